@@ -1,0 +1,57 @@
+"""The typer application object, consoles and shared option parsing."""
+
+from __future__ import annotations
+
+import functools
+import re
+import sys
+
+import typer
+from rich.console import Console
+
+from ..errors import ProcamError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Projector-camera calibration from Gray-code captures of a chessboard.")
+console = Console()
+err_console = Console(stderr=True)
+
+
+def fail(message: str, code: int = 2):
+    """Print a one-line error to stderr and exit with ``code``."""
+    err_console.print(f"[bold red]error:[/bold red] {message}", highlight=False, soft_wrap=True)
+    raise typer.Exit(code)
+
+
+def user_errors(fn):
+    """Decorator for commands: turn :class:`ProcamError` (and bad values) into one-line errors."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except ProcamError as e:
+            fail(str(e))
+        except KeyboardInterrupt:
+            err_console.print("interrupted")
+            raise typer.Exit(130)
+
+    return wrapper
+
+
+_SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
+
+
+def parse_size(text: str, what: str = "size") -> tuple[int, int]:
+    """Parse ``"1920x1080"`` into ``(1920, 1080)``; a clear error otherwise."""
+    m = _SIZE.match(text or "")
+    if not m:
+        fail(f"{what} must look like WIDTHxHEIGHT (e.g. 1920x1080), got {text!r}")
+    w, h = int(m.group(1)), int(m.group(2))
+    if w < 2 or h < 2:
+        fail(f"{what} must be at least 2x2, got {text!r}")
+    return w, h
+
+
+def is_tty() -> bool:
+    return sys.stderr.isatty()

@@ -1,0 +1,176 @@
+"""Gray-code pattern sequences for a projector.
+
+Two orders are supported (see ``docs``/README):
+
+``opencv`` (default)
+    Pixel-identical to OpenCV's ``structured_light.GrayCodePattern`` for the same size:
+    column bits MSB first, each followed by its inverse, then row bits likewise, then an
+    all-white and an all-black frame (the order OpenCV-based capture tools use).
+    Codes are not centred: column ``x`` carries ``gray(x)``.
+``moreno``
+    Moreno & Taubin's ``scan3d-capture`` order: white, black, then the column pairs, then
+    the row pairs, with codes centred on the panel: column ``x`` carries
+    ``gray(x + (2**n_x - W) // 2)``.
+
+Bit counts are per axis: ``n_x = ceil(log2 W)`` and ``n_y = ceil(log2 H)``, so a
+sequence has ``2 (n_x + n_y) + 2`` images (46 for 1920x1080, 42 for 1024x768).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+ORDERS = ("opencv", "moreno")
+
+
+def gray_encode(x: np.ndarray) -> np.ndarray:
+    """Binary-reflected Gray code of non-negative integers: ``x ^ (x >> 1)``."""
+    x = np.asarray(x)
+    return x ^ (x >> 1)
+
+
+def gray_decode(g: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`gray_encode` (prefix XOR over the bits), for codes < 2**32."""
+    g = np.array(g, copy=True)
+    shift = 1
+    while shift < 32:
+        g ^= g >> shift
+        shift <<= 1
+    return g
+
+
+def bits_for(n: int) -> int:
+    """Number of Gray-code bits needed for ``n`` positions: ``ceil(log2 n)`` (1 for n <= 2)."""
+    if n < 1:
+        raise ValueError(f"size must be positive, got {n}")
+    return max(1, math.ceil(math.log2(n)))
+
+
+@dataclass(frozen=True)
+class PatternSet:
+    """Description of a Gray-code sequence (no pixels).
+
+    Attributes
+    ----------
+    width, height : projector size in pixels.
+    order : ``"opencv"`` or ``"moreno"``.
+    col_bits, row_bits : number of bits per axis.
+    col_offset, row_offset : code offsets (the code of column x is ``gray(x + col_offset)``).
+    white, black : indices of the all-white and all-black frames.
+    col_start, row_start : index of the first column / row pattern; bit ``b`` (MSB = col_bits-1)
+        of the column code is image ``col_start + 2 (col_bits - 1 - b)`` and its inverse follows.
+    count : total number of images.
+    """
+
+    width: int
+    height: int
+    order: str
+    col_bits: int
+    row_bits: int
+    col_offset: int
+    row_offset: int
+    white: int
+    black: int
+    col_start: int
+    row_start: int
+    count: int
+
+    def pair_indices(self, axis: str) -> np.ndarray:
+        """(n_bits, 2) indices of (pattern, inverse) pairs for ``axis`` in {'col', 'row'}, MSB first."""
+        if axis == "col":
+            start, n = self.col_start, self.col_bits
+        elif axis == "row":
+            start, n = self.row_start, self.row_bits
+        else:
+            raise ValueError(f"axis must be 'col' or 'row', got {axis!r}")
+        first = start + 2 * np.arange(n)
+        return np.stack([first, first + 1], axis=1)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["format"] = "procam-graycode"
+        d["version"] = 1
+        d["col_pairs"] = self.pair_indices("col").tolist()
+        d["row_pairs"] = self.pair_indices("row").tolist()
+        d["bit_rule"] = ("image col_pairs[j][0] is white where bit (col_bits-1-j) of "
+                         "gray(x + col_offset) is 1; col_pairs[j][1] is its inverse; rows likewise")
+        return d
+
+
+def pattern_set(width: int, height: int, order: str = "opencv") -> PatternSet:
+    """Describe the sequence for a ``width`` x ``height`` projector in ``order``."""
+    width, height = int(width), int(height)
+    if width < 2 or height < 2:
+        raise ValueError(f"projector size must be at least 2x2, got {width}x{height}")
+    if order not in ORDERS:
+        raise ValueError(f"order must be one of {ORDERS}, got {order!r}")
+    nx, ny = bits_for(width), bits_for(height)
+    npat = 2 * (nx + ny)
+    if order == "opencv":
+        return PatternSet(width, height, order, nx, ny, 0, 0, white=npat, black=npat + 1,
+                          col_start=0, row_start=2 * nx, count=npat + 2)
+    ox, oy = (2**nx - width) // 2, (2**ny - height) // 2
+    return PatternSet(width, height, order, nx, ny, ox, oy, white=0, black=1,
+                      col_start=2, row_start=2 + 2 * nx, count=npat + 2)
+
+
+def bit_planes(n: int, bits: int, offset: int) -> np.ndarray:
+    """(bits, n) bool: Gray-code bits of positions 0..n-1, MSB first."""
+    g = gray_encode(np.arange(n, dtype=np.int64) + offset)
+    shifts = np.arange(bits - 1, -1, -1)
+    return ((g[None, :] >> shifts[:, None]) & 1).astype(bool)
+
+
+def generate(width: int, height: int, order: str = "opencv", white: int = 255,
+             black: int = 0, dtype=np.uint8) -> np.ndarray:
+    """The full sequence as an array ``(count, height, width)`` of ``dtype``.
+
+    Nothing is written to disk; see :func:`save`.
+    """
+    ps = pattern_set(width, height, order)
+    out = np.empty((ps.count, ps.height, ps.width), dtype=dtype)
+    out[ps.white] = white
+    out[ps.black] = black
+    cols = bit_planes(ps.width, ps.col_bits, ps.col_offset)
+    rows = bit_planes(ps.height, ps.row_bits, ps.row_offset)
+    for j, (a, b) in enumerate(ps.pair_indices("col")):
+        line = np.where(cols[j], white, black).astype(dtype)
+        out[a] = line[None, :]
+        out[b] = (white + black - line.astype(np.int64)).astype(dtype)[None, :]
+    for j, (a, b) in enumerate(ps.pair_indices("row")):
+        line = np.where(rows[j], white, black).astype(dtype)
+        out[a] = line[:, None]
+        out[b] = (white + black - line.astype(np.int64)).astype(dtype)[:, None]
+    return out
+
+
+def save(stack: np.ndarray, ps: PatternSet, out_dir, prefix: str = "pattern_") -> list[Path]:
+    """Write ``stack`` as zero-padded PNGs plus ``patterns.json`` into ``out_dir``.
+
+    Each file is written under a temporary name and renamed, so an interrupted run
+    leaves no half-written image.  Returns the image paths.
+    """
+    import cv2
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    digits = max(2, len(str(ps.count - 1)))
+    paths = []
+    for i, img in enumerate(stack):
+        path = out / f"{prefix}{i:0{digits}d}.png"
+        tmp = path.with_name(path.stem + ".tmp.png")
+        if not cv2.imwrite(str(tmp), img):
+            raise OSError(f"could not write {tmp}")
+        tmp.replace(path)
+        paths.append(path)
+    meta = ps.to_dict()
+    meta["files"] = [p.name for p in paths]
+    tmp = out / "patterns.json.tmp"
+    tmp.write_text(json.dumps(meta, indent=2))
+    tmp.replace(out / "patterns.json")
+    return paths

@@ -1,0 +1,64 @@
+"""The correspondences of one pose: board, camera and projector points."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class View:
+    """One pose of the board seen by the camera and the projector.
+
+    Attributes
+    ----------
+    obj_pts : (N, 3) float64
+        Board corners in board coordinates (square-size units, z = 0), canonical order.
+    cam_pts : (N, 2) float64
+        Distorted camera pixels (x, y) of the corners; NaN where a corner was not found.
+    proj_pts : (N, 2) float64
+        Projector pixels (x, y) of the corners; NaN where a corner failed (see ``diagnostics``).
+    name : str
+        The pose's name (usually its capture folder).
+    cam_size, proj_size : (width, height) in pixels, or None when unknown.
+    diagnostics : dict
+        Per-corner diagnostics (arrays of length N) and free-form notes.
+    """
+
+    obj_pts: np.ndarray
+    cam_pts: np.ndarray
+    proj_pts: np.ndarray
+    name: str = "view"
+    cam_size: tuple[int, int] | None = None
+    proj_size: tuple[int, int] | None = None
+    diagnostics: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        obj = np.asarray(self.obj_pts, dtype=np.float64)
+        if obj.ndim != 2 or obj.shape[1] not in (2, 3):
+            raise ValueError(f"obj_pts must be (N, 3), got {obj.shape}")
+        if obj.shape[1] == 2:
+            obj = np.column_stack([obj, np.zeros(len(obj))])
+        cam = np.asarray(self.cam_pts, dtype=np.float64).reshape(-1, 2)
+        proj = np.asarray(self.proj_pts, dtype=np.float64).reshape(-1, 2)
+        if not (len(obj) == len(cam) == len(proj)):
+            raise ValueError(f"obj/cam/proj point counts differ: {len(obj)}, {len(cam)}, {len(proj)}")
+        for arr in (obj, cam, proj):
+            arr.setflags(write=False)
+        object.__setattr__(self, "obj_pts", obj)
+        object.__setattr__(self, "cam_pts", cam)
+        object.__setattr__(self, "proj_pts", proj)
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(N,) bool: corners with finite camera and projector points."""
+        return np.isfinite(self.cam_pts).all(1) & np.isfinite(self.proj_pts).all(1)
+
+    def subset(self, mask: np.ndarray) -> "View":
+        """The view restricted to ``mask`` (N,) bool (diagnostics arrays are subset too)."""
+        mask = np.asarray(mask, dtype=bool)
+        diag = {k: (np.asarray(v)[mask] if isinstance(v, np.ndarray) and len(v) == len(mask) else v)
+                for k, v in self.diagnostics.items()}
+        return View(self.obj_pts[mask], self.cam_pts[mask], self.proj_pts[mask], self.name,
+                    self.cam_size, self.proj_size, diag)
