@@ -55,3 +55,13 @@ def parse_size(text: str, what: str = "size") -> tuple[int, int]:
 
 def is_tty() -> bool:
     return sys.stderr.isatty()
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", help="Print the version and exit.")):
+    """Projector-camera calibration from Gray-code captures of a chessboard."""
+    if version:
+        from .. import __version__
+
+        console.print(f"procam {__version__}")
+        raise typer.Exit(0)
