@@ -1,0 +1,157 @@
+"""A pose's capture folder -> validated image stack and its :class:`~procam.patterns.PatternSet`.
+
+Checks, each failing with a one-line :class:`~procam.errors.CaptureError` that names the
+folder or file and says what to do:
+
+* the folder exists and holds images (``io.list_images``), all of one size and bit depth;
+* the number of images matches the projector size (with hints when it does not);
+* the white and black frames are where the order puts them, judged from the images;
+* every pattern is followed by its inverse (catches shuffled or missing frames).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import io, patterns
+from .errors import CaptureError
+
+
+@dataclass(frozen=True)
+class Capture:
+    """A validated capture: ``stack`` (K, H, W) uint8/uint16, its ``files`` and ``pattern_set``."""
+
+    stack: np.ndarray
+    files: tuple
+    pattern_set: patterns.PatternSet
+    folder: Path
+
+    @property
+    def white(self) -> np.ndarray:
+        return self.stack[self.pattern_set.white]
+
+    @property
+    def black(self) -> np.ndarray:
+        return self.stack[self.pattern_set.black]
+
+
+def resolve_pattern_set(folder, projector=None, order=None) -> patterns.PatternSet:
+    """The PatternSet for ``folder``: from ``projector`` (w, h) and ``order``, else from its patterns.json."""
+    meta = io.read_sidecar(folder, "patterns.json")
+    if projector is None:
+        if meta is None:
+            raise CaptureError(f"{folder}: the projector size is unknown; pass --projector WIDTHxHEIGHT "
+                               "(no patterns.json in the folder)")
+        projector = (int(meta["width"]), int(meta["height"]))
+    if order is None:
+        order = meta.get("order", "opencv") if meta else "opencv"
+    return patterns.pattern_set(projector[0], projector[1], order)
+
+
+def _count_hint(found: int, ps: patterns.PatternSet) -> str:
+    w, h = ps.width, ps.height
+    if found == ps.count - 2:
+        return (" — two short: the white and black frames seem to be missing (OpenCV's GrayCodePattern.generate() "
+                "does not include them; capture them as the last two frames, or use 'procam patterns')")
+    n = min(ps.col_bits, ps.row_bits)
+    if ps.col_bits != ps.row_bits and found == 2 + 4 * n:
+        return (f" — this matches scan3d-capture's sequence with {n} bits on both axes, which drops column bits; "
+                "re-capture with the sequence from 'procam patterns'")
+    guesses = [f"{a}x{b}" for a, b in [(1920, 1080), (1280, 800), (1280, 720), (1024, 768), (800, 600),
+                                        (1920, 1200), (3840, 2160), (1400, 1050), (1366, 768), (912, 1140)]
+               if patterns.pattern_set(a, b).count == found and (a, b) != (w, h)]
+    if guesses:
+        return f" — that count fits a projector of {', '.join(guesses[:3])}: check --projector"
+    return " — check --projector and that no frames are missing or extra"
+
+
+def _frame_means(stack: np.ndarray, step: int = 4) -> np.ndarray:
+    return stack[:, ::step, ::step].reshape(len(stack), -1).mean(axis=1)
+
+
+def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files) -> None:
+    """Raise CaptureError when the white/black frames are not where ``ps.order`` puts them."""
+    means = _frame_means(stack)
+    white, black = means[ps.white], means[ps.black]
+    pat_idx = np.setdiff1d(np.arange(ps.count), [ps.white, ps.black])
+    pm = means[pat_idx]
+    contrast = white - black
+    tol = 0.05 * max(contrast, 1e-9)
+    ok = contrast > 0 and white >= pm.max() - tol and black <= pm.min() + tol
+    if ok:
+        return
+    brightest, darkest = int(np.argmax(means)), int(np.argmin(means))
+    other = [o for o in patterns.ORDERS if o != ps.order][0]
+    ps2 = patterns.pattern_set(ps.width, ps.height, other)
+    suggestion = ""
+    if brightest == ps2.white and darkest == ps2.black:
+        suggestion = f"; they look like order '{other}' (white #{ps2.white}, black #{ps2.black}): pass --order {other}"
+    else:
+        suggestion = (f"; the brightest frame is #{brightest} ({Path(files[brightest]).name}) and the darkest "
+                      f"#{darkest} ({Path(files[darkest]).name}): frames may be out of order or the projector was "
+                      "not showing the sequence")
+    raise CaptureError(
+        f"{folder}: the white and black frames are not where order '{ps.order}' puts them "
+        f"(#{ps.white} {Path(files[ps.white]).name} and #{ps.black} {Path(files[ps.black]).name})" + suggestion)
+
+
+def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_spread: float = 0.15,
+                max_correlation: float = -0.5) -> None:
+    """Raise CaptureError when a pattern is not followed by its inverse.
+
+    On well-lit pixels both images are normalised, ``p' = (p - black) / (white - black)``.  A
+    pattern and its inverse are strongly anti-correlated; two unrelated frames are not.  Pairs
+    the camera does not resolve (spread of ``p'`` below ``min_spread``, e.g. the finest stripes of
+    a high-resolution projector) are skipped: decoding marks them as low contrast anyway.
+    """
+    step = 4
+    w = stack[ps.white, ::step, ::step].astype(np.float32)
+    b = stack[ps.black, ::step, ::step].astype(np.float32)
+    c = w - b
+    lit = c > 0.25 * np.percentile(c, 99)
+    if lit.sum() < 100:
+        raise CaptureError(f"{folder}: the projector's light is not visible in the captures (white and black frames "
+                           "look the same); check exposure and that the projector shows the sequence")
+    bl, cl = b[lit], c[lit]
+    for axis in ("col", "row"):
+        for j, (a, i) in enumerate(ps.pair_indices(axis)):
+            p = (stack[a, ::step, ::step][lit] - bl) / cl
+            q = (stack[i, ::step, ::step][lit] - bl) / cl
+            sp, sq = p.std(), q.std()
+            if sp < min_spread and sq < min_spread:
+                continue
+            corr = float(np.mean((p - p.mean()) * (q - q.mean())) / max(sp * sq, 1e-12))
+            if corr > max_correlation:
+                raise CaptureError(
+                    f"{folder}: images #{a} ({Path(files[a]).name}) and #{i} ({Path(files[i]).name}) do not look "
+                    f"like a pattern and its inverse ({axis} bit {j}, correlation {corr:+.2f}); frames may be "
+                    "missing, repeated or out of order — re-capture, or check that the file names sort in "
+                    "capture order")
+
+
+def load_capture(folder, projector=None, order=None, check: bool = True) -> Capture:
+    """Read and validate a pose folder.
+
+    Parameters
+    ----------
+    folder : path of the pose's folder.
+    projector : (width, height) of the projector, or None to read it from ``patterns.json``.
+    order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
+    check : run the image-based checks (white/black position, pattern/inverse pairs).
+    """
+    folder = Path(folder)
+    files = io.list_images(folder)
+    ps = resolve_pattern_set(folder, projector, order)
+    if len(files) != ps.count:
+        raise CaptureError(f"{folder}: expected {ps.count} images for a {ps.width}x{ps.height} projector "
+                           f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
+                           f"and black; the same count for --order opencv and moreno), found {len(files)}"
+                           + _count_hint(len(files), ps))
+    stack = io.read_images(files)
+    if check:
+        check_white_black(stack, ps, folder, files)
+        check_pairs(stack, ps, folder, files)
+    return Capture(stack, tuple(files), ps, folder)
