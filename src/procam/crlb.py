@@ -1,0 +1,375 @@
+"""Cramér–Rao lower bounds for single-pose calibration (METHOD §13).
+
+For i.i.d. Gaussian pixel noise ``sigma`` on the observations and a model ``m(p)``
+the Fisher information is ``I = J^T J / sigma^2`` with ``J = dm/dp`` at the truth, and
+any unbiased estimator has ``std(p_k) >= sqrt([I^-1]_kk)``.  These bounds say what *any*
+single-pose method could achieve at a pose; biases from model errors (a principal
+point that is not the COD, ``u0p = W/2``, projector lens distortion) come on top.
+
+Computation (METHOD §13):
+
+1. ``J`` by complex-step differentiation (exact to rounding; central differences with
+   step ``rel_step * max(1, |p_k|)`` as an option) in the scaled parameters
+   (``kappa1 = k1 s^2``, ``kappa2 = k2 s^4`` with ``s = 1000`` px; rotations are local
+   perturbations ``R = exp([w]_x) R_true`` about ``w = 0``).
+2. Normalise the columns of ``J`` to unit norm.
+3. If ``sigma_min / sigma_max`` of the normalised ``J`` is below ``cond_limit``
+   the pose is degenerate for that model: every bound is ``inf``.
+4. Otherwise ``Cov = sigma^2 (J_n^T J_n)^-1``, rescaled to raw units.  ``inv``, not
+   ``pinv``: a pseudo-inverse silently reports tiny bounds at degenerate poses.
+
+Every function returns a plain ``dict``: scalar stds (floats) per intrinsic parameter,
+``"omega"`` (3,) rad and ``"t"`` (3,) board units for the pose, plus ``"cov"``
+(P, P) in raw units, ``"params"`` (names of the rows of ``cov``) and ``"condition"``
+(``sigma_min / sigma_max`` of the normalised Jacobian).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .models import matrix_to_euler
+
+__all__ = ["camera_bound", "projector_bound", "extrinsics_bound", "fisher_bound"]
+
+_CAMERA_MODELS = ("full", "known_distortion", "known_alpha")
+
+
+def _perturb(R, w):
+    """``exp([w]_x) @ R``: a rotation perturbed in the device frame (complex-step safe).
+
+    Real ``w`` uses the exact exponential; complex ``w`` (only ever an infinitesimal
+    imaginary step about 0) uses the series ``I + W + W^2/2 + W^3/6``.
+    """
+    if np.iscomplexobj(w):
+        wx, wy, wz = w
+        W = np.array([[0, -wz, wy], [wz, 0, -wx], [-wy, wx, 0]], dtype=complex)
+        return (np.eye(3) + W + W @ W / 2 + W @ W @ W / 6) @ R
+    return Rotation.from_rotvec(np.asarray(w, float)).as_matrix() @ R
+
+
+def _project(K, R, t, X):
+    """``pi(K (R X + t))`` for (N, 3) ``X``; complex-step safe.  Returns (N, 2)."""
+    Xc = X @ R.T + t.reshape(1, 3)
+    m = Xc @ K.T
+    return m[:, :2] / m[:, 2:3]
+
+
+def _distort(m, c, k1, k2, iterations=30):
+    """Division model undistorted -> distorted (METHOD §5.1), complex-step safe.
+
+    With ``r_d = s r_u`` the scale ``s`` solves ``s = 1 + k1 s^2 q + k2 s^4 q^2`` with
+    ``q = r_u^2``; Newton from ``s = 1`` (no square root, so no branch at the centre).
+    """
+    d = m - c.reshape(1, 2)
+    q = d[:, 0] ** 2 + d[:, 1] ** 2
+    s = np.ones_like(q)
+    for _ in range(iterations):
+        g = s - 1.0 - k1 * s ** 2 * q - k2 * s ** 4 * q ** 2
+        dg = 1.0 - 2.0 * k1 * s * q - 4.0 * k2 * s ** 3 * q ** 2
+        s = s - g / dg
+    g = s - 1.0 - k1 * s ** 2 * q - k2 * s ** 4 * q ** 2
+    bad = ~(np.abs(g) < 1e-9) | ~(np.real(s) > 0)
+    out = c.reshape(1, 2) + d * s[:, None]
+    if np.any(bad):
+        out = out.astype(complex if np.iscomplexobj(out) else float)
+        out[bad] = np.nan
+    return out
+
+
+def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+    """Generic CRLB: covariance lower bound of the parameters of ``model`` at ``p0``.
+
+    Parameters
+    ----------
+    model : callable
+        ``model(p) -> (M,)`` noise-free observations (pixels) for parameters ``p`` (P,).
+    p0 : array_like, shape (P,)
+        True (scaled) parameters.
+    sigma : float
+        Standard deviation of the i.i.d. Gaussian noise on each observation (pixels).
+    rel_step : float
+        Central-difference step relative to ``max(1, |p_k|)``.
+    cond_limit : float
+        ``sigma_min / sigma_max`` of the column-normalised Jacobian below which the
+        problem is declared degenerate.
+    jacobian : {"complex", "central"}
+        ``"complex"``: complex-step derivatives ``Im(m(p + i h e_k)) / h`` with
+        ``h = 1e-30``, exact to rounding (``model`` must accept complex parameters);
+        ``"central"``: central differences with ``rel_step``.  Exact derivatives keep
+        the degeneracy test clean: at exactly degenerate poses the condition is ~1e-15
+        with complex steps but ~1e-10..1e-8 with central differences.
+
+    Returns
+    -------
+    cov : ndarray, shape (P, P)
+        ``sigma^2 (J^T J)^-1``, all ``inf`` when degenerate or non-finite.
+    condition : float
+        ``sigma_min / sigma_max`` of the normalised Jacobian (0 when non-finite).
+    """
+    p0 = np.asarray(p0, float)
+    P = p0.size
+    cols = []
+    for k in range(P):
+        if jacobian == "complex":
+            h = 1e-30
+            dp = np.zeros(P, dtype=complex)
+            dp[k] = 1j * h
+            cols.append(np.imag(np.asarray(model(p0 + dp))) / h)
+        elif jacobian == "central":
+            h = rel_step * max(1.0, abs(p0[k]))
+            dp = np.zeros(P)
+            dp[k] = h
+            cols.append((np.asarray(model(p0 + dp)) - np.asarray(model(p0 - dp))) / (2.0 * h))
+        else:
+            raise ValueError(f"jacobian must be 'complex' or 'central', got {jacobian!r}")
+    J = np.column_stack(cols)
+    inf = np.full((P, P), np.inf)
+    if not np.all(np.isfinite(J)):
+        return inf, 0.0
+    norms = np.linalg.norm(J, axis=0)
+    if np.any(norms == 0):
+        return inf, 0.0
+    Jn = J / norms
+    s = np.linalg.svd(Jn, compute_uv=False)
+    condition = float(s[-1] / s[0])
+    if condition < cond_limit:
+        return inf, condition
+    try:
+        cov_n = np.linalg.inv(Jn.T @ Jn)
+    except np.linalg.LinAlgError:
+        return inf, condition
+    cov = sigma ** 2 * cov_n / np.outer(norms, norms)
+    return cov, condition
+
+
+def _std(cov, k):
+    v = cov[k, k]
+    return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("inf")
+
+
+def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full", *,
+                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+    """CRLB of a single-pose camera calibration with the division model.
+
+    Observations are the 2N **distorted** corners
+    ``m_hat = D^-1(pi(K (R M + t)); c, k1, k2)`` (METHOD §5.1, §13).
+
+    Parameters
+    ----------
+    K : array_like, shape (3, 3)
+        True intrinsics ``[[f, 0, u0], [0, alpha f, v0], [0, 0, 1]]`` (pixels).
+    dist_center : array_like, shape (2,) or None
+        True centre of distortion ``c`` (pixels); ``None`` means the principal point.
+        In the ``"full"`` model the unknowns ``(cu, cv)`` move the principal point and the
+        COD together (the method sets the principal point to the COD).
+    k1, k2 : float
+        Division-model coefficients (px^-2, px^-4); ``k1 < 0`` is barrel.
+    R, t : array_like, shapes (3, 3) and (3,)
+        Board -> camera pose (``X_cam = R X + t``), board units.
+    obj_pts : array_like, shape (N, 3)
+        Board corners (board units).
+    sigma : float
+        Corner noise (pixels, per coordinate).
+    model : {"full", "known_distortion", "known_alpha"}
+        ``"full"``: ``p = (f, alpha, cu, cv, kappa1, kappa2, omega, t)`` (12);
+        ``"known_distortion"``: ``c, k1, k2`` known, ``p = (f, alpha, omega, t)`` (8),
+        the limit of the paper's stage-2 LM; ``"known_alpha"``: ``alpha`` known too,
+        ``p = (f, omega, t)`` (7).
+    radius_scale : float
+        ``s`` of the conditioning scale ``kappa1 = k1 s^2``, ``kappa2 = k2 s^4`` (pixels).
+    rel_step, cond_limit, jacobian
+        See :func:`fisher_bound`.
+
+    Returns
+    -------
+    dict
+        ``"f"``, ``"alpha"``, ``"cu"``, ``"cv"``, ``"k1"``, ``"k2"`` (stds in their units;
+        ``0.0`` for parameters the model treats as known, ``inf`` everywhere when the
+        pose is degenerate), ``"omega"`` (3,) rad, ``"t"`` (3,), ``"cov"``, ``"params"``,
+        ``"condition"``, ``"model"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from procam.board import object_points
+    >>> from procam.models import intrinsic_matrix, euler_to_matrix
+    >>> K = intrinsic_matrix(1539.0, 674.0, 512.0, alpha=1.004)
+    >>> R = euler_to_matrix(*np.radians([20.0, 20.0, 0.0]))
+    >>> b = camera_bound(K, None, -1e-7, 0.0, R, [0, 0, 500], object_points(10, 6, 24.0))
+    >>> round(b["f"], 1)
+    4.1
+    """
+    if model not in _CAMERA_MODELS:
+        raise ValueError(f"model must be one of {_CAMERA_MODELS}, got {model!r}")
+    K = np.asarray(K, float)
+    R = np.asarray(R, float)
+    t = np.asarray(t, float).reshape(3)
+    M = np.asarray(obj_pts, float).reshape(-1, 3)
+    f0, af0 = K[0, 0], K[1, 1]
+    alpha0 = af0 / f0
+    pp0 = K[:2, 2].copy()
+    c0 = pp0.copy() if dist_center is None else np.asarray(dist_center, float).reshape(2)
+    s = float(radius_scale)
+
+    def observe(f, alpha, dc, kap1, kap2, w, tt):
+        Kp = np.array([[f, 0.0, pp0[0] + dc[0]], [0.0, alpha * f, pp0[1] + dc[1]], [0.0, 0.0, 1.0]],
+                      dtype=np.result_type(f, alpha, dc, w, tt))
+        m = _project(Kp, _perturb(R, w), tt, M)
+        return _distort(m, c0 + dc, kap1 / s ** 2, kap2 / s ** 4).ravel()
+
+    kap1, kap2 = k1 * s ** 2, k2 * s ** 4
+    if model == "full":
+        names = ["f", "alpha", "cu", "cv", "k1", "k2", "wx", "wy", "wz", "tx", "ty", "tz"]
+        p0 = np.r_[f0, alpha0, 0.0, 0.0, kap1, kap2, 0.0, 0.0, 0.0, t]
+
+        def fun(p):
+            return observe(p[0], p[1], p[2:4], p[4], p[5], p[6:9], p[9:12])
+        raw_scale = np.r_[1.0, 1.0, 1.0, 1.0, 1.0 / s ** 2, 1.0 / s ** 4, np.ones(6)]
+    elif model == "known_distortion":
+        names = ["f", "alpha", "wx", "wy", "wz", "tx", "ty", "tz"]
+        p0 = np.r_[f0, alpha0, 0.0, 0.0, 0.0, t]
+
+        def fun(p):
+            return observe(p[0], p[1], np.zeros(2), kap1, kap2, p[2:5], p[5:8])
+        raw_scale = np.ones(8)
+    else:
+        names = ["f", "wx", "wy", "wz", "tx", "ty", "tz"]
+        p0 = np.r_[f0, 0.0, 0.0, 0.0, t]
+
+        def fun(p):
+            return observe(p[0], alpha0, np.zeros(2), kap1, kap2, p[1:4], p[4:7])
+        raw_scale = np.ones(7)
+
+    cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
+                             jacobian=jacobian)
+    cov = cov * np.outer(raw_scale, raw_scale)
+    return _pack(cov, names, cond, model, ["f", "alpha", "cu", "cv", "k1", "k2"])
+
+
+def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+    """CRLB of the single-pose projector calibration (unknowns ``f_p, v0p`` and the pose).
+
+    ``u0p`` and ``alpha_p`` are held at the values in ``K`` (METHOD §8.2, §13):
+    ``p = (f, v0, omega, t)``, exactly the 8 dof of the board -> projector homography.
+
+    Parameters
+    ----------
+    K : array_like, shape (3, 3)
+        True projector intrinsics (pixels).
+    R, t : array_like, shapes (3, 3) and (3,)
+        Board -> projector pose, board units.
+    obj_pts : array_like, shape (N, 3)
+        Board corners.
+    sigma : float
+        Projector-corner noise (pixels, per coordinate).
+    rel_step, cond_limit, jacobian
+        See :func:`fisher_bound`.
+
+    Returns
+    -------
+    dict
+        ``"f"``, ``"v0"`` (pixels; ``inf`` when degenerate, i.e. ``nu_p = 0``), ``"omega"``,
+        ``"t"``, ``"cov"``, ``"params"``, ``"condition"``, ``"model"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from procam.board import object_points
+    >>> from procam.models import intrinsic_matrix, euler_to_matrix
+    >>> K = intrinsic_matrix(2421.0, 1013.0, 1065.0, alpha=1.002)
+    >>> R = euler_to_matrix(*np.radians([10.0, 10.0, 0.0]))
+    >>> round(projector_bound(K, R, [0, 0, 500], object_points(10, 6, 24.0))["f"], 0)
+    11.0
+    """
+    K = np.asarray(K, float)
+    R = np.asarray(R, float)
+    t = np.asarray(t, float).reshape(3)
+    M = np.asarray(obj_pts, float).reshape(-1, 3)
+    alpha0, u0 = K[1, 1] / K[0, 0], K[0, 2]
+    names = ["f", "v0", "wx", "wy", "wz", "tx", "ty", "tz"]
+    p0 = np.r_[K[0, 0], K[1, 2], 0.0, 0.0, 0.0, t]
+
+    def fun(p):
+        Kp = np.array([[p[0], 0.0, u0], [0.0, alpha0 * p[0], p[1]], [0.0, 0.0, 1.0]], dtype=p.dtype)
+        return _project(Kp, _perturb(R, p[2:5]), p[5:8], M).ravel()
+
+    cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
+                             jacobian=jacobian)
+    return _pack(cov, names, cond, "projector", ["f", "v0"])
+
+
+def _pack(cov, names, cond, model, scalar_keys):
+    out = {}
+    for key in scalar_keys:
+        out[key] = _std(cov, names.index(key)) if key in names else 0.0
+    if not np.all(np.isfinite(cov)):
+        out = {key: (float("inf") if key in names else 0.0) for key in scalar_keys}
+    idx_w = [names.index(k) for k in ("wx", "wy", "wz")]
+    idx_t = [names.index(k) for k in ("tx", "ty", "tz")]
+    out["omega"] = np.array([_std(cov, k) for k in idx_w])
+    out["t"] = np.array([_std(cov, k) for k in idx_t])
+    out["cov"] = cov
+    out["params"] = list(names)
+    out["condition"] = cond
+    out["model"] = model
+    return out
+
+
+def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
+    """Delta-method bound of the procam extrinsics ``R = R_p R_c^T``, ``T = t_p - R t_c``.
+
+    The camera and projector observations are independent, so the pose covariances of the
+    two device bounds (their ``omega``/``t`` blocks, marginalised over the intrinsics) are
+    combined block-diagonally and pushed through ``(R, T)`` (METHOD §13).
+
+    Parameters
+    ----------
+    cam, proj : dict
+        Results of :func:`camera_bound` and :func:`projector_bound` at the true poses.
+    R_c, t_c, R_p, t_p : array_like
+        True board -> camera and board -> projector poses.
+    rel_step : float
+        Finite-difference step (rad or board units, relative to ``max(1, |x|)``).
+
+    Returns
+    -------
+    dict
+        ``"euler_deg"`` (3,) stds of ``(psi, nu, phi)`` of ``R`` in degrees; ``"T"`` (3,)
+        stds of ``T``; ``"sigma_T"`` = ``sqrt(sum var T)``; ``"T_norm"`` std of ``|T|``;
+        ``"cov"`` (6, 6) of ``(psi, nu, phi [rad], T)``.  ``inf`` when either device is
+        degenerate.
+    """
+    R_c, R_p = np.asarray(R_c, float), np.asarray(R_p, float)
+    t_c, t_p = np.asarray(t_c, float).reshape(3), np.asarray(t_p, float).reshape(3)
+    blocks = []
+    for b in (cam, proj):
+        names = b["params"]
+        idx = [names.index(k) for k in ("wx", "wy", "wz", "tx", "ty", "tz")]
+        blocks.append(np.asarray(b["cov"], float)[np.ix_(idx, idx)])
+    if not all(np.all(np.isfinite(c)) for c in blocks):
+        inf3 = np.full(3, np.inf)
+        return {"euler_deg": inf3, "T": inf3.copy(), "sigma_T": float("inf"),
+                "T_norm": float("inf"), "cov": np.full((6, 6), np.inf)}
+    C = np.zeros((12, 12))
+    C[:6, :6], C[6:, 6:] = blocks
+
+    def fun(q):
+        Rc, tc = _perturb(R_c, q[0:3]), t_c + q[3:6]
+        Rp, tp = _perturb(R_p, q[6:9]), t_p + q[9:12]
+        Rx = Rp @ Rc.T
+        T = tp - Rx @ tc
+        return np.r_[matrix_to_euler(Rx), T, np.linalg.norm(T)]
+
+    q0 = np.zeros(12)
+    J = np.empty((7, 12))
+    for k in range(12):
+        h = rel_step * max(1.0, abs(q0[k]))
+        dq = np.zeros(12)
+        dq[k] = h
+        J[:, k] = (fun(q0 + dq) - fun(q0 - dq)) / (2.0 * h)
+    cov = J @ C @ J.T
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return {"euler_deg": np.degrees(sd[:3]), "T": sd[3:6], "sigma_T": float(np.sqrt(np.sum(sd[3:6] ** 2))),
+            "T_norm": float(sd[6]), "cov": cov[:6, :6]}
