@@ -68,31 +68,46 @@ def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     return " — check --projector and that no frames are missing or extra"
 
 
-def _frame_means(stack: np.ndarray, step: int = 4) -> np.ndarray:
-    return stack[:, ::step, ::step].reshape(len(stack), -1).mean(axis=1)
+def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
+    """(K, n) values at a fixed pseudo-random set of pixels (no aliasing with periodic stripes)."""
+    flat = stack.reshape(len(stack), -1)
+    if flat.shape[1] <= n:
+        return flat.astype(np.float32)
+    idx = np.sort(np.random.default_rng(0).choice(flat.shape[1], n, replace=False))
+    return flat[:, idx].astype(np.float32)
+
+
+def frame_levels(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame, the 5th and 95th percentiles over well-lit pixels of
+    ``(I_k - min_k I) / (max_k I - min_k I)``.
+
+    A white frame is lit everywhere (5th percentile near 1), a black frame nowhere (95th near 0),
+    a pattern in parts (5th near 0, 95th near 1) — whatever the scene's albedo or vignetting.
+    """
+    sub = _sample(stack)
+    lo, hi = sub.min(axis=0), sub.max(axis=0)
+    span = hi - lo
+    lit = span > 0.25 * np.percentile(span, 99)
+    if lit.sum() < 10:
+        return np.full(len(stack), 0.5), np.full(len(stack), 0.5)
+    norm = (sub[:, lit] - lo[lit]) / span[lit]
+    return np.percentile(norm, 5, axis=1), np.percentile(norm, 95, axis=1)
 
 
 def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files) -> None:
     """Raise CaptureError when the white/black frames are not where ``ps.order`` puts them."""
-    means = _frame_means(stack)
-    white, black = means[ps.white], means[ps.black]
-    pat_idx = np.setdiff1d(np.arange(ps.count), [ps.white, ps.black])
-    pm = means[pat_idx]
-    contrast = white - black
-    tol = 0.05 * max(contrast, 1e-9)
-    ok = contrast > 0 and white >= pm.max() - tol and black <= pm.min() + tol
-    if ok:
+    p5, p95 = frame_levels(stack)
+    if p5[ps.white] > 0.5 and p95[ps.black] < 0.5:
         return
-    brightest, darkest = int(np.argmax(means)), int(np.argmin(means))
+    brightest, darkest = int(np.argmax(p5)), int(np.argmin(p95))
     other = [o for o in patterns.ORDERS if o != ps.order][0]
     ps2 = patterns.pattern_set(ps.width, ps.height, other)
-    suggestion = ""
     if brightest == ps2.white and darkest == ps2.black:
         suggestion = f"; they look like order '{other}' (white #{ps2.white}, black #{ps2.black}): pass --order {other}"
     else:
         suggestion = (f"; the brightest frame is #{brightest} ({Path(files[brightest]).name}) and the darkest "
-                      f"#{darkest} ({Path(files[darkest]).name}): frames may be out of order or the projector was "
-                      "not showing the sequence")
+                      f"#{darkest} ({Path(files[darkest]).name}): frames may be out of order, or the projector "
+                      "was not showing the sequence")
     raise CaptureError(
         f"{folder}: the white and black frames are not where order '{ps.order}' puts them "
         f"(#{ps.white} {Path(files[ps.white]).name} and #{ps.black} {Path(files[ps.black]).name})" + suggestion)
@@ -107,9 +122,8 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
     the camera does not resolve (spread of ``p'`` below ``min_spread``, e.g. the finest stripes of
     a high-resolution projector) are skipped: decoding marks them as low contrast anyway.
     """
-    step = 4
-    w = stack[ps.white, ::step, ::step].astype(np.float32)
-    b = stack[ps.black, ::step, ::step].astype(np.float32)
+    sub = _sample(stack)
+    w, b = sub[ps.white], sub[ps.black]
     c = w - b
     lit = c > 0.25 * np.percentile(c, 99)
     if lit.sum() < 100:
@@ -118,8 +132,8 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
     bl, cl = b[lit], c[lit]
     for axis in ("col", "row"):
         for j, (a, i) in enumerate(ps.pair_indices(axis)):
-            p = (stack[a, ::step, ::step][lit] - bl) / cl
-            q = (stack[i, ::step, ::step][lit] - bl) / cl
+            p = (sub[a][lit] - bl) / cl
+            q = (sub[i][lit] - bl) / cl
             sp, sq = p.std(), q.std()
             if sp < min_spread and sq < min_spread:
                 continue

@@ -10,11 +10,17 @@ Classifiers
     bit = [pattern > inverse]; a bit is uncertain when ``|pattern - inverse| < contrast_threshold``.
 ``robust`` (default)
     Moreno & Taubin's rule (METHOD §3) with Nayar et al.'s direct/global separation from the
-    high-frequency pairs (bits 3 and 2): ``L_d = (L+ - L-)/(1 - b)``, ``L_g = 2 (L- - b L+)/(1 - b^2)``;
-    if ``L_d < m`` the bit is uncertain; if ``L_d > L_g``, bit = [p > p_inv]; else bit 0 when
-    ``p <= L_d and p_inv >= L_g``, bit 1 when ``p >= L_g and p_inv <= L_d``, otherwise uncertain.
-    Under strong interreflections it marks pixels uncertain where the simple rule decodes them
-    wrongly.
+    high-frequency pairs (bits 3 and 2), computed on black-subtracted values (the black frame holds
+    the ambient light): ``L_d = (L+ - L-)/(1 - b)``, ``L_g = 2 (L- - b L+)/(1 - b^2)``.  If
+    ``L_d < m`` the pixel is uncertain; if ``L_d > L_g``, bit = [p > p_inv]; otherwise, for the
+    low-frequency bits (above the separation bits, where global light depends on the pattern),
+    bit 0 when ``p <= L_d - e and p_inv >= L_g + e``, bit 1 when ``p >= L_g + e and p_inv <= L_d - e``
+    (``e`` = contrast_threshold, a noise margin the original rule lacks), or, wherever it cannot be
+    wrong, by the sign of ``p - p_inv`` (when ``|p - p_inv| >= L_g - (1 - b) L_d + e``, since the
+    global parts of a pattern and its inverse differ by at most ``L_g``), otherwise uncertain; the
+    high-frequency bits keep the plain comparison, where global light is the same for a pattern
+    and its inverse (the separation's own premise).  Under strong interreflections it marks pixels
+    uncertain where the simple rule decodes them wrongly.
 
 Both also require ``white - black >= shadow_threshold`` (shadow / unlit mask) and mark codes
 outside the projector invalid.
@@ -27,8 +33,10 @@ the stack's maximum (so 10/12/14-bit cameras stored in 16-bit files work), or pa
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .patterns import PatternSet
@@ -100,21 +108,26 @@ def full_scale_of(stack: np.ndarray) -> float:
     return 65535.0
 
 
+def _hf_bits(ps: PatternSet) -> list:
+    """The bits used for the direct/global estimate: 3 and 2 (METHOD §3), lower ones for tiny projectors."""
+    n = min(ps.col_bits, ps.row_bits)
+    return [3, 2] if n >= 4 else list(range(min(n, 2)))[::-1]
+
+
 def _hf_pairs(ps: PatternSet) -> list:
-    """Pairs for the direct/global estimate: bits 3 and 2 of both axes (the lowest two if fewer bits)."""
+    """Image indices of the pattern/inverse pairs of :func:`_hf_bits`, both axes."""
     idx = []
     for axis, n in (("col", ps.col_bits), ("row", ps.row_bits)):
         pairs = ps.pair_indices(axis)  # MSB first: bit b is row n-1-b
-        bits = [3, 2] if n >= 4 else list(range(min(n, 2)))[::-1]
-        for b in bits:
+        for b in _hf_bits(ps):
             idx.extend(pairs[n - 1 - b].tolist())
     return idx
 
 
 def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *,
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
-           direct_threshold: float = 5.0, black_fraction: float = 0.5,
-           full_scale: float | None = None, band: int = 64) -> DecodeResult:
+           direct_threshold: float = 5.0, black_fraction: float = 0.0,
+           full_scale: float | None = None, band: int = 32, threads: int | None = None) -> DecodeResult:
     """Decode a Gray-code image stack.
 
     Parameters
@@ -130,11 +143,16 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     direct_threshold : float, DN (8-bit scale)
         Robust only: minimum direct light ``L_d`` (Moreno's ``m``). Default 5.
     black_fraction : float
-        Robust only: fraction of light a black projector pixel still emits (Moreno's ``b``). Default 0.5.
+        Robust only: Nayar's ``b``, the fraction of light a black projector pixel still emits, *after* the
+        black frame has been subtracted (which removes ambient light and the projector's black level).
+        Default 0.  Moreno's code uses 0.5 on raw images; measured on synthetic interreflections
+        (tests/test_decode.py), 0.5 doubles the direct-light estimate, so the robust rule falls back to the
+        plain comparison exactly where global light makes it wrong.
     full_scale : float, optional
         The input's full-scale value; thresholds are multiplied by ``full_scale / 255``.
-    band : int
-        Rows processed at a time (speed only).
+    band, threads : int
+        Rows processed at a time and worker threads (speed only; default 1 thread: on 2 cores a second
+        thread gained nothing measurable, see benchmarks/decode.py).
 
     Returns
     -------
@@ -151,74 +169,102 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     fs = full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape
-    col = np.empty((H, W), np.float32)
-    row = np.empty((H, W), np.float32)
-    rcol = np.empty((H, W), np.uint8)
-    rrow = np.empty((H, W), np.uint8)
-    conf = np.empty((H, W), np.float32)
     robust = method == "robust"
-    direct = np.empty((H, W), np.float32) if robust else None
-    glob = np.empty((H, W), np.float32) if robust else None
-    hf = _hf_pairs(ps)
-    tshadow = shadow_threshold * scale
-    tcontrast = contrast_threshold * scale
-    tdirect = direct_threshold * scale
-    b = float(black_fraction)
-    wide = np.int32
+    out = {
+        "col": np.empty((H, W), np.float32), "row": np.empty((H, W), np.float32),
+        "rcol": np.empty((H, W), np.uint8), "rrow": np.empty((H, W), np.uint8),
+        "conf": np.empty((H, W), np.float32),
+        "direct": np.empty((H, W), np.float32) if robust else None,
+        "global": np.empty((H, W), np.float32) if robust else None,
+    }
+    params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1, tshadow=shadow_threshold * scale,
+                  tcontrast=contrast_threshold * scale, tdirect=direct_threshold * scale, b=float(black_fraction),
+                  wide=np.int16 if stack.dtype == np.uint8 else np.int32)
+    bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
+    if threads is None:
+        threads = 1
+    if threads > 1 and len(bands) > 1:
+        with ThreadPoolExecutor(threads) as ex:
+            list(ex.map(lambda sl: _decode_band(stack, sl, out, **params), bands))
+    else:
+        for sl in bands:
+            _decode_band(stack, sl, out, **params)
+    rcol, rrow = out["rcol"], out["rrow"]
+    return DecodeResult(out["col"], out["row"], rcol == OK, rrow == OK, rcol, rrow, out["conf"],
+                        out["direct"], out["global"], ps)
 
-    for y0 in range(0, H, band):
-        sl = slice(y0, min(H, y0 + band))
-        blk = stack[:, sl, :]
-        white = blk[ps.white].astype(wide)
-        black = blk[ps.black].astype(wide)
-        span = white - black
-        shadow = span < tshadow
+
+def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide):
+    """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`)."""
+    blk = stack[:, sl, :]
+    white = blk[ps.white].astype(wide)
+    span = white - blk[ps.black].astype(wide)
+    shadow = span < tshadow
+    if robust:
+        # Direct/global separation on black-subtracted values: the black frame carries the ambient light,
+        # which would otherwise count as "global" light.
+        blackf = blk[ps.black].astype(np.float32)
+        hfs = blk[hf]
+        lp = hfs.max(axis=0).astype(np.float32) - blackf
+        lm = hfs.min(axis=0).astype(np.float32) - blackf
+        np.maximum(lm, 0.0, out=lm)
+        ld = (lp - lm) * np.float32(1.0 / (1.0 - b))
+        lg = (lm - np.float32(b) * lp) * np.float32(2.0 / (1.0 - b * b))
+        neg = lg <= 0
+        ld[neg] = lp[neg]
+        lg[neg] = 0.0
+        out["direct"][sl] = ld
+        out["global"][sl] = lg
+        weak = ld < tdirect
+        # pixels where direct light does not dominate: Moreno's rule decides their low-frequency bits
+        hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
+        ld_h, lg_h, bl_h = ld.ravel()[hard], lg.ravel()[hard], blackf.ravel()[hard]
+    minabs = None
+    for axis, key, rkey, size, offset in (("col", "col", "rcol", ps.width, ps.col_offset),
+                                          ("row", "row", "rrow", ps.height, ps.row_offset)):
+        code = np.zeros(span.shape, np.uint16 if max(ps.col_bits, ps.row_bits) <= 16 else np.uint32)
+        prev = np.zeros(span.shape, bool)
+        amin = None
+        amb = weak.copy() if robust else None
+        nbits = ps.col_bits if axis == "col" else ps.row_bits
+        for j, (a, i) in enumerate(ps.pair_indices(axis)):
+            bitno = nbits - 1 - j
+            p = blk[a]
+            q = blk[i]
+            bit = p > q
+            ad = cv2.absdiff(p, q)
+            amin = ad if amin is None else np.minimum(amin, ad, out=amin)
+            if robust and hard.size and bitno >= hf_bit:
+                ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
+                # Moreno's rule, with a noise margin (at its boundary, all global light on one side, it has none)
+                zero = (ph <= ld_h - tcontrast) & (qh >= lg_h + tcontrast)
+                one = (ph >= lg_h + tcontrast) & (qh <= ld_h - tcontrast)
+                # and the comparison wherever it cannot be wrong: p - p_inv = +-(1-b) L_d + (g_p - g_inv)
+                # with |g_p - g_inv| <= L_g, so a difference beyond L_g - (1-b) L_d fixes the sign
+                dh = ph - qh
+                sure = np.abs(dh) >= lg_h - (1.0 - b) * ld_h + tcontrast
+                one |= sure & (dh > 0)
+                zero |= sure & (dh < 0)
+                bit.ravel()[hard] = one
+                amb.ravel()[hard] |= ~zero & ~one
+            prev ^= bit  # Gray -> binary: b_i = b_(i+1) xor g_i
+            code <<= 1
+            code |= prev
+        minabs = amin if minabs is None else np.minimum(minabs, amin)
+        value = code.astype(np.int32) - offset if offset else code
+        r = np.zeros(span.shape, np.uint8)
+        r[value >= size] = OUT_OF_RANGE
+        if offset:
+            r[value < 0] = OUT_OF_RANGE
         if robust:
-            hfs = blk[hf]
-            lp = hfs.max(axis=0).astype(np.float32)
-            lm = hfs.min(axis=0).astype(np.float32)
-            ld = (lp - lm) / (1.0 - b)
-            lg = 2.0 * (lm - b * lp) / (1.0 - b * b)
-            neg = lg <= 0
-            ld = np.where(neg, lp, ld)
-            lg = np.where(neg, 0.0, lg).astype(np.float32)
-            direct[sl] = ld
-            glob[sl] = lg
-            weak = ld < tdirect
-            strong = ld > lg
-        minabs = np.full(span.shape, np.iinfo(wide).max, wide)
-        for axis, out, reason, size, offset in (("col", col, rcol, ps.width, ps.col_offset),
-                                                 ("row", row, rrow, ps.height, ps.row_offset)):
-            code = np.zeros(span.shape, np.int32)
-            prev = np.zeros(span.shape, bool)
-            lowc = np.zeros(span.shape, bool)
-            amb = np.zeros(span.shape, bool)
-            for a, i in ps.pair_indices(axis):
-                p = blk[a].astype(wide)
-                q = blk[i].astype(wide)
-                d = p - q
-                ad = np.abs(d)
-                np.minimum(minabs, ad, out=minabs)
-                lowc |= ad < tcontrast
-                bit = d > 0
-                if robust:
-                    zero = (p <= ld) & (q >= lg)
-                    one = (p >= lg) & (q <= ld)
-                    bit = np.where(strong, bit, one)
-                    amb |= weak | (~strong & ~zero & ~one)
-                    # where the direct light dominates, fall back to the plain comparison
-                prev = prev ^ bit  # Gray -> binary: b_i = b_{i+1} xor g_i
-                code = (code << 1) | prev
-            value = code - offset
-            outside = (value < 0) | (value >= size)
-            r = np.zeros(span.shape, np.uint8)
-            r[outside] = OUT_OF_RANGE
-            r[amb & ~lowc] = AMBIGUOUS if robust else OK
-            r[lowc] = LOW_CONTRAST
-            r[shadow] = SHADOW
-            reason[sl] = r
-            out[sl] = np.where(r == OK, value, np.nan).astype(np.float32)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            conf[sl] = np.clip(np.where(span > 0, minabs / np.maximum(span, 1), 0.0), 0.0, 1.0)
-
-    return DecodeResult(col, row, rcol == OK, rrow == OK, rcol, rrow, conf, direct, glob, ps)
+            r[amb] = AMBIGUOUS
+        r[amin < tcontrast] = LOW_CONTRAST
+        r[shadow] = SHADOW
+        out[rkey][sl] = r
+        val = value.astype(np.float32)
+        val[r != OK] = np.nan
+        out[key][sl] = val
+    spanf = span.astype(np.float32)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
+    out["conf"][sl] = np.clip(conf, 0.0, 1.0)

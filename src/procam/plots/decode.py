@@ -1,0 +1,52 @@
+"""Picture of a decoded pose: colour-coded projector columns and rows plus the validity mask."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..decode import REASONS  # noqa: E402
+
+
+def decode_figure(result, white=None, title: str = ""):
+    """Figure with four panels: columns, rows (colour = projector coordinate, black = invalid),
+    validity reasons, and the white frame (if given). Returns the matplotlib Figure."""
+    ps = result.pattern_set
+    panels = 4 if white is not None else 3
+    fig, axes = plt.subplots(1, panels, figsize=(5 * panels, 4.2), constrained_layout=True)
+    cmap = plt.get_cmap("turbo").with_extremes(bad="black")
+    for ax, data, vmax, name in ((axes[0], result.col, ps.width - 1, "projector column"),
+                                 (axes[1], result.row, ps.height - 1, "projector row")):
+        im = ax.imshow(np.ma.masked_invalid(data), cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
+        ax.set_title(f"{name} (black = invalid)")
+        fig.colorbar(im, ax=ax, shrink=0.8)
+    reason = np.maximum(result.reason_col, result.reason_row)
+    colors = ["#2ca02c", "#404040", "#ff7f0e", "#d62728", "#9467bd"]
+    rcmap = matplotlib.colors.ListedColormap(colors)
+    axes[2].imshow(reason, cmap=rcmap, vmin=-0.5, vmax=len(REASONS) - 0.5, interpolation="nearest")
+    counts = np.bincount(reason.ravel(), minlength=len(REASONS)) / reason.size * 100
+    handles = [matplotlib.patches.Patch(color=colors[k], label=f"{REASONS[k].split(':')[0]} {counts[k]:.1f}%")
+               for k in range(len(REASONS))]
+    axes[2].legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.8)
+    axes[2].set_title(f"validity ({result.valid.mean() * 100:.1f}% decoded)")
+    if white is not None:
+        axes[3].imshow(white, cmap="gray", interpolation="nearest")
+        axes[3].set_title("white frame")
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def save_figure(fig, path) -> None:
+    """Save ``fig`` to ``path`` atomically (temporary name, then rename) and close it."""
+    from ..io import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
+    plt.close(fig)

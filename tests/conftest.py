@@ -1,0 +1,62 @@
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+
+
+@pytest.fixture
+def shared_data():
+    """Path of ../shared/data, or skip when the shared folder is absent (a user's clone)."""
+    path = SHARED / "data"
+    if not path.is_dir():
+        pytest.skip("../shared/data is not available")
+    return path
+
+
+def write_stack(folder, stack, names=None, ext=".png"):
+    """Write a (K, H, W[, 3]) stack as images into ``folder``; returns the paths."""
+    import cv2
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = names or [f"{i:02d}{ext}" for i in range(len(stack))]
+    paths = []
+    for name, img in zip(names, stack):
+        path = folder / name
+        assert cv2.imwrite(str(path), img)
+        paths.append(path)
+    return paths
+
+
+def camera_view_of_patterns(w=64, h=48, order="opencv", seed=0, noise=1.0, dtype=np.uint8):
+    """A small linear 'capture' of the pattern sequence, pixel for pixel."""
+    from procam import patterns
+
+    rng = np.random.default_rng(seed)
+    light = patterns.generate(w, h, order).astype(np.float32) / 255.0
+    img = 20 + 180 * (0.02 + 0.98 * light) + rng.normal(0, noise, light.shape)
+    full = 255 if dtype == np.uint8 else 65535
+    return np.clip(np.round(img * full / 255), 0, full).astype(dtype)
+
+
+def run_cli(args):
+    """Run the procam CLI in-process; returns (exit_code, stdout, stderr)."""
+    from typer.testing import CliRunner
+
+    from procam.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, [str(a) for a in args])
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        raise res.exception
+    out = res.stdout
+    try:
+        err = res.stderr
+    except ValueError:
+        err = ""
+    return res.exit_code, out, err

@@ -1,0 +1,142 @@
+import shutil
+
+import cv2
+import numpy as np
+import pytest
+from conftest import camera_view_of_patterns, run_cli, write_stack
+
+from procam import capture, io, patterns
+from procam.errors import CaptureError
+
+W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel
+
+
+@pytest.fixture
+def pose(tmp_path):
+    write_stack(tmp_path / "pose", camera_view_of_patterns(W, H))
+    return tmp_path / "pose"
+
+
+def test_natural_sort_and_any_names(tmp_path):
+    st = camera_view_of_patterns(W, H)
+    names = [f"img{i}.png" for i in range(len(st))]  # img2 must come before img10
+    write_stack(tmp_path, st, names)
+    (tmp_path / "notes.txt").write_text("not an image")
+    files = io.list_images(tmp_path)
+    assert [f.name for f in files] == names
+    cap = capture.load_capture(tmp_path, (W, H))
+    assert np.array_equal(cap.stack, st)
+
+
+def test_colour_and_16bit_images_decode(tmp_path):
+    from procam import decode
+
+    st8 = camera_view_of_patterns(W, H, seed=1)
+    colour = np.repeat(st8[..., None], 3, axis=3)
+    write_stack(tmp_path / "colour", colour)
+    st16 = camera_view_of_patterns(W, H, seed=1, dtype=np.uint16)
+    write_stack(tmp_path / "sixteen", st16)
+    yy, xx = np.mgrid[:H, :W]
+    for sub in ("colour", "sixteen"):
+        cap = capture.load_capture(tmp_path / sub, (W, H))
+        r = decode.decode(cap.stack, cap.pattern_set)
+        assert np.array_equal(r.col, xx) and np.array_equal(r.row, yy), sub
+    assert capture.load_capture(tmp_path / "sixteen", (W, H)).stack.dtype == np.uint16
+
+
+def test_wrong_count(pose):
+    (sorted(pose.iterdir())[-1]).unlink()
+    with pytest.raises(CaptureError, match=r"expected 26 images for a 64x48 projector.*found 25"):
+        capture.load_capture(pose, (W, H))
+    code, out, err = run_cli(["decode", pose, "--projector", f"{W}x{H}"])
+    assert code == 2 and "expected 26 images" in err and "found 25" in err and "Traceback" not in err
+
+
+def test_missing_white_black_hint(tmp_path):
+    write_stack(tmp_path, camera_view_of_patterns(W, H)[:-2])
+    with pytest.raises(CaptureError, match="white and black frames seem to be missing"):
+        capture.load_capture(tmp_path, (W, H))
+
+
+def test_wrong_projector_size_hint(tmp_path):
+    write_stack(tmp_path, camera_view_of_patterns(W, H))
+    with pytest.raises(CaptureError, match="found 26"):
+        capture.load_capture(tmp_path, (1920, 1080))
+
+
+def test_white_black_not_where_order_says(tmp_path):
+    write_stack(tmp_path, camera_view_of_patterns(W, H, order="moreno"))
+    with pytest.raises(CaptureError, match="pass --order moreno"):
+        capture.load_capture(tmp_path, (W, H), "opencv")
+    code, out, err = run_cli(["decode", tmp_path, "--projector", f"{W}x{H}"])
+    assert code == 2 and "--order moreno" in err
+    assert capture.load_capture(tmp_path, (W, H), "moreno").pattern_set.white == 0
+
+
+def test_shuffled_frames(tmp_path):
+    st = camera_view_of_patterns(W, H)
+    st[[2, 4]] = st[[4, 2]]  # swap two pattern frames of different bits
+    write_stack(tmp_path, st)
+    with pytest.raises(CaptureError, match="do not look like a pattern and its inverse"):
+        capture.load_capture(tmp_path, (W, H))
+
+
+def test_mixed_sizes(pose):
+    f = sorted(pose.iterdir())[5]
+    cv2.imwrite(str(f), np.zeros((H + 2, W), np.uint8))
+    with pytest.raises(CaptureError, match=f"{f.name}: size {W}x{H + 2} differs"):
+        capture.load_capture(pose, (W, H))
+    code, _, err = run_cli(["decode", pose, "--projector", f"{W}x{H}"])
+    assert code == 2 and "differs" in err
+
+
+def test_unreadable_file(pose):
+    f = sorted(pose.iterdir())[3]
+    f.write_bytes(b"this is not a png")
+    with pytest.raises(CaptureError, match=f"{f.name}: cannot be read as an image"):
+        capture.load_capture(pose, (W, H))
+    code, _, err = run_cli(["decode", pose, "--projector", f"{W}x{H}"])
+    assert code == 2 and "cannot be read" in err
+
+
+def test_empty_and_missing_folder(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(CaptureError, match="no images found"):
+        capture.load_capture(tmp_path / "empty", (W, H))
+    code, _, err = run_cli(["decode", tmp_path / "empty", "--projector", f"{W}x{H}"])
+    assert code == 2 and "no images found" in err
+    code, _, err = run_cli(["decode", tmp_path / "nope", "--projector", f"{W}x{H}"])
+    assert code == 2 and "no such folder" in err
+
+
+def test_projector_size_from_patterns_json(tmp_path):
+    ps = patterns.pattern_set(W, H)
+    write_stack(tmp_path, camera_view_of_patterns(W, H))
+    io.write_text(tmp_path / "patterns.json", __import__("json").dumps(ps.to_dict()))
+    assert capture.load_capture(tmp_path).pattern_set == ps
+    shutil.move(tmp_path / "patterns.json", tmp_path.parent / "elsewhere.json")
+    with pytest.raises(CaptureError, match="pass --projector"):
+        capture.load_capture(tmp_path)
+
+
+def test_cli_decode_writes_maps_and_picture(pose, tmp_path):
+    code, out, err = run_cli(["decode", pose, "--projector", f"{W}x{H}", "-o", tmp_path / "maps.npz",
+                              "--png", tmp_path / "d.png"])
+    assert code == 0, err
+    m = np.load(tmp_path / "maps.npz")
+    yy, xx = np.mgrid[:H, :W]
+    assert np.array_equal(m["col"], xx) and np.array_equal(m["row"], yy)
+    img = cv2.imread(str(tmp_path / "d.png"))
+    assert img is not None and img.shape[1] > 500
+    assert not list(tmp_path.glob(".*tmp*"))
+
+
+def test_cli_patterns_roundtrip(tmp_path):
+    code, out, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "p"])
+    assert code == 0, err
+    files = io.list_images(tmp_path / "p")
+    assert len(files) == 44
+    st = io.read_images(files)
+    assert np.array_equal(st, patterns.generate(1280, 720))
+    code, _, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "q", "--order", "zigzag"])
+    assert code == 2 and "--order" in err
