@@ -409,14 +409,18 @@ def camera_predict(p, obj) -> np.ndarray:
     return models.distort_division(mu, p[2:4], k1, k2)
 
 
-def _camera_residual_fn(obj, cam, p_fixed, free):
+def _camera_residual_fn(obj, cam, p_fixed, free, pp_prior=None):
+    """Residuals (2N,) [+ 2 prior residuals ``w (pp - pp_mean)`` when ``pp_prior = (pp_mean, w)``]."""
     p_fixed = np.asarray(p_fixed, float)
 
     def fun(x):
         p = p_fixed.copy()
         p[free] = x
         r = (camera_predict(p, obj) - cam).ravel()
-        return np.where(np.isfinite(r), r, 1e3)
+        r = np.where(np.isfinite(r), r, 1e3)
+        if pp_prior is not None:
+            r = np.concatenate([r, pp_prior[1] * (p[2:4] - pp_prior[0])])
+        return r
 
     return fun
 
@@ -562,16 +566,22 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
                   starts=[(r["start"], r["cost"], r["valid"]) for r in lm["runs"]])
 
     # 4. joint refinement
+    # an assumed principal point (image centre) becomes the mean of a Gaussian prior (MAP): the
+    # distorted corners move it only as far as they really constrain it
     free = np.ones(12, bool)
-    if pp_source != "cod":
+    pp_prior = None
+    if pp_source == "given" or (pp_source == "image-center" and not use_dist):
         free[2:4] = False
+    elif pp_source == "image-center":
+        sig0 = unc.sigma_from_residuals((camera_predict(p_staged, M) - m).ravel(), 10)
+        pp_prior = (c.copy(), sig0 / sigma_pp)
     if not use_dist:
         free[4:6] = False
     elif not fit_k2:
         free[5] = False
     p = p_staged.copy()
     if refine == "joint":
-        fun = _camera_residual_fn(M, m, p_staged, free)
+        fun = _camera_residual_fn(M, m, p_staged, free, pp_prior)
         try:
             with np.errstate(all="ignore"):
                 r = least_squares(fun, p_staged[free], **_LM)
@@ -781,6 +791,8 @@ def _pnp_rms(obj, pts, K) -> float:
                               flags=cv2.SOLVEPNP_ITERATIVE)
     if not ok:
         return float("nan")
+    rv, tv = cv2.solvePnPRefineLM(obj.astype(np.float64), pts.astype(np.float64), np.asarray(K, float), None,
+                                  rv, tv, (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-15))
     pr, _ = cv2.projectPoints(obj.astype(np.float64), rv, tv, np.asarray(K, float), None)
     return _rms(pr.reshape(-1, 2) - pts)
 

@@ -67,20 +67,20 @@ def covariance(J, sigma: float, *, prior_precision=None, rcond: float = RCOND) -
     n = J.shape[1]
     if not np.all(np.isfinite(J)) or not np.isfinite(sigma):
         return np.full((n, n), np.inf)
-    sigma = max(float(sigma), 1e-300)
-    info = J.T @ J / sigma ** 2
+    Ja = J / max(float(sigma), 1e-300)
     if prior_precision is not None:
         P = np.asarray(prior_precision, float)
-        info = info + (np.diag(P) if P.ndim == 1 else P)
-    d = np.sqrt(np.diag(info))
+        P = np.diag(P) if P.ndim == 1 else P
+        w, V = np.linalg.eigh(P)
+        Ja = np.vstack([Ja, (V * np.sqrt(np.clip(w, 0, None))).T])
+    d = np.linalg.norm(Ja, axis=0)
     if np.any(d == 0):
         return np.full((n, n), np.inf)
-    In = info / np.outer(d, d)
-    s = np.linalg.svd(In, compute_uv=False)
-    # In = Jn^T Jn, so its condition is the square of Jn's
-    if s[-1] <= (rcond ** 2) * s[0]:
+    _, s, Vt = np.linalg.svd(Ja / d, full_matrices=False)
+    if len(s) < n or s[-1] <= rcond * s[0]:
         return np.full((n, n), np.inf)
-    return np.linalg.inv(In) / np.outer(d, d)
+    cov_n = (Vt.T / s ** 2) @ Vt
+    return cov_n / np.outer(d, d)
 
 
 def std(cov) -> np.ndarray:

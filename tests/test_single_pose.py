@@ -1,0 +1,270 @@
+"""The single-pose solver against the simulator (ideal/paper presets), degeneracy flags, real photos.
+
+Tolerances: noisy recoveries are checked against the Cramer-Rao bound of the pose
+(:mod:`procam.crlb`, METHOD §13): an efficient estimator is within 5 sigma_CRLB except with
+probability ~6e-7 per parameter; the staged (paper) camera estimate is ~1.5x the bound, so it gets
+8 sigma. Noise-free correspondences must reproduce the truth to 1e-6 (relative).
+"""
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from procam import board, crlb, models, simulate, single_pose as sp
+from procam.errors import CalibrationError
+from procam.view import View
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+OPENCV_DIR = SHARED / "data" / "opencv-left-right"
+
+
+def _view(scene, sigma_cam=0.0, sigma_proj=0.0, seed=0, name="sim"):
+    obj, cam, proj = simulate.correspondences(scene, sigma_cam, sigma_proj, seed=seed)
+    return View(obj, cam, proj, name, tuple(scene.cam_size), tuple(scene.proj_size))
+
+
+def _euler_deg(R):
+    return np.degrees(models.matrix_to_euler(R))
+
+
+@pytest.fixture(scope="module")
+def ideal():
+    return simulate.preset("ideal")
+
+
+@pytest.mark.parametrize("refine", ["joint", "none"])
+def test_noise_free_ideal_preset_reproduces_truth(ideal, refine):
+    cal = sp.calibrate(_view(ideal), refine=refine)
+    Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
+    np.testing.assert_allclose(cal.camera.K, Kc, rtol=1e-6)
+    np.testing.assert_allclose(cal.projector.K, Kp, rtol=1e-6)
+    d = cal.camera.distortion
+    assert d.model == "division"
+    np.testing.assert_allclose(d.center, (Kc[0, 2], Kc[1, 2]), rtol=1e-6)
+    assert d.k1 == pytest.approx(ideal.cam_dist_coeffs[0], rel=1e-6)
+    np.testing.assert_allclose(cal.R, ideal.R, atol=1e-6)
+    np.testing.assert_allclose(cal.T, ideal.T, atol=1e-6 * np.linalg.norm(ideal.T))
+    assert cal.cam_rms < 1e-6 and cal.proj_rms < 1e-6 and cal.stereo_rms < 1e-6
+    assert cal.poses[0]["advice"]["ok"], cal.poses[0]["advice"]
+    assert not cal.warnings
+
+
+@pytest.fixture(scope="module")
+def bounds(ideal):
+    obj = simulate.board_corners(ideal) if hasattr(simulate, "board_corners") else None
+    obj = simulate.correspondences(ideal, 0, 0)[0]
+    cb = crlb.camera_bound(ideal.K_cam, None, ideal.cam_dist_coeffs[0], ideal.cam_dist_coeffs[1],
+                           ideal.R_board, ideal.t_board, obj, sigma=0.1, model="full")
+    pb = crlb.projector_bound(ideal.K_proj, ideal.R_board_proj, ideal.t_board_proj, obj, sigma=0.2)
+    eb = crlb.extrinsics_bound(cb, pb, ideal.R_board, ideal.t_board, ideal.R_board_proj, ideal.t_board_proj)
+    return cb, pb, eb
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_noisy_recovery_within_cramer_rao_tolerances(ideal, bounds, seed):
+    cb, pb, eb = bounds
+    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=seed))
+    Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
+    assert abs(cal.camera.K[0, 0] - Kc[0, 0]) < 5 * cb["f"]
+    assert abs(cal.camera.K[1, 1] / cal.camera.K[0, 0] - Kc[1, 1] / Kc[0, 0]) < 5 * cb["alpha"]
+    assert abs(cal.camera.K[0, 2] - Kc[0, 2]) < 5 * cb["cu"]
+    assert abs(cal.projector.K[0, 0] - Kp[0, 0]) < 5 * pb["f"]
+    assert abs(cal.projector.K[1, 2] - Kp[1, 2]) < 5 * pb["v0"]
+    dR = _euler_deg(cal.R @ np.asarray(ideal.R).T)
+    assert np.all(np.abs(dR) < 5 * eb["euler_deg"] + 1e-9)
+    assert np.all(np.abs(cal.T - ideal.T) < 5 * eb["T"])
+    # the reported std (from the Jacobian at the estimate, sigma from the residuals) ~ the bound
+    assert 0.5 < cal.std["f_c"] / cb["f"] < 2.0
+    assert 0.5 < cal.std["f_p"] / pb["f"] < 2.0
+    assert 0.5 < cal.std["T"][2] / eb["T"][2] < 2.0
+    # the paper's staged estimate is kept alongside
+    staged = cal.info["camera"].staged
+    assert abs(staged["f"] - Kc[0, 0]) < 8 * cb["f"]
+    assert 0.05 < cal.cam_rms < 0.2 and 0.1 < cal.proj_rms < 0.4
+
+
+def test_reported_std_matches_monte_carlo_spread(ideal):
+    """mrcal-style check: the Jacobian std predicts the spread of repeated calibrations."""
+    fs, fps, pred = [], [], []
+    for seed in range(20):
+        cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=100 + seed))
+        fs.append(cal.camera.K[0, 0])
+        fps.append(cal.projector.K[0, 0])
+        pred.append((cal.std["f_c"], cal.std["f_p"]))
+    pred = np.median(pred, axis=0)
+    assert 0.6 < np.std(fs, ddof=1) / pred[0] < 1.6
+    assert 0.6 < np.std(fps, ddof=1) / pred[1] < 1.6
+
+
+@pytest.mark.parametrize("angles,expected", [((10, 10), 1.1), ((20, 10), 5.8), ((-10, 10), 28.4),
+                                             ((10, -45), 28.8), ((10, 2), 57.3)])
+def test_paper_simulation_camera_bias_matches_method_table(angles, expected):
+    """METHOD §12: pp fixed at truth + (5, 5), no distortion, noise-free, D = 500 mm."""
+    K = models.intrinsic_matrix(1539.0, 674.0, 512.0, alpha=1.004)
+    obj = board.object_points(10, 6, 24.0)
+    m = models.project(K, models.euler_to_matrix(*np.radians([*angles, 0.0])), [0, 0, 500.0], obj)
+    cam = sp.calibrate_camera(obj, m, (1280, 800), principal_point=(679.0, 517.0), distortion=None)
+    assert abs(cam.K[0, 0] - 1539.0) == pytest.approx(expected, abs=0.1)
+    assert cam.principal_point_source == "given"
+    np.testing.assert_allclose(cam.K[:2, 2], (679.0, 517.0))
+
+
+@pytest.mark.parametrize("angles,expected", [((10, 20), 170), ((10, -45), 44), ((10, 5), 634), ((30, 3.5), 639)])
+def test_paper_simulation_projector_bias_matches_method_table(angles, expected):
+    """METHOD §12: truth u0p = 1013, alpha = 1.002, solved with u0p = 960, alpha = 1."""
+    K = models.intrinsic_matrix(2421.0, 1013.0, 1065.0, alpha=1.002)
+    obj = board.object_points(10, 6, 24.0)
+    m = models.project(K, models.euler_to_matrix(*np.radians([*angles, 0.0])), [0, 0, 500.0], obj)
+    proj = sp.calibrate_projector(obj, m, (1920, 1080))
+    assert abs(proj.K[0, 0] - 2421.0) == pytest.approx(expected, abs=1.0)
+    assert proj.K[0, 2] == 960.0
+
+
+@pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (20.0, 0.0, 0.0), (0.0, 25.0, 0.0)])
+def test_fronto_parallel_or_single_axis_camera_pose_is_flagged(ideal, angles):
+    scene = simulate.with_board_pose(ideal, angles)
+    view = _view(scene, 0.1, 0.2, seed=3)
+    cal = sp.calibrate(view)
+    adv = cal.poses[0]["advice"]
+    assert adv["degenerate"] and adv["camera"]["degenerate"] and not adv["ok"]
+    assert any("degenerate" in w and "camera" in w for w in cal.warnings)
+    with pytest.raises(CalibrationError, match="degenerate"):
+        sp.calibrate(view, strict=True)
+
+
+def test_projector_pose_without_nu_is_flagged(ideal):
+    scene = simulate.with_board_pose(ideal, (20.0, 0.0, 0.0), frame="projector")
+    cal = sp.calibrate(_view(scene, 0.1, 0.2, seed=4))
+    adv = cal.poses[0]["advice"]
+    assert adv["projector"]["degenerate"] and not adv["camera"]["degenerate"]
+    assert any("projector" in w and "degenerate" in w for w in cal.warnings)
+
+
+def test_advice_rules():
+    a = sp.advice((15, 12, 0), (17, 26, -4))
+    assert a["ok"] and a["camera"]["paper_rule_ok"] and a["projector"]["paper_rule_ok"]
+    a = sp.advice((4, 4, 0), (20, 10, 0))
+    assert not a["camera"]["paper_rule_ok"] and a["camera"]["weak"] and not a["projector"]["paper_rule_ok"]
+    a = sp.advice((20, 0.2, 0), None, {"f_c": 1.0}, values={"f_c": 1500.0})
+    assert a["camera"]["degenerate"] and "projector" not in a
+    a = sp.advice((20, 20, 0), None, {"f_c": 300.0}, values={"f_c": 1500.0})
+    assert a["camera"]["degenerate"] and a["camera"]["rel_std_f"] == pytest.approx(0.2)
+
+
+def test_never_a_mirror_solution_with_the_board_frame_flipped(ideal):
+    """Board z towards the devices (rows reversed): the solution must still be a proper camera."""
+    obj, cam, proj = simulate.correspondences(ideal, 0.0, 0.0)
+    cols, rows = ideal.board_cols, ideal.board_rows
+    flip = obj.copy()
+    flip[:, 1] = -flip[:, 1]           # y -> -y with the same corner order: a right-handed frame, z flipped
+    flip[:, 2] = 0.0
+    cal = sp.calibrate(View(flip, cam, proj, "flipped", ideal.cam_size, ideal.proj_size))
+    assert cal.camera.K[0, 0] > 0 and cal.camera.K[1, 1] > 0 and cal.projector.K[0, 0] > 0
+    np.testing.assert_allclose(cal.camera.K, ideal.K_cam, rtol=1e-6)
+    np.testing.assert_allclose(cal.R, ideal.R, atol=1e-6)
+    # angles are reported in the frame whose z points away from the device
+    np.testing.assert_allclose(np.abs(cal.poses[0]["camera_angles_deg"][:2]), [15.0, 12.0], atol=1e-5)
+    assert cols * rows == len(obj)
+
+
+def test_unreliable_cod_falls_back_with_warning_and_wider_std(ideal):
+    scene = replace(ideal, cam_dist_coeffs=(0.0, 0.0))
+    view = _view(scene, 0.1, 0.2, seed=5)
+    cal = sp.calibrate(view)
+    cam = cal.info["camera"]
+    assert cam.principal_point_source == "image-center"
+    assert any("centre of distortion unreliable" in w and "image centre" in w for w in cal.warnings)
+    given = sp.calibrate(view, principal_point=(674.0, 512.0))
+    assert given.info["camera"].principal_point_source == "given"
+    assert cal.std["f_c"] > 1.5 * given.std["f_c"]
+    assert np.isfinite(cal.std["u0c"]) and cal.std["u0c"] > 5.0
+    # the paper's behaviour can be forced: it uses the (meaningless) centre and warns
+    try:
+        forced = sp.calibrate(view, cod="paper")
+        assert forced.info["camera"].principal_point_source == "cod"
+        assert any("cod='paper'" in w for w in forced.warnings)
+    except CalibrationError as e:          # a centre far outside the image can leave no valid solution
+        assert "pose" in str(e)
+
+
+def test_nan_corners_are_ignored(ideal):
+    view = _view(ideal, 0.1, 0.2, seed=6)
+    cam = view.cam_pts.copy()
+    proj = view.proj_pts.copy()
+    cam[[0, 11]] = np.nan
+    proj[[5]] = np.nan
+    v2 = View(view.obj_pts, cam, proj, "holes", view.cam_size, view.proj_size)
+    cal = sp.calibrate(v2)
+    ref = sp.calibrate(v2.subset(v2.valid))
+    np.testing.assert_allclose(cal.camera.K, ref.camera.K, rtol=1e-9)
+    assert cal.poses[0]["n_corners"] == len(cam) - 3
+
+
+def test_calibration_fields(ideal):
+    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=7))
+    assert cal.method == "single-pose"
+    for k in ("f_c", "alpha_c", "u0c", "v0c", "k1", "k2", "f_p", "v0p"):
+        assert np.isfinite(cal.std[k]) and cal.std[k] > 0, k
+    assert len(cal.std["R_euler_deg"]) == 3 and len(cal.std["T"]) == 3
+    pose = cal.poses[0]
+    assert set(pose) >= {"name", "camera_angles_deg", "projector_angles_deg", "advice"}
+    np.testing.assert_allclose(pose["camera_angles_deg"][:2], (15.0, 12.0), atol=0.5)
+    assert cal.projector.distortion.model == "none"
+    assert cal.views[0].name == "sim"
+
+
+def test_camera_only_mode(ideal):
+    obj, cam, _ = simulate.correspondences(ideal, 0.1, 0.2, seed=8)
+    cal = sp.calibrate_camera_only(obj, cam, ideal.cam_size, name="photo")
+    assert cal.projector is None and cal.R is None and cal.T is None
+    assert abs(cal.camera.K[0, 0] - ideal.K_cam[0, 0]) < 30
+    assert cal.camera.distortion.model == "division" and "f_p" not in cal.std
+    assert cal.poses[0]["advice"]["camera"]["paper_rule_ok"]
+
+
+def test_too_few_points_and_missing_sizes_are_clear_errors(ideal):
+    obj, cam, proj = simulate.correspondences(ideal, 0.0, 0.0)
+    with pytest.raises(CalibrationError, match="usable camera corners"):
+        sp.calibrate_camera(obj[:5], cam[:5], (1280, 800), name="p1")
+    with pytest.raises(CalibrationError, match="image size"):
+        sp.calibrate_camera(obj, cam, None)
+    with pytest.raises(CalibrationError, match="projector size"):
+        sp.calibrate(View(obj, cam, proj, "p2", (1280, 800), None))
+
+
+# ------------------------------------------------------------------------------------------
+# real photographs (OpenCV samples): one photo -> K, against the 13-photo reference
+REFERENCE = {"left": (536.11, 536.11, 342.37, 235.60), "right": (542.36, 541.62, 328.32, 246.95)}
+
+
+def _corners(path):
+    cv2 = pytest.importorskip("cv2")
+    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    ok, c = cv2.findChessboardCorners(img, (9, 6))
+    assert ok, path
+    c = cv2.cornerSubPix(img, c, (11, 11), (-1, -1),
+                         (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01))
+    return c.reshape(-1, 2), (img.shape[1], img.shape[0])
+
+
+@pytest.mark.skipif(not OPENCV_DIR.is_dir(), reason="shared real-image data absent")
+def test_real_photos_single_pose_camera_only():
+    obj = board.object_points(9, 6, 25.0)
+    rel_ok = []
+    for path in sorted(OPENCV_DIR.glob("*.jpg")):
+        cam, size = _corners(path)
+        which = "left" if path.name.startswith("left") else "right"
+        fx = REFERENCE[which][0]
+        cal = sp.calibrate_camera_only(obj, cam, size, name=path.name)
+        f, s = cal.camera.K[0, 0], cal.std["f_c"]
+        adv = cal.poses[0]["advice"]["camera"]
+        assert np.isfinite(f) and f > 0 and cal.camera.K[1, 1] > 0
+        assert cal.info["camera"].rms_px < 1.5
+        if not (adv["degenerate"] or adv["weak"]):
+            rel_ok.append(abs(f - fx) / fx)
+            # model errors of a real lens come on top of the noise-only std
+            assert abs(f - fx) < 6 * s + 0.03 * fx, (path.name, f, s)
+    assert len(rel_ok) >= 8
+    assert np.median(rel_ok) < 0.03

@@ -1,0 +1,57 @@
+"""Covariance from the Jacobian: analytic identities, degeneracy, priors, delta method."""
+
+import numpy as np
+import pytest
+
+from procam import uncertainty as unc
+
+
+def test_numeric_jacobian_matches_analytic():
+    def f(p):
+        return np.array([p[0] ** 2 * p[1], np.sin(p[1]), p[0] * 1e3])
+
+    p = np.array([3.0, 0.7])
+    J = unc.numeric_jacobian(f, p)
+    Ja = np.array([[2 * p[0] * p[1], p[0] ** 2], [0.0, np.cos(p[1])], [1e3, 0.0]])
+    np.testing.assert_allclose(J, Ja, rtol=1e-8)
+
+
+def test_linear_regression_covariance_is_textbook():
+    rng = np.random.default_rng(0)
+    X = np.column_stack([np.ones(50), rng.uniform(-1, 1, 50), rng.uniform(0, 5, 50)])
+    sigma = 0.3
+    cov = unc.covariance(X, sigma)
+    np.testing.assert_allclose(cov, sigma ** 2 * np.linalg.inv(X.T @ X), rtol=1e-10)
+
+
+def test_sigma_from_residuals_unbiased():
+    rng = np.random.default_rng(1)
+    vals = [unc.sigma_from_residuals(0.5 * rng.standard_normal(40), 8) for _ in range(400)]
+    assert np.mean(np.square(vals)) == pytest.approx(0.25 * 40 / 32, rel=0.1)  # pure noise, m - n = 32
+    assert np.isnan(unc.sigma_from_residuals(np.ones(3), 3))
+
+
+def test_degenerate_jacobian_gives_infinite_covariance_not_pinv():
+    J = np.column_stack([np.arange(10.0), 2 * np.arange(10.0), np.ones(10)])  # columns 0, 1 dependent
+    cov = unc.covariance(J, 0.1)
+    assert np.all(np.isinf(cov))
+    assert np.all(np.isinf(unc.std(cov)))
+
+
+def test_prior_makes_unobservable_parameter_finite_and_widens_others():
+    x = np.linspace(-1, 1, 20)
+    # y = a + b x + c (x + 0 * something): column 2 duplicates column 0 -> unobservable without prior
+    J = np.column_stack([np.ones(20), x, np.ones(20)])
+    assert np.all(np.isinf(unc.covariance(J, 0.1)))
+    cov = unc.covariance(J, 0.1, prior_precision=np.array([0.0, 0.0, 1 / 0.5 ** 2]))
+    s = unc.std(cov)
+    assert np.all(np.isfinite(s))
+    assert s[2] == pytest.approx(0.5, rel=0.05)   # data say nothing about c alone
+    assert s[0] == pytest.approx(np.hypot(0.5, 0.1 / np.sqrt(20)), rel=0.05)  # a inherits the prior
+
+
+def test_propagate_linear_and_infinite():
+    cov = np.diag([4.0, 9.0])
+    out = unc.propagate(cov, lambda p: np.array([p[0] + p[1], 2 * p[0]]), np.zeros(2))
+    np.testing.assert_allclose(out, [[13.0, 8.0], [8.0, 16.0]], rtol=1e-8)
+    assert np.all(np.isinf(unc.propagate(np.full((2, 2), np.inf), lambda p: p, np.zeros(2))))
