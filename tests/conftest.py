@@ -60,3 +60,35 @@ def run_cli(args):
     except ValueError:
         err = ""
     return res.exit_code, out, err
+
+
+@pytest.fixture(scope="session")
+def paper_capture(tmp_path_factory):
+    """One rendered capture (paper preset, recommended pose, default noise, seed 1), written to a folder.
+
+    Rendered once per test session: returns (folder, stack, truth dict, scene).
+    """
+    from procam import simulate
+
+    scene = simulate.with_board_pose(simulate.preset("paper"), simulate.RECOMMENDED_POSE)
+    stack, truth = simulate.render(scene, seed=1)
+    folder = tmp_path_factory.mktemp("paper_capture")
+    simulate.write_capture(folder, stack, truth)
+    return folder, stack, truth, scene
+
+
+@pytest.fixture(scope="session")
+def ideal_capture(tmp_path_factory):
+    """Like :func:`paper_capture` with the ``ideal`` preset (single-pose assumptions true)."""
+    from procam import simulate
+
+    scene = simulate.with_board_pose(simulate.preset("ideal"), simulate.RECOMMENDED_POSE)
+    stack, truth = simulate.render(scene, seed=2)
+    folder = tmp_path_factory.mktemp("ideal_capture")
+    simulate.write_capture(folder, stack, truth)
+    return folder, stack, truth, scene
+
+
+def rms(a, b):
+    d = np.asarray(a, float) - np.asarray(b, float)
+    return float(np.sqrt(np.nanmean(np.sum(d * d, axis=1))))

@@ -155,3 +155,56 @@ def write_image(path, img: np.ndarray) -> Path:
             raise CaptureError(f"{path}: could not encode image")
         Path(tmp).write_bytes(buf.tobytes())
     return path
+
+
+def _nan_to_none(a) -> list:
+    a = np.asarray(a, float)
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in a.reshape(len(a), -1)]
+
+
+def view_to_dict(view, board=None, square=None, options: dict | None = None) -> dict:
+    """JSON-able dict of a :class:`~procam.view.View` (NaN -> null) with per-corner diagnostics."""
+    from .correspond import CORNER_REASONS
+
+    d = view.diagnostics
+    corners = []
+    for k in range(len(view.obj_pts)):
+        c = {"index": k}
+        if "reason" in d:
+            c["reason"] = CORNER_REASONS.get(int(d["reason"][k]), str(d["reason"][k]))
+        for key in ("pixels", "window_pixels", "inliers", "residual_px"):
+            if key in d:
+                v = float(d[key][k])
+                c[key] = v if np.isfinite(v) else None
+        corners.append(c)
+    out = {"format": "procam-correspondences", "version": 1, "pose": view.name,
+           "camera_size": list(view.cam_size) if view.cam_size else None,
+           "projector_size": list(view.proj_size) if view.proj_size else None,
+           "board_points": _nan_to_none(view.obj_pts), "camera_points": _nan_to_none(view.cam_pts),
+           "projector_points": _nan_to_none(view.proj_pts), "corners": corners}
+    if board is not None:
+        out["board"] = {"cols": int(board[0]), "rows": int(board[1]), "square": float(square)}
+    if options:
+        out["options"] = options
+    return out
+
+
+def view_from_dict(d: dict):
+    """Inverse of :func:`view_to_dict` (diagnostics other than the per-corner numbers are dropped)."""
+    from .correspond import CORNER_REASONS
+    from .view import View
+
+    def arr(key):
+        return np.array([[np.nan if v is None else v for v in row] for row in d[key]], float)
+
+    rev = {v: k for k, v in CORNER_REASONS.items()}
+    diag = {}
+    corners = d.get("corners", [])
+    if corners and "reason" in corners[0]:
+        diag["reason"] = np.array([rev.get(c["reason"], 255) for c in corners], np.uint8)
+    for key in ("pixels", "window_pixels", "inliers", "residual_px"):
+        if corners and key in corners[0]:
+            diag[key] = np.array([np.nan if c[key] is None else c[key] for c in corners], float)
+    return View(arr("board_points"), arr("camera_points"), arr("projector_points"), d.get("pose", "view"),
+                tuple(d["camera_size"]) if d.get("camera_size") else None,
+                tuple(d["projector_size"]) if d.get("projector_size") else None, diag)

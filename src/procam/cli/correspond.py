@@ -1,0 +1,74 @@
+"""``procam correspond``: chessboard corners in the camera and their projector coordinates."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import typer
+
+from .. import capture, correspond as corr, io, pipeline
+from ._app import app, console, fail, parse_size, user_errors
+
+
+def parse_board(text: str) -> tuple[int, int]:
+    cols, rows = parse_size(text, "--board")
+    return cols, rows
+
+
+def pose_options(estimator: str, window: int, refine: int, detector: str, method: str,
+                 min_corners: int = 10) -> pipeline.PoseOptions:
+    if estimator not in corr.ESTIMATORS:
+        fail(f"--estimator must be one of {', '.join(corr.ESTIMATORS)}, got {estimator!r}")
+    if detector not in ("auto", "classic", "sb"):
+        fail(f"--detector must be auto, classic or sb, got {detector!r}")
+    if method not in ("robust", "simple"):
+        fail(f"--method must be robust or simple, got {method!r}")
+    if window < 6:
+        fail(f"--window must be at least 6 px, got {window}")
+    return pipeline.PoseOptions(decode_method=method, detector=detector, refine_window=refine,
+                                corners=corr.CornerOptions(window=window, estimator=estimator),
+                                min_corners=min_corners)
+
+
+@app.command("correspond")
+@user_errors
+def correspond_cmd(
+    pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
+    board: str = typer.Option(..., "--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6."),
+    square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
+    projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
+    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    out: Path = typer.Option(..., "-o", "--out", help="Write the correspondences as JSON."),
+    png: Path = typer.Option(None, "--png", help="Picture: corners on the camera image and on the projector plane."),
+    window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
+    estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    refine: int = typer.Option(11, "--refine-window", help="cornerSubPix half-window, px (0 = none)."),
+    detector: str = typer.Option("auto", "--detector", help="Corner detector: auto, classic or sb."),
+    method: str = typer.Option("robust", "--method", help="Decode classifier: robust or simple."),
+):
+    """Camera corners (white frame) and their projector coordinates by local homographies."""
+    if square <= 0:
+        fail(f"--square must be positive, got {square}")
+    cols, rows = parse_board(board)
+    opts = pose_options(estimator, window, refine, detector, method)
+    cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order)
+    view, _ = pipeline.view_from_stack(cap.stack, cap.pattern_set, (cols, rows), square, name=str(pose_dir),
+                                       options=opts)
+    ok = view.valid
+    console.print(f"{pose_dir}: {ok.sum()} of {len(ok)} corners with projector coordinates"
+                  + ("" if ok.all() else f" (failed: {corr.reason_summary(view.diagnostics['reason'])})"))
+    res = view.diagnostics["residual_px"][ok]
+    if ok.any():
+        console.print(f"local homography fit RMS: median {float(__import__('numpy').median(res)):.2f}, "
+                      f"max {float(res.max()):.2f} projector px")
+    opt = dataclasses.asdict(opts)
+    io.write_text(out, json.dumps(io.view_to_dict(view, (cols, rows), square, opt), indent=1))
+    console.print(f"wrote {out}")
+    if png is not None:
+        from ..plots.correspond import correspond_figure
+        from ..plots.decode import save_figure
+
+        save_figure(correspond_figure(view, cap.white, title=str(pose_dir)), png)
+        console.print(f"wrote {png}")
