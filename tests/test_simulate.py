@@ -13,6 +13,7 @@ import pytest
 from procam import simulate as sim
 
 SRC = Path(sim.__file__)
+_PRESET = sim.preset
 
 
 # ---------------------------------------------------------------------------------------------
@@ -151,3 +152,172 @@ def test_correspondences_fast_path():
     ec = np.concatenate([sim.correspondences(s, 0.1, 0.2, seed=k)[1] - c["camera_distorted"] for k in range(50)])
     ep = np.concatenate([sim.correspondences(s, 0.1, 0.2, seed=k)[2] - c["projector"] for k in range(50)])
     assert ec.std() == pytest.approx(0.1, rel=0.1) and ep.std() == pytest.approx(0.2, rel=0.1)
+
+
+# ---------------------------------------------------------------------------------------------
+# rendering
+# ---------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def paper_capture():
+    s = sim.preset("paper")
+    calls = []
+    stack, t = sim.render(s, seed=0, progress=lambda d, n: calls.append((d, n)))
+    return s, stack, t, calls
+
+
+@pytest.fixture(scope="module")
+def paper_maps(paper_capture):
+    return sim.true_projector_maps(paper_capture[0])
+
+
+def small_scene(name="paper", **kw):
+    """The preset's rig with both devices scaled down 4x (same angles of view): cheap to render."""
+    s = _PRESET(name)
+    S = np.diag([0.25, 0.25, 1.0])
+    s = s.replace(cam_size=(320, 200), K_cam=S @ s.K_cam, proj_size=(480, 270), K_proj=S @ s.K_proj,
+                  cam_dist_coeffs=(s.cam_dist_coeffs[0] * 16, 0.0), **kw)
+    return sim.with_board_pose(s, sim.RECOMMENDED_POSE)
+
+
+def _canonical(c):
+    """OpenCV may return the 180-degree-symmetric board backwards: corner 0 must be top-left."""
+    return c[::-1] if c[0].sum() > c[-1].sum() else c
+
+
+def test_render_shape_dtype_progress(paper_capture, paper_maps):
+    s, stack, t, calls = paper_capture
+    assert stack.shape == (46, 800, 1280) and stack.dtype == np.uint8
+    assert calls[-1][0] == calls[-1][1] == 47 and len(calls) == 47
+    assert t["render"]["white"] == 44 and t["render"]["black"] == 45
+    white, black = stack[44].astype(int), stack[45].astype(int)
+    _, _, lit = paper_maps
+    assert (white == 255).mean() < 1e-3  # exposure leaves the white squares unsaturated
+    assert np.median(white[lit] - black[lit]) > 40
+
+
+def test_opencv_finds_board_and_subpixel_corners_match_truth(paper_capture):
+    s, stack, t, _ = paper_capture
+    white = stack[44]
+    ok, corners = cv2.findChessboardCorners(white, (10, 6),
+                                            cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
+    assert ok
+    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.1)
+    c = _canonical(cv2.cornerSubPix(white, corners, (11, 11), (-1, -1), crit).reshape(-1, 2))
+    e = c - np.array(t["corners"]["camera_distorted"])
+    rms = np.sqrt((e ** 2).sum(axis=1).mean())
+    assert rms < 0.1, rms
+    assert np.abs(e.mean(axis=0)).max() < 0.05  # no systematic shift (pixel-centre convention)
+
+
+def test_decoded_maps_match_true_projector_coordinates(paper_capture, paper_maps):
+    from procam import decode as dec
+    from procam import patterns as pat
+
+    s, stack, t, _ = paper_capture
+    col, row, lit = paper_maps
+    assert lit.sum() > 100_000
+    ps = pat.pattern_set(1920, 1080, "opencv")
+    # plain comparison of each pattern with its inverse: the code the capture carries
+    r = dec.decode(stack, ps, method="simple", contrast_threshold=0.0, shadow_threshold=1.0)
+    for d, truth_map in ((r.col, col), (r.row, row)):
+        match = np.abs(d - truth_map) < 1.0  # one of the (at most two) projector pixels the camera pixel straddles
+        assert match[lit].mean() >= 0.99, match[lit].mean()
+    # the default (robust) decoder: what it decodes on the board is right
+    r = dec.decode(stack, ps)
+    for d, truth_map in ((r.col, col), (r.row, row)):
+        v = lit & np.isfinite(d)
+        assert v.sum() > 0.6 * lit.sum()
+        assert (np.abs(d - truth_map)[v] < 1.0).mean() >= 0.99
+
+
+def test_true_maps_and_shadow_physics(paper_capture, paper_maps):
+    s, stack, t, _ = paper_capture
+    col, row, lit = paper_maps
+    white, black = stack[44].astype(float), stack[45].astype(float)
+    # corners of the truth lie on lit board pixels and the map agrees with the corner truth there
+    cam = np.array(t["corners"]["camera_distorted"])
+    proj = np.array(t["corners"]["projector"])
+    ij = np.rint(cam).astype(int)
+    assert lit[ij[:, 1], ij[:, 0]].all()
+    near = np.abs(col[ij[:, 1], ij[:, 0]] - proj[:, 0])
+    assert near.max() < 3  # within a camera pixel's footprint (~1.6 projector px)
+    # unlit pixels (shadow of the board on the wall, outside the projector) get no projector light
+    unlit = ~np.isfinite(col)
+    assert unlit.sum() > 1000
+    assert np.median(white[unlit] - black[unlit]) < 2
+    # the board's shadow exists: wall pixels inside the projector's image region but unlit
+    g = sim._geometry(s, s=1)
+    shadow = (~g["board"]) & np.isfinite(g["xp"]) & (g["xp"] > 0) & (g["xp"] < 1919) & (g["yp"] > 0) \
+        & (g["yp"] < 1079) & ~g["lit"]
+    assert shadow.sum() > 1000
+
+
+def test_same_seed_identical_images_and_other_seed_differs():
+    s = small_scene()
+    a, ta = sim.render(s, seed=7)
+    b, tb = sim.render(s, seed=7)
+    np.testing.assert_array_equal(a, b)
+    assert json.dumps(ta) == json.dumps(tb)
+    c, _ = sim.render(s, seed=8)
+    assert (a != c).any()
+
+
+def test_16bit_moreno_order_capture_round_trip(tmp_path):
+    from procam import capture
+    from procam import decode as dec
+
+    s = small_scene("ideal", bits=16)
+    stack, t = sim.render(s, order="moreno", seed=2)
+    assert stack.dtype == np.uint16 and stack.max() > 40000 and len(stack) == 2 + 2 * (9 + 9)
+    assert t["render"]["white"] == 0 and t["render"]["black"] == 1
+    paths = sim.write_capture(tmp_path / "pose", stack, t, order="moreno")
+    assert [p.name for p in paths][:2] == ["00.png", "01.png"] and len(paths) == 38
+    assert not [p for p in (tmp_path / "pose").iterdir() if "tmp" in p.name]
+    cap = capture.load_capture(tmp_path / "pose")
+    np.testing.assert_array_equal(cap.stack, stack)
+    assert cap.pattern_set.order == "moreno"
+    t2 = json.loads((tmp_path / "pose" / "truth.json").read_text())
+    np.testing.assert_allclose(t2["corners"]["projector"], t["corners"]["projector"])
+    col, row, lit = sim.true_projector_maps(s)
+    r = dec.decode(stack, cap.pattern_set, method="simple", contrast_threshold=0.0, shadow_threshold=1.0)
+    assert (np.abs(r.col - col) < 1)[lit].mean() > 0.98
+    assert (np.abs(r.row - row) < 1)[lit].mean() > 0.98
+
+
+def test_write_capture_rejects_wrong_stack(tmp_path):
+    t = sim.truth(sim.preset("paper"))
+    with pytest.raises(ValueError):
+        sim.write_capture(tmp_path, np.zeros((10, 8, 8), np.uint8), t)
+
+
+def test_cli_simulate(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from procam.cli import app
+
+    monkeypatch.setattr(sim, "preset", lambda name="paper": small_scene(name))
+    runner = CliRunner()
+    res = runner.invoke(app, ["simulate", str(tmp_path / "p"), "--pose", "10,-30,0", "--noise", "0",
+                              "--seed", "1"])
+    assert res.exit_code == 0, res.output
+    t = json.loads((tmp_path / "p" / "truth.json").read_text())
+    np.testing.assert_allclose(t["pose"]["camera"]["angles_deg"], [10, -30, 0], atol=1e-9)
+    assert t["photometry"]["read_noise"] == 0 and t["photometry"]["full_well"] == 0
+    assert len(list((tmp_path / "p").glob("*.png"))) == 38
+    bad = runner.invoke(app, ["simulate", str(tmp_path / "q"), "--bits", "12"])
+    assert bad.exit_code == 2 and "--bits" in bad.output
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["ideal"])
+def test_corners_strong_distortion_slow(name):
+    s = sim.preset(name)
+    stack, t = sim.render(s, seed=5)
+    ok, corners = cv2.findChessboardCorners(stack[44], (10, 6),
+                                            cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
+    assert ok
+    crit = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.1)
+    c = _canonical(cv2.cornerSubPix(stack[44], corners, (11, 11), (-1, -1), crit).reshape(-1, 2))
+    e = c - np.array(t["corners"]["camera_distorted"])
+    assert np.sqrt((e ** 2).sum(axis=1).mean()) < 0.1
