@@ -48,9 +48,11 @@ class Distortion:
         out = np.full_like(pts, np.nan)
         ok = np.isfinite(pts).all(1)
         if ok.any():
-            und = cv2.undistortPointsIter(pts[ok].reshape(-1, 1, 2), np.asarray(K, float),
-                                          np.asarray(self.coeffs, float), None, np.asarray(K, float),
-                                          (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))
+            # OpenCV 4 has undistortPointsIter; OpenCV 5 folded the criteria into undistortPoints.
+            und_fn = getattr(cv2, "undistortPointsIter", cv2.undistortPoints)
+            und = und_fn(pts[ok].reshape(-1, 1, 2), np.asarray(K, float), np.asarray(self.coeffs, float),
+                         None, np.asarray(K, float),
+                         criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))
             out[ok] = und.reshape(-1, 2)
         return out
 
