@@ -1,0 +1,254 @@
+"""Evaluation of a calibration on a set of poses (METHOD §11): reprojection, stereo, PnP precision.
+
+For every pose ``j`` and a calibration (single- or multi-pose, any distortion model):
+
+* camera and projector points are undistorted with the calibration's own distortion model
+  (:meth:`procam.calibration.Device.undistort`; division or OpenCV), so every error below is measured
+  in undistorted pixels with a plain pinhole, whatever the model;
+* ``cam_rms`` / ``proj_rms``: ``cv2.solvePnP`` (ITERATIVE) with the intrinsics fixed, RMS over the
+  corners (METHOD §11.1);
+* ``stereo_rms``: both intrinsics and ``(R, T)`` fixed, only the board pose (camera frame) optimised
+  over the camera and projector residuals, started from the camera's PnP (METHOD §11.2);
+* the per-pose procam extrinsics ``R_j = R_pj R_cj^T``, ``T_j = T_pj - R_j T_cj`` from the two PnP
+  poses, and their spread ``sigma_T = sqrt(var X + var Y + var Z)``, ``sigma_|T| = std |T_j|``
+  (METHOD §11.3), with ``ddof = 1`` (default) and ``ddof = 0``;
+* the board's Euler angles ``(psi, nu, phi)`` in the camera and the projector frames.
+
+RMS = ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Sequence
+
+import cv2
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import models
+from .calibration import Calibration
+from .errors import CalibrationError
+from .view import View
+
+
+def pose_angles(R_board_to_device) -> tuple[float, float, float]:
+    """Board pose angles ``(psi, nu, phi)`` in degrees (intrinsic XYZ; fronto-parallel = (0, 0, 0)).
+
+    Parameters
+    ----------
+    R_board_to_device : (3, 3) rotation mapping board to device coordinates.
+    """
+    return tuple(float(a) for a in np.degrees(models.matrix_to_euler(R_board_to_device)))
+
+
+def _rms(e) -> float:
+    e = np.asarray(e, float).reshape(-1, 2)
+    return float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if len(e) else float("nan")
+
+
+def pnp(obj: np.ndarray, pts: np.ndarray, K: np.ndarray):
+    """Board pose from undistorted pixels with fixed ``K``: ``(R (3, 3), t (3,), residuals (N, 2))``.
+
+    ``cv2.solvePnP`` with ``SOLVEPNP_ITERATIVE`` (OpenCV's default, as used by the paper).
+    """
+    obj = np.asarray(obj, float).reshape(-1, 3)
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    K = np.asarray(K, float)
+    img = pts.reshape(-1, 1, 2)
+    ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_ITERATIVE)
+    if not ok or not np.all(np.isfinite(tvec)) or tvec.ravel()[2] <= 0:
+        # rare planar failure of the default start: IPPE (planar) start, then the iterative refinement
+        ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_IPPE)
+        if ok:
+            ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, rvec, tvec, True, cv2.SOLVEPNP_ITERATIVE)
+    if not ok or not np.all(np.isfinite(tvec)) or tvec.ravel()[2] <= 0:
+        raise CalibrationError("solvePnP found no pose with the board in front of the device")
+    R = models.rvec_to_matrix(rvec)
+    t = np.asarray(tvec, float).ravel()
+    return R, t, models.project(K, R, t, obj) - pts
+
+
+def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12):
+    """Board pose (camera frame) minimising camera + projector residuals with everything else fixed.
+
+    Parameters
+    ----------
+    obj : (N, 3) board points; cam_u, proj_u : (N, 2) undistorted camera / projector pixels.
+    Kc, Kp : (3, 3) intrinsics; R, T : camera -> projector; R0, t0 : start (camera PnP pose).
+
+    Returns
+    -------
+    R_b (3, 3), t_b (3,), cam residuals (N, 2), proj residuals (N, 2)
+    """
+    obj = np.asarray(obj, float)
+
+    def res(x):
+        Rb = models.rvec_to_matrix(x[:3])
+        Xc = obj @ Rb.T + x[3:]
+        rc = models.project(Kc, np.eye(3), np.zeros(3), Xc) - cam_u
+        rp = models.project(Kp, R, T, Xc) - proj_u
+        return np.concatenate([rc.ravel(), rp.ravel()])
+
+    x0 = np.concatenate([models.matrix_to_rvec(R0), np.ravel(t0)])
+    sol = least_squares(res, x0, method="lm", x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
+    r = sol.fun
+    n = len(obj)
+    return (models.rvec_to_matrix(sol.x[:3]), sol.x[3:].copy(), r[:2 * n].reshape(-1, 2),
+            r[2 * n:].reshape(-1, 2))
+
+
+@dataclass(frozen=True)
+class PoseEvaluation:
+    """Metrics of one pose (pixels, board units, degrees).
+
+    ``R``, ``T``: the procam extrinsics from this pose's two PnP solutions (camera -> projector);
+    ``R_cam, t_cam`` / ``R_proj, t_proj``: the PnP board poses; ``cam_angles`` / ``proj_angles``:
+    board ``(psi, nu, phi)`` in each device frame; ``R_angles``: Euler angles of ``R``.
+    """
+
+    name: str
+    n_points: int
+    cam_rms: float
+    proj_rms: float
+    stereo_rms: float
+    cam_angles: tuple[float, float, float]
+    proj_angles: tuple[float, float, float]
+    R: np.ndarray
+    T: np.ndarray
+    R_angles: tuple[float, float, float]
+    R_cam: np.ndarray
+    t_cam: np.ndarray
+    R_proj: np.ndarray
+    t_proj: np.ndarray
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        for k, v in d.items():
+            if isinstance(v, np.ndarray):
+                d[k] = v.tolist()
+            elif isinstance(v, tuple):
+                d[k] = [float(a) for a in v]
+        return d
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Metrics of a calibration over a set of poses.
+
+    Attributes
+    ----------
+    poses : per-pose :class:`PoseEvaluation`.
+    cam_rms, proj_rms : mean over poses of the per-pose RMS (the paper's "average reprojection error").
+    cam_rms_all, proj_rms_all : RMS pooled over every point of every pose.
+    stereo_rms : stereo RMS pooled over every camera and projector point of every pose.
+    sigma_xyz : (3,) std of X, Y, Z of the per-pose ``T_j`` (ddof = 1).
+    sigma_T, sigma_abs_T : ``sqrt(var X + var Y + var Z)`` and ``std |T_j|`` (ddof = 1).
+    sigma_T_ddof0, sigma_abs_T_ddof0 : the same with ddof = 0.
+    T_mean : (3,) mean of the ``T_j``; T_calib : (3,) the calibration's ``T``.
+    R_angles : Euler angles (deg) of the calibration's ``R``.
+    """
+
+    poses: tuple
+    cam_rms: float
+    proj_rms: float
+    cam_rms_all: float
+    proj_rms_all: float
+    stereo_rms: float
+    sigma_xyz: np.ndarray
+    sigma_T: float
+    sigma_abs_T: float
+    sigma_T_ddof0: float
+    sigma_abs_T_ddof0: float
+    T_mean: np.ndarray
+    T_calib: np.ndarray
+    R_angles: tuple[float, float, float]
+
+    def to_dict(self) -> dict:
+        out = {}
+        for k in self.__dataclass_fields__:
+            v = getattr(self, k)
+            if k == "poses":
+                out[k] = [p.to_dict() for p in v]
+            elif isinstance(v, np.ndarray):
+                out[k] = v.tolist()
+            elif isinstance(v, tuple):
+                out[k] = [float(a) for a in v]
+            else:
+                out[k] = float(v)
+        return out
+
+
+def _spread(Ts: np.ndarray, ddof: int):
+    if len(Ts) <= ddof:
+        return np.full(3, np.nan), float("nan"), float("nan")
+    sx = np.std(Ts, axis=0, ddof=ddof)
+    return sx, float(np.sqrt(np.sum(sx ** 2))), float(np.std(np.linalg.norm(Ts, axis=1), ddof=ddof))
+
+
+def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) -> Evaluation:
+    """Evaluate ``calib`` on ``views`` (METHOD §11); see the module docstring for the definitions.
+
+    Parameters
+    ----------
+    calib : a :class:`procam.calibration.Calibration` with a projector and ``(R, T)``.
+    views : poses to evaluate on (NaN corners are skipped: ``view.valid``).
+    min_points : poses with fewer valid corners raise.
+
+    Returns
+    -------
+    :class:`Evaluation`
+
+    Raises
+    ------
+    CalibrationError
+        No views, a calibration without projector/extrinsics, or a pose with too few corners.
+    """
+    views = list(views)
+    if not views:
+        raise CalibrationError("nothing to evaluate: give at least one pose")
+    if calib.projector is None or calib.R is None or calib.T is None:
+        raise CalibrationError("the calibration has no projector or no camera->projector extrinsics")
+    Kc, Kp = np.asarray(calib.camera.K, float), np.asarray(calib.projector.K, float)
+    R, T = np.asarray(calib.R, float), np.asarray(calib.T, float).ravel()
+    poses = []
+    cam_all, proj_all, st_all = [], [], []
+    for k, v in enumerate(views):
+        name = v.name or f"pose{k + 1}"
+        m = v.valid
+        if m.sum() < min_points:
+            raise CalibrationError(f"pose {name!r}: only {int(m.sum())} valid corners (need {min_points})")
+        obj = v.obj_pts[m]
+        cam_u = calib.camera.undistort(v.cam_pts[m])
+        proj_u = calib.projector.undistort(v.proj_pts[m])
+        ok = np.isfinite(cam_u).all(1) & np.isfinite(proj_u).all(1)
+        if ok.sum() < min_points:
+            raise CalibrationError(f"pose {name!r}: undistortion failed for most corners; "
+                                   "is the calibration for this camera?")
+        obj, cam_u, proj_u = obj[ok], cam_u[ok], proj_u[ok]
+        try:
+            Rc, tc, ec = pnp(obj, cam_u, Kc)
+            Rp, tp, ep = pnp(obj, proj_u, Kp)
+        except CalibrationError as e:
+            raise CalibrationError(f"pose {name!r}: {e}") from None
+        _, _, sc, sp = stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, Rc, tc)
+        Rj = Rp @ Rc.T
+        Tj = tp - Rj @ tc
+        cam_all.append(ec)
+        proj_all.append(ep)
+        st_all += [sc, sp]
+        poses.append(PoseEvaluation(
+            name=name, n_points=int(len(obj)), cam_rms=_rms(ec), proj_rms=_rms(ep),
+            stereo_rms=_rms(np.vstack([sc, sp])), cam_angles=pose_angles(Rc), proj_angles=pose_angles(Rp),
+            R=Rj, T=Tj, R_angles=pose_angles(Rj), R_cam=Rc, t_cam=tc, R_proj=Rp, t_proj=tp))
+    Ts = np.array([p.T for p in poses])
+    sx1, sT1, sA1 = _spread(Ts, 1)
+    _, sT0, sA0 = _spread(Ts, 0)
+    return Evaluation(
+        poses=tuple(poses),
+        cam_rms=float(np.mean([p.cam_rms for p in poses])),
+        proj_rms=float(np.mean([p.proj_rms for p in poses])),
+        cam_rms_all=_rms(np.vstack(cam_all)), proj_rms_all=_rms(np.vstack(proj_all)),
+        stereo_rms=_rms(np.vstack(st_all)),
+        sigma_xyz=sx1, sigma_T=sT1, sigma_abs_T=sA1, sigma_T_ddof0=sT0, sigma_abs_T_ddof0=sA0,
+        T_mean=Ts.mean(axis=0), T_calib=T, R_angles=pose_angles(R))
