@@ -69,18 +69,22 @@ def test_noise_free_recovers_truth(rig):
 def test_noisy_recovery_and_std(rig):
     base, scenes = rig
     calib = multi_pose.calibrate(_views(scenes, 0.1, 0.2, seed=3))
-    truth = {"cam_fx": base.K_cam[0, 0], "cam_fy": base.K_cam[1, 1], "cam_cx": base.K_cam[0, 2],
-             "cam_cy": base.K_cam[1, 2], "proj_fx": base.K_proj[0, 0], "proj_fy": base.K_proj[1, 1],
-             "proj_cx": base.K_proj[0, 2], "proj_cy": base.K_proj[1, 2],
-             "T_x": base.T[0], "T_y": base.T[1], "T_z": base.T[2]}
-    est = {"cam_fx": calib.camera.K[0, 0], "cam_fy": calib.camera.K[1, 1], "cam_cx": calib.camera.K[0, 2],
-           "cam_cy": calib.camera.K[1, 2], "proj_fx": calib.projector.K[0, 0], "proj_fy": calib.projector.K[1, 1],
-           "proj_cx": calib.projector.K[0, 2], "proj_cy": calib.projector.K[1, 2],
-           "T_x": calib.T[0], "T_y": calib.T[1], "T_z": calib.T[2]}
+    truth = {"f_c": base.K_cam[0, 0], "fy_c": base.K_cam[1, 1], "u0c": base.K_cam[0, 2], "v0c": base.K_cam[1, 2],
+             "f_p": base.K_proj[0, 0], "fy_p": base.K_proj[1, 1], "u0p": base.K_proj[0, 2], "v0p": base.K_proj[1, 2]}
+    est = {"f_c": calib.camera.K[0, 0], "fy_c": calib.camera.K[1, 1], "u0c": calib.camera.K[0, 2],
+           "v0c": calib.camera.K[1, 2], "f_p": calib.projector.K[0, 0], "fy_p": calib.projector.K[1, 1],
+           "u0p": calib.projector.K[0, 2], "v0p": calib.projector.K[1, 2]}
+    for i in range(3):
+        truth[f"T{i}"], est[f"T{i}"] = base.T[i], calib.T[i]
+        truth[f"R{i}"] = simulate.matrix_euler(base.R)[i]
+        est[f"R{i}"] = np.degrees(models.matrix_to_euler(calib.R))[i]
+    std = dict(calib.std)
+    for i in range(3):
+        std[f"T{i}"], std[f"R{i}"] = calib.std["T"][i], calib.std["R_euler_deg"][i]
     for key, value in truth.items():
         # within 4 predicted standard deviations, and the deviations themselves are small
-        assert abs(est[key] - value) < 4 * calib.std[key], (key, est[key], value, calib.std[key])
-        assert calib.std[key] < 4.0, key
+        assert abs(est[key] - value) < 4 * std[key], (key, est[key], value, std[key])
+        assert std[key] < 4.0, key
     assert _rot_err_deg(calib.R, base.R) < 0.2
     # RMS near the injected noise: camera 0.1*sqrt(2), projector 0.2*sqrt(2) per point
     assert 0.10 < calib.cam_rms < 0.16 and 0.22 < calib.proj_rms < 0.31
@@ -146,7 +150,7 @@ def test_lens_shifted_projector_principal_point_outside_image(shifted_rig):
     assert abs(K[1, 2] - 1410) < 10 and abs(K[0, 0] - 2421) < 25 and rms < 0.35
     calib = multi_pose.calibrate(views)
     assert abs(calib.projector.K[1, 2] - 1410) < 10 and abs(calib.projector.K[0, 0] - 2421) < 25
-    sd_T = np.array([calib.std[k] for k in ("T_x", "T_y", "T_z")])
+    sd_T = np.array(calib.std["T"])
     assert np.all(np.abs(calib.T - base.T) < 4 * sd_T), (calib.T - base.T, sd_T)
     exact = _views(scenes)
     K, d, rv, tv, rms = multi_pose.calibrate_device([v.obj_pts for v in exact], [v.proj_pts for v in exact],

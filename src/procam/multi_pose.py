@@ -416,6 +416,35 @@ def _rms(arrs) -> float:
     return float(np.sqrt(np.mean(np.sum(a * a, axis=1)))) if len(a) else float("nan")
 
 
+_STD_NAMES = {"cam_fx": "f_c", "cam_fy": "fy_c", "cam_cx": "u0c", "cam_cy": "v0c",
+              "proj_fx": "f_p", "proj_fy": "fy_p", "proj_cx": "u0p", "proj_cy": "v0p"}
+
+
+def _std_dict(ref: dict) -> dict:
+    """Standard deviations from the refinement covariance, named as in the single-pose result:
+    ``f_c, fy_c, u0c, v0c, f_p, fy_p, u0p, v0p`` (px), ``cam_dist<i>``, ``proj_dist<i>``,
+    ``R_euler_deg`` (3,) (delta method through the Euler angles) and ``T`` (3,)."""
+    cov = ref["cov"]
+    names = ref["names"]
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    out = {}
+    for n, s in zip(names, sd):
+        if n.startswith(("cam_", "proj_")):
+            out[_STD_NAMES.get(n, n)] = float(s)
+    i = names.index("R_rx")
+    r0 = ref["x"][i:i + 3]
+    J = np.zeros((3, 3))
+    for k in range(3):  # d(euler)/d(rvec) by central differences
+        h = np.zeros(3)
+        h[k] = 1e-7
+        J[:, k] = (models.matrix_to_euler(models.rvec_to_matrix(r0 + h))
+                   - models.matrix_to_euler(models.rvec_to_matrix(r0 - h))) / 2e-7
+    ce = J @ cov[i:i + 3, i:i + 3] @ J.T
+    out["R_euler_deg"] = np.degrees(np.sqrt(np.clip(np.diag(ce), 0, None))).tolist()
+    out["T"] = sd[i + 3:i + 6].tolist()
+    return out
+
+
 def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist: str = "k1k2p1p2k3",
               proj_dist: str = "k1k2p1p2k3", refine: bool = True, loss: str = "soft_l1",
               loss_scale: float = 1.0, balance: bool = True, init: str = "auto", fix_aspect_ratio: bool = False,
@@ -443,7 +472,7 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
     :class:`procam.calibration.Calibration` with ``method="multi-pose"``, OpenCV distortion on both
     devices, ``cam_rms``/``proj_rms`` (per-device RMS of the final model), ``stereo_rms`` (RMS over
     all camera and projector points of the final stereo model), ``std`` (from the refinement's
-    covariance; empty without refinement), ``poses`` (per-pose angles and RMS) and ``info`` with the
+    covariance, keys as :func:`_std_dict`; empty without refinement), ``poses`` (per-pose angles and RMS) and ``info`` with the
     frozen-step result under ``"frozen"`` (K, dist, R, T, RMS) for comparison.
 
     Raises
@@ -506,11 +535,7 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
         proj_res = [r[1] for r in res]
         cam_rms, proj_rms = _rms(cam_res), _rms(proj_res)
         stereo_rms = _rms(cam_res + proj_res)
-        sd = np.sqrt(np.clip(np.diag(ref["cov"]), 0, None))
-        for n, s in zip(ref["names"], sd):
-            if n.startswith("pose"):
-                continue
-            std[n] = float(np.degrees(s)) if n.startswith("R_r") else float(s)
+        std = _std_dict(ref)
         info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref["status"],
                               "nfev": ref["nfev"], "cost": ref["cost"]}
         if ref["status"] <= 0:
