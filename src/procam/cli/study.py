@@ -1,0 +1,120 @@
+"""``procam study``: the paper's simulation sweep of |Δf| over the board's rotation, with the CRLB."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
+    TimeRemainingColumn
+from rich.table import Table
+
+from ..errors import ProcamError
+from ._app import app, console, err_console, user_errors
+
+
+def _fmt(x: float) -> str:
+    if x is None or not math.isfinite(x):
+        return "–" if x is None or math.isnan(x) else "∞"
+    return f"{x:.3g}"
+
+
+@app.command("study")
+@user_errors
+def study(
+    device: str = typer.Argument(..., help="camera or projector: the device whose board rotation is swept."),
+    output: Path = typer.Option(..., "-o", "--output", help="Output folder (CSV, JSON summary, PNG figures)."),
+    grid: str = typer.Option("-45:45:5", help="Heat-map angles for both ψ and ν: START:STOP:STEP or a comma list (deg)."),
+    psi_grid: Optional[str] = typer.Option(None, "--psi", help="ψ angles (deg), overrides --grid for ψ."),
+    nu_grid: Optional[str] = typer.Option(None, "--nu", help="ν angles (deg), overrides --grid for ν."),
+    trials: int = typer.Option(100, help="Noisy trials per cell (plus one noise-free run)."),
+    noise: Optional[float] = typer.Option(None, help="Corner noise σ in px [default: 0.1 camera, 0.2 projector]."),
+    model_error: str = typer.Option("paper", help="paper: pp +5 px (camera), u0p = W/2 vs 1013 (projector); none: exact."),
+    distance: float = typer.Option(500.0, help="Board-centre depth on the device's optical axis (mm)."),
+    slice_grid: Optional[str] = typer.Option(None, help="Angles along the paper's slices [default: the ψ grid]."),
+    slices: bool = typer.Option(True, "--slices/--no-slices", help="Also run the paper's slices."),
+    render: bool = typer.Option(False, help="Full rendering + decoding per trial instead of the fast path."),
+    jobs: int = typer.Option(1, "-j", "--jobs", help="Worker processes (joblib; -1 = all cores; 1 = serial)."),
+    dask: Optional[str] = typer.Option(None, help="Run on a Dask cluster: scheduler address, or 'local' for a LocalCluster of --jobs workers."),
+    seed: int = typer.Option(0, help="Base seed (each cell and trial derives its own)."),
+    figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
+):
+    """Sweep the board's rotation (ψ, ν) relative to a device: median |Δf| per cell and the Cramér–Rao bound.
+
+    Reproduces the paper's simulation study (METHOD §12) and draws the single-pose CRLB (§13) into it.
+    """
+    from ..study import StudyConfig, parse_grid, run_study
+
+    device = device.lower()
+    if device not in ("camera", "projector"):
+        raise ProcamError(f"device must be camera or projector, got {device!r}")
+    if render:
+        raise ProcamError("--render is not available yet: the study uses the fast path "
+                          "(exact corners + Gaussian noise); drop --render")
+    psi = parse_grid(psi_grid or grid)
+    nu = parse_grid(nu_grid or grid)
+    cfg = StudyConfig(device=device, psi=psi, nu=nu, trials=trials, noise=noise, model_error=model_error,
+                      distance=distance, slices=slices,
+                      slice_angles=None if slice_grid is None else parse_grid(slice_grid), seed=seed)
+    output.mkdir(parents=True, exist_ok=True)
+
+    client = None
+    backend = None
+    if dask is not None:
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise ProcamError("--dask needs dask.distributed: pip install 'procam[dask]'") from None
+        if dask == "local":
+            n = None if jobs in (-1, 0, 1) else jobs
+            client = Client(LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                         dashboard_address=None))
+        else:
+            client = Client(dask)
+        backend = "dask"
+        err_console.print(f"dask: {client}")
+
+    from ..study import study_cells
+
+    total = len(study_cells(cfg))
+    try:
+        with Progress(TextColumn("[bold]study[/bold] {task.description}"), BarColumn(), MofNCompleteColumn(),
+                      TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as bar:
+            tid = bar.add_task(f"{device}, model error {model_error}", total=total)
+            result = run_study(cfg, n_jobs=jobs, backend=backend,
+                               progress=lambda done, tot: bar.update(tid, completed=done))
+    finally:
+        if client is not None:
+            client.close()
+
+    stem = f"study_{device}_{model_error}"
+    csv_path = result.to_csv(output / f"{stem}.csv")
+    summary = {"config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in result.config_dict().items()},
+               "summary": result.summary(), "csv": csv_path.name}
+    paths = []
+    if figures:
+        from ..plots.study import save_study_figures
+
+        paths = save_study_figures(result, output, prefix=stem)
+        summary["figures"] = [p.name for p in paths]
+    (output / f"{stem}.json").write_text(json.dumps(summary, indent=2, default=float))
+
+    s = result.summary()
+    console.print(f"{s['cells']} cells in {s['seconds']:.1f} s ({s['cells_per_second']:.1f} cells/s, "
+                  f"{s['backend']}, {s['n_jobs']} worker(s)); σ = {cfg.sigma:g} px, {cfg.trials} trials")
+    if slices:
+        from ..study import slice_specs
+
+        for label, axis, fixed, val in slice_specs(cfg):
+            t = Table(title=f"{device}: slice {label} (|Δf| in px)", show_lines=False)
+            t.add_column(axis, justify="right")
+            for name in ("median |Δf|", "noise-free |Δf|", "√CRLB", "std/√CRLB"):
+                t.add_column(name, justify="right")
+            for r in result.slice(label):
+                t.add_row(f"{r[axis]:g}", _fmt(r["median_abs_df"]), _fmt(r["abs_df_noise_free"]),
+                          _fmt(r["bound_f"]), _fmt(r["ratio_std"]))
+            console.print(t)
+    console.print(f"wrote {csv_path}" + (f" and {len(paths)} figures" if paths else "") + f" to {output}")
