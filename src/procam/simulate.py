@@ -208,6 +208,9 @@ class Scene:
     proj_black : light of a black projector pixel as a fraction of white (black level).
     proj_defocus : projector defocus, Gaussian sigma in projector pixels.
     cam_blur : camera optics, Gaussian sigma in camera pixels.
+    cam_vignetting, proj_vignetting : relative illumination ``cos(field angle) ** n`` of the camera
+        lens (on everything it sees) and of the projector lens (on its light); 4 is the natural
+        cos^4 law of a thin lens, 0 disables.
     full_well : electrons at full scale (shot noise variance = signal / full_well); 0 = no shot noise.
     read_noise : read noise sigma in 8-bit DN (scaled for 16-bit output).
     gamma : output = linear ** (1 / gamma).
@@ -236,11 +239,13 @@ class Scene:
     albedo_white: float = 0.85
     albedo_black: float = 0.1
     albedo_wall: float = 0.5
-    gain: float = 0.9
+    gain: float = 0.95
     ambient: float = 0.04
     proj_black: float = 0.03
     proj_defocus: float = 0.5
     cam_blur: float = 0.5
+    cam_vignetting: float = 2.0
+    proj_vignetting: float = 2.0
     full_well: float = 10000.0
     read_noise: float = 1.0
     gamma: float = 1.0
@@ -487,7 +492,7 @@ def _scene_params(scene: Scene) -> dict:
             "point": (scene.t_board + scene.wall_offset * np.array([0, 0, 1.0])).tolist(),
             "albedo": scene.albedo_wall}
     photo = {k: getattr(scene, k) for k in ("gain", "ambient", "proj_black", "proj_defocus", "cam_blur",
-                                            "full_well", "read_noise", "gamma", "bits", "supersample")}
+                                            "cam_vignetting", "proj_vignetting", "full_well", "read_noise", "gamma", "bits", "supersample")}
     return {"camera": cam, "projector": proj, "extrinsics": ext, "board": board, "wall": wall,
             "photometry": photo}
 
@@ -516,7 +521,9 @@ def truth(scene: Scene) -> dict:
     Keys: ``format``, ``name``, ``camera``, ``projector``, ``extrinsics``, ``board``, ``wall``,
     ``photometry``, ``corners`` (``board`` (N, 3), ``camera_distorted``, ``camera_undistorted``,
     ``projector`` (N, 2), order ``k = j*cols + i``), ``pose`` (``camera`` / ``projector``: ``R``, ``t``,
-    ``angles_deg`` = (psi, nu, phi) of board -> device), ``fit_margin_px``.
+    ``angles_deg`` = (psi, nu, phi) of board -> device), ``fit_margin_px`` (:func:`fit_margin`) and
+    ``canonical_order`` (True when corner 0 is the top-left corner in the camera image and the index
+    runs right then down, the order a detector canonicalises to; False e.g. for |phi| near 180 deg).
     """
     d = {"format": "procam-sim-truth", "version": 1, "name": scene.name}
     d.update(_scene_params(scene))
@@ -524,6 +531,10 @@ def truth(scene: Scene) -> dict:
     d["pose"] = {"camera": _pose_dict(scene.R_board, scene.t_board),
                  "projector": _pose_dict(scene.R_board_proj, scene.t_board_proj)}
     d["fit_margin_px"] = fit_margin(scene)
+    cam = d["corners"]["camera_distorted"]
+    n, cols = len(cam), scene.board_cols
+    d["canonical_order"] = bool(np.all(np.isfinite(cam)) and np.argmin(cam.sum(axis=1)) == 0
+                                and cam[1, 0] > cam[0, 0] and cam[cols, 1] > cam[0, 1] and n > cols)
     return _jsonable(d)
 
 
@@ -623,6 +634,7 @@ def _geometry_band(scene: Scene, ys, xs):
         depth = np.where(board, sb, np.where(wall, sw, np.nan))
         del sb, sw
         X, Y, Z = dx * depth, dy * depth, depth
+        cam_vig = (1.0 + dx * dx + dy * dy) ** (-0.5 * scene.cam_vignetting)  # cos(field angle) ** n
         del dx, dy
 
         # albedo; the board's is box-filtered over each sample's footprint (anti-aliasing)
@@ -644,12 +656,12 @@ def _geometry_band(scene: Scene, ys, xs):
         yp = Kp[1, 1] * Yp / Zp + Kp[1, 2]
         Wp, Hp = scene.proj_size
         in_panel = (Zp > 0) & (xp >= -0.5) & (xp <= Wp - 0.5) & (yp >= -0.5) & (yp <= Hp - 0.5)
-        del Xp, Yp, Zp
 
         # shading
         Cp = scene.proj_center_cam
         Lx, Ly, Lz = Cp[0] - X, Cp[1] - Y, Cp[2] - Z
         dist2 = Lx * Lx + Ly * Ly + Lz * Lz
+        cos_p = Zp / np.sqrt(Xp * Xp + Yp * Yp + Zp * Zp)  # projector field angle
         nx = np.where(board, nb[0], nw[0])
         ny = np.where(board, nb[1], nw[1])
         nz = np.where(board, nb[2], nw[2])
@@ -657,8 +669,8 @@ def _geometry_band(scene: Scene, ys, xs):
         ndotv = -(nx * X + ny * Y + nz * Z)
         facing = (ndotl * ndotv) > 0
         d_ref2 = float(np.sum((Cp - tb) ** 2))
-        irr = np.abs(ndotl) / np.sqrt(dist2) * (d_ref2 / dist2)
-        del nx, ny, nz, ndotv, ndotl, dist2
+        irr = np.abs(ndotl) / np.sqrt(dist2) * (d_ref2 / dist2) * np.abs(cos_p) ** scene.proj_vignetting
+        del nx, ny, nz, ndotv, ndotl, dist2, Xp, Yp, Zp, cos_p
 
         # the board's shadow on the wall, as the projector sees it
         uu = (nb @ tb - (X * nb[0] + Y * nb[1] + Z * nb[2])) / (Lx * nb[0] + Ly * nb[1] + Lz * nb[2])
@@ -670,8 +682,8 @@ def _geometry_band(scene: Scene, ys, xs):
         err.__exit__(None, None, None)
 
     lit = surf & in_panel & facing & ~shadow
-    coef = np.where(lit, scene.gain * albedo * irr, 0.0)
-    amb = scene.gain * scene.ambient * albedo
+    coef = np.where(lit, scene.gain * albedo * irr * cam_vig, 0.0)
+    amb = scene.gain * scene.ambient * albedo * cam_vig
     xp = np.where(surf, xp, np.nan)
     yp = np.where(surf, yp, np.nan)
     return {"xp": xp, "yp": yp, "coef": coef, "amb": amb, "board": board, "lit": lit}
