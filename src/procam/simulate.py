@@ -77,8 +77,12 @@ def matrix_euler(R) -> np.ndarray:
 def project(K, X) -> np.ndarray:
     """Pinhole projection ``pi(K X)`` of (N, 3) points in the device frame -> (N, 2) pixels."""
     X = np.asarray(X, float).reshape(-1, 3)
-    m = X @ np.asarray(K, float).T
-    return m[:, :2] / m[:, 2:3]
+    K = np.asarray(K, float)
+    x, y, z = X[:, 0], X[:, 1], X[:, 2]
+    w = K[2, 0] * x + K[2, 1] * y + K[2, 2] * z
+    u = (K[0, 0] * x + K[0, 1] * y + K[0, 2] * z) / w
+    v = (K[1, 0] * x + K[1, 1] * y + K[1, 2] * z) / w
+    return np.column_stack([u, v])
 
 
 def _division_undistort(pts, center, k1, k2):
@@ -367,6 +371,25 @@ def _pose_in_camera(scene: Scene, R_bd: np.ndarray, c_d: np.ndarray, frame: str)
     return scene.R.T @ R_bd, scene.R.T @ (c_d - scene.T)
 
 
+def _margins(scene: Scene, R_b: np.ndarray, t_b: np.ndarray) -> np.ndarray:
+    """:func:`fit_margin` for M board -> camera poses sharing ``R_b`` (3, 3); ``t_b`` (M, 3) -> (M,)."""
+    t_b = np.asarray(t_b, float).reshape(-1, 3)
+    P = (_outline(scene) @ R_b.T)[None, :, :] + t_b[:, None, :]          # (M, K, 3) camera frame
+    Pp = P @ scene.R.T + scene.T
+    bad = np.any(P[..., 2] <= 1e-6, axis=1) | np.any(Pp[..., 2] <= 1e-6, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mc = distort(scene, project(scene.K_cam, P.reshape(-1, 3))).reshape(P.shape[0], -1, 2)
+        mp = project(scene.K_proj, Pp.reshape(-1, 3)).reshape(P.shape[0], -1, 2)
+    bad |= ~np.all(np.isfinite(mc), axis=(1, 2))
+    (wc, hc), (wp, hp) = scene.cam_size, scene.proj_size
+    dc = np.minimum(np.minimum(mc[..., 0] + 0.5, wc - 0.5 - mc[..., 0]),
+                    np.minimum(mc[..., 1] + 0.5, hc - 0.5 - mc[..., 1])).min(axis=1)
+    dp = np.minimum(np.minimum(mp[..., 0] + 0.5, wp - 0.5 - mp[..., 0]),
+                    np.minimum(mp[..., 1] + 0.5, hp - 0.5 - mp[..., 1])).min(axis=1)
+    m = np.minimum(dc, dp * scene.K_cam[0, 0] / scene.K_proj[0, 0])
+    return np.where(bad | ~np.isfinite(m), -1e9, m)
+
+
 def fit_margin(scene: Scene, R_board=None, t_board=None) -> float:
     """Smallest distance (camera px) of the printed board's outline to the border of either image.
 
@@ -375,35 +398,38 @@ def fit_margin(scene: Scene, R_board=None, t_board=None) -> float:
     """
     R_b = scene.R_board if R_board is None else np.asarray(R_board, float)
     t_b = scene.t_board if t_board is None else np.asarray(t_board, float)
-    P = _outline(scene) @ R_b.T + t_b
-    Pp = P @ scene.R.T + scene.T
-    if np.any(P[:, 2] <= 1e-6) or np.any(Pp[:, 2] <= 1e-6):
-        return -1e9
-    mc = distort(scene, project(scene.K_cam, P))
-    if not np.all(np.isfinite(mc)):
-        return -1e9
-    mp = project(scene.K_proj, Pp)
-    (wc, hc), (wp, hp) = scene.cam_size, scene.proj_size
-    dc = np.min(np.concatenate([mc[:, 0] + 0.5, wc - 0.5 - mc[:, 0], mc[:, 1] + 0.5, hc - 0.5 - mc[:, 1]]))
-    dp = np.min(np.concatenate([mp[:, 0] + 0.5, wp - 0.5 - mp[:, 0], mp[:, 1] + 0.5, hp - 0.5 - mp[:, 1]]))
-    return float(min(dc, dp * scene.K_cam[0, 0] / scene.K_proj[0, 0]))
+    return float(_margins(scene, R_b, t_b)[0])
+
+
+def _grid_center(scene: Scene, R_bd, distance: float, frame: str, n: int = 41, span: float = 0.6):
+    """Best board centre (x, y, distance) in ``frame`` on an n x n grid; returns (c, margin)."""
+    g = np.linspace(-span, span, n) * distance
+    X, Y = np.meshgrid(g, g)
+    C = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, distance)])
+    if frame == "camera":
+        R_b, T_b = R_bd, C
+    else:
+        R_b, T_b = scene.R.T @ R_bd, (C - scene.T) @ scene.R
+    m = _margins(scene, R_b, T_b)
+    k = int(np.argmax(m))
+    return C[k], float(m[k])
 
 
 def _best_center(scene: Scene, R_bd, distance: float, frame: str):
     """Board centre (x, y, distance) in ``frame`` maximising :func:`fit_margin`; returns (c, margin)."""
+    c0, m0 = _grid_center(scene, R_bd, distance, frame)
 
     def score(xy):
         c = np.array([xy[0], xy[1], distance])
         return fit_margin(scene, *_pose_in_camera(scene, R_bd, c, frame))
 
-    g = np.linspace(-0.6, 0.6, 13) * distance
-    best = max(((score((x, y)), x, y) for x in g for y in g))
-    res = minimize(lambda v: -score(v), x0=[best[1], best[2]], method="Nelder-Mead",
+    step = 0.03 * distance
+    res = minimize(lambda v: -score(v), x0=c0[:2], method="Nelder-Mead",
                    options={"xatol": 1e-3, "fatol": 1e-4, "initial_simplex":
-                            [[best[1], best[2]], [best[1] + 0.05 * distance, best[2]],
-                             [best[1], best[2] + 0.05 * distance]]})
-    xy, m = (res.x, -res.fun) if -res.fun >= best[0] else ((best[1], best[2]), best[0])
-    return np.array([xy[0], xy[1], distance]), m
+                            [c0[:2], c0[:2] + [step, 0], c0[:2] + [0, step]]})
+    if -res.fun >= m0:
+        return np.array([res.x[0], res.x[1], distance]), float(-res.fun)
+    return c0, m0
 
 
 def with_board_pose(scene: Scene, angles_deg, distance: float | None = None, frame: str = "camera",
@@ -437,8 +463,10 @@ def with_board_pose(scene: Scene, angles_deg, distance: float | None = None, fra
     else:
         best = None
         d = DEFAULT_DISTANCE
-        while d <= max_distance + 1e-9:
-            c_d, m = _best_center(scene, R_bd, d, frame)
+        while d <= max_distance + 1e-9:  # grid per depth, refined where it is nearly feasible
+            c_d, m = _grid_center(scene, R_bd, d, frame)
+            if m > border_px - 50:
+                c_d, m = _best_center(scene, R_bd, d, frame)
             if best is None or m > best[1]:
                 best = (c_d, m)
             if m >= border_px:
