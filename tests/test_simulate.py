@@ -28,7 +28,7 @@ def test_imports_no_solver_code():
             mods.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
             mods.add(("." * node.level) + (node.module or "") + ":" + ",".join(a.name for a in node.names))
-    allowed_prefix = ("numpy", "scipy", "cv2", "__future__", "dataclasses", "json", "os", "pathlib",
+    allowed_prefix = ("numpy", "scipy", "cv2", "__future__", "dataclasses", "functools", "json", "os", "pathlib",
                       "typing", "time", "math")
     for m in mods:
         if m.startswith("."):

@@ -27,6 +27,7 @@ intrinsic XYZ, ``R = Rx(psi) Ry(nu) Rz(phi)``, degrees at this module's surface.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 from dataclasses import dataclass, field
@@ -355,12 +356,18 @@ def preset(name: str = "paper") -> Scene:
         reference value), strong enough (about 3-14 px at the board's outer corners at the
         recommended pose) for the centre of distortion to be observable (METHOD section 5.2).
     """
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
+    return _preset_cached(name)
+
+
+@functools.lru_cache(maxsize=None)
+def _preset_cached(name: str) -> Scene:
+    # Scenes are immutable (frozen, read-only arrays), so one instance per preset can be shared.
     if name == "paper":
         scene = Scene(name="paper")
-    elif name == "ideal":
-        scene = Scene(name="ideal", K_proj=_K(2421.0, 1.0, 960.0, 1065.0), cam_dist_coeffs=(-1e-7, 0.0))
     else:
-        raise ValueError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
+        scene = Scene(name="ideal", K_proj=_K(2421.0, 1.0, 960.0, 1065.0), cam_dist_coeffs=(-1e-7, 0.0))
     return with_board_pose(scene, RECOMMENDED_POSE)
 
 
@@ -671,9 +678,9 @@ def _geometry_band(scene: Scene, ys, xs):
             g1 = np.abs(np.gradient(a, axis=1)) if a.shape[1] > 1 else 0.0
             return np.nan_to_num(g0 + g1, nan=1.0)
 
-        alb_board = _board_albedo(scene, bx, by, footprint(bx), footprint(by))
-        albedo = np.where(board, alb_board, np.where(wall, scene.albedo_wall, 0.0))
-        del alb_board, bx, by
+        albedo = np.where(wall, scene.albedo_wall, 0.0)
+        albedo[board] = _board_albedo(scene, bx[board], by[board], footprint(bx)[board], footprint(by)[board])
+        del bx, by
 
         # projector coordinates
         R, T, Kp = scene.R, scene.T, scene.K_proj
