@@ -151,3 +151,12 @@ def test_multi_pose_calibration_evaluates_near_truth(opencv_rig):
     # the fitted model explains its own data at least as well as the truth does
     assert ev.stereo_rms <= ev_truth.stereo_rms * 1.01
     assert ev.sigma_T < 3.0 and abs(ev.stereo_rms - calib.stereo_rms) < 0.05
+
+
+def test_multi_pose_noise_free_sigma_T_is_zero(opencv_rig):
+    from procam import multi_pose
+
+    base, scenes = opencv_rig
+    views = _views(scenes)
+    ev = evaluate.evaluate(multi_pose.calibrate(views), views)
+    assert ev.sigma_T < 1e-4 and ev.stereo_rms < 1e-5

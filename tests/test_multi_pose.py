@@ -63,7 +63,7 @@ def test_noise_free_recovers_truth(rig):
     assert calib.camera.distortion.model == "opencv" and calib.camera.image_size == (1280, 800)
     # the frozen (stereoCalibrate, CALIB_FIX_INTRINSIC) stage is kept for comparison
     np.testing.assert_allclose(calib.info["frozen"]["T"], base.T, atol=1e-3)
-    assert len(calib.poses) == 7 and abs(calib.poses[0]["cam_angles"][0] - 20) < 1e-6
+    assert len(calib.poses) == 7 and abs(calib.poses[0]["camera_angles_deg"][0] - 20) < 1e-6
 
 
 def test_noisy_recovery_and_std(rig):
@@ -179,7 +179,7 @@ def test_nan_corners_and_errors(rig):
     views[0] = View(views[0].obj_pts, cam, views[0].proj_pts, "holes", (1280, 800), (1920, 1080))
     c = multi_pose.calibrate(views)
     np.testing.assert_allclose(c.camera.K, base.K_cam, atol=1e-3)
-    assert c.poses[0]["n_points"] == 57
+    assert c.poses[0]["n_corners"] == 57
     with pytest.raises(CalibrationError, match="at least 2 poses"):
         multi_pose.calibrate(views[:1])
     nosize = [View(v.obj_pts, v.cam_pts, v.proj_pts, v.name) for v in views]

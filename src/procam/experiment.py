@@ -53,7 +53,9 @@ class ExperimentResult:
     Attributes
     ----------
     pose_names : the poses, numbered 1..n in this order in every table.
-    single : per pose, the single-pose intrinsics, board angles, focal errors and mean errors.
+    single : per pose, the single-pose intrinsics, board angles (from the single-pose solution, and
+        ``*_ref`` from PnP under the reference calibration: reliable even when the single-pose
+        solution is degenerate), focal errors and mean errors.
     single_extrinsics : per pose, the single-pose R (Euler), T, σ_|T|, σ_T and the stereo RMS.
     sets : per pose set, the multi-pose parameters and metrics.
     summary : Set A, reference, mean and std over the sets of the RMS and σ columns (Tables 3 + 4).
@@ -167,12 +169,14 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
 
     # --- multi-pose over every set --------------------------------------------------------------
     set_rows = []
+    set_evals = {}
     for k, s in enumerate(sets):
         row = {"set": k + 1, "poses": _label(s), "size": len(s)}
         try:
             calib = multi_pose.calibrate([views[i] for i in s], proj_size=proj_size, cam_dist=cam_dist,
                                          proj_dist=proj_dist, refine=refine)
             ev = _evaluate.evaluate(calib, views)
+            set_evals[k] = ev
             row.update(_params(calib))
             row.update({"cam_rms": calib.cam_rms, "proj_rms": calib.proj_rms, "stereo_rms": calib.stereo_rms})
             row.update(_metrics(ev))
@@ -187,6 +191,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
                                + "; ".join(f["message"] for f in failures[:3]))
     reference = min(ok_rows, key=lambda r: r["sigma_T"])
     set_a = set_rows[-1]
+    ref_poses = set_evals[reference["set"] - 1].poses  # board angles under the reference calibration
 
     # --- single-pose on every pose ----------------------------------------------------------------
     f_ref, fy_p_ref = reference["f_c"], reference["fy_p"]
@@ -194,6 +199,8 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
     for j, v in enumerate(views):
         row = {"set": j + 1, "pose": names[j]}
         ext = {"set": j + 1, "pose": names[j]}
+        ref_angles = {"psi_c_ref": ref_poses[j].cam_angles[0], "nu_c_ref": ref_poses[j].cam_angles[1],
+                      "psi_p_ref": ref_poses[j].proj_angles[0], "nu_p_ref": ref_poses[j].proj_angles[1]}
         try:
             calib = single_pose.calibrate(v, proj_size, **(single_options or {}))
             ev = _evaluate.evaluate(calib, views)
@@ -206,6 +213,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
                         "v0p": p["v0p"], "psi_c": ca[0], "nu_c": ca[1], "abs_psi_c+abs_nu_c": abs(ca[0]) + abs(ca[1]),
                         "abs_df_c": abs(p["f_c"] - f_ref), "cam_err": ev.cam_rms, "psi_p": pa[0], "nu_p": pa[1],
                         "abs_df_p": abs(p["f_p"] - fy_p_ref), "proj_err": ev.proj_rms, "u0p": p["u0p"]})
+            row.update(ref_angles)
             ext.update({"psi": p["psi"], "nu": p["nu"], "phi": p["phi"], "X": p["X"], "Y": p["Y"], "Z": p["Z"],
                         "sigma_abs_T": ev.sigma_abs_T, "sigma_T": ev.sigma_T, "stereo": ev.stereo_rms,
                         "sigma_T_ddof0": ev.sigma_T_ddof0, "sigma_abs_T_ddof0": ev.sigma_abs_T_ddof0})
@@ -213,6 +221,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
             failures.append({"what": f"single-pose {j + 1} ({names[j]})", "message": _err(e)})
             row.update(_nan_row(["f_c", "fy_c", "u0c", "v0c", "f_p", "v0p", "psi_c", "nu_c", "abs_psi_c+abs_nu_c",
                                  "abs_df_c", "cam_err", "psi_p", "nu_p", "abs_df_p", "proj_err", "u0p"]))
+            row.update(ref_angles)
             ext.update(_nan_row(["psi", "nu", "phi", "X", "Y", "Z", "sigma_abs_T", "sigma_T", "stereo",
                                  "sigma_T_ddof0", "sigma_abs_T_ddof0"]))
         single_rows.append(row)
@@ -309,6 +318,10 @@ def markdown(result: ExperimentResult, figures: Sequence[str] = ()) -> str:
         ("v0p", "v0p"), ("psi_c", "ψ_c"), ("nu_c", "ν_c"), ("abs_psi_c+abs_nu_c", "\\|ψ_c\\|+\\|ν_c\\|"),
         ("abs_df_c", "\\|Δf_c\\|"), ("cam_err", "cam err"), ("psi_p", "ψ_p"), ("nu_p", "ν_p"),
         ("abs_df_p", "\\|Δf_p\\|"), ("proj_err", "proj err")]))
+    lines += ["", "Board angles of every pose under the reference calibration (PnP; unaffected by a degenerate "
+              "single-pose solution; used by the focal-error plot):", ""]
+    lines.append(_markdown_table(result.single, [("set", "set"), ("psi_c_ref", "ψ_c"), ("nu_c_ref", "ν_c"),
+                                                 ("psi_p_ref", "ψ_p"), ("nu_p_ref", "ν_p")]))
     lines += ["", "## Single-pose procam extrinsics and precision", ""]
     lines.append(_markdown_table(result.single_extrinsics, [
         ("set", "set"), ("psi", "ψ"), ("nu", "ν"), ("phi", "φ"), ("X", "X"), ("Y", "Y"), ("Z", "Z"),

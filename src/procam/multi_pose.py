@@ -559,9 +559,9 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
     for j in range(len(objs)):
         Rc = models.rvec_to_matrix(rv_board[j])
         Rp, tp = models.compose(R, T, Rc, tv_board[j])
-        poses.append({"name": names[j], "n_points": int(len(objs[j])),
-                      "cam_angles": np.degrees(models.matrix_to_euler(Rc)).tolist(),
-                      "proj_angles": np.degrees(models.matrix_to_euler(Rp)).tolist(),
+        poses.append({"name": names[j], "n_corners": int(len(objs[j])),
+                      "camera_angles_deg": np.degrees(models.matrix_to_euler(Rc)).tolist(),
+                      "projector_angles_deg": np.degrees(models.matrix_to_euler(Rp)).tolist(),
                       "R_cam": Rc.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
                       "cam_rms": _rms([cam_res[j]]), "proj_rms": _rms([proj_res[j]]),
                       "stereo_rms": _rms([cam_res[j], proj_res[j]])})

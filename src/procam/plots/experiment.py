@@ -22,13 +22,17 @@ def _col(rows, key):
 
 def focal_error_figure(result):
     """|Δf_c| against |ψ_c| + |ν_c| and |Δf_p| against |ν_p| for the single-pose calibrations,
-    each point labelled with its pose number (the paper's degeneracy rules: > 10° and > 13°)."""
+    each point labelled with its pose number (the paper's degeneracy rules: > 10° and > 13°).
+
+    The angles are the board's under the reference calibration (``*_ref`` columns), which stay
+    meaningful when a single-pose solution is degenerate."""
     rows = result.single
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
-    specs = [(axes[0], _col(rows, "abs_psi_c+abs_nu_c"), _col(rows, "abs_df_c"), "|ψ_c| + |ν_c| (deg)",
+    cam_x = np.abs(_col(rows, "psi_c_ref")) + np.abs(_col(rows, "nu_c_ref"))
+    specs = [(axes[0], cam_x, _col(rows, "abs_df_c"), "|ψ_c| + |ν_c| (deg, reference calibration)",
               "|Δf_c| (px)", 10.0, "camera"),
-             (axes[1], np.abs(_col(rows, "nu_p")), _col(rows, "abs_df_p"), "|ν_p| (deg)", "|Δf_p| (px)", 13.0,
-              "projector")]
+             (axes[1], np.abs(_col(rows, "nu_p_ref")), _col(rows, "abs_df_p"), "|ν_p| (deg, reference calibration)",
+              "|Δf_p| (px)", 13.0, "projector")]
     for ax, x, y, xl, yl, rule, title in specs:
         ok = np.isfinite(x) & np.isfinite(y)
         ax.plot(x[ok], y[ok], "o", color="tab:blue")
