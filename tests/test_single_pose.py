@@ -88,14 +88,14 @@ def test_noisy_recovery_within_cramer_rao_tolerances(ideal, bounds, seed):
 def test_reported_std_matches_monte_carlo_spread(ideal):
     """mrcal-style check: the Jacobian std predicts the spread of repeated calibrations."""
     fs, fps, pred = [], [], []
-    for seed in range(20):
+    for seed in range(12):
         cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=100 + seed))
         fs.append(cal.camera.K[0, 0])
         fps.append(cal.projector.K[0, 0])
         pred.append((cal.std["f_c"], cal.std["f_p"]))
     pred = np.median(pred, axis=0)
-    assert 0.6 < np.std(fs, ddof=1) / pred[0] < 1.6
-    assert 0.6 < np.std(fps, ddof=1) / pred[1] < 1.6
+    assert 0.5 < np.std(fs, ddof=1) / pred[0] < 1.8
+    assert 0.5 < np.std(fps, ddof=1) / pred[1] < 1.8
 
 
 @pytest.mark.parametrize("angles,expected", [((10, 10), 1.1), ((20, 10), 5.8), ((-10, 10), 28.4),

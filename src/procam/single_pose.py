@@ -63,7 +63,9 @@ class CameraSolution:
     cost : ``0.5 * sum(residuals^2)``.
     warnings : tuple of human-readable caveats.
     cod : :class:`procam.distortion.CODEstimate` or None (principal point given).
-    principal_point_source : ``"cod"``, ``"image-center"`` (fallback) or ``"given"``.
+    principal_point_source : ``"cod"`` (centre of distortion, reliable), ``"joint"`` (COD weak, but the
+        joint fit of all parameters pins the principal point), ``"image-center"`` (fallback: image
+        centre, the prior mean of a MAP fit when ``refine="joint"``) or ``"given"``.
     staged : dict -- the paper's staged estimate (f, alpha, k1, k2, K, rms_px, start, cost) before
         the joint refinement.
     params, covariance : the full model's parameters ``CAMERA_PARAMS`` (12,) and their (12, 12)
@@ -269,7 +271,7 @@ def _run_starts(fun, starts, check):
         x0 = np.asarray(x0, float)
         try:
             with np.errstate(all="ignore"):
-                r = least_squares(fun, x0, **_LM)
+                r = least_squares(fun, x0, max_nfev=300, **_LM)
             x, cost = r.x, float(r.cost)
             ok = bool(np.isfinite(cost) and np.all(np.isfinite(x)) and check(x))
         except (ValueError, np.linalg.LinAlgError, FloatingPointError):
@@ -453,10 +455,60 @@ def _inside(pt, size) -> bool:
     return bool(-0.5 <= pt[0] <= size[0] - 0.5 and -0.5 <= pt[1] <= size[1] - 0.5)
 
 
+def _staged_camera(M, m, c, size, use_dist, n_coeffs, board_width, name, warnings):
+    """METHOD §5.3-§8.1 with the principal point / COD ``c``: returns (p_full (12,), staged dict, fit_k2)."""
+    k1 = k2 = 0.0
+    fit_k2 = use_dist and n_coeffs >= 2
+    if use_dist:
+        k1, k2, _ = dist.estimate_division(M, m, c, n_coeffs=n_coeffs)
+        r2 = np.sum((m - c) ** 2, axis=1)
+        if np.any(1 + k1 * r2 + k2 * r2 * r2 < 0.1) and n_coeffs >= 2:
+            k1, k2, _ = dist.estimate_division(M, m, c, n_coeffs=1)
+            fit_k2 = False
+            warnings.append(f"pose {name!r}: two-term division model folded over the board; k2 set to 0")
+        if np.any(1 + k1 * r2 + k2 * r2 * r2 < 0.1):
+            k1 = k2 = 0.0
+            warnings.append(f"pose {name!r}: division model unusable on this pose; distortion set to 0")
+    und = models.undistort_division(m, c, k1, k2) if use_dist else m.copy()
+    lm = solve_camera_lm(M, und, c, size, board_width=board_width)
+    if not lm["ok"]:
+        raise CalibrationError(f"pose {name!r}: camera LM found no valid (non-mirror) solution from any "
+                               f"start; the pose is probably degenerate (board fronto-parallel?)")
+    K_st = models.intrinsic_matrix(lm["f"], c[0], c[1], lm["alpha"])
+    p_staged = _full_params(K_st, c, k1, k2, lm["R"], lm["t"])
+    staged = dict(f=lm["f"], alpha=lm["alpha"], principal_point=np.array(c, float), k1=k1, k2=k2, K=K_st,
+                  R=lm["R"], t=lm["t"], start=lm["start"], cost_undistorted=lm["cost"],
+                  rms_undistorted_px=_rms(lm["residuals"]), closed_form=lm["closed_form"],
+                  starts=[(r["start"], r["cost"], r["valid"]) for r in lm["runs"]],
+                  rms_px=_rms(camera_predict(p_staged, M) - m))
+    return p_staged, staged, fit_k2
+
+
+def _joint_camera(M, m, p0, free, pp_prior, size, max_nfev=150):
+    """Joint ML/MAP refinement of the full camera model from ``p0``; returns (p, cost) or (None, inf)."""
+    fun = _camera_residual_fn(M, m, p0, free, pp_prior)
+    try:
+        with np.errstate(all="ignore"):
+            r = least_squares(fun, p0[free], max_nfev=max_nfev, **_LM)
+    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - guard
+        return None, float("inf")
+    pj = np.array(p0, float)
+    pj[free] = r.x
+    if not np.all(np.isfinite(pj)) or pj[0] <= 0 or pj[1] <= 0 or not _inside(pj[2:4], size):
+        return None, float("inf")
+    Rj = models.rvec_to_matrix(pj[6:9])
+    side = 1.0 if (-Rj.T @ pj[9:12])[2] > 0 else -1.0
+    if not _valid_pose(Rj, pj[9:12], M, side) or not np.all(np.isfinite(camera_predict(pj, M))):
+        return None, float("inf")
+    if r.cost > 0.5 * np.sum(fun(p0[free]) ** 2) + 1e-12:
+        return None, float("inf")
+    return pj, float(r.cost)
+
+
 def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, distortion: str | None = "division",
                      cod: str = "auto", refine: str = "joint", n_coeffs: int = 2,
                      min_cod_score: float = dist.MIN_COD_SCORE, pp_prior_std: float | None = None,
-                     pp_prior_fraction: float = 0.025, board_width: float | None = None,
+                     pp_prior_fraction: float = 0.025, pp_max_std: float | None = None, board_width: float | None = None,
                      min_points: int = 8, name: str = "view") -> CameraSolution:
     """Single-pose camera calibration: intrinsics, division distortion and board pose.
 
@@ -481,6 +533,11 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
         widen the reported uncertainty; default ``pp_prior_fraction * max(W, H)``.
     pp_prior_fraction : default prior std as a fraction of the larger image side (0.025: real
         lenses put the principal point within a few percent of the image centre).
+    pp_max_std : float, optional
+        With ``cod="auto"`` and a weak COD, the joint fit's own principal point (pp free, no prior) is
+        accepted when its data-only std is at most this (px; default ``pp_prior_std``): the corners then
+        pin it better than the image-centre assumption would. Otherwise the image centre is used as
+        the mean of a Gaussian prior (MAP) and a warning says so.
     board_width : w_b for the paper's initial distance 2 w_b (default: the span of the corners).
     min_points : minimum number of usable corners.
     name : pose name used in messages.
@@ -513,6 +570,7 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
 
     # 1. principal point / centre of distortion
     cod_est = None
+    fallback_msg = None
     if principal_point is not None:
         c = np.asarray(principal_point, float).reshape(2)
         pp_source = "given"
@@ -531,77 +589,74 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
         else:
             c, pp_source = center_img.copy(), "image-center"
             if use_dist and cod == "auto":
-                warnings.append(
+                fallback_msg = (
                     f"pose {name!r}: centre of distortion unreliable ({cod_est.reason}); principal point "
                     f"assumed at the image centre ({c[0]:.1f}, {c[1]:.1f}) instead. f_c, alpha_c and the "
                     f"distortion are then only as good as that assumption: their reported std includes a "
                     f"+-{sigma_pp:.0f} px prior on the principal point. For an accurate principal point use a "
                     f"pose with more visible lens distortion (board filling the image) or several poses.")
 
-    # 2. division model (linear, given c) and undistortion
-    k1 = k2 = 0.0
-    fit_k2 = use_dist and n_coeffs >= 2
-    if use_dist:
-        k1, k2, _ = dist.estimate_division(M, m, c, n_coeffs=n_coeffs)
-        r2 = np.sum((m - c) ** 2, axis=1)
-        if np.any(1 + k1 * r2 + k2 * r2 * r2 < 0.1) and n_coeffs >= 2:
-            k1, k2, _ = dist.estimate_division(M, m, c, n_coeffs=1)
-            fit_k2 = False
-            warnings.append(f"pose {name!r}: two-term division model folded over the board; k2 set to 0")
-        if np.any(1 + k1 * r2 + k2 * r2 * r2 < 0.1):
-            k1 = k2 = 0.0
-            warnings.append(f"pose {name!r}: division model unusable on this pose; distortion set to 0")
-    und = models.undistort_division(m, c, k1, k2) if use_dist else m.copy()
-
-    # 3. the paper's 6-parameter LM
-    lm = solve_camera_lm(M, und, c, (W, Hh), board_width=board_width)
-    if not lm["ok"]:
-        raise CalibrationError(f"pose {name!r}: camera LM found no valid (non-mirror) solution from any "
-                               f"start; the pose is probably degenerate (board fronto-parallel?)")
-    K_st = models.intrinsic_matrix(lm["f"], c[0], c[1], lm["alpha"])
-    p_staged = _full_params(K_st, c, k1, k2, lm["R"], lm["t"])
-    staged = dict(f=lm["f"], alpha=lm["alpha"], principal_point=c.copy(), k1=k1, k2=k2, K=K_st, R=lm["R"],
-                  t=lm["t"], start=lm["start"], cost_undistorted=lm["cost"],
-                  rms_undistorted_px=_rms(lm["residuals"]), closed_form=lm["closed_form"],
-                  starts=[(r["start"], r["cost"], r["valid"]) for r in lm["runs"]])
+    # 2.-3. the paper's staged estimate: division model (linear, given c), undistortion, 6-parameter LM
+    p_staged, staged, fit_k2 = _staged_camera(M, m, c, (W, Hh), use_dist, n_coeffs, board_width, name, warnings)
 
     # 4. joint refinement
-    # an assumed principal point (image centre) becomes the mean of a Gaussian prior (MAP): the
-    # distorted corners move it only as far as they really constrain it
     free = np.ones(12, bool)
-    pp_prior = None
-    if pp_source == "given" or (pp_source == "image-center" and not use_dist):
-        free[2:4] = False
-    elif pp_source == "image-center":
-        sig0 = unc.sigma_from_residuals((camera_predict(p_staged, M) - m).ravel(), 10)
-        pp_prior = (c.copy(), sig0 / sigma_pp)
     if not use_dist:
         free[4:6] = False
     elif not fit_k2:
         free[5] = False
+    if pp_source == "given" or (pp_source == "image-center" and not use_dist):
+        free[2:4] = False
     p = p_staged.copy()
-    if refine == "joint":
-        fun = _camera_residual_fn(M, m, p_staged, free, pp_prior)
-        try:
-            with np.errstate(all="ignore"):
-                r = least_squares(fun, p_staged[free], **_LM)
-            pj = p_staged.copy()
-            pj[free] = r.x
-            Rj = models.rvec_to_matrix(pj[6:9])
-            ok = (pj[0] > 0 and pj[1] > 0 and _inside(pj[2:4], (W, Hh)) and np.all(np.isfinite(pj))
-                  and _valid_pose(Rj, pj[9:12], M, -1.0 if (-Rj.T @ pj[9:12])[2] < 0 else 1.0)
-                  and np.all(np.isfinite(camera_predict(pj, M))))
-            if ok and r.cost <= 0.5 * np.sum(fun(p_staged[free]) ** 2) + 1e-12:
-                p = pj
-            else:
-                warnings.append(f"pose {name!r}: joint refinement rejected (invalid or worse); staged estimate kept")
-        except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover - guard
-            warnings.append(f"pose {name!r}: joint refinement failed ({e}); staged estimate kept")
+    typical = np.array([1, 1, 1, 1, 0.01, 0.01, 0.01, 0.01, 0.01, 1, 1, 1.0])
+    if refine == "joint" and pp_source == "image-center" and use_dist and cod == "auto":
+        # COD weak: let the joint ML fit estimate the principal point, from the image centre and from the
+        # COD; accept it only if the data pin it better than the prior would (data-only std <= pp_max_std)
+        starts = [p_staged]
+        if cod_est is not None and np.all(np.isfinite(cod_est.center)) and _inside(cod_est.center, (W, Hh)):
+            try:
+                starts.append(_staged_camera(M, m, cod_est.center, (W, Hh), use_dist, n_coeffs, board_width,
+                                             name, [])[0])
+            except CalibrationError:
+                pass
+        best, best_cost = None, float("inf")
+        for p0 in starts:
+            pj, cj = _joint_camera(M, m, p0, free, None, (W, Hh))
+            if pj is not None and cj < best_cost:
+                best, best_cost = pj, cj
+        if best is not None:
+            Jb = unc.numeric_jacobian(_camera_residual_fn(M, m, best, free), best[free], typical=typical[free])
+            sb = unc.sigma_from_residuals((camera_predict(best, M) - m).ravel(), int(free.sum()))
+            cb = unc.covariance(Jb, sb)
+            ipp = [int(np.sum(free[:2])), int(np.sum(free[:3]))]
+            std_pp = float(np.max(unc.std(cb)[ipp]))
+            max_std = pp_max_std if pp_max_std is not None else sigma_pp
+            if std_pp <= max_std:
+                p, pp_source, fallback_msg = best, "joint", None
+                warnings.append(f"pose {name!r}: centre of distortion weakly observed ({cod_est.reason}); "
+                                f"principal point from the joint fit of all parameters instead: "
+                                f"({p[2]:.1f}, {p[3]:.1f}) +- {std_pp:.1f} px")
+    if pp_source == "image-center" and use_dist and refine == "joint":
+        # an assumed principal point becomes the mean of a Gaussian prior (MAP): the distorted corners
+        # move it only as far as they really constrain it
+        sig0 = unc.sigma_from_residuals((camera_predict(p_staged, M) - m).ravel(), 10)
+        pj, _ = _joint_camera(M, m, p_staged, free, (c.copy(), sig0 / sigma_pp), (W, Hh))
+        if pj is not None:
+            p = pj
+        else:
+            warnings.append(f"pose {name!r}: joint refinement rejected (invalid or worse); staged estimate kept")
+    elif refine == "joint" and pp_source != "joint":
+        pj, _ = _joint_camera(M, m, p_staged, free, None, (W, Hh))
+        if pj is not None:
+            p = pj
+        else:
+            warnings.append(f"pose {name!r}: joint refinement rejected (invalid or worse); staged estimate kept")
+    if fallback_msg:
+        warnings.append(fallback_msg)
 
     # 5. residuals, covariance, std
     res = camera_predict(p, M) - m
     full_fun = _camera_residual_fn(M, m, p, np.ones(12, bool))
-    typical = np.array([1, 1, 1, 1, 0.01, 0.01, 0.01, 0.01, 0.01, 1, 1, 1.0])
     J = unc.numeric_jacobian(full_fun, p, typical=typical)
     n_free = int(free.sum())
     sigma = unc.sigma_from_residuals(res.ravel(), n_free)
@@ -610,6 +665,8 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
     if pp_source == "image-center":
         cols[2:4] = True
         prior[2:4] = 1.0 / sigma_pp ** 2
+    elif pp_source == "joint":
+        cols[2:4] = True
     idx = np.flatnonzero(cols)
     cov = np.zeros((12, 12))
     cov[np.ix_(idx, idx)] = unc.covariance(J[:, idx], sigma, prior_precision=prior[idx])
@@ -624,7 +681,6 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
     info = dict(sigma_px=sigma, n_points=int(mask.sum()), refine=refine or "none", free=free,
                 max_distortion_px=dist.max_displacement(m, p[2:4], dist_obj.k1, dist_obj.k2) if use_dist else 0.0,
                 pp_prior_std=sigma_pp if pp_source == "image-center" else None)
-    staged["rms_px"] = _rms(camera_predict(p_staged, M) - m)
     return CameraSolution(K=K, distortion=dist_obj, R=R, t=t, rms_px=_rms(res), residuals=residuals, std=std,
                           angles_deg=board_angles_deg(R, t), cost=float(0.5 * np.sum(res ** 2)),
                           warnings=tuple(warnings), cod=cod_est, principal_point_source=pp_source,
@@ -850,7 +906,7 @@ def _std_dict(cam: CameraSolution, proj: ProjectorSolution | None) -> dict:
 
 
 _CAM_KW = ("principal_point", "distortion", "cod", "refine", "n_coeffs", "min_cod_score", "pp_prior_std",
-           "pp_prior_fraction", "board_width", "min_points")
+           "pp_prior_fraction", "pp_max_std", "board_width", "min_points")
 _PROJ_KW = ("u0", "board_width", "min_points")
 _ADV_KW = ("camera_rule_deg", "projector_rule_deg", "degenerate_angle_deg", "weak_angle_deg",
            "degenerate_rel_std", "weak_rel_std")
