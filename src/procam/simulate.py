@@ -44,7 +44,8 @@ from . import patterns as _patterns
 __all__ = [
     "Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
     "truth", "correspondences", "true_projector_maps", "render", "write_capture",
-    "board_corners", "project", "distort", "undistort", "euler_matrix", "matrix_euler",
+    "board_corners", "board_extent", "corner_truth", "fit_margin", "project", "distort", "undistort",
+    "euler_matrix", "matrix_euler",
 ]
 
 #: Board (psi, nu, phi) in degrees in the CAMERA frame recommended for a single-pose calibration
@@ -527,7 +528,8 @@ def _scene_params(scene: Scene) -> dict:
             "point": (scene.t_board + scene.wall_offset * np.array([0, 0, 1.0])).tolist(),
             "albedo": scene.albedo_wall}
     photo = {k: getattr(scene, k) for k in ("gain", "ambient", "proj_black", "proj_defocus", "cam_blur",
-                                            "cam_vignetting", "proj_vignetting", "full_well", "read_noise", "gamma", "bits", "supersample")}
+                                            "cam_vignetting", "proj_vignetting", "full_well", "read_noise",
+                                            "gamma", "bits", "supersample")}
     return {"camera": cam, "projector": proj, "extrinsics": ext, "board": board, "wall": wall,
             "photometry": photo}
 
@@ -690,7 +692,8 @@ def _geometry_band(scene: Scene, ys, xs):
         xp = Kp[0, 0] * Xp / Zp + Kp[0, 1] * Yp / Zp + Kp[0, 2]
         yp = Kp[1, 1] * Yp / Zp + Kp[1, 2]
         Wp, Hp = scene.proj_size
-        in_panel = (Zp > 0) & (xp >= -0.5) & (xp <= Wp - 0.5) & (yp >= -0.5) & (yp <= Hp - 0.5)
+        front = Zp > 0
+        in_panel = front & (xp >= -0.5) & (xp <= Wp - 0.5) & (yp >= -0.5) & (yp <= Hp - 0.5)
 
         # shading
         Cp = scene.proj_center_cam
@@ -716,8 +719,10 @@ def _geometry_band(scene: Scene, ys, xs):
     finally:
         err.__exit__(None, None, None)
 
-    lit = surf & in_panel & facing & ~shadow
-    coef = np.where(lit, scene.gain * albedo * irr * cam_vig, 0.0)
+    # the panel's edges are left to the (defocused) panel masks of the renderer; `lit` is the truth mask
+    illuminated = surf & front & facing & ~shadow
+    lit = illuminated & in_panel
+    coef = np.where(illuminated, scene.gain * albedo * irr * cam_vig, 0.0)
     amb = scene.gain * scene.ambient * albedo * cam_vig
     xp = np.where(surf, xp, np.nan)
     yp = np.where(surf, yp, np.nan)
@@ -794,16 +799,14 @@ def _to_profile_map(p: np.ndarray, pad: int) -> np.ndarray:
 
 
 class _Renderer:
-    """Precomputed geometry and profiles for one scene; ``image(k)`` renders linear image k."""
+    """Precomputed geometry and profiles for one scene; ``linear(k)`` renders image k before noise."""
 
     def __init__(self, scene: Scene, order: str):
         self.scene = scene
         self.ps = _patterns.pattern_set(*scene.proj_size, order)
-        s = scene.supersample
-        W, H = scene.cam_size
         Wp, Hp = scene.proj_size
         self.pad = int(np.ceil(4 * max(scene.proj_defocus, 0.25) * PROFILE_UPSAMPLE)) + PROFILE_UPSAMPLE
-        g = _geometry(scene, s)
+        g = _geometry(scene, scene.supersample)
         # float32 maps (faster than fixed-point ones for a one-row source image)
         self.mapx = _to_profile_map(g["xp"], self.pad)
         self.mapy = _to_profile_map(g["yp"], self.pad)
