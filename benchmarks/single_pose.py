@@ -111,7 +111,8 @@ def part1(args):
         for key, v in zip(("staged", "joint", "proj"), r):
             ratios[key].append(v)
         print(f"| {psi:g}, {nu:g} | {nu_p:.1f} | {cb['f']:.2f} | {rms[0]:.2f} | {r[0]:.2f} | {rms[1]:.2f} | "
-              f"{r[1]:.2f} | {pb['f']:.2f} | {rms[2]:.2f} | {r[2]:.2f} | {fails} | {fb.get('cod', 0)}/{fb.get('joint', 0)}/{fb.get('image-center', 0)} | {dt:.2f} |")
+              f"{r[1]:.2f} | {pb['f']:.2f} | {rms[2]:.2f} | {r[2]:.2f} | {fails} | "
+              f"{fb.get('cod', 0)}/{fb.get('joint', 0)}/{fb.get('image-center', 0)} | {dt:.2f} |")
     med = {k: float(np.nanmedian(v)) for k, v in ratios.items()}
     print(f"\nmedian ratio to the CRLB: staged camera {med['staged']:.2f}, joint camera {med['joint']:.2f}, "
           f"projector {med['proj']:.2f}  (paper pipeline ~1.5 for the camera; goal <= 1.2)")
@@ -217,7 +218,8 @@ def main(argv=None):
     ap.add_argument("--skip-paper", action="store_true", help="skip part 2")
     ap.add_argument("--skip-sim", action="store_true", help="skip part 1")
     ap.add_argument("--real", type=str, default=None,
-                    help="folder of the OpenCV left/right sample photos (part 3), e.g. ../shared/data/opencv-left-right")
+                    help="folder of the OpenCV left/right sample photos (part 3), "
+                         "e.g. ../shared/data/opencv-left-right")
     args = ap.parse_args(argv)
     args.grid = [tuple(float(v) for v in c.split(",")) for c in args.grid.split(";")] if args.grid else GRID
     _header(args)

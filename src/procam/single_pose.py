@@ -508,7 +508,8 @@ def _joint_camera(M, m, p0, free, pp_prior, size, max_nfev=150):
 def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, distortion: str | None = "division",
                      cod: str = "auto", refine: str = "joint", n_coeffs: int = 2,
                      min_cod_score: float = dist.MIN_COD_SCORE, pp_prior_std: float | None = None,
-                     pp_prior_fraction: float = 0.025, pp_max_std: float | None = None, board_width: float | None = None,
+                     pp_prior_fraction: float = 0.025, pp_max_std: float | None = None,
+                     board_width: float | None = None,
                      min_points: int = 8, name: str = "view") -> CameraSolution:
     """Single-pose camera calibration: intrinsics, division distortion and board pose.
 
