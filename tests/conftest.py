@@ -1,8 +1,14 @@
 import os
-from pathlib import Path
 
-import numpy as np
-import pytest
+# One BLAS thread per process: on a loaded 2-core machine OpenBLAS threads oversubscribe the cores and a
+# small SVD inside least_squares can take 100x longer.  Must be set before numpy is imported.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 

@@ -13,8 +13,9 @@ from ..errors import ProcamError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Projector-camera calibration from Gray-code captures of a chessboard.")
-console = Console(soft_wrap=True)
-err_console = Console(stderr=True, soft_wrap=True)
+# Not a terminal (pipes, CI, logs): wide enough that tables don't wrap.
+console = Console(soft_wrap=True, width=None if sys.stdout.isatty() else 160)
+err_console = Console(stderr=True, soft_wrap=True, width=None if sys.stderr.isatty() else 160)
 
 
 def fail(message: str, code: int = 2):
