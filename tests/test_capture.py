@@ -140,3 +140,20 @@ def test_cli_patterns_roundtrip(tmp_path):
     assert np.array_equal(st, patterns.generate(1280, 720))
     code, _, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "q", "--order", "zigzag"])
     assert code == 2 and "--order" in err
+
+
+def test_saturated_and_dark_frames(tmp_path):
+    st = camera_view_of_patterns(W, H)
+    over = np.clip(st.astype(int) * 3, 0, 255).astype(np.uint8)  # white frame clipped at 255
+    write_stack(tmp_path / "over", over)
+    cap = capture.load_capture(tmp_path / "over", (W, H))
+    assert any("saturated" in w and "reduce the exposure" in w for w in cap.warnings)
+    blown = np.full_like(st, 255)
+    blown[:, :, : W // 4] = st[:, :, : W // 4]
+    write_stack(tmp_path / "blown", blown)
+    with pytest.raises(CaptureError, match="black frame is saturated"):
+        capture.load_capture(tmp_path / "blown", (W, H), check=True)
+    dark = np.full_like(st, 12)
+    write_stack(tmp_path / "dark", dark)
+    with pytest.raises(CaptureError, match="projector's light is not visible"):
+        capture.load_capture(tmp_path / "dark", (W, H))

@@ -28,6 +28,7 @@ class Capture:
     files: tuple
     pattern_set: patterns.PatternSet
     folder: Path
+    warnings: tuple = ()
 
     @property
     def white(self) -> np.ndarray:
@@ -92,6 +93,18 @@ def frame_levels(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return np.full(len(stack), 0.5), np.full(len(stack), 0.5)
     norm = (sub[:, lit] - lo[lit]) / span[lit]
     return np.percentile(norm, 5, axis=1), np.percentile(norm, 95, axis=1)
+
+
+def check_light(stack: np.ndarray, folder, min_span: float = 10.0) -> None:
+    """Raise CaptureError when the frames hardly differ (projector off, lens cap, far too dark)."""
+    from .decode import full_scale_of
+
+    sub = _sample(stack)
+    span = np.percentile(sub.max(axis=0) - sub.min(axis=0), 99)
+    if span < min_span * full_scale_of(stack) / 255.0:
+        raise CaptureError(f"{folder}: the frames hardly differ (99th percentile of max - min is {span:.0f} grey "
+                           "levels): the projector's light is not visible — check that the projector shows the "
+                           "sequence, the exposure, and the lens cap")
 
 
 def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files) -> None:
@@ -165,7 +178,30 @@ def load_capture(folder, projector=None, order=None, check: bool = True) -> Capt
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + _count_hint(len(files), ps))
     stack = io.read_images(files)
+    warnings = ()
     if check:
+        check_light(stack, folder)
         check_white_black(stack, ps, folder, files)
         check_pairs(stack, ps, folder, files)
-    return Capture(stack, tuple(files), ps, folder)
+        warnings = exposure_warnings(stack, ps, folder, files)
+    return Capture(stack, tuple(files), ps, folder, warnings)
+
+
+def exposure_warnings(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
+                      max_saturated: float = 0.02) -> tuple:
+    """Warnings about over-exposure: saturated pixels in the white frame (corners and stripe edges lose
+    accuracy there) or in the black frame (nothing decodes there).  Raises CaptureError when the black
+    frame is saturated over most of the image."""
+    from .decode import full_scale_of
+
+    fs = full_scale_of(stack)
+    out = []
+    for idx, what in ((ps.white, "white"), (ps.black, "black")):
+        frac = float(np.mean(stack[idx] >= fs))
+        if what == "black" and frac > 0.5:
+            raise CaptureError(f"{files[idx]}: the black frame is saturated on {frac:.0%} of the image; nothing can "
+                               "be decoded there — reduce the exposure or gain and re-capture")
+        if frac > max_saturated:
+            out.append(f"{Path(files[idx]).name}: {frac:.1%} of the {what} frame is saturated (value {fs:.0f}); "
+                       "reduce the exposure so the white frame stays below full scale")
+    return tuple(out)

@@ -54,6 +54,8 @@ def correspond_cmd(
     cols, rows = parse_board(board)
     opts = pose_options(estimator, window, refine, detector, method)
     cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order)
+    for w in cap.warnings:
+        console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
     view, _ = pipeline.view_from_stack(cap.stack, cap.pattern_set, (cols, rows), square, name=str(pose_dir),
                                        options=opts)
     ok = view.valid

@@ -31,6 +31,8 @@ def decode_cmd(
     if method not in ("robust", "simple"):
         fail(f"--method must be robust or simple, got {method!r}")
     cap = capture.load_capture(pose_dir, size, order)
+    for w in cap.warnings:
+        console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
     res = dec.decode(cap.stack, cap.pattern_set, method, shadow_threshold=shadow, contrast_threshold=contrast)
     ps = cap.pattern_set
     h, w = res.col.shape
