@@ -111,6 +111,10 @@ class StudyConfig:
     slice_angles : angles along the slices; ``None`` = ``psi``.
     seed : base seed.
     preset : :func:`procam.simulate.preset` name.
+    render : noisy trials from full renderings (:func:`procam.simulate.render`, the scene's
+        photometric noise) decoded by :func:`procam.pipeline.view_from_stack`, instead of exact
+        corners plus Gaussian noise; slow (seconds per trial).  ``noise`` then only sets the
+        bound's σ.  The noise-free run stays on the exact corners.
     """
 
     device: str = "camera"
@@ -125,6 +129,7 @@ class StudyConfig:
     slice_angles: tuple | None = None
     seed: int = 0
     preset: str = "paper"
+    render: bool = False
 
     def __post_init__(self):
         s = object.__setattr__
@@ -297,14 +302,32 @@ def _calibrate_f(config: StudyConfig, scene, obj, pts) -> float:
     return f if np.isfinite(f) and f > 0 else float("nan")
 
 
-def _points(config: StudyConfig, scene, sigma: float, seed: int):
+def _points(config: StudyConfig, scene, sigma: float, seed: int, render: bool = False):
     from . import simulate
 
+    if render:
+        return _rendered_points(config, scene, seed)
     if config.device == "camera":
         obj, cam, _ = simulate.correspondences(scene, sigma, 0.0, seed)
         return obj, cam
     obj, _, proj = simulate.correspondences(scene, 0.0, sigma, seed)
     return obj, proj
+
+
+def _rendered_points(config: StudyConfig, scene, seed: int):
+    """Corners from a full rendering: render -> decode -> detect -> local homographies (NaN rows if lost)."""
+    from . import patterns, pipeline, simulate
+
+    stack, _ = simulate.render(scene, order="opencv", seed=seed)
+    ps = patterns.pattern_set(scene.proj_size[0], scene.proj_size[1], "opencv")
+    try:
+        view, _ = pipeline.view_from_stack(stack, ps, (scene.board_cols, scene.board_rows), scene.square,
+                                           name=f"study cell seed {seed}")
+    except ProcamError:
+        n = scene.board_cols * scene.board_rows
+        return simulate.board_corners(scene), np.full((n, 2), np.nan)
+    pts = view.cam_pts if config.device == "camera" else view.proj_pts
+    return np.asarray(view.obj_pts, float), np.asarray(pts, float)
 
 
 def _bound(config: StudyConfig, scene, obj, sigma: float) -> float:
@@ -341,7 +364,8 @@ def _run_cell(config, psi, nu, in_grid, slices, base):
     sigma = config.sigma
     obj, exact = _points(config, scene, 0.0, 0)
     df0 = _calibrate_f(config, scene, obj, exact) - f_true
-    fs = np.array([_calibrate_f(config, scene, *_points(config, scene, sigma, _trial_seed(config, psi, nu, k)))
+    fs = np.array([_calibrate_f(config, scene, *_points(config, scene, sigma, _trial_seed(config, psi, nu, k),
+                                                        config.render))
                    for k in range(config.trials)], float)
     ok = fs[np.isfinite(fs)]
     per_px = _bound(config, scene, obj, 1.0)

@@ -149,6 +149,8 @@ def calibrate_cmd(
                 v, _ = pipeline.view_from_folder(p, (cols, rows), square, size, order, options=opts)
                 views.append(v)
                 console.print(f"{p}: {int(v.valid.sum())} of {len(v.valid)} corners")
+                for w in v.diagnostics.get("warnings", []):
+                    console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
         if method == "single":
             if len(views) != 1:
                 fail(f"--method single takes one pose folder, got {len(views)}; use --method multi")
