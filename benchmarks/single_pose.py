@@ -175,7 +175,7 @@ def part3(folder):
     obj = board.object_points(9, 6, 25.0)
     print(f"\n## Part 3: real photos ({folder.name}), one photo each; reference fx = "
           f"{REAL_REFERENCE['left'][0]} (left), {REAL_REFERENCE['right'][0]} (right)")
-    print("| image | psi_c, nu_c | s8/s9 | pp from | f_c joint +- std | dev % | f_c staged (paper) | dev % "
+    print("| image | psi_c, nu_c | s8/s9 | pp from | f_c joint +- std | dev % | f_c staged (refine=none) | dev % "
           "| pp (u0, v0) | rms px | advice |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     devs = {"joint": [], "staged": [], "joint_ok": []}
