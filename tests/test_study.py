@@ -103,7 +103,9 @@ def test_run_is_reproducible_and_order_independent():
 
 
 def _strip(rows):
-    return [{k: v for k, v in r.items() if k != "seconds"} for r in rows]
+    """Rows without their timing, NaN replaced by a marker so that NaN == NaN."""
+    return [{k: ("nan" if isinstance(v, float) and v != v else v) for k, v in r.items() if k != "seconds"}
+            for r in rows]
 
 
 def test_joblib_processes_give_the_serial_result():
@@ -180,3 +182,12 @@ def test_cli(tmp_path):
     assert bad.exit_code == 2 and "camera or projector" in bad.output
     bad = runner.invoke(app, ["study", "camera", "--grid", "1:2", "-o", str(out)])
     assert bad.exit_code == 2 and "START:STOP:STEP" in bad.output
+
+
+@pytest.mark.slow
+def test_render_path_one_cell():
+    """Full rendering + decoding per trial (camera study; D = 500 mm is enough for the camera corners)."""
+    cfg = StudyConfig("camera", trials=2, render=True, model_error="none")
+    row = run_cell(cfg, 20.0, 20.0)
+    assert row["n_ok"] == 2
+    assert row["median_abs_df"] < 10 * row["bound_f"] + 5

@@ -114,7 +114,9 @@ class StudyConfig:
     render : noisy trials from full renderings (:func:`procam.simulate.render`, the scene's
         photometric noise) decoded by :func:`procam.pipeline.view_from_stack`, instead of exact
         corners plus Gaussian noise; slow (seconds per trial).  ``noise`` then only sets the
-        bound's σ.  The noise-free run stays on the exact corners.
+        bound's σ.  The noise-free run stays on the exact corners.  The board must be seen by both
+        devices (the pipeline needs projector corners): with the paper rig that needs
+        ``distance`` > 500 mm; trials whose capture cannot be processed count as failed (``n_ok``).
     """
 
     device: str = "camera"
@@ -262,7 +264,7 @@ def _openblas_handles():
     for d in sorted(dirs):
         for path in sorted(glob.glob(os.path.join(d, "*openblas*.so*"))):
             try:
-                lib = ctypes.CDLL(path, mode=getattr(ctypes, "RTLD_NOLOAD", 0) | ctypes.RTLD_GLOBAL)
+                lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_LOCAL)
             except OSError:
                 continue
             for suffix in ("scipy_openblas_{}64_", "scipy_openblas_{}_64_", "scipy_openblas_{}", "openblas_{}"):

@@ -36,7 +36,8 @@ def study(
     distance: float = typer.Option(500.0, help="Board-centre depth on the device's optical axis (mm)."),
     slice_grid: Optional[str] = typer.Option(None, help="Angles along the paper's slices [default: the ψ grid]."),
     slices: bool = typer.Option(True, "--slices/--no-slices", help="Also run the paper's slices."),
-    render: bool = typer.Option(False, help="Full rendering + decoding per trial instead of the fast path."),
+    render: bool = typer.Option(False, help="Noisy trials from full renderings + decoding (slow, seconds per trial; "
+                                            "the board must be visible to both devices: use a larger --distance)."),
     jobs: int = typer.Option(1, "-j", "--jobs", help="Worker processes (joblib; -1 = all cores; 1 = serial)."),
     dask: Optional[str] = typer.Option(None, help="Run on a Dask cluster: scheduler address, or 'local' for a LocalCluster of --jobs workers."),
     seed: int = typer.Option(0, help="Base seed (each cell and trial derives its own)."),
@@ -51,14 +52,12 @@ def study(
     device = device.lower()
     if device not in ("camera", "projector"):
         raise ProcamError(f"device must be camera or projector, got {device!r}")
-    if render:
-        raise ProcamError("--render is not available yet: the study uses the fast path "
-                          "(exact corners + Gaussian noise); drop --render")
     psi = parse_grid(psi_grid or grid)
     nu = parse_grid(nu_grid or grid)
     cfg = StudyConfig(device=device, psi=psi, nu=nu, trials=trials, noise=noise, model_error=model_error,
                       distance=distance, slices=slices,
-                      slice_angles=None if slice_grid is None else parse_grid(slice_grid), seed=seed)
+                      slice_angles=None if slice_grid is None else parse_grid(slice_grid), seed=seed,
+                      render=render)
     output.mkdir(parents=True, exist_ok=True)
 
     client = None
