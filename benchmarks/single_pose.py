@@ -19,6 +19,10 @@ Usage::
 
 from __future__ import annotations
 
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # oversubscribed BLAS slows least_squares on small problems
+
 import argparse
 import datetime
 import platform
@@ -59,13 +63,16 @@ def _observations(scene, args, seed):
     if args.source == "points":
         return simulate.correspondences(scene, args.sigma_cam, args.sigma_proj, seed=seed)
     try:
-        from procam.pipeline import view_from_stack  # noqa: F401  (written by the lead)
+        from procam.patterns import pattern_set
+        from procam.pipeline import view_from_stack
         render = simulate.render
     except (ImportError, AttributeError) as e:
         sys.exit(f"--source render needs procam.simulate.render and procam.pipeline.view_from_stack, which are "
-                 f"not available yet ({e}); use --source points")
-    stack, pattern_set = render(scene, seed=seed)
-    view = view_from_stack(stack, pattern_set, board=(scene.board_cols, scene.board_rows), square=scene.square)
+                 f"not available ({e}); use --source points")
+    stack, _ = render(scene, order="opencv", seed=seed)
+    ps = pattern_set(*scene.proj_size, order="opencv")
+    view, _ = view_from_stack(stack, ps, board=(scene.board_cols, scene.board_rows), square=scene.square,
+                              name=f"render-{seed}")
     return view.obj_pts, view.cam_pts, view.proj_pts
 
 
