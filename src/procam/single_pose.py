@@ -39,7 +39,7 @@ from .errors import CalibrationError
 #: scale of the conditioned distortion coefficients: k1 = kappa1 / S^2, k2 = kappa2 / S^4 (METHOD §13)
 KAPPA_SCALE = 1000.0
 CAMERA_PARAMS = ("f_c", "alpha_c", "u0c", "v0c", "kappa1", "kappa2", "rx", "ry", "rz", "tx", "ty", "tz")
-PROJECTOR_PARAMS = ("f_p", "v0p", "phi_p", "xo_p", "yo_p", "zo_p")
+PROJECTOR_PARAMS = ("f_p", "v0p", "rx", "ry", "rz", "tx", "ty", "tz")
 _LM = dict(method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12)
 
 
@@ -97,9 +97,10 @@ class CameraSolution:
 class ProjectorSolution:
     """Single-pose projector calibration (``u0p`` fixed, ``alpha_p = 1``, no distortion).
 
-    Attributes as :class:`CameraSolution`; ``params`` are ``PROJECTOR_PARAMS`` = (f_p, v0p, phi_p,
-    O (3)) of the principal-axis model, ``covariance`` (6, 6); ``std`` keys ``f_p, v0p, angles_deg, t``;
-    ``H_pb`` the projector -> board homography (needed to map ``params`` to a pose).
+    Attributes as :class:`CameraSolution`; ``params`` are ``PROJECTOR_PARAMS`` = (f_p, v0p, rvec (3),
+    t (3)) of the pinhole model with ``u0`` fixed, ``covariance`` (8, 8); ``std`` keys ``f_p, v0p,
+    angles_deg, t``; ``H_pb`` the projector -> board homography; ``info["theta"]`` the principal-axis
+    parameters (f_p, v0p, phi_p, O (3)) the LM solved for.
     """
 
     K: np.ndarray
@@ -733,31 +734,38 @@ def calibrate_projector(obj_pts, proj_pts, proj_size, *, u0=None, board_width=No
                                f"start; the pose is probably degenerate (no rotation about the projector's y axis?)")
     x = lm["x"]
     res = lm["residuals"]
-    J = unc.numeric_jacobian(lm["fun"], x, typical=np.array([1, 1, 0.01, 1, 1, 1.0]))
-    sigma = unc.sigma_from_residuals(res.ravel(), 6)
+    u0v = lm["u0"]
+    # covariance in the plain pinhole parameters (f, v0, rvec, t): the principal-axis parameters are
+    # tied to the data through H_P^B, so their Jacobian would understate the uncertainty
+    q = np.concatenate([[lm["f"], lm["v0"]], models.matrix_to_rvec(lm["R"]), lm["t"]])
+    J = unc.numeric_jacobian(lambda v: (projector_predict(v, M, u0v) - m).ravel(), q,
+                             typical=np.array([1, 1, 0.01, 0.01, 0.01, 1, 1, 1.0]))
+    sigma = unc.sigma_from_residuals(res.ravel(), 8)
     cov = unc.covariance(J, sigma)
     s = unc.std(cov)
-    H_pb, u0v = lm["H_pb"], lm["u0"]
 
-    def ang(q):
-        R, t = _proj_pose(q, H_pb, u0v)
-        return board_angles_deg(R, t)
-
-    def tt(q):
-        return _proj_pose(q, H_pb, u0v)[1]
+    def ang(v):
+        return board_angles_deg(models.rvec_to_matrix(v[2:5]), v[5:8])
 
     std = {"f_p": float(s[0]), "v0p": float(s[1]),
-           "angles_deg": np.sqrt(np.abs(np.diag(unc.propagate(cov, ang, x, typical=1.0)))),
-           "t": np.sqrt(np.abs(np.diag(unc.propagate(cov, tt, x))))}
+           "angles_deg": np.sqrt(np.abs(np.diag(unc.propagate(cov, ang, q, typical=1.0)))),
+           "t": s[5:8].copy()}
     K = models.intrinsic_matrix(lm["f"], u0v, lm["v0"])
     residuals = np.full((len(obj), 2), np.nan)
     residuals[mask] = res
     return ProjectorSolution(K=K, distortion=Distortion(), R=lm["R"], t=lm["t"], rms_px=_rms(res),
                              residuals=residuals, std=std, angles_deg=board_angles_deg(lm["R"], lm["t"]),
-                             cost=float(lm["cost"]), params=x, covariance=cov, H_pb=H_pb, u0=u0v, mask=mask,
+                             cost=float(lm["cost"]), params=q, covariance=cov, H_pb=lm["H_pb"], u0=u0v, mask=mask,
                              image_size=(W, Hh),
                              info=dict(sigma_px=sigma, start=lm["start"], closed_form=lm["closed_form"],
+                                       theta=x.copy(),
                                        starts=[(r["start"], r["cost"], r["valid"]) for r in lm["runs"]]))
+
+
+def projector_predict(q, obj, u0) -> np.ndarray:
+    """Projector pixels (N, 2) for ``q = (f, v0, rvec (3), t (3))`` with ``u0`` fixed and alpha = 1."""
+    q = np.asarray(q, float)
+    return models.project(models.intrinsic_matrix(q[0], u0, q[1]), models.rvec_to_matrix(q[2:5]), q[5:8], obj)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -884,7 +892,7 @@ def _extrinsics_std(cam: CameraSolution, proj: ProjectorSolution):
 
     def g(q):
         Rc, tc = models.rvec_to_matrix(q[6:9]), q[9:12]
-        Rp, tp = _proj_pose(q[n:], proj.H_pb, proj.u0)
+        Rp, tp = models.rvec_to_matrix(q[n + 2:n + 5]), q[n + 5:n + 8]
         R = Rp @ Rc.T
         return np.concatenate([np.degrees(models.matrix_to_euler(R)), tp - R @ tc])
 
