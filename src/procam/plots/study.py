@@ -13,7 +13,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
+from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
 __all__ = ["heatmap", "slices", "save_study_figures"]
 
@@ -59,12 +59,18 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
         extend = ("min" if finite.min() < lo else "neither")
         if finite.max() > hi:
             extend = "both" if extend == "min" else "max"
-        norm = LogNorm(vmin=lo, vmax=hi) if log else None
+        ratio = metric.startswith("ratio")
+        if log:
+            norm = LogNorm(vmin=lo, vmax=hi)
+        elif ratio and lo < 1 < hi:  # ratios to the bound: diverging about 1
+            norm = TwoSlopeNorm(vcenter=1.0, vmin=lo, vmax=hi)
+        else:
+            norm = None
         data = np.ma.masked_invalid(np.where(val <= 0, lo, val) if log else val)
         dpsi = np.diff(psi).min() if psi.size > 1 else 1.0
         dnu = np.diff(nu).min() if nu.size > 1 else 1.0
-        im = ax.imshow(data, origin="lower", aspect="auto", cmap="viridis", norm=norm,
-                       vmin=None if log else lo, vmax=None if log else hi,
+        im = ax.imshow(data, origin="lower", aspect="auto", cmap="RdBu_r" if ratio else "viridis", norm=norm,
+                       vmin=None if norm is not None else lo, vmax=None if norm is not None else hi,
                        extent=(nu[0] - dnu / 2, nu[-1] + dnu / 2, psi[0] - dpsi / 2, psi[-1] + dpsi / 2),
                        interpolation="nearest")
         fig.colorbar(im, ax=ax, label=_LABEL.get(metric, metric), extend=extend)
@@ -115,6 +121,18 @@ def slices(result):
             ax.plot(x, bd, "-", color="0.35", lw=2, label="√CRLB(f)")
             ax.plot(x, 0.674 * bd, ":", color="0.35", label="0.674·√CRLB (efficient median)")
         ax.set_yscale("log")
+        # without a model error the noise-free |Δf| is ~1e-11 px (solver precision): keep the axis on
+        # the noisy scale and pin such points to the bottom edge
+        ref = np.concatenate([med, 0.674 * bd]) if result.config.trials > 0 else np.array([])
+        ref = ref[np.isfinite(ref) & (ref > 0)]
+        if ref.size:
+            lo = ref.min() / 3
+            top = np.nanmax(np.concatenate([ref, nf[np.isfinite(nf)]])) * 2
+            ax.set_ylim(lo, top)
+            below = np.isfinite(nf) & (nf < lo)
+            if below.any():
+                ax.plot(x[below], np.full(below.sum(), lo * 1.15), "v", ms=4, color="C1",
+                        label="noise-free |Δf| below axis")
         ax.set_xlabel(f"{'ψ' if axis == 'psi' else 'ν'}_{s} (deg)")
         ax.set_ylabel("|Δf| (px)")
         ax.set_title(f"{'ν' if fixed == 'nu' else 'ψ'}_{s} = {val:g}°", fontsize=10)
