@@ -417,6 +417,22 @@ def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = Non
     -------
     StudyResult
         Rows in the order of ``cells``, whatever the order the workers finished in.
+
+    Examples
+    --------
+    Serially, with local processes, or on a Dask cluster (``pip install 'procam[dask]'``; every
+    worker needs procam installed); all three give identical rows::
+
+        cfg = StudyConfig("projector", psi=parse_grid("-45:45:5"), nu=parse_grid("-45:45:5"))
+        res = run_study(cfg)                      # serial, no joblib needed
+        res = run_study(cfg, n_jobs=-1)           # joblib/loky processes on this machine
+        from dask.distributed import Client
+        with Client("tcp://scheduler:8786"):      # or Client(LocalCluster(...))
+            res = run_study(cfg, backend="dask")  # joblib's dask backend: tasks run on the cluster
+        res.to_csv("study.csv")
+
+    The CLI does the same with ``procam study projector -j 2`` or ``--dask tcp://scheduler:8786``
+    (``--dask local`` starts a LocalCluster of ``--jobs`` workers).
     """
     todo = list(study_cells(config) if cells is None else cells)
     total = len(todo)
