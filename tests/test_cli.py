@@ -58,3 +58,20 @@ def test_demo_runs(tmp_path):
     s = json.loads((tmp_path / "demo" / "demo_summary.json").read_text())
     assert abs(s["projector_f"][1] - s["projector_f"][0]) < 20
     assert (tmp_path / "demo" / "calib.yml").is_file() and (tmp_path / "demo" / "capture" / "truth.json").is_file()
+
+
+def test_examples_run(tmp_path):
+    """The examples are documentation: they must run."""
+    import runpy
+    import sys
+    from pathlib import Path
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    runpy.run_path(str(ex / "single_pose_from_points.py"), run_name="__main__")
+    old = sys.argv
+    sys.argv = ["plot_decode.py", str(tmp_path / "d.png")]
+    try:
+        runpy.run_path(str(ex / "plot_decode.py"), run_name="__main__")
+    finally:
+        sys.argv = old
+    assert (tmp_path / "d.png").is_file()
