@@ -265,3 +265,21 @@ def test_real_photos_single_pose_camera_only():
             assert abs(f - fx) < 6 * s + 0.03 * fx, (path.name, f, s)
     assert len(rel_ok) >= 8
     assert np.median(rel_ok) < 0.03
+
+
+def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
+    """The principal point from a MAP fit is not 'assumed at the image centre': say what was done."""
+    scene = replace(ideal, cam_dist_coeffs=(0.0, 0.0))
+    view = _view(scene, 0.1, 0.2, seed=5)
+    cal = sp.calibrate(view)
+    cam = cal.info["camera"]
+    assert cam.principal_point_source == "image-center"
+    (msg,) = [w for w in cal.warnings if "centre of distortion unreliable" in w]
+    u0, v0 = cal.camera.K[0, 2], cal.camera.K[1, 2]
+    assert "Gaussian prior centred on the image centre (639.5, 399.5) with std 32 px" in msg
+    assert f"final ({u0:.1f}, {v0:.1f}) +- ({cal.std['u0c']:.1f}, {cal.std['v0c']:.1f}) px" in msg
+    assert "assumed at the image centre" not in msg
+    staged = sp.calibrate(view, refine="none")
+    (msg,) = [w for w in staged.warnings if "centre of distortion unreliable" in w]
+    assert "fixed at the image centre (639.5, 399.5)" in msg
+    np.testing.assert_allclose(staged.camera.K[:2, 2], (639.5, 399.5))

@@ -572,7 +572,8 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
 
     # 1. principal point / centre of distortion
     cod_est = None
-    fallback_msg = None
+    fallback_reason = None      # COD unreliable with cod="auto": the principal point comes from a prior
+    map_ok = False              # the MAP fit (prior on the principal point) was accepted
     if principal_point is not None:
         c = np.asarray(principal_point, float).reshape(2)
         pp_source = "given"
@@ -591,12 +592,7 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
         else:
             c, pp_source = center_img.copy(), "image-center"
             if use_dist and cod == "auto":
-                fallback_msg = (
-                    f"pose {name!r}: centre of distortion unreliable ({cod_est.reason}); principal point "
-                    f"assumed at the image centre ({c[0]:.1f}, {c[1]:.1f}) instead. f_c, alpha_c and the "
-                    f"distortion are then only as good as that assumption: their reported std includes a "
-                    f"+-{sigma_pp:.0f} px prior on the principal point. For an accurate principal point use a "
-                    f"pose with more visible lens distortion (board filling the image) or several poses.")
+                fallback_reason = cod_est.reason
 
     # 2.-3. the paper's staged estimate: division model (linear, given c), undistortion, 6-parameter LM
     p_staged, staged, fit_k2 = _staged_camera(M, m, c, (W, Hh), use_dist, n_coeffs, board_width, name, warnings)
@@ -634,7 +630,7 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
             std_pp = float(np.max(unc.std(cb)[ipp]))
             max_std = pp_max_std if pp_max_std is not None else sigma_pp
             if std_pp <= max_std:
-                p, pp_source, fallback_msg = best, "joint", None
+                p, pp_source, fallback_reason = best, "joint", None
                 warnings.append(f"pose {name!r}: centre of distortion weakly observed ({cod_est.reason}); "
                                 f"principal point from the joint fit of all parameters instead: "
                                 f"({p[2]:.1f}, {p[3]:.1f}) +- {std_pp:.1f} px")
@@ -644,7 +640,7 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
         sig0 = unc.sigma_from_residuals((camera_predict(p_staged, M) - m).ravel(), 10)
         pj, _ = _joint_camera(M, m, p_staged, free, (c.copy(), sig0 / sigma_pp), (W, Hh))
         if pj is not None:
-            p = pj
+            p, map_ok = pj, True
         else:
             warnings.append(f"pose {name!r}: joint refinement rejected (invalid or worse); staged estimate kept")
     elif refine == "joint" and pp_source != "joint":
@@ -653,9 +649,6 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
             p = pj
         else:
             warnings.append(f"pose {name!r}: joint refinement rejected (invalid or worse); staged estimate kept")
-    if fallback_msg:
-        warnings.append(fallback_msg)
-
     # 5. residuals, covariance, std
     res = camera_predict(p, M) - m
     full_fun = _camera_residual_fn(M, m, p, np.ones(12, bool))
@@ -676,6 +669,17 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
     R = models.rvec_to_matrix(p[6:9])
     t = p[9:12].copy()
     std = _camera_std(p, cov)
+    if fallback_reason is not None:
+        if map_ok:
+            how = (f"principal point estimated with a Gaussian prior centred on the image centre ({c[0]:.1f}, "
+                   f"{c[1]:.1f}) with std {sigma_pp:.0f} px per axis (MAP fit of all parameters): final "
+                   f"({p[2]:.1f}, {p[3]:.1f}) +- ({std['u0c']:.1f}, {std['v0c']:.1f}) px")
+        else:
+            how = (f"principal point fixed at the image centre ({p[2]:.1f}, {p[3]:.1f}); the reported std "
+                   f"includes a +-{sigma_pp:.0f} px prior on it")
+        warnings.append(f"pose {name!r}: centre of distortion unreliable ({fallback_reason}); {how}. f_c, alpha_c "
+                        f"and the distortion are only as good as that prior. For an accurate principal point use a "
+                        f"pose with more visible lens distortion (board filling the image) or several poses.")
     dist_obj = Distortion("division", (float(p[2]), float(p[3])), float(p[4] / KAPPA_SCALE ** 2),
                           float(p[5] / KAPPA_SCALE ** 4)) if use_dist else Distortion()
     residuals = np.full((len(obj), 2), np.nan)
