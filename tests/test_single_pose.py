@@ -223,7 +223,7 @@ def test_camera_only_mode(ideal):
 
 def test_too_few_points_and_missing_sizes_are_clear_errors(ideal):
     obj, cam, proj = simulate.correspondences(ideal, 0.0, 0.0)
-    with pytest.raises(CalibrationError, match="usable camera corners"):
+    with pytest.raises(CalibrationError, match="only 5 of 5 camera corners are usable"):
         sp.calibrate_camera(obj[:5], cam[:5], (1280, 800), name="p1")
     with pytest.raises(CalibrationError, match="image size"):
         sp.calibrate_camera(obj, cam, None)
@@ -267,6 +267,113 @@ def test_real_photos_single_pose_camera_only():
     assert np.median(rel_ok) < 0.03
 
 
+# ------------------------------------------------------------------------------------------
+# robustness: outlier corners, too few / collinear corners, honest fallback messages
+def _displaced(view, n_cam, n_proj, seed):
+    """The view with n_cam camera and n_proj projector corners moved by 3-10 px in random directions."""
+    rng = np.random.default_rng(seed)
+    n = len(view.obj_pts)
+
+    def move(pts, k):
+        idx = np.sort(rng.choice(n, k, replace=False))
+        ang, r = rng.uniform(0, 2 * np.pi, k), rng.uniform(3.0, 10.0, k)
+        out = pts.copy()
+        out[idx] += np.column_stack([r * np.cos(ang), r * np.sin(ang)])
+        return out, idx
+
+    cam, ic = move(view.cam_pts, n_cam)
+    proj, ip = move(view.proj_pts, n_proj)
+    return View(view.obj_pts, cam, proj, "outliers", view.cam_size, view.proj_size), ic, ip
+
+
+@pytest.mark.parametrize("seed,n_cam,n_proj", [(0, 3, 2), (1, 2, 3)])
+def test_outlier_corners_are_rejected_and_the_truth_recovered(ideal, bounds, seed, n_cam, n_proj):
+    cb, pb, _ = bounds
+    clean_view = _view(ideal, 0.1, 0.2, seed=seed)
+    bad_view, ic, ip = _displaced(clean_view, n_cam, n_proj, seed)
+    clean, cal = sp.calibrate(clean_view), sp.calibrate(bad_view)
+    rej = cal.poses[0]["rejected_corners"]
+    assert [r["index"] for r in sorted(rej["camera"], key=lambda r: r["index"])] == list(ic)
+    assert [r["index"] for r in sorted(rej["projector"], key=lambda r: r["index"])] == list(ip)
+    assert all(r["residual_px"] > 2.0 for r in rej["camera"] + rej["projector"])
+    assert cal.poses[0]["n_used"] == {"camera": 60 - n_cam, "projector": 60 - n_proj}
+    assert any("camera corners rejected as outliers" in w and f"#{ic[0]} " in w for w in cal.warnings)
+    assert any("projector corners rejected as outliers" in w for w in cal.warnings)
+    assert cal.info["camera"].rejected.tolist() == list(ic)
+    # as good as the clean data: the same CRLB tolerances, and close to the clean estimate
+    Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
+    for c in (cal, clean):
+        assert abs(c.camera.K[0, 0] - Kc[0, 0]) < 5 * cb["f"]
+        assert abs(c.projector.K[0, 0] - Kp[0, 0]) < 5 * pb["f"]
+    assert abs(cal.camera.K[0, 0] - clean.camera.K[0, 0]) < cb["f"]
+    assert abs(cal.projector.K[0, 0] - clean.projector.K[0, 0]) < pb["f"]
+    assert cal.cam_rms < 0.2 and cal.proj_rms < 0.4 and cal.stereo_rms < 0.4
+    # without the rejection the displaced corners pull the fit
+    off = sp.calibrate(bad_view, reject_outliers=False)
+    assert off.poses[0]["rejected_corners"] == {"camera": [], "projector": []}
+    assert off.cam_rms > 2 * cal.cam_rms and off.proj_rms > 2 * cal.proj_rms
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_clean_data_rejects_no_corner(ideal, seed):
+    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=seed))
+    assert cal.poses[0]["rejected_corners"] == {"camera": [], "projector": []}
+    thr = cal.poses[0]["outlier_threshold_px"]
+    assert thr["camera"] >= 0.5 and thr["projector"] >= 0.5
+    assert not any("outlier" in w for w in cal.warnings)
+
+
+def test_camera_only_rejects_an_outlier_corner(ideal):
+    obj, cam, _ = simulate.correspondences(ideal, 0.1, 0.0, seed=9)
+    cam = cam.copy()
+    cam[17] += (4.0, -3.0)
+    cal = sp.calibrate_camera_only(obj, cam, ideal.cam_size, name="photo")
+    assert [r["index"] for r in cal.poses[0]["rejected_corners"]["camera"]] == [17]
+    assert cal.cam_rms < 0.2
+
+
+def test_widespread_large_residuals_are_not_treated_as_outliers(ideal):
+    """A third of the corners off by a few px (the rest clean): more than outlier_max_fraction = 0.2 --
+    a wrong model or bad data, not a few outliers: keep all corners and say so."""
+    obj, cam, _ = simulate.correspondences(ideal, 0.05, 0.0, seed=10)
+    rng = np.random.default_rng(10)
+    bad = rng.permutation(len(cam))[:20]
+    cam = cam.copy()
+    cam[bad] += rng.normal(0, 3.0, (20, 2))
+    sol = sp.calibrate_camera(obj, cam, ideal.cam_size, name="messy")
+    assert len(sol.rejected) == 0 and sol.mask.all()
+    assert any("not a few outliers" in w for w in sol.warnings)
+
+
+def test_too_few_valid_corners_in_a_view_is_a_clear_error(ideal):
+    view = _view(ideal, 0.1, 0.2, seed=11)
+    cam = view.cam_pts.copy()
+    cam[6:] = np.nan
+    with pytest.raises(CalibrationError, match=r"pose 'few': only 6 of 60 corners .* usable; single-pose "
+                                               r"calibration needs at least 8"):
+        sp.calibrate(View(view.obj_pts, cam, view.proj_pts, "few", view.cam_size, view.proj_size))
+
+
+@pytest.mark.parametrize("extra", [0, 1])
+def test_collinear_corners_are_a_clear_error(ideal, extra):
+    """All valid corners on one board row (plus, optionally, one more): no homography, no calibration."""
+    import warnings as _w
+
+    view = _view(ideal, 0.1, 0.2, seed=12)
+    cols = ideal.board_cols
+    keep = np.zeros(len(view.obj_pts), bool)
+    keep[cols:2 * cols] = True
+    keep[2 * cols + 3] = bool(extra)
+    cam = np.where(keep[:, None], view.cam_pts, np.nan)
+    v = View(view.obj_pts, cam, view.proj_pts, "row", view.cam_size, view.proj_size)
+    with _w.catch_warnings():
+        _w.simplefilter("error")        # no numpy RuntimeWarning either
+        with pytest.raises(CalibrationError, match=rf"pose 'row': the {cols + extra} usable corners .* one line"):
+            sp.calibrate(v)
+        with pytest.raises(CalibrationError, match=rf"the {cols + extra} usable camera corners .* one line"):
+            sp.calibrate_camera_only(view.obj_pts, cam, ideal.cam_size, name="row")
+
+
 def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
     """The principal point from a MAP fit is not 'assumed at the image centre': say what was done."""
     scene = replace(ideal, cam_dist_coeffs=(0.0, 0.0))
@@ -283,3 +390,21 @@ def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
     (msg,) = [w for w in staged.warnings if "centre of distortion unreliable" in w]
     assert "fixed at the image centre (639.5, 399.5)" in msg
     np.testing.assert_allclose(staged.camera.K[:2, 2], (639.5, 399.5))
+
+
+def test_gross_outliers_that_wreck_the_plain_fit_are_rejected(ideal):
+    """A projector corner mis-decoded by hundreds of px can leave the plain fit without a valid solution:
+    the fit then restarts from the corners consistent with a robust (LMedS) homography."""
+    view = _view(ideal, 0.1, 0.2, seed=2)
+    cam, proj = view.cam_pts.copy(), view.proj_pts.copy()
+    cam[50] += (-52.3, -41.3)
+    proj[15] += (-1953.2, 1439.8)
+    bad = View(view.obj_pts, cam, proj, "gross", view.cam_size, view.proj_size)
+    with pytest.raises(CalibrationError, match="projector LM found no valid"):
+        sp.calibrate(bad, reject_outliers=False)
+    cal = sp.calibrate(bad)
+    rej = cal.poses[0]["rejected_corners"]
+    assert [r["index"] for r in rej["camera"]] == [50] and [r["index"] for r in rej["projector"]] == [15]
+    clean = sp.calibrate(view)
+    np.testing.assert_allclose(cal.projector.K, clean.projector.K, rtol=2e-3)
+    np.testing.assert_allclose(cal.camera.K, clean.camera.K, rtol=5e-3)

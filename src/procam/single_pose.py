@@ -24,7 +24,7 @@ device (fronto-parallel <=> psi = nu = 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -70,7 +70,11 @@ class CameraSolution:
         the joint refinement.
     params, covariance : the full model's parameters ``CAMERA_PARAMS`` (12,) and their (12, 12)
         covariance (rows/columns of fixed parameters are 0, of assumed ones carry their prior).
-    mask : (N,) bool, corners used.
+    mask : (N,) bool, corners used (finite and not rejected as outliers).
+    rejected : (n_rej,) int, indices (rows of the input arrays) of corners rejected as outliers;
+        ``rejected_residuals_px`` (n_rej,) their residual norms (px) under the final model;
+        ``outlier_threshold_px`` the rejection threshold of the last pass (NaN when rejection is off).
+        ``residuals`` holds the rejected corners' residuals too.
     """
 
     K: np.ndarray
@@ -91,6 +95,9 @@ class CameraSolution:
     mask: np.ndarray | None = None
     image_size: tuple | None = None
     info: dict = field(default_factory=dict)
+    rejected: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    rejected_residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outlier_threshold_px: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -100,7 +107,8 @@ class ProjectorSolution:
     Attributes as :class:`CameraSolution`; ``params`` are ``PROJECTOR_PARAMS`` = (f_p, v0p, rvec (3),
     t (3)) of the pinhole model with ``u0`` fixed, ``covariance`` (8, 8); ``std`` keys ``f_p, v0p,
     angles_deg, t``; ``H_pb`` the projector -> board homography; ``info["theta"]`` the principal-axis
-    parameters (f_p, v0p, phi_p, O (3)) the LM solved for.
+    parameters (f_p, v0p, phi_p, O (3)) the LM solved for; ``rejected``, ``rejected_residuals_px``,
+    ``outlier_threshold_px`` as for the camera.
     """
 
     K: np.ndarray
@@ -120,6 +128,9 @@ class ProjectorSolution:
     mask: np.ndarray | None = None
     image_size: tuple | None = None
     info: dict = field(default_factory=dict)
+    rejected: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    rejected_residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outlier_threshold_px: float = float("nan")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -456,6 +467,183 @@ def _inside(pt, size) -> bool:
     return bool(-0.5 <= pt[0] <= size[0] - 0.5 and -0.5 <= pt[1] <= size[1] - 0.5)
 
 
+# ----------------------------------------------------------------------------------------------
+# input checks and outlier rejection
+#: defaults of the outlier rejection (documented in :func:`calibrate_camera`)
+OUTLIER_K = 5.0
+OUTLIER_FLOOR_PX = 0.5
+OUTLIER_MAX_FRACTION = 0.2
+OUTLIER_MAX_ITER = 5
+
+
+def _spread_ok(xy, rel_tol: float = 1e-12) -> bool:
+    """True unless the planar points (n, 2) are collinear or all but one are (no homography then).
+
+    The test is on the eigenvalues of the 2x2 scatter matrix of the points, and of the points with
+    each one left out (rank-one downdates, O(n)): ``lambda_min <= rel_tol * lambda_max`` is a line.
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    n = len(xy)
+    if n < 4:
+        return False
+
+    def flat(S, Q, k):
+        m = S / k
+        C = Q / k - m[..., :, None] * m[..., None, :]
+        tr = C[..., 0, 0] + C[..., 1, 1]
+        det = C[..., 0, 0] * C[..., 1, 1] - C[..., 0, 1] * C[..., 1, 0]
+        disc = np.sqrt(np.maximum(tr * tr / 4 - det, 0.0))
+        lmax, lmin = tr / 2 + disc, tr / 2 - disc
+        return lmin <= rel_tol * np.maximum(lmax, 1e-300)
+
+    xy = xy - xy.mean(axis=0)
+    S, Q = xy.sum(axis=0), xy.T @ xy
+    if flat(S, Q, n):
+        return False
+    leave_one = flat(S - xy, Q - xy[:, :, None] * xy[:, None, :], n - 1)
+    return not bool(np.any(leave_one))
+
+
+def _check_corners(obj, mask, min_points: int, name: str, what: str, hint: str) -> None:
+    """Raise :class:`CalibrationError` (saying how many corners are usable and needed) unless the
+    usable corners ``obj[mask]`` can determine a single-pose fit."""
+    n, n_all = int(mask.sum()), len(mask)
+    need = (f"single-pose calibration needs at least {max(min_points, 4)}, spread over at least 2 rows and "
+            f"2 columns of the board")
+    if n < min_points:
+        raise CalibrationError(f"pose {name!r}: only {n} of {n_all} {what} are usable; {need}; {hint}")
+    if not _spread_ok(obj[mask, :2]):
+        raise CalibrationError(f"pose {name!r}: the {n} usable {what} all (or all but one) lie on one line of the "
+                               f"board (e.g. one row or column); {need}; {hint}")
+
+
+def robust_sigma(residuals) -> float:
+    """Robust standard deviation (px) of one residual component: ``1.4826 * MAD`` of the x and y
+    components of the (n, 2) residuals pooled (non-finite rows ignored)."""
+    r = np.asarray(residuals, float).reshape(-1, 2)
+    r = r[np.isfinite(r).all(1)].ravel()
+    if r.size == 0:
+        return float("nan")
+    return float(1.4826 * np.median(np.abs(r - np.median(r))))
+
+
+def _prescreen(obj, obs, valid, k: float, floor_px: float):
+    """Corners consistent with a least-median-of-squares homography board -> image (N,) bool, or None.
+
+    Only a rescue start for poses whose plain fit is wrecked by gross outliers (hundreds of px): the
+    threshold ``max(floor, k * robust sigma)`` of the homography residuals is wide enough for lens
+    distortion, and every corner is re-tested against the real model afterwards.
+    """
+    src, dst = obj[valid, :2].astype(np.float64), obs[valid].astype(np.float64)
+    try:
+        H, _ = cv2.findHomography(src, dst, cv2.LMEDS)
+    except cv2.error:
+        return None
+    if H is None or not np.all(np.isfinite(H)):
+        return None
+    with np.errstate(all="ignore"):
+        r = _dehom(H, src) - dst
+        norm = np.hypot(r[:, 0], r[:, 1])
+    keep = norm <= max(floor_px, k * robust_sigma(r))
+    out = np.zeros_like(valid)
+    out[np.flatnonzero(valid)[keep]] = True
+    return out
+
+
+def _fit_robust(fit, predict, obs, obj, valid, *, enabled: bool, k: float, floor_px: float, max_fraction: float,
+                max_iter: int, min_points: int):
+    """Fit, flag corners whose residual norm exceeds ``max(floor_px, k * robust_sigma)``, refit without
+    them, repeat until the set of used corners is stable (at most ``max_iter`` refits).
+
+    ``fit(used_mask) -> solution``; ``predict(solution) -> (N, 2)`` for every row. Rejected corners are
+    re-tested against every new fit (a corner pulled off by a gross outlier comes back). Nothing is
+    rejected when more than ``max_fraction`` of the corners would be (the model, not a few corners,
+    is wrong), or when the rest would be too few or degenerate. When the plain fit fails or leaves
+    more than ``max_fraction`` of the corners off (gross outliers), the fit is restarted from the
+    corners consistent with a robust (LMedS) homography.
+
+    Returns (solution, used (N,) bool, threshold_px, notes list of str).
+    """
+    if not enabled:
+        return fit(valid), valid, float("nan"), []
+    n_valid = int(valid.sum())
+
+    def flag(sol):
+        with np.errstate(all="ignore"):
+            res = predict(sol) - obs
+            norm = np.hypot(res[:, 0], res[:, 1])
+        thr = max(float(floor_px), float(k) * robust_sigma(res[valid]))
+        return valid & (norm <= thr), thr          # NaN (unpredictable) counts as an outlier
+
+    def too_many(mask):
+        return n_valid - int(mask.sum()) > max_fraction * n_valid
+
+    error = None
+    try:
+        sol, used = fit(valid), valid.copy()
+    except CalibrationError as e:
+        sol, used, error = None, valid.copy(), e
+    if sol is None or too_many(flag(sol)[0]):
+        pre = _prescreen(obj, obs, valid, k, floor_px)
+        if pre is not None and min_points <= pre.sum() < n_valid and _spread_ok(obj[pre, :2]):
+            try:
+                sol2 = fit(pre)
+                if sol is None or not too_many(flag(sol2)[0]):
+                    sol, used = sol2, pre
+            except CalibrationError:
+                pass
+    if sol is None:
+        raise error
+    seen = {used.tobytes()}
+    notes: list[str] = []
+    thr = float("nan")
+    for it in range(max_iter + 1):
+        new, thr_i = flag(sol)
+        if too_many(new):
+            notes.append(f"{n_valid - int(new.sum())} of {n_valid} corners have residuals above {thr_i:.2f} px: "
+                         f"the model does not fit this pose well (not a few outliers), so no corner was rejected")
+            if used.sum() < n_valid:      # an earlier pass rejected some: go back to all corners
+                try:
+                    sol, used = fit(valid), valid.copy()
+                except CalibrationError:
+                    pass
+            thr = thr_i
+            break
+        if int(new.sum()) < min_points or not _spread_ok(obj[new, :2]):
+            break
+        thr = thr_i
+        if np.array_equal(new, used) or new.tobytes() in seen or it == max_iter:
+            break
+        try:
+            sol_new = fit(new)
+        except CalibrationError:
+            break
+        sol, used = sol_new, new
+        seen.add(new.tobytes())
+    return sol, used, thr, notes
+
+
+def _rejection_report(sol, predict, obs, valid, used, thr, notes, name: str, what: str, k: float,
+                      floor_px: float, max_list: int = 8):
+    """The solution with all valid corners' residuals, the rejected corners and their warning."""
+    with np.errstate(all="ignore"):
+        res = predict(sol) - obs
+    res[~valid] = np.nan
+    rej = np.flatnonzero(valid & ~used)
+    norms = np.hypot(res[rej, 0], res[rej, 1])
+    warnings = list(sol.warnings)
+    if len(rej):
+        order = np.argsort(-np.nan_to_num(norms, nan=np.inf))
+        listed = ", ".join(f"#{rej[i]} ({norms[i]:.1f} px)" for i in order[:max_list])
+        more = f" and {len(rej) - max_list} more" if len(rej) > max_list else ""
+        warnings.append(f"pose {name!r}: {len(rej)} of {int(valid.sum())} {what} corners rejected as outliers "
+                        f"(residual > {thr:.2f} px = max({floor_px:g} px, {k:g} x robust sigma)): {listed}{more}; "
+                        f"the fit uses the other {int(used.sum())} (reject_outliers=False keeps them)")
+    warnings += [f"pose {name!r}: {what}: {n}" for n in notes]
+    return replace(sol, residuals=res, rejected=rej, rejected_residuals_px=norms, outlier_threshold_px=float(thr),
+                   warnings=tuple(warnings))
+
+
 def _staged_camera(M, m, c, size, use_dist, n_coeffs, board_width, name, warnings):
     """METHOD §5.3-§8.1 with the principal point / COD ``c``: returns (p_full (12,), staged dict, fit_k2)."""
     k1 = k2 = 0.0
@@ -510,7 +698,9 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
                      cod: str = "auto", refine: str = "joint", n_coeffs: int = 2,
                      min_cod_score: float = dist.MIN_COD_SCORE, pp_prior_std: float | None = None,
                      pp_prior_fraction: float = 0.025, pp_max_std: float | None = None,
-                     board_width: float | None = None,
+                     board_width: float | None = None, reject_outliers: bool = True,
+                     outlier_k: float = OUTLIER_K, outlier_floor_px: float = OUTLIER_FLOOR_PX,
+                     outlier_max_fraction: float = OUTLIER_MAX_FRACTION, outlier_max_iter: int = OUTLIER_MAX_ITER,
                      min_points: int = 8, name: str = "view") -> CameraSolution:
     """Single-pose camera calibration: intrinsics, division distortion and board pose.
 
@@ -541,6 +731,16 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
         pin it better than the image-centre assumption would. Otherwise the image centre is used as
         the mean of a Gaussian prior (MAP) and a warning says so.
     board_width : w_b for the paper's initial distance 2 w_b (default: the span of the corners).
+    reject_outliers : bool
+        After the fit, corners whose residual norm exceeds ``max(outlier_floor_px, outlier_k *
+        sigma_r)`` are rejected and the whole pose is refitted without them, until the set is stable
+        (at most ``outlier_max_iter`` refits; a rejected corner comes back if a later fit explains it).
+        ``sigma_r`` = 1.4826 MAD of the residual components (a robust noise estimate). With Gaussian
+        noise a clean corner exceeds ``k sigma`` with probability ``exp(-k^2 / 2)`` (4e-6 for the
+        default k = 5; the floor of 0.5 px keeps every corner of clean, low-noise data). Nothing is
+        rejected when more than ``outlier_max_fraction`` (0.2) of the corners would be: then the model,
+        not a few corners, is wrong, and a warning says so. Rejections are reported in
+        ``rejected``/``rejected_residuals_px`` and as a warning.
     min_points : minimum number of usable corners.
     name : pose name used in messages.
 
@@ -557,15 +757,31 @@ def calibrate_camera(obj_pts, cam_pts, image_size, *, principal_point=None, dist
     if image_size is None:
         raise CalibrationError(f"pose {name!r}: the camera image size is unknown; pass image_size=(W, H)")
     W, Hh = int(image_size[0]), int(image_size[1])
-    if mask.sum() < min_points:
-        raise CalibrationError(f"pose {name!r}: only {int(mask.sum())} usable camera corners "
-                               f"(need >= {min_points}); check the board detection")
-    M, m = obj[mask], cam[mask]
-    use_dist = distortion not in (None, "none", False)
     if cod not in ("auto", "paper", "image-center"):
         raise ValueError(f"cod must be 'auto', 'paper' or 'image-center', got {cod!r}")
     if refine not in ("joint", "none", None):
         raise ValueError(f"refine must be 'joint' or 'none', got {refine!r}")
+    _check_corners(obj, mask, min_points, name, "camera corners", "check the board detection")
+    kw = dict(principal_point=principal_point, distortion=distortion, cod=cod, refine=refine, n_coeffs=n_coeffs,
+              min_cod_score=min_cod_score, pp_prior_std=pp_prior_std, pp_prior_fraction=pp_prior_fraction,
+              pp_max_std=pp_max_std, board_width=board_width, name=name)
+
+    def predict(sol):
+        return camera_predict(sol.params, obj)
+
+    sol, used, thr, notes = _fit_robust(lambda u: _camera_fit(obj, cam, u, (W, Hh), **kw), predict, cam, obj, mask,
+                                        enabled=reject_outliers, k=outlier_k, floor_px=outlier_floor_px,
+                                        max_fraction=outlier_max_fraction, max_iter=outlier_max_iter,
+                                        min_points=min_points)
+    return _rejection_report(sol, predict, cam, mask, used, thr, notes, name, "camera", outlier_k, outlier_floor_px)
+
+
+def _camera_fit(obj, cam, mask, image_size, *, principal_point, distortion, cod, refine, n_coeffs, min_cod_score,
+                pp_prior_std, pp_prior_fraction, pp_max_std, board_width, name) -> CameraSolution:
+    """One single-pose camera fit on the corners ``mask`` (see :func:`calibrate_camera`)."""
+    W, Hh = image_size
+    M, m = obj[mask], cam[mask]
+    use_dist = distortion not in (None, "none", False)
     warnings: list[str] = []
     center_img = np.array([(W - 1) / 2.0, (Hh - 1) / 2.0])
     sigma_pp = pp_prior_std if pp_prior_std is not None else pp_prior_fraction * max(W, Hh)
@@ -713,8 +929,10 @@ def _camera_std(p, cov) -> dict:
 
 # ----------------------------------------------------------------------------------------------
 # projector
-def calibrate_projector(obj_pts, proj_pts, proj_size, *, u0=None, board_width=None, min_points: int = 8,
-                        name: str = "view") -> ProjectorSolution:
+def calibrate_projector(obj_pts, proj_pts, proj_size, *, u0=None, board_width=None, reject_outliers: bool = True,
+                        outlier_k: float = OUTLIER_K, outlier_floor_px: float = OUTLIER_FLOOR_PX,
+                        outlier_max_fraction: float = OUTLIER_MAX_FRACTION, outlier_max_iter: int = OUTLIER_MAX_ITER,
+                        min_points: int = 8, name: str = "view") -> ProjectorSolution:
     """Single-pose projector calibration (§8.2): ``f_p, v0p`` and the pose with ``u0p`` fixed, alpha = 1.
 
     Parameters
@@ -723,14 +941,30 @@ def calibrate_projector(obj_pts, proj_pts, proj_size, *, u0=None, board_width=No
     proj_size : (width, height) of the projector in pixels.
     u0 : fixed principal point column (default ``W / 2``, the paper's assumption).
     board_width : w_b for the paper's initial distance (default: the span of the corners).
+    reject_outliers, outlier_k, outlier_floor_px, outlier_max_fraction, outlier_max_iter :
+        outlier rejection as in :func:`calibrate_camera` (a mis-decoded corner's projector
+        coordinates are rejected and the projector refitted without them).
+    min_points : minimum number of usable corners. name : pose name used in messages.
     """
     obj, pp, mask = _clean(obj_pts, proj_pts, f"pose {name!r}")
     if proj_size is None:
         raise CalibrationError(f"pose {name!r}: the projector size is unknown; pass proj_size=(W, H)")
     W, Hh = int(proj_size[0]), int(proj_size[1])
-    if mask.sum() < min_points:
-        raise CalibrationError(f"pose {name!r}: only {int(mask.sum())} usable projector corners "
-                               f"(need >= {min_points}); check the decoding")
+    _check_corners(obj, mask, min_points, name, "projector corners", "check the decoding")
+
+    def predict(sol):
+        return projector_predict(sol.params, obj, sol.u0)
+
+    sol, used, thr, notes = _fit_robust(
+        lambda m: _projector_fit(obj, pp, m, (W, Hh), u0=u0, board_width=board_width, name=name), predict, pp, obj,
+        mask, enabled=reject_outliers, k=outlier_k, floor_px=outlier_floor_px, max_fraction=outlier_max_fraction,
+        max_iter=outlier_max_iter, min_points=min_points)
+    return _rejection_report(sol, predict, pp, mask, used, thr, notes, name, "projector", outlier_k, outlier_floor_px)
+
+
+def _projector_fit(obj, pp, mask, proj_size, *, u0, board_width, name) -> ProjectorSolution:
+    """One single-pose projector fit on the corners ``mask`` (see :func:`calibrate_projector`)."""
+    W, Hh = proj_size
     M, m = obj[mask], pp[mask]
     lm = solve_projector_lm(M, m, (W, Hh), u0=u0, board_width=board_width)
     if not lm["ok"]:
@@ -918,9 +1152,10 @@ def _std_dict(cam: CameraSolution, proj: ProjectorSolution | None) -> dict:
     return s
 
 
+_OUTLIER_KW = ("reject_outliers", "outlier_k", "outlier_floor_px", "outlier_max_fraction", "outlier_max_iter")
 _CAM_KW = ("principal_point", "distortion", "cod", "refine", "n_coeffs", "min_cod_score", "pp_prior_std",
-           "pp_prior_fraction", "pp_max_std", "board_width", "min_points")
-_PROJ_KW = ("u0", "board_width", "min_points")
+           "pp_prior_fraction", "pp_max_std", "board_width", "min_points") + _OUTLIER_KW
+_PROJ_KW = ("u0", "board_width", "min_points") + _OUTLIER_KW
 _ADV_KW = ("camera_rule_deg", "projector_rule_deg", "degenerate_angle_deg", "weak_angle_deg",
            "degenerate_rel_std", "weak_rel_std")
 
@@ -934,6 +1169,21 @@ def _split(options):
             {k: v for k, v in options.items() if k in _ADV_KW})
 
 
+def _rejected_list(sol) -> list:
+    return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
+
+
+def _judge(adv, name, strict, warnings):
+    """Warnings from the advice; raise on a degenerate pose if ``strict``."""
+    keys = [k for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
+    for key in keys:
+        if adv[key]["degenerate"] or adv[key]["weak"]:
+            warnings.append(f"pose {name!r}: {adv[key]['message']}")
+    if strict and adv["degenerate"]:
+        raise CalibrationError(f"pose {name!r}: degenerate pose for single-pose calibration: "
+                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["degenerate"]))
+
+
 def calibrate(view, proj_size=None, **options) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View` (METHOD §16).
 
@@ -942,8 +1192,10 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
     view : View -- only corners with finite camera AND projector points (``view.valid``) are used.
     proj_size : (W, H) of the projector (default ``view.proj_size``).
     **options : keyword options of :func:`calibrate_camera` (``principal_point, distortion, cod,
-        refine, n_coeffs, min_cod_score, pp_prior_std, pp_prior_fraction, board_width, min_points``),
-        of :func:`calibrate_projector` (``u0``), of :func:`advice` (thresholds), plus ``cam_size``
+        refine, n_coeffs, min_cod_score, pp_prior_std, pp_prior_fraction, board_width, min_points``,
+        and the outlier rejection ``reject_outliers, outlier_k, outlier_floor_px,
+        outlier_max_fraction, outlier_max_iter``, applied to the camera and the projector), of
+        :func:`calibrate_projector` (``u0``), of :func:`advice` (thresholds), plus ``cam_size``
         (default ``view.cam_size``) and ``strict`` (raise :class:`CalibrationError` on a degenerate
         pose instead of warning).
 
@@ -951,39 +1203,55 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
     -------
     Calibration
         ``method="single-pose"``; camera with division distortion, projector without; ``R, T``
-        camera -> projector; ``cam_rms, proj_rms`` (METHOD §11.1 on this pose), ``stereo_rms``
-        (§11.2); ``std`` with ``f_c, alpha_c, fy_c, u0c, v0c, k1, k2, f_p, v0p, R_euler_deg (3), T (3)``
-        and the board angles' std; one entry in ``poses`` with the angles and :func:`advice`;
-        ``info["camera"]``/``info["projector"]`` hold the full solutions.
+        camera -> projector; ``cam_rms, proj_rms`` (METHOD §11.1 on this pose, outliers excluded),
+        ``stereo_rms`` (§11.2, corners used by both devices); ``std`` with ``f_c, alpha_c, fy_c, u0c,
+        v0c, k1, k2, f_p, v0p, R_euler_deg (3), T (3)`` and the board angles' std; one entry in
+        ``poses`` with the angles, :func:`advice`, ``rejected_corners`` (``{"camera": [{"index",
+        "residual_px"}, ...], "projector": [...]}``, indices into the view's corners) and
+        ``outlier_threshold_px``; ``info["camera"]``/``info["projector"]`` hold the full solutions.
+
+    Raises
+    ------
+    CalibrationError
+        Too few usable corners (the message says how many are usable and needed), corners on one
+        line, no valid solution, or a degenerate pose with ``strict``.
     """
     strict = bool(options.pop("strict", False))
     cam_size = options.pop("cam_size", None) or view.cam_size
     proj_size = proj_size or view.proj_size
     cam_kw, proj_kw, adv_kw = _split(options)
-    valid = view.valid
     name = view.name
-    obj = view.obj_pts[valid]
-    cam = calibrate_camera(obj, view.cam_pts[valid], cam_size, name=name, **cam_kw)
-    proj = calibrate_projector(obj, view.proj_pts[valid], proj_size, name=name, **proj_kw)
+    obj_all = view.obj_pts
+    valid = view.valid & np.isfinite(obj_all).all(1)
+    _check_corners(obj_all, valid, int(options.get("min_points", 8)), name,
+                   "corners (with finite camera and projector coordinates)", "check the board detection and decoding")
+
+    def only_valid(a):
+        return np.where(valid[:, None], a, np.nan)
+
+    # NaN for corners invalid in either device, so that both fits use the same corners and the
+    # rejected corners' indices are the view's
+    cam = calibrate_camera(obj_all, only_valid(view.cam_pts), cam_size, name=name, **cam_kw)
+    proj = calibrate_projector(obj_all, only_valid(view.proj_pts), proj_size, name=name, **proj_kw)
     R, T = extrinsics(cam, proj)
     std = _std_dict(cam, proj)
-    adv = advice(cam.angles_deg, proj.angles_deg, std,
-                 values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, **adv_kw)
+    adv = advice(cam.angles_deg, proj.angles_deg, std, values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, **adv_kw)
     warnings = list(cam.warnings) + list(proj.warnings)
-    for key in ("camera", "projector"):
-        if adv[key]["degenerate"] or adv[key]["weak"]:
-            warnings.append(f"pose {name!r}: {adv[key]['message']}")
-    if strict and adv["degenerate"]:
-        raise CalibrationError(f"pose {name!r}: degenerate pose for single-pose calibration: "
-                               + "; ".join(adv[k]["message"] for k in ("camera", "projector") if adv[k]["degenerate"]))
-    cam_und = cam.distortion.undistort(view.cam_pts[valid], cam.K)
-    proj_pts = view.proj_pts[valid]
-    cam_rms = _pnp_rms(obj, cam_und, cam.K)
-    proj_rms = _pnp_rms(obj, proj_pts, proj.K)
-    stereo = _stereo_rms(obj, cam_und, proj_pts, cam.K, proj.K, R, T, cam.R, cam.t)
+    _judge(adv, name, strict, warnings)
+    cin, pin = cam.mask, proj.mask
+    both = cin & pin
+    with np.errstate(all="ignore"):
+        cam_und = cam.distortion.undistort(only_valid(view.cam_pts), cam.K)
+    proj_pts = view.proj_pts
+    cam_rms = _pnp_rms(obj_all[cin], cam_und[cin], cam.K)
+    proj_rms = _pnp_rms(obj_all[pin], proj_pts[pin], proj.K)
+    stereo = _stereo_rms(obj_all[both], cam_und[both], proj_pts[both], cam.K, proj.K, R, T, cam.R, cam.t)
     pose = {"name": name, "camera_angles_deg": [float(a) for a in cam.angles_deg],
             "projector_angles_deg": [float(a) for a in proj.angles_deg], "advice": adv,
-            "cam_rms": cam_rms, "proj_rms": proj_rms, "stereo_rms": stereo, "n_corners": int(valid.sum())}
+            "cam_rms": cam_rms, "proj_rms": proj_rms, "stereo_rms": stereo, "n_corners": int(valid.sum()),
+            "n_used": {"camera": int(cin.sum()), "projector": int(pin.sum())},
+            "rejected_corners": {"camera": _rejected_list(cam), "projector": _rejected_list(proj)},
+            "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px}}
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion),
                        projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
                        method="single-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
@@ -997,22 +1265,23 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, name: str = "view", s
                           **options) -> Calibration:
     """Camera-only single-pose calibration (one photo of a chessboard, no projector): K and division distortion.
 
-    Options as :func:`calibrate_camera` and :func:`advice`. Returns a :class:`Calibration` with
-    ``projector=None, R=T=None``, ``cam_rms`` (METHOD §11.1 on this pose), ``std`` and one pose entry.
+    Options as :func:`calibrate_camera` and :func:`advice`; ``strict`` as in :func:`calibrate`. Returns a :class:`Calibration` with ``projector=None, R=T=None``, ``cam_rms``
+    (METHOD §11.1 on this pose, outliers excluded), ``std`` and one pose entry (with
+    ``rejected_corners``).
     """
     cam_kw, _, adv_kw = _split(options)
     cam = calibrate_camera(obj_pts, cam_pts, image_size, name=name, **cam_kw)
     std = _std_dict(cam, None)
     adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, **adv_kw)
     warnings = list(cam.warnings)
-    if adv["camera"]["degenerate"] or adv["camera"]["weak"]:
-        warnings.append(f"pose {name!r}: {adv['camera']['message']}")
-    if strict and adv["degenerate"]:
-        raise CalibrationError(f"pose {name!r}: degenerate pose: {adv['camera']['message']}")
-    obj, pts, mask = _clean(obj_pts, cam_pts, name)
+    _judge(adv, name, strict, warnings)
+    obj, pts, finite = _clean(obj_pts, cam_pts, name)
+    mask = cam.mask
     cam_rms = _pnp_rms(obj[mask], cam.distortion.undistort(pts[mask], cam.K), cam.K)
     pose = {"name": name, "camera_angles_deg": [float(a) for a in cam.angles_deg], "projector_angles_deg": None,
-            "advice": adv, "cam_rms": cam_rms, "n_corners": int(mask.sum())}
+            "advice": adv, "cam_rms": cam_rms, "n_corners": int(finite.sum()),
+            "n_used": {"camera": int(mask.sum())}, "rejected_corners": {"camera": _rejected_list(cam)},
+            "outlier_threshold_px": {"camera": cam.outlier_threshold_px}}
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
                        method="single-pose", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
                        info={"camera": cam, "principal_point_source": cam.principal_point_source,
