@@ -135,10 +135,42 @@ def test_fronto_parallel_or_single_axis_camera_pose_is_flagged(ideal, angles):
 
 def test_projector_pose_without_nu_is_flagged(ideal):
     scene = simulate.with_board_pose(ideal, (20.0, 0.0, 0.0), frame="projector")
-    cal = sp.calibrate(_view(scene, 0.1, 0.2, seed=4))
+    view = _view(scene, 0.1, 0.2, seed=4)
+    cal = sp.calibrate(view, on_failure="warn")
     adv = cal.poses[0]["advice"]
     assert adv["projector"]["degenerate"] and not adv["camera"]["degenerate"]
-    assert any("projector" in w and "degenerate" in w for w in cal.warnings)
+    assert any("projector" in w and ("degenerate" in w or "FAILED" in w) for w in cal.warnings)
+    if adv["projector"]["failed"]:     # an impossible f_p is an error by default
+        with pytest.raises(CalibrationError, match="projector: FAILED"):
+            sp.calibrate(view)
+
+
+@pytest.mark.parametrize("nu_p", [-1.4, -1.5])
+def test_near_degenerate_projector_pose_is_a_failure_not_a_number(nu_p):
+    """Issue 5 follow-up: nu_p ~ -1.5 deg (paper preset, u0p assumed W/2) gave an absurd f_p reported as
+    valid. An f outside [0.2, 5] x the image diagonal is impossible: an error by default, flagged with
+    on_failure='warn'."""
+    scene = simulate.with_board_pose(simulate.preset("paper"), (10.0, nu_p, 0.0), frame="projector")
+    view = _view(scene, 0.1, 0.2, seed=0)
+    with pytest.raises(CalibrationError, match=r"pose 'sim'.*projector: FAILED estimate: f_p = .* is impossible"):
+        sp.calibrate(view)
+    cal = sp.calibrate(view, on_failure="warn")
+    adv = cal.poses[0]["advice"]
+    assert adv["failed"] and adv["degenerate"] and not adv["ok"]
+    assert adv["projector"]["failed"] and not adv["camera"]["failed"]
+    assert any("FAILED" in w for w in cal.warnings)
+
+
+def test_advice_flags_an_impossible_focal_length_whatever_its_std():
+    """f_p = 19 px with a small reported std and |nu_p| = 1.4 deg was not called degenerate."""
+    a = sp.advice(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, projector_size=(1920, 1080))
+    assert a["projector"]["failed"] and a["projector"]["degenerate"] and a["failed"] and not a["ok"]
+    assert "19 px is impossible" in a["projector"]["message"]
+    a = sp.advice((20, 20, 0), None, {"f_c": 5.0}, values={"f_c": 1.5e5}, camera_size=(1280, 800))
+    assert a["camera"]["failed"] and "impossible" in a["camera"]["message"]
+    a = sp.advice((20, 20, 0), (10, 20, 0), {"f_c": 5.0, "f_p": 5.0}, values={"f_c": 1500.0, "f_p": 2400.0},
+                  camera_size=(1280, 800), projector_size=(1920, 1080))
+    assert a["ok"] and not a["failed"]
 
 
 def test_advice_rules():

@@ -41,6 +41,8 @@ KAPPA_SCALE = 1000.0
 CAMERA_PARAMS = ("f_c", "alpha_c", "u0c", "v0c", "kappa1", "kappa2", "rx", "ry", "rz", "tx", "ty", "tz")
 PROJECTOR_PARAMS = ("f_p", "v0p", "rx", "ry", "rz", "tx", "ty", "tz")
 _LM = dict(method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+#: focal lengths outside this range x the image diagonal are impossible (diagonal fields of view ~136 .. ~11 deg)
+PLAUSIBLE_F_RANGE = (0.2, 5.0)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -1010,7 +1012,8 @@ def projector_predict(q, obj, u0) -> np.ndarray:
 # advice
 def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None,
            camera_rule_deg: float = 10.0, projector_rule_deg: float = 13.0, degenerate_angle_deg: float = 1.0,
-           weak_angle_deg: float = 4.0, degenerate_rel_std: float = 0.10, weak_rel_std: float = 0.02) -> dict:
+           weak_angle_deg: float = 4.0, degenerate_rel_std: float = 0.10, weak_rel_std: float = 0.02,
+           camera_size=None, projector_size=None, plausible_f_range=PLAUSIBLE_F_RANGE) -> dict:
     """Is this pose good for single-pose calibration? The paper's rule and the true conditions.
 
     The paper's empirical rule: camera ``|psi_c| + |nu_c| > 10 deg``, projector ``|nu_p| > 13 deg``.
@@ -1028,11 +1031,16 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
     degenerate_angle_deg : an angle below this is treated as zero (degenerate).
     weak_angle_deg : an angle below this makes the pose weak (poorly conditioned).
     degenerate_rel_std, weak_rel_std : relative std of f above which the pose is degenerate / weak.
+    camera_size, projector_size : (W, H) pixels; with ``values`` a focal length outside
+        ``plausible_f_range`` x the image diagonal (default [0.2, 5]: diagonal fields of view of ~136 deg down to
+        ~11 deg) is impossible for a real device: the estimate has **failed** (``failed``, and
+        ``degenerate``), whatever its std says.
 
     Returns
     -------
     dict with ``camera`` and ``projector`` sub-dicts (``paper_rule_ok``, ``degenerate``, ``weak``,
-    ``rel_std_f``, ``message``) and ``ok`` (neither degenerate nor weak) and ``degenerate``.
+    ``failed``, ``rel_std_f``, ``message``) and ``ok`` (neither degenerate nor weak), ``degenerate``
+    and ``failed``.
     """
     std = std or {}
     values = values or {}
@@ -1044,13 +1052,37 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
             return None
         return float(s) / abs(float(v)) if np.isfinite(s) else float("inf")
 
+    def implausible(key, size, device):
+        """Message if the focal length is impossible for this image size, else None."""
+        f = values.get(key)
+        if f is None or size is None:
+            return None
+        lo, hi = (plausible_f_range[0] * np.hypot(*size), plausible_f_range[1] * np.hypot(*size))
+        if np.isfinite(f) and lo <= f <= hi:
+            return None
+        return (f"{device}: FAILED estimate: {key} = {f:.4g} px is impossible for a {size[0]}x{size[1]} image "
+                f"(plausible {lo:.0f}-{hi:.0f} px = {plausible_f_range[0]:g}-{plausible_f_range[1]:g} x the "
+                f"diagonal); this pose does not determine the {device}'s intrinsics")
+
+    def rel_txt(key, r):
+        v = values.get(key)
+        return f"{key} = {v:.1f} +- {r * abs(v):.3g} px" if v is not None and np.isfinite(r) else f"{key} +- inf"
+
     if camera_angles_deg is not None:
         psi, nu = abs(float(camera_angles_deg[0])), abs(float(camera_angles_deg[1]))
         r = rel("f_c")
+        failed = implausible("f_c", camera_size, "camera")
         paper_ok = psi + nu > camera_rule_deg
-        degen = min(psi, nu) < degenerate_angle_deg or (r is not None and r > degenerate_rel_std)
+        degen = (failed is not None or min(psi, nu) < degenerate_angle_deg
+                 or (r is not None and r > degenerate_rel_std))
         weak = not degen and (not paper_ok or min(psi, nu) < weak_angle_deg or (r is not None and r > weak_rel_std))
-        if degen:
+        if failed:
+            msg = failed + " (tilt the board about both image axes, e.g. 15-25 deg each)"
+        elif degen and min(psi, nu) >= degenerate_angle_deg:
+            msg = (f"camera: degenerate pose: {rel_txt('f_c', r)} ({100 * r:.0f} %) is not determined by this pose "
+                   f"(|psi_c| = {psi:.1f}, |nu_c| = {nu:.1f} deg as estimated); tilt the board about both image "
+                   f"axes (e.g. 15-25 deg each)")
+        elif degen:
             msg = (f"camera: degenerate pose (|psi_c| = {psi:.1f} deg, |nu_c| = {nu:.1f} deg): f_c and alpha_c "
                    f"are not determined when the board is not tilted about BOTH image axes; tilt the board "
                    f"about both (e.g. 15-25 deg each)")
@@ -1062,15 +1094,22 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
         else:
             msg = "camera: pose OK"
         out["camera"] = dict(psi_abs_deg=psi, nu_abs_deg=nu, sum_abs_deg=psi + nu, min_abs_deg=min(psi, nu),
-                             paper_rule_ok=bool(paper_ok), degenerate=bool(degen), weak=bool(weak), rel_std_f=r,
-                             message=msg)
+                             paper_rule_ok=bool(paper_ok), degenerate=bool(degen), weak=bool(weak),
+                             failed=failed is not None, rel_std_f=r, message=msg)
     if projector_angles_deg is not None:
         psi, nu = abs(float(projector_angles_deg[0])), abs(float(projector_angles_deg[1]))
         r = rel("f_p")
+        failed = implausible("f_p", projector_size, "projector")
         paper_ok = nu > projector_rule_deg
-        degen = nu < degenerate_angle_deg or (r is not None and r > degenerate_rel_std)
+        degen = failed is not None or nu < degenerate_angle_deg or (r is not None and r > degenerate_rel_std)
         weak = not degen and (not paper_ok or (r is not None and r > weak_rel_std))
-        if degen:
+        if failed:
+            msg = failed + " (with u0p fixed it needs the board turned left/right about the projector's vertical axis)"
+        elif degen and nu >= degenerate_angle_deg:
+            msg = (f"projector: degenerate pose: {rel_txt('f_p', r)} ({100 * r:.0f} %) is not determined by this "
+                   f"pose (|nu_p| = {nu:.1f} deg as estimated); with u0p fixed, f_p and v0p need a clear rotation "
+                   f"of the board about the projector's vertical axis; turn the board left/right")
+        elif degen:
             msg = (f"projector: degenerate pose (|nu_p| = {nu:.1f} deg): with u0p fixed, f_p and v0p need a "
                    f"rotation of the board about the projector's vertical axis; turn the board left/right")
         elif weak:
@@ -1080,9 +1119,10 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
         else:
             msg = "projector: pose OK"
         out["projector"] = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), degenerate=bool(degen),
-                                weak=bool(weak), rel_std_f=r, message=msg)
+                                weak=bool(weak), failed=failed is not None, rel_std_f=r, message=msg)
     subs = [v for v in out.values() if isinstance(v, dict)]
     out["degenerate"] = any(s["degenerate"] for s in subs)
+    out["failed"] = any(s["failed"] for s in subs)
     out["ok"] = not any(s["degenerate"] or s["weak"] for s in subs)
     return out
 
@@ -1157,7 +1197,7 @@ _CAM_KW = ("principal_point", "distortion", "cod", "refine", "n_coeffs", "min_co
            "pp_prior_fraction", "pp_max_std", "board_width", "min_points") + _OUTLIER_KW
 _PROJ_KW = ("u0", "board_width", "min_points") + _OUTLIER_KW
 _ADV_KW = ("camera_rule_deg", "projector_rule_deg", "degenerate_angle_deg", "weak_angle_deg",
-           "degenerate_rel_std", "weak_rel_std")
+           "degenerate_rel_std", "weak_rel_std", "plausible_f_range")
 
 
 def _split(options):
@@ -1173,12 +1213,19 @@ def _rejected_list(sol) -> list:
     return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
 
 
-def _judge(adv, name, strict, warnings):
-    """Warnings from the advice; raise on a degenerate pose if ``strict``."""
+def _judge(adv, name, strict, on_failure, warnings):
+    """Warnings from the advice; raise on a failed estimate (``on_failure="raise"``) or, if ``strict``,
+    on a degenerate pose."""
+    if on_failure not in ("raise", "warn"):
+        raise ValueError(f"on_failure must be 'raise' or 'warn', got {on_failure!r}")
     keys = [k for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
     for key in keys:
         if adv[key]["degenerate"] or adv[key]["weak"]:
             warnings.append(f"pose {name!r}: {adv[key]['message']}")
+    if adv["failed"] and on_failure == "raise":
+        raise CalibrationError(f"pose {name!r}: single-pose calibration failed: "
+                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["failed"])
+                               + "; use another pose (on_failure='warn' returns the failed estimate anyway)")
     if strict and adv["degenerate"]:
         raise CalibrationError(f"pose {name!r}: degenerate pose for single-pose calibration: "
                                + "; ".join(adv[k]["message"] for k in keys if adv[k]["degenerate"]))
@@ -1195,9 +1242,11 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
         refine, n_coeffs, min_cod_score, pp_prior_std, pp_prior_fraction, board_width, min_points``,
         and the outlier rejection ``reject_outliers, outlier_k, outlier_floor_px,
         outlier_max_fraction, outlier_max_iter``, applied to the camera and the projector), of
-        :func:`calibrate_projector` (``u0``), of :func:`advice` (thresholds), plus ``cam_size``
-        (default ``view.cam_size``) and ``strict`` (raise :class:`CalibrationError` on a degenerate
-        pose instead of warning).
+        :func:`calibrate_projector` (``u0``), of :func:`advice` (thresholds, ``plausible_f_range``),
+        plus ``cam_size`` (default ``view.cam_size``), ``strict`` (raise :class:`CalibrationError` on
+        a degenerate pose instead of warning) and ``on_failure`` (``"raise"``, default: raise
+        :class:`CalibrationError` when an estimated focal length is impossible, see :func:`advice`;
+        ``"warn"``: return it, flagged ``failed`` in the advice, with a warning).
 
     Returns
     -------
@@ -1214,9 +1263,11 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
     ------
     CalibrationError
         Too few usable corners (the message says how many are usable and needed), corners on one
-        line, no valid solution, or a degenerate pose with ``strict``.
+        line, no valid solution, an impossible focal length (``on_failure="raise"``), or a degenerate
+        pose with ``strict``.
     """
     strict = bool(options.pop("strict", False))
+    on_failure = options.pop("on_failure", "raise")
     cam_size = options.pop("cam_size", None) or view.cam_size
     proj_size = proj_size or view.proj_size
     cam_kw, proj_kw, adv_kw = _split(options)
@@ -1235,9 +1286,10 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
     proj = calibrate_projector(obj_all, only_valid(view.proj_pts), proj_size, name=name, **proj_kw)
     R, T = extrinsics(cam, proj)
     std = _std_dict(cam, proj)
-    adv = advice(cam.angles_deg, proj.angles_deg, std, values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, **adv_kw)
+    adv = advice(cam.angles_deg, proj.angles_deg, std, values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]},
+                 camera_size=cam.image_size, projector_size=proj.image_size, **adv_kw)
     warnings = list(cam.warnings) + list(proj.warnings)
-    _judge(adv, name, strict, warnings)
+    _judge(adv, name, strict, on_failure, warnings)
     cin, pin = cam.mask, proj.mask
     both = cin & pin
     with np.errstate(all="ignore"):
@@ -1262,19 +1314,20 @@ def calibrate(view, proj_size=None, **options) -> Calibration:
 
 
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, name: str = "view", strict: bool = False,
-                          **options) -> Calibration:
+                          on_failure: str = "raise", **options) -> Calibration:
     """Camera-only single-pose calibration (one photo of a chessboard, no projector): K and division distortion.
 
-    Options as :func:`calibrate_camera` and :func:`advice`; ``strict`` as in :func:`calibrate`. Returns a :class:`Calibration` with ``projector=None, R=T=None``, ``cam_rms``
+    Options as :func:`calibrate_camera` and :func:`advice`; ``strict``, ``on_failure`` as in
+    :func:`calibrate`. Returns a :class:`Calibration` with ``projector=None, R=T=None``, ``cam_rms``
     (METHOD §11.1 on this pose, outliers excluded), ``std`` and one pose entry (with
     ``rejected_corners``).
     """
     cam_kw, _, adv_kw = _split(options)
     cam = calibrate_camera(obj_pts, cam_pts, image_size, name=name, **cam_kw)
     std = _std_dict(cam, None)
-    adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, **adv_kw)
+    adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size, **adv_kw)
     warnings = list(cam.warnings)
-    _judge(adv, name, strict, warnings)
+    _judge(adv, name, strict, on_failure, warnings)
     obj, pts, finite = _clean(obj_pts, cam_pts, name)
     mask = cam.mask
     cam_rms = _pnp_rms(obj[mask], cam.distortion.undistort(pts[mask], cam.K), cam.K)
