@@ -15,6 +15,7 @@ Usage::
     python benchmarks/single_pose.py                    # --source points, 40 trials per pose
     python benchmarks/single_pose.py --trials 200 --sigma-cam 0.1 --sigma-proj 0.2
     python benchmarks/single_pose.py --source render    # rendered Gray-code captures (needs procam.pipeline)
+    python benchmarks/single_pose.py --outliers 3 --skip-paper   # 3 outlier corners per device (3-10 px)
 """
 
 from __future__ import annotations
@@ -56,12 +57,25 @@ def _header(args):
     print(f"# single-pose benchmark  {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M UTC}  "
           f"commit {commit}  {platform.machine()} {platform.python_version()}  numpy {np.__version__}")
     print(f"# source={args.source} trials={args.trials} sigma_cam={args.sigma_cam} sigma_proj={args.sigma_proj} "
-          f"seed={args.seed}")
+          f"seed={args.seed} outliers={args.outliers} per device (3-10 px; rejection "
+          f"{'off' if args.no_reject else 'on'})")
+
+
+def _displace(o, c, p, n, seed):
+    """Move n camera and n projector corners by 3-10 px in random directions (outlier corners)."""
+    rng = np.random.default_rng(seed + 7)
+    c, p = np.array(c, float), np.array(p, float)
+    for pts in (c, p):
+        idx = rng.choice(len(o), n, replace=False)
+        ang, r = rng.uniform(0, 2 * np.pi, n), rng.uniform(3.0, 10.0, n)
+        pts[idx] += np.column_stack([r * np.cos(ang), r * np.sin(ang)])
+    return o, c, p
 
 
 def _observations(scene, args, seed):
     if args.source == "points":
-        return simulate.correspondences(scene, args.sigma_cam, args.sigma_proj, seed=seed)
+        o, c, p = simulate.correspondences(scene, args.sigma_cam, args.sigma_proj, seed=seed)
+        return _displace(o, c, p, args.outliers, seed) if args.outliers else (o, c, p)
     try:
         from procam.patterns import pattern_set
         from procam.pipeline import view_from_stack
@@ -98,17 +112,19 @@ def part1(args):
         for trial in range(args.trials):
             o, c, p = _observations(scene, args, args.seed + 1000 * trial)
             try:   # the paper's pipeline: COD always, staged (COD -> k -> H -> LM)
-                e_st.append(sp.calibrate_camera(o, c, ideal.cam_size, cod="paper", refine="none").K[0, 0] - Kc[0, 0])
+                e_st.append(sp.calibrate_camera(o, c, ideal.cam_size, cod="paper", refine="none",
+                                                reject_outliers=not args.no_reject).K[0, 0] - Kc[0, 0])
             except ProcamError:
                 e_st.append(np.nan)
             try:   # procam's default: cod="auto", joint refinement
-                cam = sp.calibrate_camera(o, c, ideal.cam_size)
+                cam = sp.calibrate_camera(o, c, ideal.cam_size, reject_outliers=not args.no_reject)
                 e_j.append(cam.K[0, 0] - Kc[0, 0])
                 fb[cam.principal_point_source] = fb.get(cam.principal_point_source, 0) + 1
             except ProcamError:
                 e_j.append(np.nan)
             try:
-                e_p.append(sp.calibrate_projector(o, p, ideal.proj_size).K[0, 0] - Kp[0, 0])
+                e_p.append(sp.calibrate_projector(o, p, ideal.proj_size,
+                                                  reject_outliers=not args.no_reject).K[0, 0] - Kp[0, 0])
             except ProcamError:
                 pass
         dt = (time.time() - t0) / args.trials
@@ -221,6 +237,9 @@ def main(argv=None):
     ap.add_argument("--sigma-cam", type=float, default=0.1)
     ap.add_argument("--sigma-proj", type=float, default=0.2)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--outliers", type=int, default=0,
+                    help="part 1 (points): displace this many camera and projector corners by 3-10 px per trial")
+    ap.add_argument("--no-reject", action="store_true", help="part 1: turn the outlier rejection off")
     ap.add_argument("--grid", type=str, default=None, help="poses 'psi,nu;psi,nu;...' in degrees (camera frame)")
     ap.add_argument("--skip-paper", action="store_true", help="skip part 2")
     ap.add_argument("--skip-sim", action="store_true", help="skip part 1")

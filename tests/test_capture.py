@@ -157,3 +157,19 @@ def test_saturated_and_dark_frames(tmp_path):
     write_stack(tmp_path / "dark", dark)
     with pytest.raises(CaptureError, match="projector's light is not visible"):
         capture.load_capture(tmp_path / "dark", (W, H))
+
+
+def test_step_hint_and_step_capture(tmp_path):
+    from procam import decode
+
+    w, h, step = 96, 64, 2
+    light = patterns.generate(w, h, step=step).astype(np.float32)
+    write_stack(tmp_path, np.clip(20 + 0.7 * light, 0, 255).astype(np.uint8))
+    with pytest.raises(CaptureError, match="--step 2"):
+        capture.load_capture(tmp_path, (w, h))
+    cap = capture.load_capture(tmp_path, (w, h), step=step)
+    r = decode.decode(cap.stack, cap.pattern_set)
+    yy, xx = np.mgrid[:h, :w]
+    assert np.array_equal(r.col, xx // 2 * 2 + 0.5) and np.array_equal(r.row, yy // 2 * 2 + 0.5)
+    code, _, err = run_cli(["decode", tmp_path, "--projector", f"{w}x{h}", "--step", "2"])
+    assert code == 0, err

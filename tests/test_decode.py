@@ -125,3 +125,23 @@ def test_bad_arguments():
         decode.decode(st, ps, "magic")
     with pytest.raises(ValueError):
         decode.decode(st.astype(np.float32), ps)
+
+
+@pytest.mark.parametrize("order", patterns.ORDERS)
+def test_step_codes_blocks_and_decodes_to_their_centre(order):
+    """kamino410-style graycode_step: one code per step x step block; decoded value = the block's centre."""
+    w, h, step = 100, 60, 3
+    ps = patterns.pattern_set(w, h, order, step)
+    assert (ps.code_width, ps.code_height) == (34, 20)
+    assert ps.count == 2 * (patterns.bits_for(34) + patterns.bits_for(20)) + 2
+    st = patterns.generate(w, h, order, step=step)
+    assert st.shape == (ps.count, h, w)
+    # every block of step x step projector pixels is uniform in every pattern
+    assert np.all(st[:, :, :99].reshape(ps.count, h, 33, 3) == st[:, :, :99:3][..., None])
+    r = decode.decode(st, ps)
+    yy, xx = np.mgrid[:h, :w]
+    assert np.array_equal(r.col, (xx // step) * step + 1.0) and np.array_equal(r.row, (yy // step) * step + 1.0)
+    # the same sequence as OpenCV's GrayCodePattern of the reduced size, expanded (opencv order)
+    if order == "opencv":
+        small = patterns.generate(34, 20)
+        assert np.array_equal(st, small[:, np.arange(h) // step][:, :, np.arange(w) // step])

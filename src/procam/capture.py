@@ -39,8 +39,9 @@ class Capture:
         return self.stack[self.pattern_set.black]
 
 
-def resolve_pattern_set(folder, projector=None, order=None) -> patterns.PatternSet:
-    """The PatternSet for ``folder``: from ``projector`` (w, h) and ``order``, else from its patterns.json."""
+def resolve_pattern_set(folder, projector=None, order=None, step=None) -> patterns.PatternSet:
+    """The PatternSet for ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
+    patterns.json, else the defaults (opencv order, step 1)."""
     meta = io.read_sidecar(folder, "patterns.json")
     if projector is None:
         if meta is None:
@@ -49,7 +50,12 @@ def resolve_pattern_set(folder, projector=None, order=None) -> patterns.PatternS
         projector = (int(meta["width"]), int(meta["height"]))
     if order is None:
         order = meta.get("order", "opencv") if meta else "opencv"
-    return patterns.pattern_set(projector[0], projector[1], order)
+    if step is None:
+        step = int(meta.get("step", 1)) if meta else 1
+    try:
+        return patterns.pattern_set(projector[0], projector[1], order, step)
+    except ValueError as e:
+        raise CaptureError(f"{folder}: {e}") from None
 
 
 def _count_hint(found: int, ps: patterns.PatternSet) -> str:
@@ -64,8 +70,15 @@ def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     guesses = [f"{a}x{b}" for a, b in [(1920, 1080), (1280, 800), (1280, 720), (1024, 768), (800, 600),
                                         (1920, 1200), (3840, 2160), (1400, 1050), (1366, 768), (912, 1140)]
                if patterns.pattern_set(a, b).count == found and (a, b) != (w, h)]
+    steps = [k for k in (2, 3, 4, 8) if ps.step == 1 and patterns.pattern_set(w, h, ps.order, k).count == found]
+    hints = []
     if guesses:
-        return f" — that count fits a projector of {', '.join(guesses[:3])}: check --projector"
+        hints.append(f"that count fits a projector of {', '.join(guesses[:3])}: check --projector")
+    if steps:
+        hints.append(f"it fits this projector with --step {steps[0]} (one code per {steps[0]}x{steps[0]} pixels, "
+                     "kamino410's graycode_step)")
+    if hints:
+        return " — " + "; or ".join(hints)
     return " — check --projector and that no frames are missing or extra"
 
 
@@ -114,7 +127,7 @@ def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files)
         return
     brightest, darkest = int(np.argmax(p5)), int(np.argmin(p95))
     other = [o for o in patterns.ORDERS if o != ps.order][0]
-    ps2 = patterns.pattern_set(ps.width, ps.height, other)
+    ps2 = patterns.pattern_set(ps.width, ps.height, other, ps.step)
     if brightest == ps2.white and darkest == ps2.black:
         suggestion = f"; they look like order '{other}' (white #{ps2.white}, black #{ps2.black}): pass --order {other}"
     else:
@@ -159,7 +172,7 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
                     "capture order")
 
 
-def load_capture(folder, projector=None, order=None, check: bool = True) -> Capture:
+def load_capture(folder, projector=None, order=None, check: bool = True, step=None) -> Capture:
     """Read and validate a pose folder.
 
     Parameters
@@ -168,12 +181,14 @@ def load_capture(folder, projector=None, order=None, check: bool = True) -> Capt
     projector : (width, height) of the projector, or None to read it from ``patterns.json``.
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
+    step : projector pixels per code (None: patterns.json's, else 1).
     """
     folder = Path(folder)
     files = io.list_images(folder)
-    ps = resolve_pattern_set(folder, projector, order)
+    ps = resolve_pattern_set(folder, projector, order, step)
     if len(files) != ps.count:
-        raise CaptureError(f"{folder}: expected {ps.count} images for a {ps.width}x{ps.height} projector "
+        raise CaptureError(f"{folder}: expected {ps.count} images for a {ps.width}x{ps.height} projector"
+                           + (f" with step {ps.step}" if ps.step > 1 else "") + " "
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + _count_hint(len(files), ps))

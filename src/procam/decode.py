@@ -60,7 +60,7 @@ class DecodeResult:
     ----------
     col, row : float32
         Projector column / row (pixels, centre of projector pixel = integer) of each camera
-        pixel; NaN where invalid.
+        pixel; NaN where invalid.  With ``pattern_set.step > 1`` the centre of the code's block.
     valid_col, valid_row : bool
     reason_col, reason_row : uint8
         Codes of :data:`REASONS` (0 = decoded).
@@ -220,8 +220,8 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
         ld_h, lg_h, bl_h = ld.ravel()[hard], lg.ravel()[hard], blackf.ravel()[hard]
     minabs = None
-    for axis, key, rkey, size, offset in (("col", "col", "rcol", ps.width, ps.col_offset),
-                                          ("row", "row", "rrow", ps.height, ps.row_offset)):
+    for axis, key, rkey, size, offset in (("col", "col", "rcol", ps.code_width, ps.col_offset),
+                                          ("row", "row", "rrow", ps.code_height, ps.row_offset)):
         code = np.zeros(span.shape, np.uint16 if max(ps.col_bits, ps.row_bits) <= 16 else np.uint32)
         prev = np.zeros(span.shape, bool)
         amin = None
@@ -262,6 +262,8 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         r[shadow] = SHADOW
         out[rkey][sl] = r
         val = value.astype(np.float32)
+        if ps.step > 1:  # the centre of the step x step block the code stands for
+            val = val * np.float32(ps.step) + np.float32((ps.step - 1) / 2)
         val[r != OK] = np.nan
         out[key][sl] = val
     spanf = span.astype(np.float32)

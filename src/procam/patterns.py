@@ -14,6 +14,12 @@ Two orders are supported (see ``docs``/README):
 
 Bit counts are per axis: ``n_x = ceil(log2 W)`` and ``n_y = ceil(log2 H)``, so a
 sequence has ``2 (n_x + n_y) + 2`` images (46 for 1920x1080, 42 for 1024x768).
+
+``step`` (default 1) codes blocks of ``step x step`` projector pixels with one code, as
+kamino410/procam-calibration's ``graycode_step`` does against moire: the codes are those of a
+``ceil(W/step) x ceil(H/step)`` projector, each pattern pixel drawn ``step`` times in each direction
+(code of projector column x = ``x // step``).  Decoding returns the block's centre,
+``code * step + (step - 1) / 2``.
 """
 
 from __future__ import annotations
@@ -65,6 +71,7 @@ class PatternSet:
     col_start, row_start : index of the first column / row pattern; bit ``b`` (MSB = col_bits-1)
         of the column code is image ``col_start + 2 (col_bits - 1 - b)`` and its inverse follows.
     count : total number of images.
+    step : projector pixels per code along each axis (1 = every pixel has its own code).
     """
 
     width: int
@@ -79,6 +86,17 @@ class PatternSet:
     col_start: int
     row_start: int
     count: int
+    step: int = 1
+
+    @property
+    def code_width(self) -> int:
+        """Number of column codes: ``ceil(width / step)``."""
+        return (self.width - 1) // self.step + 1
+
+    @property
+    def code_height(self) -> int:
+        """Number of row codes: ``ceil(height / step)``."""
+        return (self.height - 1) // self.step + 1
 
     def pair_indices(self, axis: str) -> np.ndarray:
         """(n_bits, 2) indices of (pattern, inverse) pairs for ``axis`` in {'col', 'row'}, MSB first."""
@@ -98,25 +116,30 @@ class PatternSet:
         d["col_pairs"] = self.pair_indices("col").tolist()
         d["row_pairs"] = self.pair_indices("row").tolist()
         d["bit_rule"] = ("image col_pairs[j][0] is white where bit (col_bits-1-j) of "
-                         "gray(x + col_offset) is 1; col_pairs[j][1] is its inverse; rows likewise")
+                         "gray(x // step + col_offset) is 1; col_pairs[j][1] is its inverse; rows likewise")
         return d
 
 
-def pattern_set(width: int, height: int, order: str = "opencv") -> PatternSet:
-    """Describe the sequence for a ``width`` x ``height`` projector in ``order``."""
-    width, height = int(width), int(height)
+def pattern_set(width: int, height: int, order: str = "opencv", step: int = 1) -> PatternSet:
+    """Describe the sequence for a ``width`` x ``height`` projector in ``order`` (``step`` px per code)."""
+    width, height, step = int(width), int(height), int(step)
     if width < 2 or height < 2:
         raise ValueError(f"projector size must be at least 2x2, got {width}x{height}")
     if order not in ORDERS:
         raise ValueError(f"order must be one of {ORDERS}, got {order!r}")
-    nx, ny = bits_for(width), bits_for(height)
+    if step < 1:
+        raise ValueError(f"step must be a positive integer, got {step}")
+    cw, ch = (width - 1) // step + 1, (height - 1) // step + 1
+    if cw < 2 or ch < 2:
+        raise ValueError(f"step {step} leaves fewer than 2 codes per axis for {width}x{height}")
+    nx, ny = bits_for(cw), bits_for(ch)
     npat = 2 * (nx + ny)
     if order == "opencv":
         return PatternSet(width, height, order, nx, ny, 0, 0, white=npat, black=npat + 1,
-                          col_start=0, row_start=2 * nx, count=npat + 2)
-    ox, oy = (2**nx - width) // 2, (2**ny - height) // 2
+                          col_start=0, row_start=2 * nx, count=npat + 2, step=step)
+    ox, oy = (2**nx - cw) // 2, (2**ny - ch) // 2
     return PatternSet(width, height, order, nx, ny, ox, oy, white=0, black=1,
-                      col_start=2, row_start=2 + 2 * nx, count=npat + 2)
+                      col_start=2, row_start=2 + 2 * nx, count=npat + 2, step=step)
 
 
 def bit_planes(n: int, bits: int, offset: int) -> np.ndarray:
@@ -127,17 +150,17 @@ def bit_planes(n: int, bits: int, offset: int) -> np.ndarray:
 
 
 def generate(width: int, height: int, order: str = "opencv", white: int = 255,
-             black: int = 0, dtype=np.uint8) -> np.ndarray:
+             black: int = 0, dtype=np.uint8, step: int = 1) -> np.ndarray:
     """The full sequence as an array ``(count, height, width)`` of ``dtype``.
 
     Nothing is written to disk; see :func:`save`.
     """
-    ps = pattern_set(width, height, order)
+    ps = pattern_set(width, height, order, step)
     out = np.empty((ps.count, ps.height, ps.width), dtype=dtype)
     out[ps.white] = white
     out[ps.black] = black
-    cols = bit_planes(ps.width, ps.col_bits, ps.col_offset)
-    rows = bit_planes(ps.height, ps.row_bits, ps.row_offset)
+    cols = bit_planes(ps.code_width, ps.col_bits, ps.col_offset)[:, np.arange(ps.width) // ps.step]
+    rows = bit_planes(ps.code_height, ps.row_bits, ps.row_offset)[:, np.arange(ps.height) // ps.step]
     for j, (a, b) in enumerate(ps.pair_indices("col")):
         line = np.where(cols[j], white, black).astype(dtype)
         out[a] = line[None, :]

@@ -85,12 +85,12 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: f
 
 
 def view_from_folder(folder, board, square: float, projector=None, order=None, *,
-                     options: PoseOptions = PoseOptions()):
+                     options: PoseOptions = PoseOptions(), step=None):
     """Load, validate and process one pose folder; returns (View, DecodeResult).
 
     The capture's exposure warnings are in ``view.diagnostics["warnings"]``.
     """
-    cap = _capture.load_capture(folder, projector, order)
+    cap = _capture.load_capture(folder, projector, order, step=step)
     view, maps = view_from_stack(cap.stack, cap.pattern_set, board, square, name=str(Path(folder)), options=options)
     view.diagnostics["warnings"] = list(cap.warnings)
     return view, maps

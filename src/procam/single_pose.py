@@ -580,20 +580,28 @@ def _fit_robust(fit, predict, obs, obj, valid, *, enabled: bool, k: float, floor
     def too_many(mask):
         return n_valid - int(mask.sum()) > max_fraction * n_valid
 
+    def median_residual(sol):
+        with np.errstate(all="ignore"):
+            res = predict(sol) - obs
+            norm = np.hypot(res[valid, 0], res[valid, 1])
+        return float(np.median(np.where(np.isfinite(norm), norm, np.inf)))
+
     error = None
     try:
         sol, used = fit(valid), valid.copy()
     except CalibrationError as e:
         sol, used, error = None, valid.copy(), e
-    if sol is None or too_many(flag(sol)[0]):
-        pre = _prescreen(obj, obs, valid, k, floor_px)
-        if pre is not None and min_points <= pre.sum() < n_valid and _spread_ok(obj[pre, :2]):
-            try:
-                sol2 = fit(pre)
-                if sol is None or not too_many(flag(sol2)[0]):
-                    sol, used = sol2, pre
-            except CalibrationError:
-                pass
+    # a second start without the corners a robust homography calls gross outliers (they can wreck the
+    # COD, the closed forms and the LM starts); the start with the lower median residual over all
+    # corners (least median of squares) wins, and every corner is re-tested below
+    pre = _prescreen(obj, obs, valid, k, floor_px)
+    if pre is not None and min_points <= pre.sum() < n_valid and _spread_ok(obj[pre, :2]):
+        try:
+            sol2 = fit(pre)
+            if sol is None or median_residual(sol2) < median_residual(sol):
+                sol, used = sol2, pre
+        except CalibrationError:
+            pass
     if sol is None:
         raise error
     seen = {used.tobytes()}

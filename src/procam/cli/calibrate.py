@@ -111,6 +111,8 @@ def calibrate_cmd(
     square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
     projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
     order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
+                                                 "default: patterns.json's, else 1)."),
     method: str = typer.Option(None, "--method", help="single or multi (default: single for one pose, multi for several)."),
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from one photo of the board."),
     out: Path = typer.Option(..., "-o", "--out", help="Calibration JSON file."),
@@ -146,7 +148,7 @@ def calibrate_cmd(
         views = []
         with console.status("decoding poses ...") if console.is_terminal else _nullctx():
             for p in poses:
-                v, _ = pipeline.view_from_folder(p, (cols, rows), square, size, order, options=opts)
+                v, _ = pipeline.view_from_folder(p, (cols, rows), square, size, order, options=opts, step=step)
                 views.append(v)
                 console.print(f"{p}: {int(v.valid.sum())} of {len(v.valid)} corners")
                 for w in v.diagnostics.get("warnings", []):

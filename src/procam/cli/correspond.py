@@ -40,6 +40,8 @@ def correspond_cmd(
     square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
     projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
     order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
+                                                 "default: patterns.json's, else 1)."),
     out: Path = typer.Option(..., "-o", "--out", help="Write the correspondences as JSON."),
     png: Path = typer.Option(None, "--png", help="Picture: corners on the camera image and on the projector plane."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
@@ -53,7 +55,8 @@ def correspond_cmd(
         fail(f"--square must be positive, got {square}")
     cols, rows = parse_board(board)
     opts = pose_options(estimator, window, refine, detector, method)
-    cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order)
+    cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order,
+                               step=step)
     for w in cap.warnings:
         console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
     view, _ = pipeline.view_from_stack(cap.stack, cap.pattern_set, (cols, rows), square, name=str(pose_dir),

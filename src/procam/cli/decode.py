@@ -18,6 +18,8 @@ def decode_cmd(
     projector: str = typer.Option(None, "--projector", "-p",
                                   help="Projector size WIDTHxHEIGHT (default: from the folder's patterns.json)."),
     order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
+                                                 "default: patterns.json's, else 1)."),
     method: str = typer.Option("robust", "--method", help="Bit classifier: robust (direct/global) or simple."),
     shadow: float = typer.Option(10.0, "--shadow-threshold", help="Min white-black, 8-bit DN (scaled for 16-bit)."),
     contrast: float = typer.Option(3.0, "--contrast-threshold", help="Min |pattern-inverse| per bit, 8-bit DN."),
@@ -30,7 +32,7 @@ def decode_cmd(
         fail(f"--order must be opencv or moreno, got {order!r}")
     if method not in ("robust", "simple"):
         fail(f"--method must be robust or simple, got {method!r}")
-    cap = capture.load_capture(pose_dir, size, order)
+    cap = capture.load_capture(pose_dir, size, order, step=step)
     for w in cap.warnings:
         console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
     res = dec.decode(cap.stack, cap.pattern_set, method, shadow_threshold=shadow, contrast_threshold=contrast)

@@ -14,12 +14,12 @@ from ._app import app, console, fail, parse_size, user_errors
 from .correspond import parse_board, pose_options
 
 
-def load_views(poses, cols, rows, square, projector, order, estimator, window, *, progress=None):
+def load_views(poses, cols, rows, square, projector, order, estimator, window, *, progress=None, step=None):
     """Decode every pose folder into a View (``progress(done, total, label)`` after each)."""
     opts = pose_options(estimator, window, 11, "auto", "robust")
     views = []
     for k, p in enumerate(poses):
-        v, _ = pipeline.view_from_folder(p, (cols, rows), square, projector, order, options=opts)
+        v, _ = pipeline.view_from_folder(p, (cols, rows), square, projector, order, options=opts, step=step)
         views.append(v)
         if progress is not None:
             progress(k + 1, len(poses), str(p))
@@ -61,6 +61,8 @@ def evaluate_cmd(
     projector: str = typer.Option(None, "--projector", "-p",
                                   help="Projector size WIDTHxHEIGHT (default: patterns.json, else the calibration's)."),
     order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
+                                                 "default: patterns.json's, else 1)."),
     json_out: Path = typer.Option(None, "--json", help="Write the metrics as JSON here."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
     estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
@@ -80,7 +82,7 @@ def evaluate_cmd(
     if size is None and not all((Path(p) / "patterns.json").exists() for p in poses):
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else _Null():
-        views = load_views(poses, cols, rows, square, size, order, estimator, window)
+        views = load_views(poses, cols, rows, square, size, order, estimator, window, step=step)
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "

@@ -47,6 +47,8 @@ def experiment_cmd(
     square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
     projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
     order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
+                                                 "default: patterns.json's, else 1)."),
     min_set: int = typer.Option(3, "--min-set", help="Smallest pose set for the multi-pose calibrations."),
     refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration "
                                                         "(default: Moreno-Taubin's frozen-intrinsics stereo, as the paper)."),
@@ -75,7 +77,7 @@ def experiment_cmd(
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")
-        views = load_views(poses, cols, rows, square, size, order, estimator, window,
+        views = load_views(poses, cols, rows, square, size, order, estimator, window, step=step,
                            progress=lambda d, t, label: bar.update(t_dec, completed=d, label=Path(label).name))
         t_cal = bar.add_task("calibrating", total=n_sets + len(poses), label="")
         result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=refine,
