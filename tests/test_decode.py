@@ -116,6 +116,27 @@ def test_robust_classifier_under_global_illumination():
     assert np.all((r.col == xx)[simple_wrong & r.valid_col])
 
 
+def test_unresolved_fine_stripes_still_decode_coarsely():
+    """A camera that cannot resolve the finest stripes (blur): the certain leading bits still give the
+    projector coordinate to within the block they leave, instead of nothing."""
+    import cv2
+
+    w, h = 256, 128
+    ps = patterns.pattern_set(w, h)
+    st = _capture(w, h, "opencv", noise=1.0, seed=5)
+    blurred = np.stack([cv2.GaussianBlur(im, (0, 0), 2.0) for im in st])
+    strict = decode.decode(blurred, ps, max_dropped_bits=0)
+    r = decode.decode(blurred, ps)
+    assert strict.valid.mean() < 0.05
+    assert r.valid.mean() > 0.5
+    yy, xx = np.mgrid[:h, :w]
+    assert r.dropped_col[r.valid_col].max() >= 1
+    # the error stays within the block: at most 2^(dropped-1) + 1 px
+    err = np.abs(r.col - xx)[r.valid_col]
+    assert np.all(err <= 2.0 ** (r.dropped_col[r.valid_col].astype(float) - 1) + 1)
+    assert np.abs(np.mean(r.col[r.valid_col] - xx[r.valid_col])) < 0.1  # unbiased
+
+
 def test_bad_arguments():
     ps = patterns.pattern_set(37, 19)
     st = patterns.generate(37, 19)
@@ -140,7 +161,11 @@ def test_step_codes_blocks_and_decodes_to_their_centre(order):
     assert np.all(st[:, :, :99].reshape(ps.count, h, 33, 3) == st[:, :, :99:3][..., None])
     r = decode.decode(st, ps)
     yy, xx = np.mgrid[:h, :w]
-    assert np.array_equal(r.col, (xx // step) * step + 1.0) and np.array_equal(r.row, (yy // step) * step + 1.0)
+    # the centre of each block; the last, partial block is clipped to the panel (column 99 is alone in it)
+    lo_x, lo_y = (xx // step) * step, (yy // step) * step
+    assert np.array_equal(r.col, (lo_x + np.minimum(lo_x + step - 1, w - 1)) / 2)
+    assert np.array_equal(r.row, (lo_y + np.minimum(lo_y + step - 1, h - 1)) / 2)
+    assert r.col[0, 99] == 99
     # the same sequence as OpenCV's GrayCodePattern of the reduced size, expanded (opencv order)
     if order == "opencv":
         small = patterns.generate(34, 20)

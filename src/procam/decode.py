@@ -23,7 +23,11 @@ Classifiers
     uncertain where the simple rule decodes them wrongly.
 
 Both also require ``white - black >= shadow_threshold`` (shadow / unlit mask) and mark codes
-outside the projector invalid.
+outside the projector invalid.  Where only the finest bits are uncertain (stripes the camera cannot
+resolve, a pixel on a stripe edge) the leading certain bits still fix the code to a block of
+``2^dropped`` codes and the pixel gets the block's centre (up to ``max_dropped_bits``; measured in
+``tests/test_decode.py`` and ``benchmarks/correspond.py``: without it a slightly blurred capture of a
+high-resolution projector decodes nowhere).
 
 Thresholds are in **8-bit grey levels (DN)** and are scaled to the input's full scale: for
 ``uint16`` input the full scale is the smallest of 2^10-1, 2^12-1, 2^14-1, 2^16-1 that holds
@@ -69,6 +73,9 @@ class DecodeResult:
     direct, global_ : float32 or None
         The robust classifier's direct and global light estimates (DN at the input scale).
     pattern_set : the decoded sequence's :class:`PatternSet`.
+    dropped_col, dropped_row : uint8
+        Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
+        value is then the centre of the block of ``2^dropped`` codes the certain bits leave.
     """
 
     col: np.ndarray
@@ -81,6 +88,8 @@ class DecodeResult:
     direct: np.ndarray | None
     global_: np.ndarray | None
     pattern_set: PatternSet
+    dropped_col: np.ndarray | None = None
+    dropped_row: np.ndarray | None = None
 
     @property
     def valid(self) -> np.ndarray:
@@ -127,7 +136,8 @@ def _hf_pairs(ps: PatternSet) -> list:
 def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *,
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
-           full_scale: float | None = None, band: int = 32, threads: int | None = None) -> DecodeResult:
+           full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 32,
+           threads: int | None = None) -> DecodeResult:
     """Decode a Gray-code image stack.
 
     Parameters
@@ -150,6 +160,11 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
         plain comparison exactly where global light makes it wrong.
     full_scale : float, optional
         The input's full-scale value; thresholds are multiplied by ``full_scale / 255``.
+    max_dropped_bits : int
+        How many of the finest bits may be uncertain at a pixel (stripes the camera cannot resolve,
+        a pixel on a stripe edge) before the pixel is invalid; the certain bits above them still give
+        the code to within ``2^dropped`` codes, and the value is that block's centre
+        (``dropped_col``/``dropped_row`` say how many were left out).  0 = every bit must be certain.
     band, threads : int
         Rows processed at a time and worker threads (speed only; default 1 thread: on 2 cores a second
         thread gained nothing measurable, see benchmarks/decode.py).
@@ -174,12 +189,13 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
         "col": np.empty((H, W), np.float32), "row": np.empty((H, W), np.float32),
         "rcol": np.empty((H, W), np.uint8), "rrow": np.empty((H, W), np.uint8),
         "conf": np.empty((H, W), np.float32),
+        "dcol": np.empty((H, W), np.uint8), "drow": np.empty((H, W), np.uint8),
         "direct": np.empty((H, W), np.float32) if robust else None,
         "global": np.empty((H, W), np.float32) if robust else None,
     }
     params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1, tshadow=shadow_threshold * scale,
                   tcontrast=contrast_threshold * scale, tdirect=direct_threshold * scale, b=float(black_fraction),
-                  wide=np.int16 if stack.dtype == np.uint8 else np.int32)
+                  wide=np.int16 if stack.dtype == np.uint8 else np.int32, max_dropped=int(max_dropped_bits))
     bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
     if threads is None:
         threads = 1
@@ -191,10 +207,10 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
             _decode_band(stack, sl, out, **params)
     rcol, rrow = out["rcol"], out["rrow"]
     return DecodeResult(out["col"], out["row"], rcol == OK, rrow == OK, rcol, rrow, out["conf"],
-                        out["direct"], out["global"], ps)
+                        out["direct"], out["global"], ps, out["dcol"], out["drow"])
 
 
-def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide):
+def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide, max_dropped):
     """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`)."""
     blk = stack[:, sl, :]
     white = blk[ps.white].astype(wide)
@@ -220,12 +236,16 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
         ld_h, lg_h, bl_h = ld.ravel()[hard], lg.ravel()[hard], blackf.ravel()[hard]
     minabs = None
-    for axis, key, rkey, size, offset in (("col", "col", "rcol", ps.code_width, ps.col_offset),
-                                          ("row", "row", "rrow", ps.code_height, ps.row_offset)):
-        code = np.zeros(span.shape, np.uint16 if max(ps.col_bits, ps.row_bits) <= 16 else np.uint32)
+    for axis, key, rkey, dkey, size, full, offset in (
+            ("col", "col", "rcol", "dcol", ps.code_width, ps.width, ps.col_offset),
+            ("row", "row", "rrow", "drow", ps.code_height, ps.height, ps.row_offset)):
+        code = np.zeros(span.shape, np.int32)
         prev = np.zeros(span.shape, bool)
         amin = None
         amb = weak.copy() if robust else None
+        prefix = ~shadow  # all bits so far certain
+        used = np.zeros(span.shape, np.uint8)  # number of leading certain bits
+        amb_break = np.zeros(span.shape, bool)
         nbits = ps.col_bits if axis == "col" else ps.row_bits
         for j, (a, i) in enumerate(ps.pair_indices(axis)):
             bitno = nbits - 1 - j
@@ -234,6 +254,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             bit = p > q
             ad = cv2.absdiff(p, q)
             amin = ad if amin is None else np.minimum(amin, ad, out=amin)
+            unc = ad < tcontrast
             if robust and hard.size and bitno >= hf_bit:
                 ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
                 # Moreno's rule, with a noise margin (at its boundary, all global light on one side, it has none)
@@ -246,26 +267,39 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
                 one |= sure & (dh > 0)
                 zero |= sure & (dh < 0)
                 bit.ravel()[hard] = one
-                amb.ravel()[hard] |= ~zero & ~one
+                ambh = ~zero & ~one
+                amb.ravel()[hard] |= ambh
+                unc.ravel()[hard] |= ambh
+                amb_break.ravel()[hard] |= prefix.ravel()[hard] & ambh
+            if robust:
+                unc |= weak
+            prefix &= ~unc
+            used += prefix
             prev ^= bit  # Gray -> binary: b_i = b_(i+1) xor g_i
             code <<= 1
             code |= prev
         minabs = amin if minabs is None else np.minimum(minabs, amin)
-        value = code.astype(np.int32) - offset if offset else code
+        # Keep the leading certain bits: the code is then known to a block of 2^dropped codes (a Gray-code
+        # prefix fixes the binary prefix); the value is the centre of the block's projector pixels.
+        dropped = (nbits - used.astype(np.int32))
+        lo = (code >> dropped) << dropped
+        hi = lo + (1 << dropped) - 1
+        lo -= offset
+        hi -= offset
         r = np.zeros(span.shape, np.uint8)
-        r[value >= size] = OUT_OF_RANGE
-        if offset:
-            r[value < 0] = OUT_OF_RANGE
+        r[(hi < 0) | (lo >= size)] = OUT_OF_RANGE
+        too_coarse = dropped > max_dropped
         if robust:
-            r[amb] = AMBIGUOUS
-        r[amin < tcontrast] = LOW_CONTRAST
+            r[too_coarse & amb_break] = AMBIGUOUS
+        r[too_coarse & ~amb_break] = LOW_CONTRAST
         r[shadow] = SHADOW
         out[rkey][sl] = r
-        val = value.astype(np.float32)
-        if ps.step > 1:  # the centre of the step x step block the code stands for
-            val = val * np.float32(ps.step) + np.float32((ps.step - 1) / 2)
+        px_lo = np.maximum(lo * ps.step, 0)
+        px_hi = np.minimum(hi * ps.step + (ps.step - 1), full - 1)
+        val = (px_lo + px_hi).astype(np.float32) * np.float32(0.5)
         val[r != OK] = np.nan
         out[key][sl] = val
+        out[dkey][sl] = np.where(r == OK, dropped, 0).astype(np.uint8)
     spanf = span.astype(np.float32)
     with np.errstate(divide="ignore", invalid="ignore"):
         conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
