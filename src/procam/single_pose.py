@@ -530,7 +530,8 @@ def robust_sigma(residuals) -> float:
 
 
 def _prescreen(obj, obs, valid, k: float, floor_px: float):
-    """Corners consistent with a least-median-of-squares homography board -> image (N,) bool, or None.
+    """Corners consistent with a least-median-of-squares homography board -> image: ((N,) bool, robust
+    sigma of the homography's residuals in px), or (None, nan).
 
     Only a rescue start for poses whose plain fit is wrecked by gross outliers (hundreds of px): the
     threshold ``max(floor, k * robust sigma)`` of the homography residuals is wide enough for lens
@@ -540,16 +541,17 @@ def _prescreen(obj, obs, valid, k: float, floor_px: float):
     try:
         H, _ = cv2.findHomography(src, dst, cv2.LMEDS)
     except cv2.error:
-        return None
+        return None, float("nan")
     if H is None or not np.all(np.isfinite(H)):
-        return None
+        return None, float("nan")
     with np.errstate(all="ignore"):
         r = _dehom(H, src) - dst
         norm = np.hypot(r[:, 0], r[:, 1])
-    keep = norm <= max(floor_px, k * robust_sigma(r))
+    sig = robust_sigma(r)
+    keep = norm <= max(floor_px, k * sig)
     out = np.zeros_like(valid)
     out[np.flatnonzero(valid)[keep]] = True
-    return out
+    return out, sig
 
 
 def _fit_robust(fit, predict, obs, obj, valid, *, enabled: bool, k: float, floor_px: float, max_fraction: float,
@@ -560,9 +562,9 @@ def _fit_robust(fit, predict, obs, obj, valid, *, enabled: bool, k: float, floor
     ``fit(used_mask) -> solution``; ``predict(solution) -> (N, 2)`` for every row. Rejected corners are
     re-tested against every new fit (a corner pulled off by a gross outlier comes back). Nothing is
     rejected when more than ``max_fraction`` of the corners would be (the model, not a few corners,
-    is wrong), or when the rest would be too few or degenerate. When the plain fit fails or leaves
-    more than ``max_fraction`` of the corners off (gross outliers), the fit is restarted from the
-    corners consistent with a robust (LMedS) homography.
+    is wrong), or when the rest would be too few or degenerate. When the plain fit fails, flags
+    outliers, or fits worse than a plain homography (gross outliers wrecked it), a second start
+    without the corners a robust (LMedS) homography calls outliers competes with it.
 
     Returns (solution, used (N,) bool, threshold_px, notes list of str).
     """
@@ -591,11 +593,17 @@ def _fit_robust(fit, predict, obs, obj, valid, *, enabled: bool, k: float, floor
         sol, used = fit(valid), valid.copy()
     except CalibrationError as e:
         sol, used, error = None, valid.copy(), e
-    # a second start without the corners a robust homography calls gross outliers (they can wreck the
-    # COD, the closed forms and the LM starts); the start with the lower median residual over all
-    # corners (least median of squares) wins, and every corner is re-tested below
-    pre = _prescreen(obj, obs, valid, k, floor_px)
-    if pre is not None and min_points <= pre.sum() < n_valid and _spread_ok(obj[pre, :2]):
+    # a second start without the corners a robust homography calls outliers (outliers can wreck the
+    # COD, the closed forms and the LM starts) when the plain fit failed, flags outliers or fits worse
+    # than a homography; the start with the lower median residual over all corners (least median of
+    # squares) wins, and every corner is re-tested below
+    pre, sig_h = _prescreen(obj, obs, valid, k, floor_px)
+    suspicious = sol is None
+    if not suspicious:
+        with np.errstate(all="ignore"):
+            sig_m = robust_sigma(predict(sol)[valid] - obs[valid])
+        suspicious = bool(flag(sol)[0].sum() < n_valid or not sig_m <= 2.0 * sig_h + 1e-9)
+    if suspicious and pre is not None and min_points <= pre.sum() < n_valid and _spread_ok(obj[pre, :2]):
         try:
             sol2 = fit(pre)
             if sol is None or median_residual(sol2) < median_residual(sol):
