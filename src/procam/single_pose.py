@@ -15,7 +15,13 @@ Pipeline per pose (camera, then projector, then the procam extrinsics):
    1.5x the Cramer-Rao bound for f_c, the joint one reaches it;
 5. ``R = R_p R_c^T, T = T_p - R T_c`` (camera -> projector, as OpenCV ``stereoCalibrate``);
 6. pose angles, the paper's advice rule and the true degeneracy conditions (§10.4), and the standard
-   deviation of every parameter from the Jacobian at the solution (:mod:`procam.uncertainty`).
+   deviation of every parameter from the Jacobian at the solution (:mod:`procam.uncertainty`); a
+   focal length outside [0.2, 5] x the image diagonal is a failed estimate, not a number.
+
+Real captures: per device, corners whose residual exceeds ``max(0.5 px, 5 robust sigma)`` are rejected
+as outliers and the device refitted without them until stable (reported in the solution, in
+``Calibration.poses`` and as a warning; ``reject_outliers=False`` turns it off); too few or collinear
+corners raise :class:`~procam.errors.CalibrationError` saying how many are usable and needed.
 
 Board frame: corner k at ``(i s, j s, 0) - centroid`` (centred; METHOD §1); pose ``(R, t)`` maps
 board -> device. Angles are reported in degrees, in a board frame whose z axis points away from the
