@@ -55,7 +55,11 @@ def read_image(path, gray: bool = True) -> np.ndarray:
     import cv2
 
     path = Path(path)
-    data = np.fromfile(str(path), dtype=np.uint8) if path.exists() else None
+    if path.is_dir():
+        raise CaptureError(f"{path}: is a folder, not an image file")
+    if not path.exists():
+        raise CaptureError(f"{path}: no such file")
+    data = np.fromfile(str(path), dtype=np.uint8)
     img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data is not None and data.size else None
     if img is None:
         raise CaptureError(f"{path}: cannot be read as an image (corrupt, empty or not an image); "
@@ -225,13 +229,15 @@ CONVENTIONS = {
 }
 
 
-def _jsonable(obj):
+def to_jsonable(obj):
+    """JSON-ready copy of ``obj``: numpy arrays/scalars -> lists/numbers, NaN/inf -> None, tuples -> lists,
+    other objects -> str."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [to_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
+        return to_jsonable(obj.tolist())
     if isinstance(obj, (np.floating, float)):
         v = float(obj)
         return v if np.isfinite(v) else None
@@ -252,7 +258,7 @@ def _device_dict(dev, rms) -> dict | None:
 
 
 def calibration_to_dict(calib, include_views: bool = True) -> dict:
-    """The JSON document of a :class:`~procam.calibration.Calibration` (schema in docs/file-formats.md)."""
+    """The JSON document of a :class:`~procam.calibration.Calibration` (schema: docs/file-formats.md)."""
     info = {k: v for k, v in calib.info.items() if isinstance(v, (str, int, float, bool, list, dict, type(None)))}
     out = {
         "format": "procam-calibration", "version": 1, "method": calib.method,
@@ -274,7 +280,7 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
                                                "the image; written as cam_kc in the YAML file"}
     if include_views and calib.views:
         out["views"] = [view_to_dict(v) for v in calib.views]
-    return _jsonable(out)
+    return to_jsonable(out)
 
 
 def calibration_from_dict(d: dict):
@@ -333,8 +339,11 @@ def save_opencv_yaml(calib, path) -> Path:
     """
     import cv2
 
+    from .errors import CalibrationFileError
+
     if calib.projector is None:
-        raise ValueError("a camera-only calibration has no projector: write it as JSON")
+        raise CalibrationFileError(f"{path}: a camera-only calibration has no projector, so it has no OpenCV procam "
+                                   "YAML form; write it as JSON (.json)")
     path = Path(path)
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
@@ -401,6 +410,14 @@ def load_calibration(path):
         fs.release()
         return calib
     try:
-        return calibration_from_dict(json.loads(path.read_text()))
-    except (ValueError, KeyError, TypeError) as e:
+        doc = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise CalibrationFileError(f"{path}: not a procam calibration JSON file ({e})") from None
+    if not isinstance(doc, dict):
+        raise CalibrationFileError(f"{path}: not a procam calibration JSON file (the top level is not an object)")
+    try:
+        return calibration_from_dict(doc)
+    except KeyError as e:
+        raise CalibrationFileError(f"{path}: not a procam calibration JSON file (missing key {e})") from None
+    except (ValueError, TypeError, AttributeError, IndexError) as e:
         raise CalibrationFileError(f"{path}: not a procam calibration JSON file ({e})") from None
