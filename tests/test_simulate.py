@@ -32,7 +32,8 @@ def test_imports_no_solver_code():
                       "typing", "time", "math")
     for m in mods:
         if m.startswith("."):
-            assert m in (".:patterns", ".patterns:"), m  # only procam.patterns
+            # only procam.patterns and procam.io (file writing, JSON conversion; no solver code)
+            assert m in (".:patterns", ".patterns:") or m.startswith(".io:"), m
         else:
             assert m.split(":")[0].startswith(allowed_prefix), m
 
@@ -289,6 +290,18 @@ def test_write_capture_rejects_wrong_stack(tmp_path):
     t = sim.truth(sim.preset("paper"))
     with pytest.raises(ValueError):
         sim.write_capture(tmp_path, np.zeros((10, 8, 8), np.uint8), t)
+
+
+def test_write_capture_removes_stale_frames(tmp_path):
+    ps = sim._patterns.pattern_set(37, 19)
+    for name in ("24.png", "99.png", "5.png", "00.png"):
+        (tmp_path / name).write_bytes(b"stale")
+    (tmp_path / "photo.png").write_bytes(b"keep")
+    stack = np.zeros((ps.count, 4, 6), np.uint8)
+    paths = sim.write_capture(tmp_path, stack, {"projector": {"size": [37, 19]}, "x": np.nan})
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == sorted([p.name for p in paths] + ["photo.png"])
+    assert (tmp_path / "00.png").read_bytes() != b"stale"
+    assert json.loads((tmp_path / "truth.json").read_text())["x"] is None
 
 
 def test_cli_simulate(tmp_path, monkeypatch):

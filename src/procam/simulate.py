@@ -14,8 +14,8 @@ Two paths:
   geometry is computed once per scene; each pattern image is then a cheap 1-D profile lookup,
   because Gray-code stripes depend on one projector coordinate only.
 
-This module is independent of the solvers: it imports only numpy, scipy, cv2 and
-:mod:`procam.patterns`, and has its own projection, division model (with its Newton inverse) and
+This module is independent of the solvers: it imports only numpy, scipy, cv2,
+:mod:`procam.patterns` and :mod:`procam.io` (file writing), and has its own projection, division model (with its Newton inverse) and
 OpenCV-Brown distortion.
 
 Conventions (see ``procam`` README): pixels ``(x, y)`` = (column, row), origin at the centre of the
@@ -29,7 +29,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -40,6 +39,7 @@ from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
 from . import patterns as _patterns
+from .io import to_jsonable, write_image, write_text
 
 __all__ = [
     "Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
@@ -534,24 +534,6 @@ def _scene_params(scene: Scene) -> dict:
             "photometry": photo}
 
 
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (np.floating,)):
-        obj = float(obj)
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
 def truth(scene: Scene) -> dict:
     """Everything known about the scene, JSON-able (lists, floats; NaN written as null).
 
@@ -572,7 +554,7 @@ def truth(scene: Scene) -> dict:
     n, cols = len(cam), scene.board_cols
     d["canonical_order"] = bool(np.all(np.isfinite(cam)) and np.argmin(cam.sum(axis=1)) == 0
                                 and cam[1, 0] > cam[0, 0] and cam[cols, 1] > cam[0, 1] and n > cols)
-    return _jsonable(d)
+    return to_jsonable(d)
 
 
 def correspondences(scene: Scene, sigma_cam: float = 0.1, sigma_proj: float = 0.2, seed: int = 0):
@@ -902,30 +884,22 @@ def render(scene: Scene, order: str = "opencv", seed: int = 0,
     t["render"] = {"order": order, "seed": int(seed), "count": int(r.ps.count),
                    "white": int(r.ps.white), "black": int(r.ps.black),
                    "pattern_set": r.ps.to_dict()}
-    return stack, _jsonable(t)
+    return stack, to_jsonable(t)
 
 
 # --------------------------------------------------------------------------------------------
 # output
 # --------------------------------------------------------------------------------------------
 
-def _write_text_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
 def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv") -> list[Path]:
     """Write a rendered capture in procam's default capture-folder layout.
 
     Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``)
     and ``patterns.json`` (:meth:`procam.patterns.PatternSet.to_dict` plus ``"files"``).  Every file
-    is written under a hidden temporary name and renamed, so an interrupted run leaves no
-    half-written image that a loader would pick up.
+    is written under a hidden temporary name and renamed (:func:`procam.io.write_image`), so an
+    interrupted run leaves no half-written image that a loader would pick up.  Numbered PNGs
+    (``NN.png``) left in ``out_dir`` by an earlier run with a longer sequence are deleted, so they
+    are not read as part of this one.
 
     Parameters
     ----------
@@ -948,20 +922,10 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
     if stack.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
     digits = max(2, len(str(ps.count - 1)))
-    paths = []
-    for i, img in enumerate(stack):
-        path = out / f"{i:0{digits}d}.png"
-        tmp = out / f".{path.stem}.tmp{os.getpid()}.png"
-        try:
-            if not cv2.imwrite(str(tmp), img):
-                raise OSError(f"could not write {tmp}")
-            os.replace(tmp, path)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
-        paths.append(path)
+    paths = [write_image(out / f"{i:0{digits}d}.png", img) for i, img in enumerate(stack)]
+    _patterns.remove_stale(out, paths, prefix="")
     meta = ps.to_dict()
     meta["files"] = [p.name for p in paths]
-    _write_text_atomic(out / "patterns.json", json.dumps(meta, indent=2))
-    _write_text_atomic(out / "truth.json", json.dumps(_jsonable(truth), indent=1))
+    write_text(out / "patterns.json", json.dumps(meta, indent=2))
+    write_text(out / "truth.json", json.dumps(to_jsonable(truth), indent=1))
     return paths
