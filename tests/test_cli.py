@@ -75,3 +75,44 @@ def test_examples_run(tmp_path):
     finally:
         sys.argv = old
     assert (tmp_path / "d.png").is_file()
+
+
+def test_user_mistakes_give_one_line_errors(ideal_capture, tmp_path, shared_data):
+    """Review findings: each of these used to print a traceback or a misleading message."""
+    folder, _, _, _ = ideal_capture
+    img = shared_data / "opencv-left-right" / "left01.jpg"
+    base = ["--board", "10x6", "--square", "24"]
+    cases = [
+        (["calibrate", folder, *base, "-o", "/proc/nope/c.json"], "cannot create the folder"),
+        (["calibrate", folder, *base, "-o", tmp_path / "c.json", "--png", tmp_path / "r.xyz"], "must end in"),
+        (["calibrate", folder, "--board", "10x6", "--square", "nan", "-o", tmp_path / "c.json"], "--square"),
+        (["calibrate", folder, folder, *base, "--method", "multi", "--cam-dist", "fisheye", "-o",
+          tmp_path / "c.json"], "--cam-dist"),
+        (["calibrate", folder, folder, *base, "--method", "single", "-o", tmp_path / "c.json"], "one pose folder"),
+        (["calibrate", "--camera-only", img, "--board", "9x6", "--square", "25", "-o", tmp_path / "c.yml"],
+         "camera-only"),
+        (["calibrate", "--camera-only", tmp_path, "--board", "9x6", "--square", "25", "-o", tmp_path / "c.json"],
+         "is a folder"),
+        (["calibrate", "--camera-only", tmp_path / "nope.jpg", "--board", "9x6", "--square", "25", "-o",
+          tmp_path / "c.json"], "no such file"),
+        (["correspond", folder, *base, "-o", tmp_path / "c.txt"], "must end in .json"),
+        (["patterns", "--projector", "64x32", "-o", "/proc/nope"], "/proc/nope"),
+    ]
+    for args, needle in cases:
+        code, _, err = run_cli(args)
+        assert code == 2 and needle in err and "Traceback" not in err, (args, err)
+    assert not (tmp_path / "c.json").exists() and not (tmp_path / "c.yml").exists()
+    (tmp_path / "list.json").write_text("[1, 2]")
+    code, _, err = run_cli(["evaluate", tmp_path / "list.json", folder, *base])
+    assert code == 2 and "not a procam calibration" in err
+
+
+def test_bad_patterns_json(ideal_capture, tmp_path):
+    import shutil
+
+    folder, _, _, _ = ideal_capture
+    copy = tmp_path / "pose"
+    shutil.copytree(folder, copy)
+    (copy / "patterns.json").write_text('{"height": 1080}')
+    code, _, err = run_cli(["decode", copy])
+    assert code == 2 and "patterns.json: no valid width/height" in err

@@ -43,15 +43,26 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None) -> patter
     """The PatternSet for ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
     patterns.json, else the defaults (opencv order, step 1)."""
     meta = io.read_sidecar(folder, "patterns.json")
+    if meta is not None and not isinstance(meta, dict):
+        meta = {}
     if projector is None:
         if meta is None:
             raise CaptureError(f"{folder}: the projector size is unknown; pass --projector WIDTHxHEIGHT "
                                "(no patterns.json in the folder)")
-        projector = (int(meta["width"]), int(meta["height"]))
+        try:
+            projector = (int(meta["width"]), int(meta["height"]))
+        except (KeyError, TypeError, ValueError):
+            raise CaptureError(f"{Path(folder) / 'patterns.json'}: no valid width/height; fix it or pass "
+                               "--projector WIDTHxHEIGHT") from None
     if order is None:
         order = meta.get("order", "opencv") if meta else "opencv"
+        if order not in patterns.ORDERS:
+            raise CaptureError(f"{Path(folder) / 'patterns.json'}: unknown order {order!r}; fix it or pass --order")
     if step is None:
-        step = int(meta.get("step", 1)) if meta else 1
+        try:
+            step = int(meta.get("step", 1)) if meta else 1
+        except (TypeError, ValueError):
+            raise CaptureError(f"{Path(folder) / 'patterns.json'}: invalid step; fix it or pass --step") from None
     try:
         return patterns.pattern_set(projector[0], projector[1], order, step)
     except ValueError as e:
@@ -217,6 +228,6 @@ def exposure_warnings(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
             raise CaptureError(f"{files[idx]}: the black frame is saturated on {frac:.0%} of the image; nothing can "
                                "be decoded there — reduce the exposure or gain and re-capture")
         if frac > max_saturated:
-            out.append(f"{Path(files[idx]).name}: {frac:.1%} of the {what} frame is saturated (value {fs:.0f}); "
+            out.append(f"{Path(folder) / Path(files[idx]).name}: {frac:.1%} of the {what} frame is saturated (value {fs:.0f}); "
                        "reduce the exposure so the white frame stays below full scale")
     return tuple(out)

@@ -53,7 +53,7 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
 
 
 def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: float, *, name: str = "pose",
-                    options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None):
+                    options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None, warnings=()):
     """Decode a stack and build the pose's View.
 
     Parameters
@@ -61,6 +61,7 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: f
     stack : (K, H, W) uint8/uint16 in ``pattern_set``'s order.
     board : (cols, rows) inner corners; ``square`` the square size (the length unit of all outputs).
     cam_pts : optional (N, 2) camera corners to use instead of detecting them.
+    warnings : notes about the capture, kept in ``view.diagnostics["warnings"]``.
 
     Returns
     -------
@@ -74,7 +75,8 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: f
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     obj = _board.object_points(cols, rows, square)
     H, W = stack.shape[1:]
-    view = View(obj, cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height), diag)
+    view = View(obj, cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
+                {**diag, "warnings": list(warnings)})
     n_ok = int(view.valid.sum())
     if n_ok < options.min_corners:
         raise CorrespondenceError(
@@ -91,6 +93,5 @@ def view_from_folder(folder, board, square: float, projector=None, order=None, *
     The capture's exposure warnings are in ``view.diagnostics["warnings"]``.
     """
     cap = _capture.load_capture(folder, projector, order, step=step)
-    view, maps = view_from_stack(cap.stack, cap.pattern_set, board, square, name=str(Path(folder)), options=options)
-    view.diagnostics["warnings"] = list(cap.warnings)
-    return view, maps
+    return view_from_stack(cap.stack, cap.pattern_set, board, square, name=str(Path(folder)), options=options,
+                           warnings=cap.warnings)

@@ -33,6 +33,9 @@ def user_errors(fn):
             return fn(*args, **kwargs)
         except ProcamError as e:
             fail(str(e))
+        except OSError as e:  # unwritable output folder, disk full, permission denied ...
+            where = e.filename or "file"
+            fail(f"{where}: {e.strerror or e}; check the path and its permissions")
         except KeyboardInterrupt:
             err_console.print("interrupted")
             raise typer.Exit(130)
@@ -54,8 +57,34 @@ def parse_size(text: str, what: str = "size") -> tuple[int, int]:
     return w, h
 
 
-def is_tty() -> bool:
-    return sys.stderr.isatty()
+def parse_square(value: float) -> float:
+    """``--square``: a positive, finite length."""
+    import math
+
+    if not (math.isfinite(value) and value > 0):
+        fail(f"--square must be a positive length (the board's square size, e.g. 24 for mm), got {value}")
+    return float(value)
+
+
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+
+
+def output_path(path, option: str, suffixes: tuple[str, ...]):
+    """Check an output path before any work is done: a known suffix and a folder that can be created."""
+    from pathlib import Path
+
+    if path is None:
+        return None
+    path = Path(path)
+    if path.suffix.lower() not in suffixes:
+        fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
+    if path.is_dir():
+        fail(f"{option} {path}: is a folder; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        fail(f"{option} {path}: cannot create the folder {path.parent} ({e.strerror or e})")
+    return path
 
 
 @app.callback()
@@ -66,3 +95,8 @@ def _root(version: bool = typer.Option(False, "--version", help="Print the versi
 
         console.print(f"procam {__version__}")
         raise typer.Exit(0)
+
+
+def is_tty() -> bool:
+    """Is stderr a terminal (live progress bars) rather than a pipe or log?"""
+    return sys.stderr.isatty()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -9,8 +10,8 @@ import typer
 from rich.table import Table
 
 from .. import io, pipeline
-from ..errors import BoardNotFoundError, CalibrationError
-from ._app import app, console, fail, parse_size, user_errors
+from ..errors import BoardNotFoundError
+from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, parse_square, user_errors
 from .correspond import parse_board, pose_options
 
 
@@ -131,22 +132,37 @@ def calibrate_cmd(
     from ..plots.residuals import residual_figure
     from ..report import pose_residuals
 
-    if square <= 0:
-        fail(f"--square must be positive, got {square}")
+    square = parse_square(square)
     cols, rows = parse_board(board)
     if cod not in ("auto", "paper", "center"):
         fail(f"--cod must be auto, paper or center, got {cod!r}")
+    # everything that can be checked is checked before the (slow) decoding
+    output_path(out, "-o", (".json", ".yml", ".yaml"))
+    output_path(yaml, "--yaml", (".yml", ".yaml"))
+    output_path(png, "--png", FIGURE_SUFFIXES)
     if camera_only:
+        if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
+            fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
         calib = _camera_only(poses, cols, rows, square, cod)
     else:
         if method is None:
             method = "single" if len(poses) == 1 else "multi"
         if method not in ("single", "multi"):
             fail(f"--method must be single or multi, got {method!r}")
+        if method == "single" and len(poses) != 1:
+            fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
+        if method == "multi":
+            from ..multi_pose import DIST_MODELS
+
+            if len(poses) < 2:
+                fail("--method multi needs at least two pose folders (three or more recommended)")
+            for opt, val in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
+                if val not in DIST_MODELS:
+                    fail(f"{opt} must be one of {', '.join(DIST_MODELS)}, got {val!r}")
         size = parse_size(projector, "--projector") if projector else None
         opts = pose_options(estimator, window, 11, "auto", "robust")
         views = []
-        with console.status("decoding poses ...") if console.is_terminal else _nullctx():
+        with console.status("decoding poses ...") if console.is_terminal else nullcontext():
             for p in poses:
                 v, _ = pipeline.view_from_folder(p, (cols, rows), square, size, order, options=opts, step=step)
                 views.append(v)
@@ -154,14 +170,10 @@ def calibrate_cmd(
                 for w in v.diagnostics.get("warnings", []):
                     console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
         if method == "single":
-            if len(views) != 1:
-                fail(f"--method single takes one pose folder, got {len(views)}; use --method multi")
             from .. import single_pose
 
             calib = single_pose.calibrate(views[0], cod=cod)
         else:
-            if len(views) < 2:
-                fail("--method multi needs at least two pose folders (three or more recommended)")
             from .. import multi_pose
 
             calib = multi_pose.calibrate(views, cam_dist=cam_dist, proj_dist=proj_dist, refine=not no_refine)
@@ -169,8 +181,6 @@ def calibrate_cmd(
     io.save_calibration(calib, out)
     console.print(f"wrote {out}")
     if yaml is not None:
-        if calib.projector is None:
-            fail("--yaml needs a projector calibration; a camera-only result is written as JSON only")
         io.save_opencv_yaml(calib, yaml)
         console.print(f"wrote {yaml}")
     if png is not None:
@@ -179,14 +189,6 @@ def calibrate_cmd(
                               title=f"{out.name}: {calib.method}")
         save_figure(fig, png)
         console.print(f"wrote {png}")
-
-
-class _nullctx:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *a):
-        return False
 
 
 def _camera_only(images, cols, rows, square, cod):
@@ -205,9 +207,6 @@ def _camera_only(images, cols, rows, square, cod):
                                  "inner corners), the exposure, and that the whole board is in view")
     obj = _board.object_points(cols, rows, square)
     h, w = img.shape[:2]
-    try:
-        calib = single_pose.calibrate_camera_only(obj, c, (w, h), name=str(path), cod=cod)
-    except CalibrationError:
-        raise
+    calib = single_pose.calibrate_camera_only(obj, c, (w, h), name=str(path), cod=cod)
     view = View(obj, c, np.full_like(c, np.nan), str(path), (w, h), None)
     return calib.replace(views=(view,))

@@ -6,10 +6,11 @@ import dataclasses
 import json
 from pathlib import Path
 
+import numpy as np
 import typer
 
 from .. import capture, correspond as corr, io, pipeline
-from ._app import app, console, fail, parse_size, user_errors
+from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, parse_square, user_errors
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -51,10 +52,11 @@ def correspond_cmd(
     method: str = typer.Option("robust", "--method", help="Decode classifier: robust or simple."),
 ):
     """Camera corners (white frame) and their projector coordinates by local homographies."""
-    if square <= 0:
-        fail(f"--square must be positive, got {square}")
+    square = parse_square(square)
     cols, rows = parse_board(board)
     opts = pose_options(estimator, window, refine, detector, method)
+    output_path(out, "-o", (".json",))
+    output_path(png, "--png", FIGURE_SUFFIXES)
     cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order,
                                step=step)
     for w in cap.warnings:
@@ -66,7 +68,7 @@ def correspond_cmd(
                   + ("" if ok.all() else f" (failed: {corr.reason_summary(view.diagnostics['reason'])})"))
     res = view.diagnostics["residual_px"][ok]
     if ok.any():
-        console.print(f"local homography fit RMS: median {float(__import__('numpy').median(res)):.2f}, "
+        console.print(f"local homography fit RMS: median {float(np.median(res)):.2f}, "
                       f"max {float(res.max()):.2f} projector px")
     opt = dataclasses.asdict(opts)
     io.write_text(out, json.dumps(io.view_to_dict(view, (cols, rows), square, opt), indent=1))

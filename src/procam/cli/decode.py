@@ -8,7 +8,7 @@ import numpy as np
 import typer
 
 from .. import capture, decode as dec, io
-from ._app import app, console, fail, parse_size, user_errors
+from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, user_errors
 
 
 @app.command("decode")
@@ -30,6 +30,10 @@ def decode_cmd(
     size = parse_size(projector, "--projector") if projector else None
     if order is not None and order not in ("opencv", "moreno"):
         fail(f"--order must be opencv or moreno, got {order!r}")
+    if out is not None and out.suffix != ".npz":
+        out = out.with_suffix(".npz")
+    output_path(out, "-o", (".npz",))
+    output_path(png, "--png", FIGURE_SUFFIXES)
     if method not in ("robust", "simple"):
         fail(f"--method must be robust or simple, got {method!r}")
     cap = capture.load_capture(pose_dir, size, order, step=step)
@@ -47,8 +51,6 @@ def decode_cmd(
             if not text.startswith("decoded"):
                 console.print(f"  {axis}: {n} px {text}", highlight=False)
     if out is not None:
-        if out.suffix != ".npz":
-            out = out.with_suffix(".npz")
         with io.atomic_path(out) as tmp:
             with open(tmp, "wb") as f:
                 np.savez_compressed(f, col=res.col, row=res.row, valid_col=res.valid_col,

@@ -54,7 +54,8 @@ def demo_cmd(
     c = truth["corners"]
     e_cam = view.cam_pts - np.array(c["camera_distorted"])
     e_proj = view.proj_pts - np.array(c["projector"])
-    console.print(f"decoded {maps.valid.mean() * 100:.1f} % of the pixels; {int(view.valid.sum())}/60 corners; "
+    console.print(f"decoded {maps.valid.mean() * 100:.1f} % of the pixels; {int(view.valid.sum())}/{len(view.valid)} "
+                  "corners; "
                   f"corner error vs truth: camera {np.sqrt(np.nanmean(np.sum(e_cam ** 2, 1))):.3f} px RMS, "
                   f"projector {np.sqrt(np.nanmean(np.sum(e_proj ** 2, 1))):.3f} px RMS "
                   f"({time.perf_counter() - t0:.1f} s)")
