@@ -12,9 +12,12 @@ For every pose ``j`` and a calibration (single- or multi-pose, any distortion mo
 * the per-pose procam extrinsics ``R_j = R_pj R_cj^T``, ``T_j = T_pj - R_j T_cj`` from the two PnP
   poses, and their spread ``sigma_T = sqrt(var X + var Y + var Z)``, ``sigma_|T| = std |T_j|``
   (METHOD §11.3), with ``ddof = 1`` (default) and ``ddof = 0``;
-* the board's Euler angles ``(psi, nu, phi)`` in the camera and the projector frames.
+* the board's Euler angles ``(psi, nu, phi)`` in the camera and the projector frames
+  (:func:`procam.models.board_angles_deg`, as the solvers report them).
 
-RMS = ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances).
+RMS = ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances). PnP, the stereo pose and the
+RMS are :mod:`procam.residuals` (the same code the solvers use for ``Calibration.cam_rms`` etc.);
+residuals are observed - predicted.
 """
 
 from __future__ import annotations
@@ -22,81 +25,31 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Sequence
 
-import cv2
 import numpy as np
-from scipy.optimize import least_squares
 
 from . import models
 from .calibration import Calibration
 from .errors import CalibrationError
+from .residuals import pnp, rms, stereo_pose  # noqa: F401  (pnp, stereo_pose re-exported)
 from .view import View
 
 
-def pose_angles(R_board_to_device) -> tuple[float, float, float]:
+def pose_angles(R_board_to_device, t=None) -> tuple[float, float, float]:
     """Board pose angles ``(psi, nu, phi)`` in degrees (intrinsic XYZ; fronto-parallel = (0, 0, 0)).
 
     Parameters
     ----------
     R_board_to_device : (3, 3) rotation mapping board to device coordinates.
+    t : (3,) translation of the pose, optional.  With it the angles are
+        :func:`procam.models.board_angles_deg` (board z away from the device, as single- and
+        multi-pose report them); without it the plain Euler angles :func:`procam.models.euler_deg`.
     """
-    return tuple(float(a) for a in np.degrees(models.matrix_to_euler(R_board_to_device)))
+    a = models.euler_deg(R_board_to_device) if t is None else models.board_angles_deg(R_board_to_device, t)
+    return tuple(float(v) for v in a)
 
 
-def _rms(e) -> float:
-    e = np.asarray(e, float).reshape(-1, 2)
-    return float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if len(e) else float("nan")
-
-
-def pnp(obj: np.ndarray, pts: np.ndarray, K: np.ndarray):
-    """Board pose from undistorted pixels with fixed ``K``: ``(R (3, 3), t (3,), residuals (N, 2))``.
-
-    ``cv2.solvePnP`` with ``SOLVEPNP_ITERATIVE`` (OpenCV's default, as used by the paper).
-    """
-    obj = np.asarray(obj, float).reshape(-1, 3)
-    pts = np.asarray(pts, float).reshape(-1, 2)
-    K = np.asarray(K, float)
-    img = pts.reshape(-1, 1, 2)
-    ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok or not np.all(np.isfinite(tvec)) or tvec.ravel()[2] <= 0:
-        # rare planar failure of the default start: IPPE (planar) start, then the iterative refinement
-        ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_IPPE)
-        if ok:
-            ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, rvec, tvec, True, cv2.SOLVEPNP_ITERATIVE)
-    if not ok or not np.all(np.isfinite(tvec)) or tvec.ravel()[2] <= 0:
-        raise CalibrationError("solvePnP found no pose with the board in front of the device")
-    R = models.rvec_to_matrix(rvec)
-    t = np.asarray(tvec, float).ravel()
-    return R, t, models.project(K, R, t, obj) - pts
-
-
-def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12):
-    """Board pose (camera frame) minimising camera + projector residuals with everything else fixed.
-
-    Parameters
-    ----------
-    obj : (N, 3) board points; cam_u, proj_u : (N, 2) undistorted camera / projector pixels.
-    Kc, Kp : (3, 3) intrinsics; R, T : camera -> projector; R0, t0 : start (camera PnP pose).
-
-    Returns
-    -------
-    R_b (3, 3), t_b (3,), cam residuals (N, 2), proj residuals (N, 2)
-    """
-    obj = np.asarray(obj, float)
-
-    def res(x):
-        Rb = models.rvec_to_matrix(x[:3])
-        Xc = obj @ Rb.T + x[3:]
-        rc = models.project(Kc, np.eye(3), np.zeros(3), Xc) - cam_u
-        rp = models.project(Kp, R, T, Xc) - proj_u
-        return np.concatenate([rc.ravel(), rp.ravel()])
-
-    x0 = np.concatenate([models.matrix_to_rvec(R0), np.ravel(t0)])
-    sol = least_squares(res, x0, method="lm", x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
-    r = sol.fun
-    n = len(obj)
-    return (models.rvec_to_matrix(sol.x[:3]), sol.x[3:].copy(), r[:2 * n].reshape(-1, 2),
-            r[2 * n:].reshape(-1, 2))
-
+# shared with the solvers (procam.residuals); the old names stay importable from here
+_rms = rms
 
 @dataclass(frozen=True)
 class PoseEvaluation:
@@ -238,9 +191,10 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
         proj_all.append(ep)
         st_all += [sc, sp]
         poses.append(PoseEvaluation(
-            name=name, n_points=int(len(obj)), cam_rms=_rms(ec), proj_rms=_rms(ep),
-            stereo_rms=_rms(np.vstack([sc, sp])), cam_angles=pose_angles(Rc), proj_angles=pose_angles(Rp),
-            R=Rj, T=Tj, R_angles=pose_angles(Rj), R_cam=Rc, t_cam=tc, R_proj=Rp, t_proj=tp))
+            name=name, n_points=int(len(obj)), cam_rms=rms(ec), proj_rms=rms(ep),
+            stereo_rms=rms(np.vstack([sc, sp])), cam_angles=pose_angles(Rc, tc),
+            proj_angles=pose_angles(Rp, tp), R=Rj, T=Tj, R_angles=pose_angles(Rj),
+            R_cam=Rc, t_cam=tc, R_proj=Rp, t_proj=tp))
     Ts = np.array([p.T for p in poses])
     sx1, sT1, sA1 = _spread(Ts, 1)
     _, sT0, sA0 = _spread(Ts, 0)
@@ -248,7 +202,7 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
         poses=tuple(poses),
         cam_rms=float(np.mean([p.cam_rms for p in poses])),
         proj_rms=float(np.mean([p.proj_rms for p in poses])),
-        cam_rms_all=_rms(np.vstack(cam_all)), proj_rms_all=_rms(np.vstack(proj_all)),
-        stereo_rms=_rms(np.vstack(st_all)),
+        cam_rms_all=rms(np.vstack(cam_all)), proj_rms_all=rms(np.vstack(proj_all)),
+        stereo_rms=rms(np.vstack(st_all)),
         sigma_xyz=sx1, sigma_T=sT1, sigma_abs_T=sA1, sigma_T_ddof0=sT0, sigma_abs_T_ddof0=sA0,
         T_mean=Ts.mean(axis=0), T_calib=T, R_angles=pose_angles(R))

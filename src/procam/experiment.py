@@ -23,7 +23,6 @@ from __future__ import annotations
 import csv
 import io as _stdio
 import itertools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -33,6 +32,7 @@ import numpy as np
 from . import evaluate as _evaluate
 from . import models
 from . import multi_pose
+from ._fmt import fmt_number
 from .errors import CalibrationError, ProcamError
 from .view import View
 
@@ -258,16 +258,10 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
 # Report
 # ------------------------------------------------------------------------------------------------------
 
-def _fmt(v, nd=2) -> str:
-    if isinstance(v, (float, np.floating)):
-        return "—" if not math.isfinite(v) else f"{v:.{nd}f}"
-    return str(v)
-
-
 def _markdown_table(rows: list[dict], cols: list[tuple[str, str]], nd=2) -> str:
     head = "| " + " | ".join(h for _, h in cols) + " |"
     sep = "| " + " | ".join("---" for _ in cols) + " |"
-    body = ["| " + " | ".join(_fmt(r.get(k, ""), nd) for k, _ in cols) + " |" for r in rows]
+    body = ["| " + " | ".join(fmt_number(r.get(k, ""), nd) for k, _ in cols) + " |" for r in rows]
     return "\n".join([head, sep, *body])
 
 
@@ -295,7 +289,7 @@ def markdown(result: ExperimentResult, figures: Sequence[str] = ()) -> str:
     lines.append(f"Multi-pose: every set of ≥ {o['min_set']} poses ({o['n_sets']} sets), OpenCV distortion "
                  f"camera `{o['cam_dist']}`, projector `{o['proj_dist']}`, "
                  + ("joint refinement." if o["refine"] else "Moreno–Taubin (stereoCalibrate with fixed intrinsics)."))
-    lines.append(f"Reference = the set with the lowest σ_T: {ref['poses']} (σ_T = {_fmt(ref['sigma_T'])}); "
+    lines.append(f"Reference = the set with the lowest σ_T: {ref['poses']} (σ_T = {fmt_number(ref['sigma_T'])}); "
                  f"Set A = all poses {a['poses']}. σ are sample std (ddof = 1) over the per-pose PnP extrinsics of "
                  "all poses; errors in px, lengths in board units, angles in degrees.")
     lines += ["", "## Multi-pose reprojection errors (paper Table 3)", "",
@@ -311,8 +305,8 @@ def markdown(result: ExperimentResult, figures: Sequence[str] = ()) -> str:
     lines.append(_markdown_table(result.params, [("parameter", "parameter"), ("reference", "reference"),
                                                  ("set_a", "Set A"), ("mean", "mean"), ("std", "std")]))
     lines += ["", "## Single-pose calibration of every pose (paper Tables CamAccuracy / ProAccuracy)", "",
-              f"Focal errors: Δf_c against the reference f_c = {_fmt(ref['f_c'])}, Δf_p against the reference "
-              f"α_p f_p = {_fmt(ref['fy_p'])}; errors are the mean per-pose RMS over all poses.", ""]
+              f"Focal errors: Δf_c against the reference f_c = {fmt_number(ref['f_c'])}, Δf_p against the reference "
+              f"α_p f_p = {fmt_number(ref['fy_p'])}; errors are the mean per-pose RMS over all poses.", ""]
     lines.append(_markdown_table(result.single, [
         ("set", "set"), ("f_c", "f_c"), ("fy_c", "α_c f_c"), ("u0c", "u0c"), ("v0c", "v0c"), ("f_p", "f_p"),
         ("v0p", "v0p"), ("psi_c", "ψ_c"), ("nu_c", "ν_c"), ("abs_psi_c+abs_nu_c", "\\|ψ_c\\|+\\|ν_c\\|"),
@@ -358,17 +352,6 @@ def write_report(result: ExperimentResult, out_dir) -> list[Path]:
     for name, rows in result.tables().items():
         paths.append(io.write_text(out / f"{name}.csv", _csv_text(rows)))
 
-    def clean(o):
-        if isinstance(o, dict):
-            return {k: clean(v) for k, v in o.items()}
-        if isinstance(o, (list, tuple)):
-            return [clean(v) for v in o]
-        if isinstance(o, (float, np.floating)):
-            return float(o) if math.isfinite(o) else None
-        if isinstance(o, np.integer):
-            return int(o)
-        return o
-
-    paths.append(io.write_text(out / "experiment.json", json.dumps(clean(result.to_dict()), indent=1)))
+    paths.append(io.write_text(out / "experiment.json", json.dumps(io.to_jsonable(result.to_dict()), indent=1)))
     paths.append(io.write_text(out / "report.md", markdown(result, [p.name for p in paths if p.suffix == ".png"])))
     return paths

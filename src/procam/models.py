@@ -110,3 +110,28 @@ def invert(R: np.ndarray, t: np.ndarray):
     """Inverse pose: ``(R^T, -R^T t)``."""
     R = np.asarray(R, float)
     return R.T, -R.T @ np.asarray(t, float).reshape(3)
+
+
+def euler_deg(R) -> np.ndarray:
+    """Intrinsic XYZ angles ``(psi, nu, phi)`` of a (3, 3) rotation in **degrees** (3,).
+
+    For rotations that are not a board pose (e.g. the camera -> projector ``R``); a board pose's
+    angles are :func:`board_angles_deg`.
+    """
+    return np.degrees(matrix_to_euler(R))
+
+
+def board_angles_deg(R, t) -> np.ndarray:
+    """Board angles ``(psi, nu, phi)`` in degrees (3,) of a board -> device pose ``(R, t)``.
+
+    Measured in the board frame whose z points away from the device (DESIGN conventions; a
+    fronto-parallel board gives (0, 0, 0)): if the device is on the board's +z side
+    (``invert(R, t)[1][2] > 0``) the board frame is first turned 180 deg about its x axis, so the
+    same physical pose gets the same angles whichever way its corners were numbered.
+    Single-pose, multi-pose and :mod:`procam.evaluate` all report board angles with this function.
+    """
+    R = np.asarray(R, float)
+    _, O = invert(R, t)
+    if O[2] > 0:
+        R = R @ np.diag([1.0, -1.0, -1.0])
+    return euler_deg(R)

@@ -28,8 +28,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from . import models
+from . import uncertainty as unc
 from .calibration import Calibration, Device, Distortion
 from .errors import CalibrationError
+from .residuals import rms
 from .view import View
 
 #: OpenCV distortion models: name -> (calibrateCamera flags, vector length, free coefficient indices).
@@ -348,7 +350,7 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
 
     Returns
     -------
-    dict with ``Kc, dc, Kp, dp, R, T, rvecs, tvecs``, ``residuals`` (per-pose (cam (N,2), proj (N,2))),
+    dict with ``Kc, dc, Kp, dp, R, T, rvecs, tvecs``, ``residuals`` (per-pose (cam (N,2), proj (N,2)), observed - predicted px, unweighted),
     ``cov`` (parameter covariance, Gauss–Newton, ``s^2 (J^T J)^-1`` of the weighted problem), ``names`` (parameter names),
     ``x`` (the solution vector), ``status``, ``nfev``, ``cost``.
     """
@@ -400,7 +402,8 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
     row = 0
     for o in objs:
         n2 = 2 * len(o)
-        residuals.append((rr[row:row + n2].reshape(-1, 2), rr[row + n2:row + 2 * n2].reshape(-1, 2) / w))
+        # reported observed - predicted (the model's residuals are projected - observed)
+        residuals.append((-rr[row:row + n2].reshape(-1, 2), -rr[row + n2:row + 2 * n2].reshape(-1, 2) / w))
         row += 2 * n2
     return {"Kc": Kc1, "dc": dc1, "Kp": Kp1, "dp": dp1, "R": models.rvec_to_matrix(r1), "T": T1,
             "rvecs": rv1, "tvecs": tv1, "residuals": residuals, "cov": cov, "names": names, "x": x,
@@ -412,8 +415,8 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
 # --------------------------------------------------------------------------------------------------
 
 def _rms(arrs) -> float:
-    a = np.concatenate([np.asarray(x, float).reshape(-1, 2) for x in arrs])
-    return float(np.sqrt(np.mean(np.sum(a * a, axis=1)))) if len(a) else float("nan")
+    """Pooled RMS (px) of a list of (N, 2) residual arrays (:func:`procam.residuals.rms`)."""
+    return rms(list(arrs))
 
 
 _STD_NAMES = {"cam_fx": "f_c", "cam_fy": "fy_c", "cam_cx": "u0c", "cam_cy": "v0c",
@@ -432,15 +435,9 @@ def _std_dict(ref: dict) -> dict:
         if n.startswith(("cam_", "proj_")):
             out[_STD_NAMES.get(n, n)] = float(s)
     i = names.index("R_rx")
-    r0 = ref["x"][i:i + 3]
-    J = np.zeros((3, 3))
-    for k in range(3):  # d(euler)/d(rvec) by central differences
-        h = np.zeros(3)
-        h[k] = 1e-7
-        J[:, k] = (models.matrix_to_euler(models.rvec_to_matrix(r0 + h))
-                   - models.matrix_to_euler(models.rvec_to_matrix(r0 - h))) / 2e-7
-    ce = J @ cov[i:i + 3, i:i + 3] @ J.T
-    out["R_euler_deg"] = np.degrees(np.sqrt(np.clip(np.diag(ce), 0, None))).tolist()
+    ce = unc.propagate(cov[i:i + 3, i:i + 3], lambda r: models.euler_deg(models.rvec_to_matrix(r)),
+                       ref["x"][i:i + 3])
+    out["R_euler_deg"] = unc.std(ce).tolist()
     out["T"] = sd[i + 3:i + 6].tolist()
     return out
 
@@ -549,10 +546,10 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
         cam_res, proj_res = [], []
         for j in range(len(objs)):
             pc = models.project(Kc, models.rvec_to_matrix(rvc[j]), tvc[j], objs[j])
-            cam_res.append(Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc) - cams[j])
+            cam_res.append(cams[j] - Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc))
             Rp, tp = models.compose(R, T, models.rvec_to_matrix(rvc[j]), tvc[j])
             pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, Rp, tp, objs[j]), Kp)
-            proj_res.append(pp - projs[j])
+            proj_res.append(projs[j] - pp)
         cam_rms, proj_rms, stereo_rms = rms_c, rms_p, rms_s
 
     poses = []
@@ -560,8 +557,8 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
         Rc = models.rvec_to_matrix(rv_board[j])
         Rp, tp = models.compose(R, T, Rc, tv_board[j])
         poses.append({"name": names[j], "n_corners": int(len(objs[j])),
-                      "camera_angles_deg": np.degrees(models.matrix_to_euler(Rc)).tolist(),
-                      "projector_angles_deg": np.degrees(models.matrix_to_euler(Rp)).tolist(),
+                      "camera_angles_deg": models.board_angles_deg(Rc, tv_board[j]).tolist(),
+                      "projector_angles_deg": models.board_angles_deg(Rp, tp).tolist(),
                       "R_cam": Rc.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
                       "cam_rms": _rms([cam_res[j]]), "proj_rms": _rms([proj_res[j]]),
                       "stereo_rms": _rms([cam_res[j], proj_res[j]])})

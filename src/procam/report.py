@@ -1,19 +1,34 @@
 """Per-pose residuals of a calibration (for summaries and plots).
 
 For every view: the board pose from PnP with the calibrated intrinsics, each device on its own
-(METHOD §11.1), and the residual vectors observed - predicted in each device's pixels.
+(METHOD §11.1, :func:`procam.residuals.pnp`, the same PnP as ``Calibration.cam_rms`` and
+``procam evaluate``), and the residual vectors **observed - predicted** in each device's own
+(distorted) pixels.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .errors import CalibrationError
+from .residuals import pnp
 
-def pose_residuals(calib, views) -> list[dict]:
-    """List of dicts per view: ``name, cam_pts, cam_res, proj_pts, proj_res`` (N, 2) arrays, NaN where a
-    corner is missing; residuals in the device's own (distorted) pixels."""
-    import cv2
 
+def pose_residuals(calib, views, *, min_points: int = 4) -> list[dict]:
+    """Per-view residuals of ``calib``.
+
+    Parameters
+    ----------
+    calib : :class:`procam.calibration.Calibration` (camera-only calibrations give camera residuals only).
+    views : :class:`procam.view.View` sequence.
+    min_points : a device with fewer usable corners in a view gets no residuals (all NaN).
+
+    Returns
+    -------
+    list of dict, one per view: ``name``, ``cam_pts``, ``cam_res``, ``proj_pts``, ``proj_res``
+    ((N, 2) arrays, NaN where a corner is missing or PnP failed; ``proj_*`` None without a
+    projector); residuals observed - predicted, in the device's own distorted pixels.
+    """
     out = []
     for v in views:
         ok = v.valid if calib.projector is not None else np.isfinite(v.cam_pts).all(1)
@@ -24,17 +39,19 @@ def pose_residuals(calib, views) -> list[dict]:
         if calib.projector is not None:
             devices.append(("proj", calib.projector, v.proj_pts))
         for key, dev, pts in devices:
-            if ok.sum() < 4:
+            und = np.full_like(pts, np.nan, dtype=float)
+            if ok.any():
+                with np.errstate(all="ignore"):
+                    und[ok] = dev.undistort(pts[ok])
+            use = ok & np.isfinite(und).all(1)
+            if use.sum() < min_points:
                 continue
-            und = dev.undistort(pts[ok])
-            good, rvec, tvec = cv2.solvePnP(v.obj_pts[ok], und.reshape(-1, 1, 2), np.asarray(dev.K, float), None,
-                                            flags=cv2.SOLVEPNP_ITERATIVE)
-            if not good:
+            try:
+                R, t, _ = pnp(v.obj_pts[use], und[use], dev.K)
+            except CalibrationError:
                 continue
-            R = cv2.Rodrigues(rvec)[0]
-            pred = dev.project(R, tvec.ravel(), v.obj_pts[ok])
-            res = np.full_like(pts, np.nan)
-            res[ok] = pts[ok] - pred
+            res = np.full_like(pts, np.nan, dtype=float)
+            res[use] = pts[use] - dev.project(R, t, v.obj_pts[use])
             item[f"{key}_res"] = res
         out.append(item)
     return out

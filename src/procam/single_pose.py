@@ -41,6 +41,7 @@ from . import models
 from . import uncertainty as unc
 from .calibration import Calibration, Device, Distortion
 from .errors import CalibrationError
+from .residuals import pnp, rms, stereo_pose
 
 #: scale of the conditioned distortion coefficients: k1 = kappa1 / S^2, k2 = kappa2 / S^4 (METHOD §13)
 KAPPA_SCALE = 1000.0
@@ -266,22 +267,21 @@ def pose_from_homography(K, H_bd):
     return R, M[:, 2].copy()
 
 
-def board_angles_deg(R, t) -> np.ndarray:
-    """(psi, nu, phi) degrees of a board -> device pose, in the board frame whose z points away from
-    the device (the board frame is turned 180 deg about x first if the device is on its +z side)."""
-    R = np.asarray(R, float)
-    O = -R.T @ np.asarray(t, float).reshape(3)
-    if O[2] > 0:
-        R = R @ np.diag([1.0, -1.0, -1.0])
-    return np.degrees(models.matrix_to_euler(R))
+#: (psi, nu, phi) degrees of a board -> device pose (kept here for callers; see
+#: :func:`procam.models.board_angles_deg`).
+board_angles_deg = models.board_angles_deg
+
+
+def _device_side(R, t) -> float:
+    """+1 if the device centre ``O = -R^T t`` (board frame) is on the board's +z side, else -1."""
+    return 1.0 if models.invert(R, t)[1][2] > 0 else -1.0
 
 
 # ----------------------------------------------------------------------------------------------
 # the two 6-parameter problems
 def _valid_pose(R, t, M, side) -> bool:
     depth = (M @ R.T + t)[:, 2]
-    O = -R.T @ t
-    return bool(np.all(depth > 0) and np.sign(O[2]) == side)
+    return bool(np.all(depth > 0) and _device_side(R, t) == side)
 
 
 def _run_starts(fun, starts, check):
@@ -304,8 +304,7 @@ def _run_starts(fun, starts, check):
 
 def _side_and_pose(K0, H_bd):
     R0, t0 = pose_from_homography(K0, H_bd)
-    O0 = -R0.T @ t0
-    return (1.0 if O0[2] > 0 else -1.0), R0, t0, O0
+    return _device_side(R0, t0), R0, t0, models.invert(R0, t0)[1]
 
 
 def _board_width(M) -> float:
@@ -452,10 +451,7 @@ def _full_params(K, c, k1, k2, R, t):
                      *models.matrix_to_rvec(R), *np.asarray(t, float).reshape(3)])
 
 
-def _rms(res) -> float:
-    res = np.asarray(res, float).reshape(-1, 2)
-    res = res[np.isfinite(res).all(1)]
-    return float(np.sqrt(np.mean(np.sum(res * res, axis=1)))) if len(res) else float("nan")
+_rms = rms  # NaN-skipping RMS (procam.residuals.rms)
 
 
 def _clean(obj_pts, img_pts, what):
@@ -651,7 +647,7 @@ def _rejection_report(sol, predict, obs, valid, used, thr, notes, name: str, wha
                       floor_px: float, max_list: int = 8):
     """The solution with all valid corners' residuals, the rejected corners and their warning."""
     with np.errstate(all="ignore"):
-        res = predict(sol) - obs
+        res = obs - predict(sol)  # observed - predicted, as documented on the solutions
     res[~valid] = np.nan
     rej = np.flatnonzero(valid & ~used)
     norms = np.hypot(res[rej, 0], res[rej, 1])
@@ -698,7 +694,11 @@ def _staged_camera(M, m, c, size, use_dist, n_coeffs, board_width, name, warning
 
 
 def _joint_camera(M, m, p0, free, pp_prior, size, max_nfev=150):
-    """Joint ML/MAP refinement of the full camera model from ``p0``; returns (p, cost) or (None, inf)."""
+    """Joint ML/MAP refinement of the full camera model from ``p0``; returns (p, cost) or (None, inf).
+
+    The result is rejected if it is invalid, fits worse than ``p0``, or puts the camera on the other
+    side of the board than the (staged) start ``p0`` does (a mirror solution).
+    """
     fun = _camera_residual_fn(M, m, p0, free, pp_prior)
     try:
         with np.errstate(all="ignore"):
@@ -710,7 +710,7 @@ def _joint_camera(M, m, p0, free, pp_prior, size, max_nfev=150):
     if not np.all(np.isfinite(pj)) or pj[0] <= 0 or pj[1] <= 0 or not _inside(pj[2:4], size):
         return None, float("inf")
     Rj = models.rvec_to_matrix(pj[6:9])
-    side = 1.0 if (-Rj.T @ pj[9:12])[2] > 0 else -1.0
+    side = _device_side(models.rvec_to_matrix(p0[6:9]), p0[9:12])  # the start's side, not the result's
     if not _valid_pose(Rj, pj[9:12], M, side) or not np.all(np.isfinite(camera_predict(pj, M))):
         return None, float("inf")
     if r.cost > 0.5 * np.sum(fun(p0[free]) ** 2) + 1e-12:
@@ -923,7 +923,7 @@ def _camera_fit(obj, cam, mask, image_size, *, principal_point, distortion, cod,
     dist_obj = Distortion("division", (float(p[2]), float(p[3])), float(p[4] / KAPPA_SCALE ** 2),
                           float(p[5] / KAPPA_SCALE ** 4)) if use_dist else Distortion()
     residuals = np.full((len(obj), 2), np.nan)
-    residuals[mask] = res
+    residuals[mask] = -res  # observed - predicted
     info = dict(sigma_px=sigma, n_points=int(mask.sum()), refine=refine or "none", free=free,
                 max_distortion_px=dist.max_displacement(m, p[2:4], dist_obj.k1, dist_obj.k2) if use_dist else 0.0,
                 pp_prior_std=sigma_pp if pp_source == "image-center" else None)
@@ -1014,7 +1014,7 @@ def _projector_fit(obj, pp, mask, proj_size, *, u0, board_width, name) -> Projec
            "t": s[5:8].copy()}
     K = models.intrinsic_matrix(lm["f"], u0v, lm["v0"])
     residuals = np.full((len(obj), 2), np.nan)
-    residuals[mask] = res
+    residuals[mask] = -res  # observed - predicted
     return ProjectorSolution(K=K, distortion=Distortion(), R=lm["R"], t=lm["t"], rms_px=_rms(res),
                              residuals=residuals, std=std, angles_deg=board_angles_deg(lm["R"], lm["t"]),
                              cost=float(lm["cost"]), params=q, covariance=cov, H_pb=lm["H_pb"], u0=u0v, mask=mask,
@@ -1152,28 +1152,18 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
 # ----------------------------------------------------------------------------------------------
 # procam
 def _pnp_rms(obj, pts, K) -> float:
-    ok, rv, tv = cv2.solvePnP(obj.astype(np.float64), pts.astype(np.float64), np.asarray(K, float), None,
-                              flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok:
+    """METHOD §11.1 RMS (px) of undistorted ``pts`` with ``K`` fixed (:func:`procam.residuals.pnp`);
+    NaN if PnP finds no pose in front of the device."""
+    try:
+        return rms(pnp(obj, pts, K)[2])
+    except CalibrationError:
         return float("nan")
-    rv, tv = cv2.solvePnPRefineLM(obj.astype(np.float64), pts.astype(np.float64), np.asarray(K, float), None,
-                                  rv, tv, (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-15))
-    pr, _ = cv2.projectPoints(obj.astype(np.float64), rv, tv, np.asarray(K, float), None)
-    return _rms(pr.reshape(-1, 2) - pts)
 
 
 def _stereo_rms(obj, cam_und, proj, Kc, Kp, R, T, R0, t0) -> float:
-    def fun(x):
-        Rb = models.rvec_to_matrix(x[:3])
-        tb = x[3:]
-        rc = models.project(Kc, Rb, tb, obj) - cam_und
-        rp = models.project(Kp, R @ Rb, R @ tb + T, obj) - proj
-        return np.concatenate([rc.ravel(), rp.ravel()])
-
-    x0 = np.concatenate([models.matrix_to_rvec(R0), t0])
-    r = least_squares(fun, x0, method="lm", x_scale="jac")
-    e = r.fun.reshape(-1, 2)
-    return float(np.sqrt(np.mean(np.sum(e * e, axis=1))))
+    """METHOD §11.2 RMS (px) over camera and projector points (:func:`procam.residuals.stereo_pose`)."""
+    _, _, rc, rp = stereo_pose(obj, cam_und, proj, Kc, Kp, R, T, R0, t0)
+    return rms([rc, rp])
 
 
 def extrinsics(cam: CameraSolution, proj: ProjectorSolution):
@@ -1194,7 +1184,7 @@ def _extrinsics_std(cam: CameraSolution, proj: ProjectorSolution):
         Rc, tc = models.rvec_to_matrix(q[6:9]), q[9:12]
         Rp, tp = models.rvec_to_matrix(q[n + 2:n + 5]), q[n + 5:n + 8]
         R = Rp @ Rc.T
-        return np.concatenate([np.degrees(models.matrix_to_euler(R)), tp - R @ tc])
+        return np.concatenate([models.euler_deg(R), tp - R @ tc])
 
     C = unc.propagate(cov, g, np.concatenate([pc, pp]), typical=np.r_[np.ones(n), np.ones(len(pp))])
     s = np.sqrt(np.abs(np.diag(C)))

@@ -30,6 +30,7 @@ joblib is an optional dependency (``procam[parallel]``); the serial path does no
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
 import time
@@ -43,6 +44,7 @@ import numpy as np
 
 from .crlb import camera_bound, projector_bound
 from .errors import ProcamError
+from .io import atomic_path
 
 __all__ = ["StudyConfig", "StudyResult", "parse_grid", "study_cells", "study_scene", "cell_scene",
            "run_cell", "run_study", "slice_specs", "COLUMNS"]
@@ -457,7 +459,7 @@ def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = Non
 
     results: dict[int, dict] = {}
     done = 0
-    ctx = joblib.parallel_config(backend=backend) if backend is not None else _nullcontext()
+    ctx = joblib.parallel_config(backend=backend) if backend is not None else contextlib.nullcontext()
     jobs = n_jobs if backend is None or n_jobs != 1 else -1
     with ctx:
         try:  # joblib >= 1.4: results as they finish (live progress)
@@ -478,14 +480,6 @@ def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = Non
 def _task(config: StudyConfig, chunk):
     """Module-level joblib task (picklable): ``(indices, rows)`` of a chunk of cells."""
     return [i for i, _ in chunk], _run_chunk(config, [c for _, c in chunk])
-
-
-class _nullcontext:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
 
 
 @dataclass
@@ -533,9 +527,9 @@ class StudyResult:
         return sorted(rows, key=lambda r: r[axis])
 
     def to_csv(self, path) -> Path:
-        """Write every cell as a CSV row (:data:`COLUMNS`); returns the path."""
+        """Write every cell as a CSV row (:data:`COLUMNS`), atomically; returns the path."""
         path = Path(path)
-        with path.open("w", newline="") as fh:
+        with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=list(COLUMNS))
             w.writeheader()
             for r in self.rows:

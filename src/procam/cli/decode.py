@@ -56,6 +56,7 @@ def decode_cmd(
                 np.savez_compressed(f, col=res.col, row=res.row, valid_col=res.valid_col,
                                     valid_row=res.valid_row, reason_col=res.reason_col,
                                     reason_row=res.reason_row, confidence=res.confidence,
+                                    dropped_col=res.dropped_col, dropped_row=res.dropped_row,
                                     projector_size=np.array([ps.width, ps.height]), order=np.array(ps.order))
         console.print(f"wrote {out}")
     if png is not None:

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -81,7 +81,7 @@ def evaluate_cmd(
     size = parse_size(projector, "--projector") if projector else None
     if size is None and not all((Path(p) / "patterns.json").exists() for p in poses):
         size = tuple(calib.projector.image_size)
-    with console.status("decoding poses ...") if console.is_terminal else _Null():
+    with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
         views = load_views(poses, cols, rows, square, size, order, estimator, window, step=step)
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
@@ -93,23 +93,5 @@ def evaluate_cmd(
     console.print(s)
     if json_out is not None:
         d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict()}
-        io.write_text(json_out, json.dumps(_clean(d), indent=1))
+        io.write_text(json_out, json.dumps(io.to_jsonable(d), indent=1))
         console.print(f"wrote {json_out}")
-
-
-def _clean(o):
-    if isinstance(o, dict):
-        return {k: _clean(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_clean(v) for v in o]
-    if isinstance(o, float) and not np.isfinite(o):
-        return None
-    return o
-
-
-class _Null:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *a):
-        return False

@@ -8,16 +8,10 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from .._fmt import fmt_number
 from ._app import app, console, err_console, fail, parse_size, user_errors
 from .correspond import parse_board
 from .evaluate import load_views
-
-
-def _fmt(v, nd=3):
-    try:
-        return "—" if v != v else f"{v:.{nd}f}"
-    except (TypeError, ValueError):
-        return str(v)
 
 
 def summary_tables(result) -> list[Table]:
@@ -26,15 +20,16 @@ def summary_tables(result) -> list[Table]:
     for c in ("", "cam", "proj", "stereo", "σ_X", "σ_Y", "σ_Z", "σ_T", "σ_|T|"):
         t.add_column(c, justify="left" if c == "" else "right", overflow="fold")
     for r in result.summary:
-        t.add_row(r["row"], _fmt(r["cam_rms"]), _fmt(r["proj_rms"]), _fmt(r["stereo_rms"]), _fmt(r["sigma_X"], 2),
-                  _fmt(r["sigma_Y"], 2), _fmt(r["sigma_Z"], 2), _fmt(r["sigma_T"], 2), _fmt(r["sigma_abs_T"], 2))
+        t.add_row(r["row"], *(fmt_number(r[k], 3) for k in ("cam_rms", "proj_rms", "stereo_rms")),
+                  *(fmt_number(r[k], 2) for k in ("sigma_X", "sigma_Y", "sigma_Z", "sigma_T", "sigma_abs_T")))
     s = Table(title="single-pose calibration of every pose (errors: mean over all poses)")
     for c in ("set", "f_c", "Δf_c", "ψc+νc", "cam", "f_p", "Δf_p", "|νp|", "proj", "σ_T"):
         s.add_column(c, justify="right", overflow="fold")
     for r, e in zip(result.single, result.single_extrinsics):
-        s.add_row(str(r["set"]), _fmt(r["f_c"], 1), _fmt(r["abs_df_c"], 1), _fmt(abs(r["psi_c_ref"]) + abs(r["nu_c_ref"]), 1),
-                  _fmt(r["cam_err"], 2), _fmt(r["f_p"], 1), _fmt(r["abs_df_p"], 1), _fmt(abs(r["nu_p_ref"]), 1),
-                  _fmt(r["proj_err"], 2), _fmt(e["sigma_T"], 2))
+        s.add_row(str(r["set"]), fmt_number(r["f_c"], 1), fmt_number(r["abs_df_c"], 1),
+                  fmt_number(abs(r["psi_c_ref"]) + abs(r["nu_c_ref"]), 1), fmt_number(r["cam_err"], 2),
+                  fmt_number(r["f_p"], 1), fmt_number(r["abs_df_p"], 1), fmt_number(abs(r["nu_p_ref"]), 1),
+                  fmt_number(r["proj_err"], 2), fmt_number(e["sigma_T"], 2))
     return [t, s]
 
 

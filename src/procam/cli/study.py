@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Optional
 
@@ -12,14 +11,10 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
     TimeRemainingColumn
 from rich.table import Table
 
+from .. import io
+from .._fmt import fmt_number
 from ..errors import ProcamError
 from ._app import app, console, err_console, user_errors
-
-
-def _fmt(x: float) -> str:
-    if x is None or not math.isfinite(x):
-        return "–" if x is None or math.isnan(x) else "∞"
-    return f"{x:.3g}"
 
 
 @app.command("study")
@@ -91,15 +86,14 @@ def study(
 
     stem = f"study_{device}_{model_error}"
     csv_path = result.to_csv(output / f"{stem}.csv")
-    summary = {"config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in result.config_dict().items()},
-               "summary": result.summary(), "csv": csv_path.name}
+    summary = {"config": result.config_dict(), "summary": result.summary(), "csv": csv_path.name}
     paths = []
     if figures:
         from ..plots.study import save_study_figures
 
         paths = save_study_figures(result, output, prefix=stem)
         summary["figures"] = [p.name for p in paths]
-    (output / f"{stem}.json").write_text(json.dumps(summary, indent=2, default=float))
+    io.write_text(output / f"{stem}.json", json.dumps(io.to_jsonable(summary), indent=2))
 
     s = result.summary()
     console.print(f"{s['cells']} cells in {s['seconds']:.1f} s ({s['cells_per_second']:.1f} cells/s, "
@@ -113,7 +107,7 @@ def study(
             for name in ("median |Δf|", "noise-free |Δf|", "√CRLB", "std/√CRLB"):
                 t.add_column(name, justify="right")
             for r in result.slice(label):
-                t.add_row(f"{r[axis]:g}", _fmt(r["median_abs_df"]), _fmt(r["abs_df_noise_free"]),
-                          _fmt(r["bound_f"]), _fmt(r["ratio_std"]))
+                t.add_row(f"{r[axis]:g}", *(fmt_number(r[k], spec=".3g")
+                                            for k in ("median_abs_df", "abs_df_noise_free", "bound_f", "ratio_std")))
             console.print(t)
     console.print(f"wrote {csv_path}" + (f" and {len(paths)} figures" if paths else "") + f" to {output}")

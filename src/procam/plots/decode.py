@@ -9,6 +9,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..decode import REASONS  # noqa: E402
+from . import save_figure  # noqa: E402,F401  (re-exported: cli.calibrate/correspond/demo import it from here)
 
 
 def decode_figure(result, white=None, title: str = ""):
@@ -41,12 +42,3 @@ def decode_figure(result, white=None, title: str = ""):
     if title:
         fig.suptitle(title)
     return fig
-
-
-def save_figure(fig, path) -> None:
-    """Save ``fig`` to ``path`` atomically (temporary name, then rename) and close it."""
-    from ..io import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
-    plt.close(fig)

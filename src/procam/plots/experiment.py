@@ -5,13 +5,13 @@ Matplotlib with the Agg backend only; functions return ``Figure`` objects.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+from . import save_figure  # noqa: E402
 
 __all__ = ["focal_error_figure", "sigma_t_figure", "experiment_figures", "save_figure"]
 
@@ -95,14 +95,3 @@ def sigma_t_figure(result):
 def experiment_figures(result) -> dict:
     """``name -> Figure`` for the report: ``focal_errors`` and ``sigma_T``."""
     return {"focal_errors": focal_error_figure(result), "sigma_T": sigma_t_figure(result)}
-
-
-def save_figure(fig, path) -> Path:
-    """Save ``fig`` as PNG (format from the suffix) via a temporary name, then close it."""
-    from ..io import atomic_path
-
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=path.suffix.lstrip(".") or "png")
-    plt.close(fig)
-    return path

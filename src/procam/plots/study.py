@@ -15,6 +15,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
+from . import save_figure  # noqa: E402
+
 __all__ = ["heatmap", "slices", "save_study_figures"]
 
 _LABEL = {"median_abs_df": "median |Δf| (px)", "abs_df_noise_free": "noise-free |Δf| (px)",
@@ -162,14 +164,8 @@ def save_study_figures(result, outdir, prefix: str | None = None) -> list[Path]:
     for m in metrics:
         fig = heatmap(result, m, log=not m.startswith("ratio"),
                       vmin=0.5 if m.startswith("ratio") else None, vmax=2.0 if m.startswith("ratio") else None)
-        p = outdir / f"{prefix}_heatmap_{m}.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        out.append(p)
+        out.append(save_figure(fig, outdir / f"{prefix}_heatmap_{m}.png"))
     if any(r["slices"] for r in result.rows) or result.rows:
         fig = slices(result)
-        p = outdir / f"{prefix}_slices.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        out.append(p)
+        out.append(save_figure(fig, outdir / f"{prefix}_slices.png"))
     return out
