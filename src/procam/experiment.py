@@ -136,7 +136,8 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
         ``k1k2p1p2k3`` for both).
     refine : joint refinement of the multi-pose calibrations.  Default ``False``: the reference is
         Moreno & Taubin's (``calibrateCamera`` per device, then ``stereoCalibrate`` with fixed
-        intrinsics), as in the paper.
+        intrinsics), as in the paper.  Note that ``procam calibrate`` (multi-pose) refines by default
+        (``--no-refine`` turns it off), so its result for the same poses differs from this reference.
     single_options : keyword options of :func:`procam.single_pose.calibrate`.
 
     Returns

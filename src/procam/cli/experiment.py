@@ -45,8 +45,9 @@ def experiment_cmd(
     step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
                                                  "default: patterns.json's, else 1)."),
     min_set: int = typer.Option(3, "--min-set", help="Smallest pose set for the multi-pose calibrations."),
-    refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration "
-                                                        "(default: Moreno-Taubin's frozen-intrinsics stereo, as the paper)."),
+    refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
+                                                        "here (Moreno-Taubin's frozen-intrinsics stereo, as the paper), "
+                                                        "unlike `procam calibrate`, which refines unless --no-refine."),
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
