@@ -1,0 +1,126 @@
+"""Reprojection residuals shared by the solvers, the evaluation and the reports (METHOD §11).
+
+One implementation of each measure, so that a calibration's own ``cam_rms`` / ``stereo_rms`` and
+``procam evaluate`` on the same pose agree:
+
+* :func:`rms` -- ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances), rows with a NaN
+  skipped;
+* :func:`pnp` -- board pose from undistorted pixels with the intrinsics fixed (METHOD §11.1);
+* :func:`stereo_pose` -- board pose with both devices' intrinsics and ``(R, T)`` fixed (METHOD §11.2).
+
+Sign convention: every residual is **observed - predicted** (pixels).
+
+This module is below :mod:`procam.single_pose`, :mod:`procam.multi_pose` and
+:mod:`procam.evaluate`; it imports only :mod:`procam.models` and :mod:`procam.errors`.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import models
+from .errors import CalibrationError
+
+#: Termination of the final ``cv2.solvePnPRefineLM`` step of :func:`pnp` (iterations, epsilon).
+PNP_REFINE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-15)
+
+
+def rms(e) -> float:
+    """RMS point distance ``sqrt(sum_i |e_i|^2 / n)`` of residual vectors, skipping non-finite rows.
+
+    Parameters
+    ----------
+    e : (N, 2) array (anything reshapeable to it), or a list/tuple of such arrays (pooled).
+
+    Returns
+    -------
+    float
+        Pixels; NaN when no finite row is left.
+    """
+    if isinstance(e, (list, tuple)):
+        parts = [np.asarray(a, float).reshape(-1, 2) for a in e]
+        e = np.concatenate(parts) if parts else np.zeros((0, 2))
+    e = np.asarray(e, float).reshape(-1, 2)
+    e = e[np.isfinite(e).all(axis=1)]
+    return float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if len(e) else float("nan")
+
+
+def pnp(obj, pts, K, *, refine: bool = True):
+    """Board pose from undistorted pixels with fixed ``K``: ``(R (3, 3), t (3,), residuals (N, 2))``.
+
+    ``cv2.solvePnP`` with ``SOLVEPNP_ITERATIVE`` (OpenCV's default, as used by the paper); if that
+    fails or puts the board behind the device (a rare planar failure of its start), an IPPE start
+    refined by the iterative method.  ``refine`` polishes the pose with ``cv2.solvePnPRefineLM``
+    (:data:`PNP_REFINE_CRITERIA`) so the RMS is that of the converged minimum.
+
+    Parameters
+    ----------
+    obj : (N, 3) board points; pts : (N, 2) undistorted pixels (finite, N >= 4); K : (3, 3).
+
+    Returns
+    -------
+    R, t : board -> device pose; residuals : (N, 2) observed - predicted pixels.
+
+    Raises
+    ------
+    CalibrationError
+        No pose with the board in front of the device.
+    """
+    obj = np.ascontiguousarray(np.asarray(obj, float).reshape(-1, 3))
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    K = np.asarray(K, float)
+    img = np.ascontiguousarray(pts.reshape(-1, 1, 2))
+
+    def bad(ok, tvec):
+        return not ok or not np.all(np.isfinite(tvec)) or tvec.ravel()[2] <= 0
+
+    ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_ITERATIVE)
+    if bad(ok, tvec):
+        ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, flags=cv2.SOLVEPNP_IPPE)
+        if ok:
+            ok, rvec, tvec = cv2.solvePnP(obj, img, K, None, rvec, tvec, True, cv2.SOLVEPNP_ITERATIVE)
+    if bad(ok, tvec):
+        raise CalibrationError("solvePnP found no pose with the board in front of the device")
+    if refine:
+        rv, tv = cv2.solvePnPRefineLM(obj, img, K, None, rvec.copy(), tvec.copy(), PNP_REFINE_CRITERIA)
+        if not bad(True, tv) and np.all(np.isfinite(rv)):
+            rvec, tvec = rv, tv
+    R = models.rvec_to_matrix(rvec)
+    t = np.asarray(tvec, float).ravel()
+    return R, t, pts - models.project(K, R, t, obj)
+
+
+def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12):
+    """Board pose (camera frame) minimising camera + projector residuals with everything else fixed.
+
+    Parameters
+    ----------
+    obj : (N, 3) board points; cam_u, proj_u : (N, 2) undistorted camera / projector pixels.
+    Kc, Kp : (3, 3) intrinsics; R, T : camera -> projector; R0, t0 : start (camera PnP pose).
+    tol : ftol = xtol = gtol of ``least_squares`` (LM).
+
+    Returns
+    -------
+    R_b (3, 3), t_b (3,), cam residuals (N, 2), proj residuals (N, 2) (observed - predicted, pixels)
+    """
+    obj = np.asarray(obj, float).reshape(-1, 3)
+    cam_u = np.asarray(cam_u, float).reshape(-1, 2)
+    proj_u = np.asarray(proj_u, float).reshape(-1, 2)
+    R = np.asarray(R, float)
+    T = np.asarray(T, float).reshape(3)
+
+    def res(x):
+        Rb = models.rvec_to_matrix(x[:3])
+        Xc = obj @ Rb.T + x[3:]
+        rc = cam_u - models.project(Kc, np.eye(3), np.zeros(3), Xc)
+        rp = proj_u - models.project(Kp, R, T, Xc)
+        return np.concatenate([rc.ravel(), rp.ravel()])
+
+    x0 = np.concatenate([models.matrix_to_rvec(R0), np.ravel(t0)])
+    sol = least_squares(res, x0, method="lm", x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
+    r = sol.fun
+    n = len(obj)
+    return (models.rvec_to_matrix(sol.x[:3]), sol.x[3:].copy(), r[:2 * n].reshape(-1, 2),
+            r[2 * n:].reshape(-1, 2))
