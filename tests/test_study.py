@@ -184,6 +184,24 @@ def test_cli(tmp_path):
     assert bad.exit_code == 2 and "START:STOP:STEP" in bad.output
 
 
+def test_cli_zero_trials_writes_strict_json(tmp_path):
+    """--trials 0 gives NaN medians: the summary must still be valid JSON (null, not NaN)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from procam.cli import app
+
+    out = tmp_path / "o"
+    r = CliRunner().invoke(app, ["study", "camera", "--grid", "10", "--trials", "0", "--no-slices",
+                                 "--no-figures", "--model-error", "none", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    text = (out / "study_camera_none.json").read_text()
+    d = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+    assert d["summary"]["cells"] == 1 and d["config"]["psi"] == [10.0]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
 @pytest.mark.slow
 def test_render_path_one_cell():
     """Full rendering + decoding per trial (camera study; D = 500 mm is enough for the camera corners)."""
