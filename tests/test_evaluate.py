@@ -160,3 +160,45 @@ def test_multi_pose_noise_free_sigma_T_is_zero(opencv_rig):
     views = _views(scenes)
     ev = evaluate.evaluate(multi_pose.calibrate(views), views)
     assert ev.sigma_T < 1e-4 and ev.stereo_rms < 1e-5
+
+
+def test_single_pose_rms_and_angles_match_evaluate(division_rig):
+    """Review 11/12/18: the solver's own cam/proj/stereo RMS and board angles are the evaluation's."""
+    from procam import single_pose
+
+    base, scenes = division_rig
+    view = _views(scenes[:1], 0.1, 0.2, seed=5)[0]
+    calib = single_pose.calibrate(view, base.proj_size)
+    ev = evaluate.evaluate(calib, [view])
+    p = ev.poses[0]
+    assert p.cam_rms == pytest.approx(calib.cam_rms, rel=1e-6)
+    assert p.proj_rms == pytest.approx(calib.proj_rms, rel=1e-6)
+    assert p.stereo_rms == pytest.approx(calib.stereo_rms, rel=1e-6)
+    # same frame convention; the poses differ slightly (PnP fits undistorted pixels, the solver distorted ones)
+    assert p.cam_angles == pytest.approx(tuple(calib.poses[0]["camera_angles_deg"]), abs=0.01)
+    assert p.proj_angles == pytest.approx(tuple(calib.poses[0]["projector_angles_deg"]), abs=0.01)
+
+
+def test_multi_pose_angles_match_evaluate(opencv_rig):
+    from procam import multi_pose
+
+    base, scenes = opencv_rig
+    views = _views(scenes)
+    calib = multi_pose.calibrate(views)
+    ev = evaluate.evaluate(calib, views)
+    for p, q in zip(ev.poses, calib.poses):
+        assert p.cam_angles == pytest.approx(tuple(q["camera_angles_deg"]), abs=1e-3)
+        assert p.proj_angles == pytest.approx(tuple(q["projector_angles_deg"]), abs=1e-3)
+
+
+def test_report_residuals_observed_minus_predicted(division_rig):
+    from procam.report import pose_residuals
+
+    base, scenes = division_rig
+    views = _views(scenes[:1])
+    moved = views[0].cam_pts.copy()
+    moved[0, 0] += 3.0
+    view = dataclasses.replace(views[0], cam_pts=moved)
+    out = pose_residuals(_truth_calibration(base), [view])[0]
+    assert out["cam_res"][0, 0] > 2.0
+    assert np.nanmax(np.abs(out["proj_res"])) < 1e-5
