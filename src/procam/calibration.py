@@ -113,10 +113,11 @@ class Calibration:
 
     Attributes
     ----------
-    camera, projector : :class:`Device`.
+    camera, projector : :class:`Device` (``projector`` is None for a camera-only result).
     R : (3, 3), T : (3,)
-        Camera -> projector: ``x_p = R x_c + T`` (board units).
-    method : "single-pose" or "multi-pose" (with variant details in ``info``).
+        Camera -> projector: ``x_p = R x_c + T`` (board units); None for a camera-only result.
+    method : "single-pose", "multi-pose" or "camera-only" (camera intrinsics from one pose, no
+        projector; :func:`procam.single_pose.calibrate_camera_only`), with variant details in ``info``.
     cam_rms, proj_rms, stereo_rms : RMS reprojection errors in pixels (NaN if not computed).
     std : dict name -> standard deviation (same units as the parameter; angles in degrees),
         from the Jacobian at the solution.

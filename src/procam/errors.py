@@ -14,10 +14,6 @@ class CaptureError(ProcamError):
     """A capture folder or image file cannot be used (missing, unreadable, wrong count, ...)."""
 
 
-class DecodeError(ProcamError):
-    """A captured Gray-code sequence cannot be decoded."""
-
-
 class BoardNotFoundError(ProcamError):
     """The chessboard was not found in an image."""
 

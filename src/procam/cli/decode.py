@@ -8,6 +8,7 @@ import numpy as np
 import typer
 
 from .. import capture, decode as dec, io
+from ..patterns import ORDERS
 from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, user_errors
 
 
@@ -28,8 +29,8 @@ def decode_cmd(
 ):
     """Decode a pose: projector column and row per camera pixel, validity and reasons."""
     size = parse_size(projector, "--projector") if projector else None
-    if order is not None and order not in ("opencv", "moreno"):
-        fail(f"--order must be opencv or moreno, got {order!r}")
+    if order is not None and order not in ORDERS:
+        fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
     if out is not None and out.suffix != ".npz":
         out = out.with_suffix(".npz")
     output_path(out, "-o", (".npz",))

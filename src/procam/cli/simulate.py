@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from ..patterns import ORDERS
 from ._app import app, console, fail, is_tty, user_errors
 
 
@@ -48,8 +49,8 @@ def simulate_cmd(
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):
         fail(f"--bits must be 8 or 16, got {bits}")
-    if order not in ("opencv", "moreno"):
-        fail(f"--order must be opencv or moreno, got {order!r}")
+    if order not in ORDERS:
+        fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
     if frame not in ("camera", "projector"):
         fail(f"--frame must be camera or projector, got {frame!r}")
     if distance is not None and not (50 <= distance <= 20000):
