@@ -59,9 +59,9 @@ def summary_table(calib) -> Table:
         t.add_row("distortion", "", "opencv " + " ".join(f"{c:.4g}" for c in calib.projector.distortion.coeffs))
     t.add_row("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}")
     if calib.R is not None:
-        from ..models import matrix_to_euler
+        from ..models import euler_deg
 
-        eul = np.degrees(matrix_to_euler(calib.R))
+        eul = euler_deg(calib.R)
         for i, n in enumerate(("psi", "nu", "phi")):
             t.add_row(f"R {n} (deg)", _pm(eul[i], _std(calib, "R_euler_deg", i)), "")
         for i, n in enumerate("XYZ"):

@@ -12,6 +12,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from .. import io, patterns, pipeline, simulate, single_pose
+from ..models import euler_deg
+from ..residuals import rms
 from ._app import app, console, fail, user_errors
 from .calibrate import print_summary
 
@@ -56,8 +58,8 @@ def demo_cmd(
     e_proj = view.proj_pts - np.array(c["projector"])
     console.print(f"decoded {maps.valid.mean() * 100:.1f} % of the pixels; {int(view.valid.sum())}/{len(view.valid)} "
                   "corners; "
-                  f"corner error vs truth: camera {np.sqrt(np.nanmean(np.sum(e_cam ** 2, 1))):.3f} px RMS, "
-                  f"projector {np.sqrt(np.nanmean(np.sum(e_proj ** 2, 1))):.3f} px RMS "
+                  f"corner error vs truth: camera {rms(e_cam):.3f} px RMS, "
+                  f"projector {rms(e_proj):.3f} px RMS "
                   f"({time.perf_counter() - t0:.1f} s)")
     calib = single_pose.calibrate(view)
     print_summary(calib)
@@ -85,9 +87,7 @@ def demo_cmd(
     _row(t, "projector f (px)", proj["f"], Kp[0, 0], std.get("f_p"))
     _row(t, "projector u0 (px, fixed W/2)", proj["u0"], Kp[0, 2])
     _row(t, "projector v0 (px)", proj["v0"], Kp[1, 2], std.get("v0p"))
-    from ..models import matrix_to_euler
-
-    eul = np.degrees(matrix_to_euler(calib.R))
+    eul = euler_deg(calib.R)
     rstd = std.get("R_euler_deg") or [None] * 3
     tstd = std.get("T") or [None] * 3
     for i, n in enumerate(("psi", "nu", "phi")):
