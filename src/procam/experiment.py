@@ -111,7 +111,7 @@ def _metrics(ev) -> dict:
 
 def _params(calib) -> dict:
     Kc, Kp = calib.camera.K, calib.projector.K
-    e = np.degrees(models.matrix_to_euler(calib.R))
+    e = models.euler_deg(calib.R)
     T = np.asarray(calib.T, float)
     return {"f_c": Kc[0, 0], "fy_c": Kc[1, 1], "u0c": Kc[0, 2], "v0c": Kc[1, 2], "f_p": Kp[0, 0], "fy_p": Kp[1, 1],
             "u0p": Kp[0, 2], "v0p": Kp[1, 2], "psi": e[0], "nu": e[1], "phi": e[2], "X": T[0], "Y": T[1], "Z": T[2]}
