@@ -45,7 +45,7 @@ def test_camera_only_on_a_real_photo(shared_data, tmp_path):
     code, stdout, err = run_cli(["calibrate", "--camera-only", img, "--board", "9x6", "--square", "25", "-o", out])
     assert code == 0, err
     c = io.load_calibration(out)
-    assert c.projector is None and c.camera.image_size == (640, 480)
+    assert c.projector is None and c.camera.image_size == (640, 480) and c.method == "camera-only"
     assert 400 < c.camera.K[0, 0] < 700  # reference 536; one photo is coarse
     code, _, err = run_cli(["calibrate", "--camera-only", img, "--board", "10x6", "--square", "25", "-o", out])
     assert code == 2 and "not found" in err

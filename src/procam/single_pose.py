@@ -1348,6 +1348,6 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, name: str = "view", s
             "n_used": {"camera": int(mask.sum())}, "rejected_corners": {"camera": _rejected_list(cam)},
             "outlier_threshold_px": {"camera": cam.outlier_threshold_px}}
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
-                       method="single-pose", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
+                       method="camera-only", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
                        info={"camera": cam, "principal_point_source": cam.principal_point_source,
                              "cod_score": None if cam.cod is None else cam.cod.score, "refine": cam.info["refine"]})
