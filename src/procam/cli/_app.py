@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import re
 import sys
+from typing import Annotated, Optional
 
 import typer
 from rich.console import Console
@@ -55,6 +56,21 @@ def parse_size(text: str, what: str = "size") -> tuple[int, int]:
     if w < 2 or h < 2:
         fail(f"{what} must be at least 2x2, got {text!r}")
     return w, h
+
+
+# Options shared by the commands that read capture folders (one definition, one help text).
+BoardOpt = Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6.")]
+SquareOpt = Annotated[float, typer.Option("--square", help="Square size; the length unit of every output (e.g. mm).")]
+ProjectorOpt = Annotated[Optional[str], typer.Option(
+    "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: the folder's patterns.json).")]
+OrderOpt = Annotated[Optional[str], typer.Option("--order", help="Sequence order: opencv (default) or moreno.")]
+StepOpt = Annotated[Optional[int], typer.Option(
+    "--step", help="Projector pixels per Gray code (kamino410's graycode_step; default: patterns.json's, else 1).")]
+
+
+def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int] | None:
+    """:func:`parse_size` for an optional option (None stays None)."""
+    return parse_size(text, what) if text else None
 
 
 def parse_square(value: float) -> float:

@@ -11,7 +11,8 @@ from rich.table import Table
 
 from .. import io, pipeline
 from ..errors import BoardNotFoundError
-from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, parse_square, user_errors
+from ._app import (BoardOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail,
+    optional_size, output_path, parse_square, user_errors)
 from .correspond import parse_board, pose_options
 
 
@@ -106,14 +107,10 @@ def print_summary(calib):
 @app.command("calibrate")
 @user_errors
 def calibrate_cmd(
+    board: BoardOpt,
+    square: SquareOpt,
     poses: list[Path] = typer.Argument(..., help="One pose folder (single-pose), several (multi-pose), or with "
                                                "--camera-only one image."),
-    board: str = typer.Option(..., "--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6."),
-    square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
-    projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
-    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
-    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
-                                                 "default: patterns.json's, else 1)."),
     method: str = typer.Option(None, "--method", help="single or multi (default: single for one pose, multi for several)."),
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from one photo of the board."),
     out: Path = typer.Option(..., "-o", "--out", help="Calibration JSON file."),
@@ -126,6 +123,9 @@ def calibrate_cmd(
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
     estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     from ..plots.decode import save_figure
@@ -159,7 +159,7 @@ def calibrate_cmd(
             for opt, val in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
                 if val not in DIST_MODELS:
                     fail(f"{opt} must be one of {', '.join(DIST_MODELS)}, got {val!r}")
-        size = parse_size(projector, "--projector") if projector else None
+        size = optional_size(projector)
         opts = pose_options(estimator, window, 11, "auto", "robust")
         views = []
         with console.status("decoding poses ...") if console.is_terminal else nullcontext():

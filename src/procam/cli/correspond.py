@@ -10,7 +10,8 @@ import numpy as np
 import typer
 
 from .. import capture, correspond as corr, io, pipeline
-from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, parse_square, user_errors
+from ._app import (BoardOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail,
+    optional_size, output_path, parse_size, parse_square, user_errors)
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -36,13 +37,9 @@ def pose_options(estimator: str, window: int, refine: int, detector: str, method
 @app.command("correspond")
 @user_errors
 def correspond_cmd(
+    board: BoardOpt,
+    square: SquareOpt,
     pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
-    board: str = typer.Option(..., "--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6."),
-    square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
-    projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
-    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
-    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
-                                                 "default: patterns.json's, else 1)."),
     out: Path = typer.Option(..., "-o", "--out", help="Write the correspondences as JSON."),
     png: Path = typer.Option(None, "--png", help="Picture: corners on the camera image and on the projector plane."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
@@ -50,6 +47,9 @@ def correspond_cmd(
     refine: int = typer.Option(11, "--refine-window", help="cornerSubPix half-window, px (0 = none)."),
     detector: str = typer.Option("auto", "--detector", help="Corner detector: auto, classic or sb."),
     method: str = typer.Option("robust", "--method", help="Decode classifier: robust or simple."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
 ):
     """Camera corners (white frame) and their projector coordinates by local homographies."""
     square = parse_square(square)
@@ -57,7 +57,7 @@ def correspond_cmd(
     opts = pose_options(estimator, window, refine, detector, method)
     output_path(out, "-o", (".json",))
     output_path(png, "--png", FIGURE_SUFFIXES)
-    cap = capture.load_capture(pose_dir, parse_size(projector, "--projector") if projector else None, order,
+    cap = capture.load_capture(pose_dir, optional_size(projector), order,
                                step=step)
     for w in cap.warnings:
         console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)

@@ -9,18 +9,17 @@ import typer
 
 from .. import capture, decode as dec, io
 from ..patterns import ORDERS
-from ._app import FIGURE_SUFFIXES, app, console, fail, output_path, parse_size, user_errors
+from ._app import (FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size,
+    output_path, user_errors)
 
 
 @app.command("decode")
 @user_errors
 def decode_cmd(
     pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
-    projector: str = typer.Option(None, "--projector", "-p",
-                                  help="Projector size WIDTHxHEIGHT (default: from the folder's patterns.json)."),
-    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
-    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
-                                                 "default: patterns.json's, else 1)."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
     method: str = typer.Option("robust", "--method", help="Bit classifier: robust (direct/global) or simple."),
     shadow: float = typer.Option(10.0, "--shadow-threshold", help="Min white-black, 8-bit DN (scaled for 16-bit)."),
     contrast: float = typer.Option(3.0, "--contrast-threshold", help="Min |pattern-inverse| per bit, 8-bit DN."),
@@ -28,7 +27,7 @@ def decode_cmd(
     png: Path = typer.Option(None, "--png", help="Write a colour-coded picture of the maps."),
 ):
     """Decode a pose: projector column and row per camera pixel, validity and reasons."""
-    size = parse_size(projector, "--projector") if projector else None
+    size = optional_size(projector)
     if order is not None and order not in ORDERS:
         fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
     if out is not None and out.suffix != ".npz":

@@ -10,7 +10,8 @@ import typer
 from rich.table import Table
 
 from .. import io, pipeline
-from ._app import app, console, fail, parse_size, user_errors
+from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail, optional_size,
+    parse_square, user_errors)
 from .correspond import parse_board, pose_options
 
 
@@ -54,31 +55,28 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
 @app.command("evaluate")
 @user_errors
 def evaluate_cmd(
+    board: BoardOpt,
+    square: SquareOpt,
     calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) to evaluate."),
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences) to evaluate on."),
-    board: str = typer.Option(..., "--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6."),
-    square: float = typer.Option(..., "--square", help="Square size, in the calibration's length unit (e.g. mm)."),
-    projector: str = typer.Option(None, "--projector", "-p",
-                                  help="Projector size WIDTHxHEIGHT (default: patterns.json, else the calibration's)."),
-    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
-    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
-                                                 "default: patterns.json's, else 1)."),
     json_out: Path = typer.Option(None, "--json", help="Write the metrics as JSON here."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
     estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
 ):
     """Per pose: camera/projector RMS (PnP, intrinsics fixed), stereo RMS, the procam extrinsics from
     per-pose PnP; overall: σ_T and σ_|T| (METHOD §11), the board angles in both device frames."""
     from ..evaluate import evaluate
 
-    if square <= 0:
-        fail(f"--square must be positive, got {square}")
+    square = parse_square(square)
     cols, rows = parse_board(board)
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot be evaluated against projector points; "
              "give a procam calibration")
-    size = parse_size(projector, "--projector") if projector else None
+    size = optional_size(projector)
     if size is None and not all((Path(p) / "patterns.json").exists() for p in poses):
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():

@@ -9,7 +9,8 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from .._fmt import fmt_number
-from ._app import app, console, err_console, fail, parse_size, user_errors
+from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, err_console, fail,
+    optional_size, parse_square, user_errors)
 from .correspond import parse_board
 from .evaluate import load_views
 
@@ -36,14 +37,10 @@ def summary_tables(result) -> list[Table]:
 @app.command("experiment")
 @user_errors
 def experiment_cmd(
+    board: BoardOpt,
+    square: SquareOpt,
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences), at least 3."),
     out: Path = typer.Option(..., "-o", "--out", help="Report folder (created if missing)."),
-    board: str = typer.Option(..., "--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6."),
-    square: float = typer.Option(..., "--square", help="Square size; the length unit of every output (e.g. mm)."),
-    projector: str = typer.Option(None, "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: patterns.json)."),
-    order: str = typer.Option(None, "--order", help="Sequence order: opencv (default) or moreno."),
-    step: int = typer.Option(None, "--step", help="Projector pixels per Gray code (kamino410's graycode_step; "
-                                                 "default: patterns.json's, else 1)."),
     min_set: int = typer.Option(3, "--min-set", help="Smallest pose set for the multi-pose calibrations."),
     refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
                                                         "here (Moreno-Taubin's frozen-intrinsics stereo, as the paper), "
@@ -52,14 +49,16 @@ def experiment_cmd(
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
     window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
     estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
     from .. import experiment
     from ..multi_pose import DIST_MODELS
 
-    if square <= 0:
-        fail(f"--square must be positive, got {square}")
+    square = parse_square(square)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
@@ -68,7 +67,7 @@ def experiment_cmd(
         if d not in DIST_MODELS:
             fail(f"{name} must be one of {', '.join(DIST_MODELS)}, got {d!r}")
     cols, rows = parse_board(board)
-    size = parse_size(projector, "--projector") if projector else None
+    size = optional_size(projector)
     n_sets = len(experiment.pose_sets(len(poses), min_set))
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
