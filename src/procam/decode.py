@@ -136,7 +136,7 @@ def _hf_pairs(ps: PatternSet) -> list:
 def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *,
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
-           full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 32,
+           full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 64,
            threads: int | None = None) -> DecodeResult:
     """Decode a Gray-code image stack.
 
@@ -219,16 +219,26 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
     if robust:
         # Direct/global separation on black-subtracted values: the black frame carries the ambient light,
         # which would otherwise count as "global" light.
-        blackf = blk[ps.black].astype(np.float32)
-        hfs = blk[hf]
-        lp = hfs.max(axis=0).astype(np.float32) - blackf
-        lm = hfs.min(axis=0).astype(np.float32) - blackf
-        np.maximum(lm, 0.0, out=lm)
-        ld = (lp - lm) * np.float32(1.0 / (1.0 - b))
-        lg = (lm - np.float32(b) * lp) * np.float32(2.0 / (1.0 - b * b))
-        neg = lg <= 0
-        ld[neg] = lp[neg]
-        lg[neg] = 0.0
+        mx, mn = blk[hf[0]].copy(), blk[hf[0]].copy()
+        for k in hf[1:]:
+            np.maximum(mx, blk[k], out=mx)
+            np.minimum(mn, blk[k], out=mn)
+        if b == 0.0:  # the default: integer arithmetic, L_d = L+ - L-, L_g = 2 L-
+            blackw = blk[ps.black].astype(wide)
+            lpw = mx.astype(wide) - blackw
+            lmw = np.maximum(mn.astype(wide) - blackw, 0)
+            ld = (lpw - lmw).astype(np.float32)
+            lg = (2 * lmw).astype(np.float32)
+            blackf = blackw
+        else:
+            blackf = blk[ps.black].astype(np.float32)
+            lp = mx.astype(np.float32) - blackf
+            lm = np.maximum(mn.astype(np.float32) - blackf, 0.0)
+            ld = (lp - lm) * np.float32(1.0 / (1.0 - b))
+            lg = (lm - np.float32(b) * lp) * np.float32(2.0 / (1.0 - b * b))
+            neg = lg <= 0
+            ld[neg] = lp[neg]
+            lg[neg] = 0.0
         out["direct"][sl] = ld
         out["global"][sl] = lg
         weak = ld < tdirect
@@ -239,13 +249,17 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
     for axis, key, rkey, dkey, size, full, offset in (
             ("col", "col", "rcol", "dcol", ps.code_width, ps.width, ps.col_offset),
             ("row", "row", "rrow", "drow", ps.code_height, ps.height, ps.row_offset)):
-        code = np.zeros(span.shape, np.int32)
+        code = np.zeros(span.shape, np.uint16 if max(ps.col_bits, ps.row_bits) <= 16 else np.uint32)
         prev = np.zeros(span.shape, bool)
         amin = None
-        amb = weak.copy() if robust else None
+        certain = np.empty(span.shape, bool)
         prefix = ~shadow  # all bits so far certain
+        if robust:  # too little direct light: no bit is certain
+            prefix &= ~weak
+            amb_break = weak & ~shadow
+        else:
+            amb_break = np.zeros(span.shape, bool)
         used = np.zeros(span.shape, np.uint8)  # number of leading certain bits
-        amb_break = np.zeros(span.shape, bool)
         nbits = ps.col_bits if axis == "col" else ps.row_bits
         for j, (a, i) in enumerate(ps.pair_indices(axis)):
             bitno = nbits - 1 - j
@@ -254,7 +268,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             bit = p > q
             ad = cv2.absdiff(p, q)
             amin = ad if amin is None else np.minimum(amin, ad, out=amin)
-            unc = ad < tcontrast
+            np.greater_equal(ad, tcontrast, out=certain)
             if robust and hard.size and bitno >= hf_bit:
                 ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
                 # Moreno's rule, with a noise margin (at its boundary, all global light on one side, it has none)
@@ -268,12 +282,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
                 zero |= sure & (dh < 0)
                 bit.ravel()[hard] = one
                 ambh = ~zero & ~one
-                amb.ravel()[hard] |= ambh
-                unc.ravel()[hard] |= ambh
+                certain.ravel()[hard] &= ~ambh
                 amb_break.ravel()[hard] |= prefix.ravel()[hard] & ambh
-            if robust:
-                unc |= weak
-            prefix &= ~unc
+            prefix &= certain
             used += prefix
             prev ^= bit  # Gray -> binary: b_i = b_(i+1) xor g_i
             code <<= 1
@@ -282,6 +293,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         # Keep the leading certain bits: the code is then known to a block of 2^dropped codes (a Gray-code
         # prefix fixes the binary prefix); the value is the centre of the block's projector pixels.
         dropped = (nbits - used.astype(np.int32))
+        code = code.astype(np.int32)
         lo = (code >> dropped) << dropped
         hi = lo + (1 << dropped) - 1
         lo -= offset
