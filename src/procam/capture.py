@@ -102,14 +102,15 @@ def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
     return flat[:, idx].astype(np.float32)
 
 
-def frame_levels(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per frame, the 5th and 95th percentiles over well-lit pixels of
     ``(I_k - min_k I) / (max_k I - min_k I)``.
 
     A white frame is lit everywhere (5th percentile near 1), a black frame nowhere (95th near 0),
     a pattern in parts (5th near 0, 95th near 1) — whatever the scene's albedo or vignetting.
+    ``sub`` is :func:`_sample` of ``stack`` if the caller has it already.
     """
-    sub = _sample(stack)
+    sub = _sample(stack) if sub is None else sub
     lo, hi = sub.min(axis=0), sub.max(axis=0)
     span = hi - lo
     lit = span > 0.25 * np.percentile(span, 99)
@@ -119,11 +120,11 @@ def frame_levels(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.percentile(norm, 5, axis=1), np.percentile(norm, 95, axis=1)
 
 
-def check_light(stack: np.ndarray, folder, min_span: float = 10.0) -> None:
+def check_light(stack: np.ndarray, folder, min_span: float = 10.0, sub: np.ndarray | None = None) -> None:
     """Raise CaptureError when the frames hardly differ (projector off, lens cap, far too dark)."""
     from .decode import full_scale_of
 
-    sub = _sample(stack)
+    sub = _sample(stack) if sub is None else sub
     span = np.percentile(sub.max(axis=0) - sub.min(axis=0), 99)
     if span < min_span * full_scale_of(stack) / 255.0:
         raise CaptureError(f"{folder}: the frames hardly differ (99th percentile of max - min is {span:.0f} grey "
@@ -131,9 +132,10 @@ def check_light(stack: np.ndarray, folder, min_span: float = 10.0) -> None:
                            "sequence, the exposure, and the lens cap")
 
 
-def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files) -> None:
+def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
+                      sub: np.ndarray | None = None) -> None:
     """Raise CaptureError when the white/black frames are not where ``ps.order`` puts them."""
-    p5, p95 = frame_levels(stack)
+    p5, p95 = frame_levels(stack, sub)
     if p5[ps.white] > 0.5 and p95[ps.black] < 0.5:
         return
     brightest, darkest = int(np.argmax(p5)), int(np.argmin(p95))
@@ -151,7 +153,7 @@ def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files)
 
 
 def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_spread: float = 0.15,
-                max_correlation: float = -0.5) -> None:
+                max_correlation: float = -0.5, sub: np.ndarray | None = None) -> None:
     """Raise CaptureError when a pattern is not followed by its inverse.
 
     On well-lit pixels both images are normalised, ``p' = (p - black) / (white - black)``.  A
@@ -159,7 +161,7 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
     the camera does not resolve (spread of ``p'`` below ``min_spread``, e.g. the finest stripes of
     a high-resolution projector) are skipped: decoding marks them as low contrast anyway.
     """
-    sub = _sample(stack)
+    sub = _sample(stack) if sub is None else sub
     w, b = sub[ps.white], sub[ps.black]
     c = w - b
     lit = c > 0.25 * np.percentile(c, 99)
@@ -206,9 +208,10 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     stack = io.read_images(files)
     warnings = ()
     if check:
-        check_light(stack, folder)
-        check_white_black(stack, ps, folder, files)
-        check_pairs(stack, ps, folder, files)
+        sub = _sample(stack)  # one pixel sample serves every check
+        check_light(stack, folder, sub=sub)
+        check_white_black(stack, ps, folder, files, sub=sub)
+        check_pairs(stack, ps, folder, files, sub=sub)
         warnings = exposure_warnings(stack, ps, folder, files)
     return Capture(stack, tuple(files), ps, folder, warnings)
 

@@ -343,7 +343,8 @@ def write_report(result: ExperimentResult, out_dir) -> list[Path]:
     import json
 
     from . import io
-    from .plots.experiment import experiment_figures, save_figure
+    from .plots import save_figure
+    from .plots.experiment import experiment_figures
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

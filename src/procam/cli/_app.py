@@ -66,6 +66,8 @@ ProjectorOpt = Annotated[Optional[str], typer.Option(
 OrderOpt = Annotated[Optional[str], typer.Option("--order", help="Sequence order: opencv (default) or moreno.")]
 StepOpt = Annotated[Optional[int], typer.Option(
     "--step", help="Projector pixels per Gray code (kamino410's graycode_step; default: patterns.json's, else 1).")]
+WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
+EstimatorOpt = Annotated[str, typer.Option("--estimator", help="Homography fit: lsq, ransac or lmeds.")]
 
 
 def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int] | None:

@@ -9,11 +9,11 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from .. import io, pipeline
+from .. import io
 from ..errors import BoardNotFoundError
-from ._app import (BoardOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail,
-    optional_size, output_path, parse_square, user_errors)
-from .correspond import parse_board, pose_options
+from ._app import (BoardOpt, EstimatorOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt,
+    WindowOpt, app, console, fail, optional_size, output_path, parse_square, user_errors)
+from .correspond import load_views, parse_board
 
 
 def _pm(value, std, fmt=".2f"):
@@ -121,14 +121,14 @@ def calibrate_cmd(
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
-    window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
-    estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = "ransac",
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
-    from ..plots.decode import save_figure
+    from ..plots import save_figure
     from ..plots.residuals import residual_figure
     from ..report import pose_residuals
 
@@ -159,16 +159,13 @@ def calibrate_cmd(
             for opt, val in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
                 if val not in DIST_MODELS:
                     fail(f"{opt} must be one of {', '.join(DIST_MODELS)}, got {val!r}")
-        size = optional_size(projector)
-        opts = pose_options(estimator, window, 11, "auto", "robust")
-        views = []
         with console.status("decoding poses ...") if console.is_terminal else nullcontext():
-            for p in poses:
-                v, _ = pipeline.view_from_folder(p, (cols, rows), square, size, order, options=opts, step=step)
-                views.append(v)
-                console.print(f"{p}: {int(v.valid.sum())} of {len(v.valid)} corners")
-                for w in v.diagnostics.get("warnings", []):
-                    console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
+            views = load_views(poses, cols, rows, square, optional_size(projector), order, estimator, window,
+                               step=step)
+        for v in views:
+            console.print(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
+            for w in v.diagnostics.get("warnings", []):
+                console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
         if method == "single":
             from .. import single_pose
 

@@ -10,8 +10,8 @@ import numpy as np
 import typer
 
 from .. import capture, correspond as corr, io, pipeline
-from ._app import (BoardOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail,
-    optional_size, output_path, parse_size, parse_square, user_errors)
+from ._app import (BoardOpt, EstimatorOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt,
+    WindowOpt, app, console, fail, optional_size, output_path, parse_size, parse_square, user_errors)
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -34,6 +34,18 @@ def pose_options(estimator: str, window: int, refine: int, detector: str, method
                                 min_corners=min_corners)
 
 
+def load_views(poses, cols, rows, square, projector, order, estimator, window, *, progress=None, step=None):
+    """Decode every pose folder into a View (``progress(done, total, label)`` after each)."""
+    opts = pose_options(estimator, window, 11, "auto", "robust")
+    views = []
+    for k, p in enumerate(poses):
+        v, _ = pipeline.view_from_folder(p, (cols, rows), square, projector, order, options=opts, step=step)
+        views.append(v)
+        if progress is not None:
+            progress(k + 1, len(poses), str(p))
+    return views
+
+
 @app.command("correspond")
 @user_errors
 def correspond_cmd(
@@ -42,8 +54,8 @@ def correspond_cmd(
     pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
     out: Path = typer.Option(..., "-o", "--out", help="Write the correspondences as JSON."),
     png: Path = typer.Option(None, "--png", help="Picture: corners on the camera image and on the projector plane."),
-    window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
-    estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = "ransac",
     refine: int = typer.Option(11, "--refine-window", help="cornerSubPix half-window, px (0 = none)."),
     detector: str = typer.Option("auto", "--detector", help="Corner detector: auto, classic or sb."),
     method: str = typer.Option("robust", "--method", help="Decode classifier: robust or simple."),
@@ -75,7 +87,7 @@ def correspond_cmd(
     console.print(f"wrote {out}")
     if png is not None:
         from ..plots.correspond import correspond_figure
-        from ..plots.decode import save_figure
+        from ..plots import save_figure
 
         save_figure(correspond_figure(view, cap.white, title=str(pose_dir)), png)
         console.print(f"wrote {png}")

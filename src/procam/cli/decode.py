@@ -60,7 +60,8 @@ def decode_cmd(
                                     projector_size=np.array([ps.width, ps.height]), order=np.array(ps.order))
         console.print(f"wrote {out}")
     if png is not None:
-        from ..plots.decode import decode_figure, save_figure
+        from ..plots import save_figure
+        from ..plots.decode import decode_figure
 
         save_figure(decode_figure(res, cap.white, title=str(pose_dir)), png)
         console.print(f"wrote {png}")

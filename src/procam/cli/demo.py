@@ -66,7 +66,8 @@ def demo_cmd(
     io.save_calibration(calib, out_dir / "calib.json")
     io.save_opencv_yaml(calib, out_dir / "calib.yml")
     from ..plots.correspond import correspond_figure
-    from ..plots.decode import decode_figure, save_figure
+    from ..plots import save_figure
+    from ..plots.decode import decode_figure
 
     save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), out_dir / "decode.png")
     save_figure(correspond_figure(view, stack[ps.white], title="demo: correspondences"), out_dir / "corners.png")

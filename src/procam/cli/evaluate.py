@@ -9,22 +9,10 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .. import io, pipeline
-from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, fail, optional_size,
-    parse_square, user_errors)
-from .correspond import parse_board, pose_options
-
-
-def load_views(poses, cols, rows, square, projector, order, estimator, window, *, progress=None, step=None):
-    """Decode every pose folder into a View (``progress(done, total, label)`` after each)."""
-    opts = pose_options(estimator, window, 11, "auto", "robust")
-    views = []
-    for k, p in enumerate(poses):
-        v, _ = pipeline.view_from_folder(p, (cols, rows), square, projector, order, options=opts, step=step)
-        views.append(v)
-        if progress is not None:
-            progress(k + 1, len(poses), str(p))
-    return views
+from .. import io
+from ._app import (BoardOpt, EstimatorOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, WindowOpt, app, console,
+    fail, optional_size, parse_square, user_errors)
+from .correspond import load_views, parse_board
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -60,8 +48,8 @@ def evaluate_cmd(
     calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) to evaluate."),
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences) to evaluate on."),
     json_out: Path = typer.Option(None, "--json", help="Write the metrics as JSON here."),
-    window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
-    estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = "ransac",
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,

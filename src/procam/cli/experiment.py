@@ -9,10 +9,10 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from .._fmt import fmt_number
-from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, err_console, fail,
-    optional_size, parse_square, user_errors)
+from ._app import (BoardOpt, EstimatorOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, WindowOpt, app, console,
+    err_console, fail, optional_size, parse_square, user_errors)
 from .correspond import parse_board
-from .evaluate import load_views
+from .correspond import load_views
 
 
 def summary_tables(result) -> list[Table]:
@@ -47,8 +47,8 @@ def experiment_cmd(
                                                         "unlike `procam calibrate`, which refines unless --no-refine."),
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
-    window: int = typer.Option(60, "--window", help="Local-homography window side, camera px."),
-    estimator: str = typer.Option("ransac", "--estimator", help="Homography fit: lsq, ransac or lmeds."),
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = "ransac",
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
