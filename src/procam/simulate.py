@@ -142,6 +142,16 @@ def _brown_undistort_norm(xd, coeffs, iterations=30):
     return np.stack([x, y], axis=-1)
 
 
+def _to_norm(K, pts) -> np.ndarray:
+    """Pixels (..., 2) -> normalised image coordinates with the camera matrix ``K``."""
+    return np.stack([(pts[..., 0] - K[0, 2]) / K[0, 0], (pts[..., 1] - K[1, 2]) / K[1, 1]], axis=-1)
+
+
+def _to_pix(K, xn) -> np.ndarray:
+    """Normalised image coordinates (..., 2) -> pixels with the camera matrix ``K``."""
+    return np.stack([K[0, 0] * xn[..., 0] + K[0, 2], K[1, 1] * xn[..., 1] + K[1, 2]], axis=-1)
+
+
 def distort(scene: "Scene", pts) -> np.ndarray:
     """Camera lens: undistorted (ideal pinhole) pixels (..., 2) -> distorted (observed) pixels."""
     pts = np.asarray(pts, float)
@@ -150,10 +160,7 @@ def distort(scene: "Scene", pts) -> np.ndarray:
     if scene.cam_distortion == "division":
         k1, k2 = scene.cam_dist_coeffs
         return _division_distort(pts, scene.cam_center, k1, k2)
-    K = scene.K_cam
-    xn = np.stack([(pts[..., 0] - K[0, 2]) / K[0, 0], (pts[..., 1] - K[1, 2]) / K[1, 1]], axis=-1)
-    xd = _brown_distort_norm(xn, scene.cam_dist_coeffs)
-    return np.stack([K[0, 0] * xd[..., 0] + K[0, 2], K[1, 1] * xd[..., 1] + K[1, 2]], axis=-1)
+    return _to_pix(scene.K_cam, _brown_distort_norm(_to_norm(scene.K_cam, pts), scene.cam_dist_coeffs))
 
 
 def undistort(scene: "Scene", pts) -> np.ndarray:
@@ -164,10 +171,7 @@ def undistort(scene: "Scene", pts) -> np.ndarray:
     if scene.cam_distortion == "division":
         k1, k2 = scene.cam_dist_coeffs
         return _division_undistort(pts, scene.cam_center, k1, k2)
-    K = scene.K_cam
-    xd = np.stack([(pts[..., 0] - K[0, 2]) / K[0, 0], (pts[..., 1] - K[1, 2]) / K[1, 1]], axis=-1)
-    xn = _brown_undistort_norm(xd, scene.cam_dist_coeffs)
-    return np.stack([K[0, 0] * xn[..., 0] + K[0, 2], K[1, 1] * xn[..., 1] + K[1, 2]], axis=-1)
+    return _to_pix(scene.K_cam, _brown_undistort_norm(_to_norm(scene.K_cam, pts), scene.cam_dist_coeffs))
 
 
 def _K(f, alpha, u0, v0):

@@ -55,7 +55,31 @@ PLAUSIBLE_F_RANGE = (0.2, 5.0)
 # ----------------------------------------------------------------------------------------------
 # results
 @dataclass(frozen=True)
-class CameraSolution:
+class _DeviceSolution:
+    """Fields shared by :class:`CameraSolution` and :class:`ProjectorSolution` (documented there)."""
+
+    K: np.ndarray
+    distortion: Distortion
+    R: np.ndarray
+    t: np.ndarray
+    rms_px: float
+    residuals: np.ndarray
+    std: dict
+    angles_deg: np.ndarray
+    cost: float
+    warnings: tuple = ()
+    params: np.ndarray | None = None
+    covariance: np.ndarray | None = None
+    mask: np.ndarray | None = None
+    image_size: tuple | None = None
+    info: dict = field(default_factory=dict)
+    rejected: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    rejected_residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outlier_threshold_px: float = float("nan")
+
+
+@dataclass(frozen=True)
+class CameraSolution(_DeviceSolution):
     """Single-pose camera calibration.
 
     Attributes
@@ -86,31 +110,13 @@ class CameraSolution:
         ``residuals`` holds the rejected corners' residuals too.
     """
 
-    K: np.ndarray
-    distortion: Distortion
-    R: np.ndarray
-    t: np.ndarray
-    rms_px: float
-    residuals: np.ndarray
-    std: dict
-    angles_deg: np.ndarray
-    cost: float
-    warnings: tuple = ()
     cod: dist.CODEstimate | None = None
     principal_point_source: str = "cod"
     staged: dict = field(default_factory=dict)
-    params: np.ndarray | None = None
-    covariance: np.ndarray | None = None
-    mask: np.ndarray | None = None
-    image_size: tuple | None = None
-    info: dict = field(default_factory=dict)
-    rejected: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    rejected_residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    outlier_threshold_px: float = float("nan")
 
 
 @dataclass(frozen=True)
-class ProjectorSolution:
+class ProjectorSolution(_DeviceSolution):
     """Single-pose projector calibration (``u0p`` fixed, ``alpha_p = 1``, no distortion).
 
     Attributes as :class:`CameraSolution`; ``params`` are ``PROJECTOR_PARAMS`` = (f_p, v0p, rvec (3),
@@ -120,26 +126,8 @@ class ProjectorSolution:
     ``outlier_threshold_px`` as for the camera.
     """
 
-    K: np.ndarray
-    distortion: Distortion
-    R: np.ndarray
-    t: np.ndarray
-    rms_px: float
-    residuals: np.ndarray
-    std: dict
-    angles_deg: np.ndarray
-    cost: float
-    warnings: tuple = ()
-    params: np.ndarray | None = None
-    covariance: np.ndarray | None = None
     H_pb: np.ndarray | None = None
     u0: float = float("nan")
-    mask: np.ndarray | None = None
-    image_size: tuple | None = None
-    info: dict = field(default_factory=dict)
-    rejected: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    rejected_residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    outlier_threshold_px: float = float("nan")
 
 
 # ----------------------------------------------------------------------------------------------
