@@ -40,9 +40,11 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
     """
     white = stack[ps.white]
     black = stack[ps.black]
-    diff = np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None)
-    for img in (white, diff, black):
-        c = _board.detect_corners(img, pattern_size, detector=detector, refine_window=refine_window)
+    candidates = (lambda: white,  # the white - black image is only built when the white frame fails
+                  lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
+                  lambda: black)
+    for image in candidates:
+        c = _board.detect_corners(image(), pattern_size, detector=detector, refine_window=refine_window)
         if c is not None:
             return c
     cols, rows = pattern_size
