@@ -15,7 +15,10 @@ from procam import evaluate, experiment, io, multi_pose, pipeline, simulate
 from procam.errors import CalibrationError
 from procam.view import View
 
-ANGLES = [(20, -15, 0), (-15, 20, 5), (10, 25, -5), (-25, -10, 0)]
+# Every pose well away from the single-pose degeneracies (|nu_p| = 21-39 deg, |psi_c|, |nu_c| >= 10 deg on this
+# rig): a test that asserts "no failure" must not sit on a knife edge where another CPU's BLAS kernels send the
+# projector LM elsewhere (camera (20, -15, 0) had nu_p = -1.5 deg and failed on Haswell/Zen kernels).
+ANGLES = [(15, -35, 0), (-15, 20, 5), (10, 25, -5), (-25, 15, 0)]
 
 
 @pytest.fixture(scope="module")
