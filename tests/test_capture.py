@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
-from procam import capture, io, patterns
+from procam import _files, capture, patterns
 from procam.errors import CaptureError
 
 W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel
@@ -22,7 +22,7 @@ def test_natural_sort_and_any_names(tmp_path):
     names = [f"img{i}.png" for i in range(len(st))]  # img2 must come before img10
     write_stack(tmp_path, st, names)
     (tmp_path / "notes.txt").write_text("not an image")
-    files = io.list_images(tmp_path)
+    files = _files.list_images(tmp_path)
     assert [f.name for f in files] == names
     cap = capture.load_capture(tmp_path, (W, H))
     assert np.array_equal(cap.stack, st)
@@ -112,7 +112,7 @@ def test_empty_and_missing_folder(tmp_path):
 def test_projector_size_from_patterns_json(tmp_path):
     ps = patterns.pattern_set(W, H)
     write_stack(tmp_path, camera_view_of_patterns(W, H))
-    io.write_text(tmp_path / "patterns.json", __import__("json").dumps(ps.to_dict()))
+    _files.write_text(tmp_path / "patterns.json", __import__("json").dumps(ps.to_dict()))
     assert capture.load_capture(tmp_path).pattern_set == ps
     shutil.move(tmp_path / "patterns.json", tmp_path.parent / "elsewhere.json")
     with pytest.raises(CaptureError, match="pass --projector"):
@@ -134,9 +134,9 @@ def test_cli_decode_writes_maps_and_picture(pose, tmp_path):
 def test_cli_patterns_roundtrip(tmp_path):
     code, out, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "p"])
     assert code == 0, err
-    files = io.list_images(tmp_path / "p")
+    files = _files.list_images(tmp_path / "p")
     assert len(files) == 44
-    st = io.read_images(files)
+    st = _files.read_images(files)
     assert np.array_equal(st, patterns.generate(1280, 720))
     code, _, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "q", "--order", "zigzag"])
     assert code == 2 and "--order" in err

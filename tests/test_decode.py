@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter1d
 
-from procam import decode, patterns
+from procam import _files, decode, patterns
 
 SIZES = [(1920, 1080), (1024, 768), (1280, 720), (800, 600), (37, 19)]
 
@@ -50,7 +50,7 @@ def test_12bit_in_16bit_container():
     w, h = 320, 240
     ps = patterns.pattern_set(w, h)
     st = _capture(w, h, "opencv", contrast=0.2, noise=3.0, seed=2, dtype=np.uint16)  # noise 3 DN of 8 bits
-    assert decode.full_scale_of(st) == 4095
+    assert _files.full_scale_of(st) == 4095
     r = decode.decode(st, ps)
     yy, xx = np.mgrid[:h, :w]
     assert ((r.col == xx) & (r.row == yy)).mean() >= 0.999

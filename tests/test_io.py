@@ -62,13 +62,6 @@ def test_opencv_yaml_loads_in_opencv(tmp_path):
     assert np.allclose(d.R, c.R) and d.proj_rms == pytest.approx(0.1)
 
 
-def test_atomic_write_leaves_nothing_on_error(tmp_path):
-    target = tmp_path / "out.json"
-    with pytest.raises(RuntimeError):
-        with io.atomic_path(target) as tmp:
-            tmp.write_text("half")
-            raise RuntimeError("boom")
-    assert not target.exists() and not list(tmp_path.iterdir())
 
 
 def test_load_errors(tmp_path):

@@ -3,7 +3,7 @@
 Checks, each failing with a one-line :class:`~procam.errors.CaptureError` that names the
 folder or file and says what to do:
 
-* the folder exists and holds images (``io.list_images``), all of one size and bit depth;
+* the folder exists and holds images (``_files.list_images``), all of one size and bit depth;
 * the number of images matches the projector size (with hints when it does not);
 * the white and black frames are where the order puts them, judged from the images;
 * every pattern is followed by its inverse (catches shuffled or missing frames).
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io, patterns
+from . import _files, patterns
 from .errors import CaptureError
 
 
@@ -42,7 +42,7 @@ class Capture:
 def resolve_pattern_set(folder, projector=None, order=None, step=None) -> patterns.PatternSet:
     """The PatternSet for ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
     patterns.json, else the defaults (opencv order, step 1)."""
-    meta = io.read_sidecar(folder, "patterns.json")
+    meta = _files.read_sidecar(folder, "patterns.json")
     if meta is not None and not isinstance(meta, dict):
         meta = {}
     if projector is None:
@@ -122,11 +122,9 @@ def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.n
 
 def check_light(stack: np.ndarray, folder, min_span: float = 10.0, sub: np.ndarray | None = None) -> None:
     """Raise CaptureError when the frames hardly differ (projector off, lens cap, far too dark)."""
-    from .decode import full_scale_of
-
     sub = _sample(stack) if sub is None else sub
     span = np.percentile(sub.max(axis=0) - sub.min(axis=0), 99)
-    if span < min_span * full_scale_of(stack) / 255.0:
+    if span < min_span * _files.full_scale_of(stack) / 255.0:
         raise CaptureError(f"{folder}: the frames hardly differ (99th percentile of max - min is {span:.0f} grey "
                            "levels): the projector's light is not visible — check that the projector shows the "
                            "sequence, the exposure, and the lens cap")
@@ -197,7 +195,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     step : projector pixels per code (None: patterns.json's, else 1).
     """
     folder = Path(folder)
-    files = io.list_images(folder)
+    files = _files.list_images(folder)
     ps = resolve_pattern_set(folder, projector, order, step)
     if len(files) != ps.count:
         raise CaptureError(f"{folder}: expected {ps.count} images for a {ps.width}x{ps.height} projector"
@@ -205,7 +203,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + _count_hint(len(files), ps))
-    stack = io.read_images(files)
+    stack = _files.read_images(files)
     warnings = ()
     if check:
         sub = _sample(stack)  # one pixel sample serves every check
@@ -221,9 +219,7 @@ def exposure_warnings(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
     """Warnings about over-exposure: saturated pixels in the white frame (corners and stripe edges lose
     accuracy there) or in the black frame (nothing decodes there).  Raises CaptureError when the black
     frame is saturated over most of the image."""
-    from .decode import full_scale_of
-
-    fs = full_scale_of(stack)
+    fs = _files.full_scale_of(stack)
     out = []
     for idx, what in ((ps.white, "white"), (ps.black, "black")):
         frac = float(np.mean(stack[idx] >= fs))

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from . import _files
 from .patterns import PatternSet
 
 #: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.
@@ -105,16 +106,6 @@ class DecodeResult:
         return out
 
 
-def full_scale_of(stack: np.ndarray) -> float:
-    """Full-scale value of a stack: 255 for uint8; for uint16 the smallest 2^b - 1 (b in 10, 12, 14, 16)
-    that holds its maximum."""
-    if stack.dtype == np.uint8:
-        return 255.0
-    mx = int(stack.max())
-    for bits in (10, 12, 14, 16):
-        if mx <= 2**bits - 1:
-            return float(2**bits - 1)
-    return 65535.0
 
 
 def _hf_bits(ps: PatternSet) -> list:
@@ -181,7 +172,7 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
         raise ValueError(f"method must be 'robust' or 'simple', got {method!r}")
     if stack.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
-    fs = full_scale_of(stack) if full_scale is None else float(full_scale)
+    fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape
     robust = method == "robust"

@@ -342,7 +342,7 @@ def write_report(result: ExperimentResult, out_dir) -> list[Path]:
     """
     import json
 
-    from . import io
+    from . import _files
     from .plots import save_figure
     from .plots.experiment import experiment_figures
 
@@ -352,8 +352,8 @@ def write_report(result: ExperimentResult, out_dir) -> list[Path]:
     for name, fig in experiment_figures(result).items():
         paths.append(save_figure(fig, out / f"{name}.png"))
     for name, rows in result.tables().items():
-        paths.append(io.write_text(out / f"{name}.csv", _csv_text(rows)))
+        paths.append(_files.write_text(out / f"{name}.csv", _csv_text(rows)))
 
-    paths.append(io.write_text(out / "experiment.json", json.dumps(io.to_jsonable(result.to_dict()), indent=1)))
-    paths.append(io.write_text(out / "report.md", markdown(result, [p.name for p in paths if p.suffix == ".png"])))
+    paths.append(_files.write_text(out / "experiment.json", json.dumps(_files.to_jsonable(result.to_dict()), indent=1)))
+    paths.append(_files.write_text(out / "report.md", markdown(result, [p.name for p in paths if p.suffix == ".png"])))
     return paths

@@ -1,164 +1,23 @@
-"""Reading capture folders (image stacks) and writing files atomically.
+"""procam's file formats: calibrations (JSON, OpenCV FileStorage YAML) and correspondences (JSON).
 
-Images are read with OpenCV (PNG, JPEG, TIFF, BMP, PGM/PPM, WebP), 8- or 16-bit.
-Colour images are converted to grey with OpenCV's ``COLOR_BGR2GRAY`` (ITU-R BT.601 luma,
-``0.299 R + 0.587 G + 0.114 B``); an alpha channel is dropped.  File names are sorted
-naturally (``img2`` before ``img10``); files that are not images by extension
-(``truth.json``, ``patterns.json``, notes) are ignored.
+The schemas are in ``docs/file-formats.md``. Every file is written under a temporary name and renamed
+(:func:`procam._files.atomic_path`); readers validate what they load and raise
+:class:`~procam.errors.CalibrationFileError` naming the file.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import re
-from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from .errors import CaptureError
-
-IMAGE_EXTS = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm", ".webp", ".jp2"}
-
-
-def natural_key(name: str):
-    """Sort key that orders embedded numbers numerically (``img2`` < ``img10``)."""
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", str(name))]
-
-
-def list_images(folder) -> list[Path]:
-    """Image files in ``folder`` in natural order.
-
-    Raises :class:`CaptureError` if the folder does not exist, is not a folder, or holds no images.
-    """
-    folder = Path(folder)
-    if not folder.exists():
-        raise CaptureError(f"{folder}: no such folder; give the folder that holds one pose's captured images")
-    if not folder.is_dir():
-        raise CaptureError(f"{folder}: not a folder; give the folder that holds one pose's captured images")
-    files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_EXTS
-             and not p.name.startswith(".")]
-    if not files:
-        others = sorted(p.name for p in folder.iterdir())
-        hint = f" (it holds: {', '.join(others[:5])}{', ...' if len(others) > 5 else ''})" if others else " (it is empty)"
-        raise CaptureError(f"{folder}: no images found{hint}; expected PNG/JPEG/TIFF/BMP captures of the pattern sequence")
-    return sorted(files, key=lambda p: natural_key(p.name))
-
-
-def read_image(path, gray: bool = True) -> np.ndarray:
-    """Read one image as ``uint8`` or ``uint16``, (H, W) when ``gray`` else as stored.
-
-    Raises :class:`CaptureError` naming the file when it cannot be read or has an unsupported type.
-    """
-    import cv2
-
-    path = Path(path)
-    if path.is_dir():
-        raise CaptureError(f"{path}: is a folder, not an image file")
-    if not path.exists():
-        raise CaptureError(f"{path}: no such file")
-    data = np.fromfile(str(path), dtype=np.uint8)
-    img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data is not None and data.size else None
-    if img is None:
-        raise CaptureError(f"{path}: cannot be read as an image (corrupt, empty or not an image); "
-                           "remove it from the folder or re-save it as PNG")
-    if img.dtype not in (np.uint8, np.uint16):
-        raise CaptureError(f"{path}: pixel type {img.dtype} is not supported; save captures as 8- or 16-bit images")
-    if gray and img.ndim == 3:
-        ch = img.shape[2]
-        if ch == 1:
-            img = img[:, :, 0]
-        elif ch == 4:
-            img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY)
-        elif ch == 3:
-            img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
-        else:
-            raise CaptureError(f"{path}: {ch} channels are not supported; save as grey or colour (BGR) images")
-    return img
-
-
-def read_images(files, gray: bool = True, threads: int | None = None) -> np.ndarray:
-    """Read ``files`` into one array (K, H, W) of a single dtype.
-
-    Images are read in parallel threads (OpenCV releases the GIL).  All images must have the
-    same size and bit depth: otherwise :class:`CaptureError` names the first one that differs.
-    """
-    files = [Path(f) for f in files]
-    if not files:
-        raise CaptureError("no image files given")
-    first = read_image(files[0], gray)
-    stack = np.empty((len(files),) + first.shape, dtype=first.dtype)
-    stack[0] = first
-
-    def load(i):
-        img = read_image(files[i], gray)
-        if img.shape != first.shape:
-            raise CaptureError(f"{files[i]}: size {img.shape[1]}x{img.shape[0]} differs from {files[0].name} "
-                               f"({first.shape[1]}x{first.shape[0]}); all images of a pose must come from one "
-                               "camera at one resolution")
-        if img.dtype != first.dtype:
-            raise CaptureError(f"{files[i]}: {img.dtype.itemsize * 8}-bit image among "
-                               f"{first.dtype.itemsize * 8}-bit ones ({files[0].name}); capture all frames at one bit depth")
-        stack[i] = img
-
-    n = threads if threads is not None else min(4, os.cpu_count() or 1)
-    if n > 1 and len(files) > 2:
-        with ThreadPoolExecutor(n) as ex:
-            list(ex.map(load, range(1, len(files))))
-    else:
-        for i in range(1, len(files)):
-            load(i)
-    return stack
-
-
-def read_sidecar(folder, name: str = "patterns.json") -> dict | None:
-    """The JSON file ``name`` in ``folder`` (e.g. written by ``procam patterns``/``simulate``), or None."""
-    path = Path(folder) / name
-    if not path.is_file():
-        return None
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError) as e:
-        raise CaptureError(f"{path}: not valid JSON ({e}); fix or delete it") from None
-
-
-@contextmanager
-def atomic_path(path):
-    """Yield a temporary path next to ``path``; on success rename it to ``path``.
-
-    On error the temporary file is removed, so no half-written output is left behind.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def write_text(path, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically."""
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(text)
-    return Path(path)
-
-
-def write_image(path, img: np.ndarray) -> Path:
-    """Write an image atomically with OpenCV (format from the extension)."""
-    import cv2
-
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        ok, buf = cv2.imencode(path.suffix, img)
-        if not ok:
-            raise CaptureError(f"{path}: could not encode image")
-        Path(tmp).write_bytes(buf.tobytes())
-    return path
+from ._files import atomic_path, to_jsonable, write_text
+from .calibration import Calibration, Device, Distortion
+from .correspond import CORNER_REASONS
+from .distortion import opencv_from_division
+from .errors import CalibrationFileError
+from .view import View
 
 
 def _nan_to_none(a) -> list:
@@ -168,7 +27,6 @@ def _nan_to_none(a) -> list:
 
 def view_to_dict(view, board=None, square=None, options: dict | None = None) -> dict:
     """JSON-able dict of a :class:`~procam.view.View` (NaN -> null) with per-corner diagnostics."""
-    from .correspond import CORNER_REASONS
 
     d = view.diagnostics
     corners = []
@@ -195,8 +53,6 @@ def view_to_dict(view, board=None, square=None, options: dict | None = None) -> 
 
 def view_from_dict(d: dict):
     """Inverse of :func:`view_to_dict` (diagnostics other than the per-corner numbers are dropped)."""
-    from .correspond import CORNER_REASONS
-    from .view import View
 
     def arr(key):
         return np.array([[np.nan if v is None else v for v in row] for row in d[key]], float)
@@ -229,25 +85,6 @@ CONVENTIONS = {
 }
 
 
-def to_jsonable(obj):
-    """JSON-ready copy of ``obj``: numpy arrays/scalars -> lists/numbers, NaN/inf -> None, tuples -> lists,
-    other objects -> str."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if np.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if obj is None or isinstance(obj, (str, int, bool)):
-        return obj
-    return str(obj)
 
 
 def _device_dict(dev, rms) -> dict | None:
@@ -271,8 +108,6 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         "std": calib.std, "poses": list(calib.poses), "warnings": list(calib.warnings), "info": info,
     }
     if calib.camera is not None and calib.camera.distortion.model == "division":
-        from .distortion import opencv_from_division
-
         d = calib.camera.distortion
         coeffs, err = opencv_from_division(calib.camera.K, d.center, d.k1, d.k2, calib.camera.image_size)
         out["camera"]["opencv_fit"] = {"coeffs": list(map(float, coeffs)), "max_err_px": float(err),
@@ -285,8 +120,6 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
 
 def calibration_from_dict(d: dict):
     """Inverse of :func:`calibration_to_dict`."""
-    from .calibration import Calibration, Device, Distortion
-
     if d.get("format") != "procam-calibration":
         raise ValueError("not a procam calibration document (missing format: procam-calibration)")
 
@@ -323,8 +156,6 @@ def _opencv_kc(dev) -> np.ndarray:
     if d.model == "opencv":
         return np.asarray(d.coeffs, float).reshape(1, -1)
     if d.model == "division":
-        from .distortion import opencv_from_division
-
         coeffs, _ = opencv_from_division(dev.K, d.center, d.k1, d.k2, dev.image_size)
         return np.asarray(coeffs, float).reshape(1, -1)
     return np.zeros((1, 5))
@@ -338,8 +169,6 @@ def save_opencv_yaml(calib, path) -> Path:
     (``distortion.opencv_from_division``); the division model itself is in the JSON file.
     """
     import cv2
-
-    from .errors import CalibrationFileError
 
     if calib.projector is None:
         raise CalibrationFileError(f"{path}: a camera-only calibration has no projector, so it has no OpenCV procam "
@@ -368,9 +197,6 @@ def load_calibration(path):
 
     Raises :class:`~procam.errors.CalibrationFileError` naming the file and what is wrong.
     """
-    from .calibration import Calibration, Device, Distortion
-    from .errors import CalibrationFileError
-
     path = Path(path)
     if not path.is_file():
         raise CalibrationFileError(f"{path}: no such file; give a calibration written by 'procam calibrate'")

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import write_image, write_text
+from ._files import write_image, write_text
 
 ORDERS = ("opencv", "moreno")
 
@@ -204,7 +204,7 @@ def remove_stale(out_dir, keep, prefix: str = "pattern_") -> list[Path]:
 def save(stack: np.ndarray, ps: PatternSet, out_dir, prefix: str = "pattern_") -> list[Path]:
     """Write ``stack`` as zero-padded PNGs plus ``patterns.json`` into ``out_dir``.
 
-    Each file is written under a hidden temporary name and renamed (:func:`procam.io.write_image`),
+    Each file is written under a hidden temporary name and renamed (:func:`procam._files.write_image`),
     so an interrupted run leaves no half-written image.  ``{prefix}NN.png`` files of an earlier,
     longer sequence are deleted (:func:`remove_stale`).  Returns the image paths.
     """

@@ -15,7 +15,7 @@ Two paths:
   because Gray-code stripes depend on one projector coordinate only.
 
 This module is independent of the solvers: it imports only numpy, scipy, cv2,
-:mod:`procam.patterns` and :mod:`procam.io` (file writing), and has its own projection, division model (with its Newton inverse) and
+:mod:`procam.patterns` and :mod:`procam._files` (file writing), and has its own projection, division model (with its Newton inverse) and
 OpenCV-Brown distortion.
 
 Conventions (see ``procam`` README): pixels ``(x, y)`` = (column, row), origin at the centre of the
@@ -39,7 +39,7 @@ from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
 from . import patterns as _patterns
-from .io import to_jsonable, write_image, write_text
+from ._files import to_jsonable, write_image, write_text
 
 __all__ = [
     "Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
@@ -900,7 +900,7 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
 
     Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``)
     and ``patterns.json`` (:meth:`procam.patterns.PatternSet.to_dict` plus ``"files"``).  Every file
-    is written under a hidden temporary name and renamed (:func:`procam.io.write_image`), so an
+    is written under a hidden temporary name and renamed (:func:`procam._files.write_image`), so an
     interrupted run leaves no half-written image that a loader would pick up.  Numbered PNGs
     (``NN.png``) left in ``out_dir`` by an earlier run with a longer sequence are deleted, so they
     are not read as part of this one.

@@ -44,7 +44,7 @@ import numpy as np
 
 from .crlb import camera_bound, projector_bound
 from .errors import ProcamError
-from .io import atomic_path
+from ._files import atomic_path
 
 __all__ = ["StudyConfig", "StudyResult", "parse_grid", "study_cells", "study_scene", "cell_scene",
            "run_cell", "run_study", "slice_specs", "COLUMNS"]

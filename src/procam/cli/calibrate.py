@@ -9,7 +9,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from .. import io
+from .. import _files, io
 from ..errors import BoardNotFoundError
 from ._app import (BoardOpt, EstimatorOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt,
     WindowOpt, app, console, fail, optional_size, output_path, parse_square, user_errors)
@@ -196,7 +196,7 @@ def _camera_only(images, cols, rows, square, cod):
     if len(images) != 1:
         fail(f"--camera-only takes one image, got {len(images)}")
     path = images[0]
-    img = io.read_image(path)
+    img = _files.read_image(path)
     c = _board.detect_corners(img, (cols, rows))
     if c is None:
         raise BoardNotFoundError(f"{path}: chessboard with {cols}x{rows} inner corners not found; check --board "

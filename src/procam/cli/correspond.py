@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from .. import capture, correspond as corr, io, pipeline
+from .. import _files, capture, correspond as corr, io, pipeline
 from ._app import (BoardOpt, EstimatorOpt, FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, SquareOpt, StepOpt,
     WindowOpt, app, console, fail, optional_size, output_path, parse_size, parse_square, user_errors)
 
@@ -83,7 +83,7 @@ def correspond_cmd(
         console.print(f"local homography fit RMS: median {float(np.median(res)):.2f}, "
                       f"max {float(res.max()):.2f} projector px")
     opt = dataclasses.asdict(opts)
-    io.write_text(out, json.dumps(io.view_to_dict(view, (cols, rows), square, opt), indent=1))
+    _files.write_text(out, json.dumps(io.view_to_dict(view, (cols, rows), square, opt), indent=1))
     console.print(f"wrote {out}")
     if png is not None:
         from ..plots.correspond import correspond_figure

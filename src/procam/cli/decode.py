@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from .. import capture, decode as dec, io
+from .. import _files, capture, decode as dec
 from ..patterns import ORDERS
 from ._app import (FIGURE_SUFFIXES, OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size,
     output_path, user_errors)
@@ -51,7 +51,7 @@ def decode_cmd(
             if not text.startswith("decoded"):
                 console.print(f"  {axis}: {n} px {text}", highlight=False)
     if out is not None:
-        with io.atomic_path(out) as tmp:
+        with _files.atomic_path(out) as tmp:
             with open(tmp, "wb") as f:
                 np.savez_compressed(f, col=res.col, row=res.row, valid_col=res.valid_col,
                                     valid_row=res.valid_row, reason_col=res.reason_col,

@@ -11,7 +11,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from .. import io, patterns, pipeline, simulate, single_pose
+from .. import _files, io, patterns, pipeline, simulate, single_pose
 from ..models import euler_deg
 from ..residuals import rms
 from ._app import app, console, fail, user_errors
@@ -101,5 +101,5 @@ def demo_cmd(
                       "u0 = W/2 = 960 and alpha = 1 (the paper's model error), so f_p and T carry that bias.")
     summary = {"preset": preset, "seed": seed, "pose_deg": list(simulate.RECOMMENDED_POSE),
                "camera_f": [cam["f"], float(K[0, 0])], "projector_f": [proj["f"], float(Kp[0, 0])]}
-    io.write_text(out_dir / "demo_summary.json", json.dumps(summary, indent=1))
+    _files.write_text(out_dir / "demo_summary.json", json.dumps(summary, indent=1))
     console.print(f"wrote {out_dir}/capture, calib.json, calib.yml, decode.png, corners.png")

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .. import io
+from .. import _files, io
 from ._app import (BoardOpt, EstimatorOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, WindowOpt, app, console,
     fail, optional_size, parse_square, user_errors)
 from .correspond import load_views, parse_board
@@ -79,5 +79,5 @@ def evaluate_cmd(
     console.print(s)
     if json_out is not None:
         d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict()}
-        io.write_text(json_out, json.dumps(io.to_jsonable(d), indent=1))
+        _files.write_text(json_out, json.dumps(_files.to_jsonable(d), indent=1))
         console.print(f"wrote {json_out}")

@@ -11,7 +11,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
     TimeRemainingColumn
 from rich.table import Table
 
-from .. import io
+from .. import _files
 from .._fmt import fmt_number
 from ..errors import ProcamError
 from ._app import app, console, err_console, user_errors
@@ -93,7 +93,7 @@ def study(
 
         paths = save_study_figures(result, output, prefix=stem)
         summary["figures"] = [p.name for p in paths]
-    io.write_text(output / f"{stem}.json", json.dumps(io.to_jsonable(summary), indent=2))
+    _files.write_text(output / f"{stem}.json", json.dumps(_files.to_jsonable(summary), indent=2))
 
     s = result.summary()
     console.print(f"{s['cells']} cells in {s['seconds']:.1f} s ({s['cells_per_second']:.1f} cells/s, "

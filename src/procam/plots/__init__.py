@@ -32,7 +32,7 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
     import matplotlib.pyplot as plt
 
     from ..errors import ProcamError
-    from ..io import atomic_path
+    from .._files import atomic_path
 
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower()
