@@ -1,3 +1,4 @@
+import json
 import shutil
 
 import cv2
@@ -173,3 +174,30 @@ def test_step_hint_and_step_capture(tmp_path):
     assert np.array_equal(r.col, xx // 2 * 2 + 0.5) and np.array_equal(r.row, yy // 2 * 2 + 0.5)
     code, _, err = run_cli(["decode", tmp_path, "--projector", f"{w}x{h}", "--step", "2"])
     assert code == 0, err
+
+
+def test_write_sequence_writes_pngs_and_json(tmp_path):
+    import cv2
+
+    ps = patterns.pattern_set(37, 19)
+    st = patterns.generate(37, 19)
+    paths = capture.write_sequence(tmp_path, st, ps, prefix="pattern_")
+    assert [p.name for p in paths][:2] == ["pattern_00.png", "pattern_01.png"]
+    meta = json.loads((tmp_path / "patterns.json").read_text())
+    assert meta["count"] == 24 and meta["white"] == 22 and meta["order"] == "opencv"
+    for p, img in zip(paths, st):
+        assert np.array_equal(cv2.imread(str(p), cv2.IMREAD_UNCHANGED), img)
+    assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_write_sequence_removes_stale_frames_of_a_longer_sequence(tmp_path):
+    big = patterns.pattern_set(640, 480)
+    capture.write_sequence(tmp_path, patterns.generate(640, 480), big, prefix="pattern_")
+    (tmp_path / "notes.png").write_bytes(b"")
+    (tmp_path / "pattern_a.png").write_bytes(b"")
+    small = patterns.pattern_set(37, 19)
+    paths = capture.write_sequence(tmp_path, patterns.generate(37, 19), small, prefix="pattern_")
+    left = sorted(p.name for p in tmp_path.glob("pattern_*.png"))
+    assert big.count > small.count and left == sorted([p.name for p in paths] + ["pattern_a.png"])
+    assert (tmp_path / "notes.png").exists()
+    assert capture.remove_stale(tmp_path, paths, prefix="pattern_") == []

@@ -74,33 +74,6 @@ def test_equal_to_opencv_contrib_when_installed():
         assert np.array_equal(np.array(pats), patterns.generate(w, h)[:-2])
 
 
-def test_save_writes_pngs_and_json(tmp_path):
-    import cv2
-
-    ps = patterns.pattern_set(37, 19)
-    st = patterns.generate(37, 19)
-    paths = patterns.save(st, ps, tmp_path)
-    assert [p.name for p in paths][:2] == ["pattern_00.png", "pattern_01.png"]
-    meta = json.loads((tmp_path / "patterns.json").read_text())
-    assert meta["count"] == 24 and meta["white"] == 22 and meta["order"] == "opencv"
-    for p, img in zip(paths, st):
-        assert np.array_equal(cv2.imread(str(p), cv2.IMREAD_UNCHANGED), img)
-    assert not list(tmp_path.glob("*.tmp*"))
-
-
-def test_save_removes_stale_frames_of_a_longer_sequence(tmp_path):
-    big = patterns.pattern_set(640, 480)
-    patterns.save(patterns.generate(640, 480), big, tmp_path)
-    (tmp_path / "notes.png").write_bytes(b"")
-    (tmp_path / "pattern_a.png").write_bytes(b"")
-    small = patterns.pattern_set(37, 19)
-    paths = patterns.save(patterns.generate(37, 19), small, tmp_path)
-    left = sorted(p.name for p in tmp_path.glob("pattern_*.png"))
-    assert big.count > small.count and left == sorted([p.name for p in paths] + ["pattern_a.png"])
-    assert (tmp_path / "notes.png").exists()
-    assert patterns.remove_stale(tmp_path, paths) == []
-
-
 def test_bad_sizes():
     with pytest.raises(ValueError):
         patterns.pattern_set(1, 10)

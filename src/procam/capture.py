@@ -1,4 +1,6 @@
-"""A pose's capture folder -> validated image stack and its :class:`~procam.patterns.PatternSet`.
+"""The capture-folder format, both ways: a pose's folder -> validated image stack and its
+:class:`~procam.patterns.PatternSet` (:func:`load_capture`), and a pattern/capture sequence -> a folder
+of zero-padded PNGs plus ``patterns.json`` (:func:`write_sequence`).
 
 Checks, each failing with a one-line :class:`~procam.errors.CaptureError` that names the
 folder or file and says what to do:
@@ -11,6 +13,8 @@ folder or file and says what to do:
 
 from __future__ import annotations
 
+import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -230,3 +234,49 @@ def exposure_warnings(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
             out.append(f"{Path(folder) / Path(files[idx]).name}: {frac:.1%} of the {what} frame is saturated (value {fs:.0f}); "
                        "reduce the exposure so the white frame stays below full scale")
     return tuple(out)
+
+
+# ------------------------------------------------------------------------------------------------
+# writing
+def remove_stale(out_dir, keep, prefix: str = "") -> list[Path]:
+    """Delete ``{prefix}NN.png`` files in ``out_dir`` that are not in ``keep``.
+
+    An earlier run with a longer sequence (e.g. a 1920x1200 projector after a 1024x768 one)
+    leaves ``pattern_44.png`` ... behind, which a loader would read as part of the new
+    sequence.  Only names made of ``prefix``, decimal digits and ``.png`` are touched.
+
+    Parameters
+    ----------
+    out_dir : the folder.
+    keep : paths (or names) just written.
+    prefix : file-name prefix of the sequence (``""`` for a capture folder of ``00.png`` ...).
+
+    Returns
+    -------
+    list of the deleted paths.
+    """
+    keep = {Path(p).name for p in keep}
+    pat = re.compile(re.escape(prefix) + r"\d+\.png")
+    stale = sorted(p for p in Path(out_dir).iterdir()
+                   if p.is_file() and pat.fullmatch(p.name) and p.name not in keep)
+    for p in stale:
+        p.unlink()
+    return stale
+
+
+def write_sequence(out_dir, stack: np.ndarray, ps: patterns.PatternSet, prefix: str = "") -> list[Path]:
+    """Write ``stack`` as zero-padded PNGs plus ``patterns.json`` into ``out_dir``.
+
+    Each file is written under a hidden temporary name and renamed (:func:`procam._files.write_image`),
+    so an interrupted run leaves no half-written image.  ``{prefix}NN.png`` files of an earlier,
+    longer sequence are deleted (:func:`remove_stale`).  Returns the image paths.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    digits = max(2, len(str(ps.count - 1)))
+    paths = [_files.write_image(out / f"{prefix}{i:0{digits}d}.png", img) for i, img in enumerate(stack)]
+    remove_stale(out, paths, prefix)
+    meta = ps.to_dict()
+    meta["files"] = [p.name for p in paths]
+    _files.write_text(out / "patterns.json", json.dumps(meta, indent=2))
+    return paths

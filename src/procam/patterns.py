@@ -24,15 +24,11 @@ kamino410/procam-calibration's ``graycode_step`` does against moire: the codes a
 
 from __future__ import annotations
 
-import json
 import math
-import re
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ._files import write_image, write_text
 
 ORDERS = ("opencv", "moreno")
 
@@ -173,47 +169,3 @@ def generate(width: int, height: int, order: str = "opencv", white: int = 255,
         out[a] = line[:, None]
         out[b] = (white + black - line.astype(np.int64)).astype(dtype)[:, None]
     return out
-
-
-def remove_stale(out_dir, keep, prefix: str = "pattern_") -> list[Path]:
-    """Delete ``{prefix}NN.png`` files in ``out_dir`` that are not in ``keep``.
-
-    An earlier run with a longer sequence (e.g. a 1920x1200 projector after a 1024x768 one)
-    leaves ``pattern_44.png`` ... behind, which a loader would read as part of the new
-    sequence.  Only names made of ``prefix``, decimal digits and ``.png`` are touched.
-
-    Parameters
-    ----------
-    out_dir : the folder.
-    keep : paths (or names) just written.
-    prefix : file-name prefix of the sequence (``""`` for a capture folder of ``00.png`` ...).
-
-    Returns
-    -------
-    list of the deleted paths.
-    """
-    keep = {Path(p).name for p in keep}
-    pat = re.compile(re.escape(prefix) + r"\d+\.png")
-    stale = sorted(p for p in Path(out_dir).iterdir()
-                   if p.is_file() and pat.fullmatch(p.name) and p.name not in keep)
-    for p in stale:
-        p.unlink()
-    return stale
-
-
-def save(stack: np.ndarray, ps: PatternSet, out_dir, prefix: str = "pattern_") -> list[Path]:
-    """Write ``stack`` as zero-padded PNGs plus ``patterns.json`` into ``out_dir``.
-
-    Each file is written under a hidden temporary name and renamed (:func:`procam._files.write_image`),
-    so an interrupted run leaves no half-written image.  ``{prefix}NN.png`` files of an earlier,
-    longer sequence are deleted (:func:`remove_stale`).  Returns the image paths.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    digits = max(2, len(str(ps.count - 1)))
-    paths = [write_image(out / f"{prefix}{i:0{digits}d}.png", img) for i, img in enumerate(stack)]
-    remove_stale(out, paths, prefix)
-    meta = ps.to_dict()
-    meta["files"] = [p.name for p in paths]
-    write_text(out / "patterns.json", json.dumps(meta, indent=2))
-    return paths

@@ -15,7 +15,7 @@ Two paths:
   because Gray-code stripes depend on one projector coordinate only.
 
 This module is independent of the solvers: it imports only numpy, scipy, cv2,
-:mod:`procam.patterns` and :mod:`procam._files` (file writing), and has its own projection, division model (with its Newton inverse) and
+:mod:`procam.patterns`, :mod:`procam.capture` (the capture-folder format) and :mod:`procam._files` (file writing), and has its own projection, division model (with its Newton inverse) and
 OpenCV-Brown distortion.
 
 Conventions (see ``procam`` README): pixels ``(x, y)`` = (column, row), origin at the centre of the
@@ -38,8 +38,9 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
+from . import capture as _capture
 from . import patterns as _patterns
-from ._files import to_jsonable, write_image, write_text
+from ._files import to_jsonable, write_text
 
 __all__ = [
     "Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
@@ -900,7 +901,7 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
 
     Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``)
     and ``patterns.json`` (:meth:`procam.patterns.PatternSet.to_dict` plus ``"files"``).  Every file
-    is written under a hidden temporary name and renamed (:func:`procam._files.write_image`), so an
+    is written under a hidden temporary name and renamed (:func:`procam.capture.write_sequence`), so an
     interrupted run leaves no half-written image that a loader would pick up.  Numbered PNGs
     (``NN.png``) left in ``out_dir`` by an earlier run with a longer sequence are deleted, so they
     are not read as part of this one.
@@ -925,11 +926,6 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
         raise ValueError(f"stack must be ({ps.count}, H, W) for a {wp}x{hp} projector, got {stack.shape}")
     if stack.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
-    digits = max(2, len(str(ps.count - 1)))
-    paths = [write_image(out / f"{i:0{digits}d}.png", img) for i, img in enumerate(stack)]
-    _patterns.remove_stale(out, paths, prefix="")
-    meta = ps.to_dict()
-    meta["files"] = [p.name for p in paths]
-    write_text(out / "patterns.json", json.dumps(meta, indent=2))
+    paths = _capture.write_sequence(out, stack, ps)
     write_text(out / "truth.json", json.dumps(to_jsonable(truth), indent=1))
     return paths

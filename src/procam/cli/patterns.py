@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from .. import patterns as pat
+from .. import capture, patterns as pat
 from ._app import app, console, fail, parse_size, user_errors
 
 
@@ -26,6 +26,6 @@ def patterns_cmd(
     if step < 1:
         fail(f"--step must be a positive integer, got {step}")
     ps = pat.pattern_set(w, h, order, step)
-    paths = pat.save(pat.generate(w, h, order, step=step), ps, out)
+    paths = capture.write_sequence(out, pat.generate(w, h, order, step=step), ps, prefix="pattern_")
     console.print(f"wrote {len(paths)} images ({ps.col_bits} column bits, {ps.row_bits} row bits, "
                   f"order {order}; white = #{ps.white}, black = #{ps.black}) and patterns.json to {out}")
