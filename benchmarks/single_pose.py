@@ -108,29 +108,29 @@ def part1(args):
         pb = crlb.projector_bound(Kp, scene.R_board_proj, scene.t_board_proj, obj, sigma=args.sigma_proj)
         nu_p = simulate.matrix_euler(scene.R_board_proj)[1]
         e_st, e_j, e_p, fb = [], [], [], {}
+        robust = sp.RobustOptions(reject_outliers=not args.no_reject)
         t0 = time.time()
         for trial in range(args.trials):
             o, c, p = _observations(scene, args, args.seed + 1000 * trial)
             try:   # the paper's pipeline: COD always, staged (COD -> k -> H -> LM)
-                e_st.append(sp.calibrate_camera(o, c, ideal.cam_size, cod="paper", refine="none",
-                                                reject_outliers=not args.no_reject).K[0, 0] - Kc[0, 0])
+                e_st.append(sp.calibrate_camera(o, c, ideal.cam_size, sp.CameraOptions(cod="paper", refine="none"),
+                                                robust=robust).K[0, 0] - Kc[0, 0])
             except ProcamError:
                 e_st.append(np.nan)
             try:   # procam's default: cod="auto", joint refinement
-                cam = sp.calibrate_camera(o, c, ideal.cam_size, reject_outliers=not args.no_reject)
+                cam = sp.calibrate_camera(o, c, ideal.cam_size, robust=robust)
                 e_j.append(cam.K[0, 0] - Kc[0, 0])
                 fb[cam.principal_point_source] = fb.get(cam.principal_point_source, 0) + 1
             except ProcamError:
                 e_j.append(np.nan)
             try:
-                e_p.append(sp.calibrate_projector(o, p, ideal.proj_size,
-                                                  reject_outliers=not args.no_reject).K[0, 0] - Kp[0, 0])
+                e_p.append(sp.calibrate_projector(o, p, ideal.proj_size, robust=robust).K[0, 0] - Kp[0, 0])
             except ProcamError:
                 pass
         dt = (time.time() - t0) / args.trials
         rms = [float(np.sqrt(np.nanmean(np.square(e)))) if e else float("nan") for e in (e_st, e_j, e_p)]
         fails = int(np.sum(np.isnan(e_st)))
-        r = [rms[0] / cb["f"], rms[1] / cb["f"], rms[2] / pb["f"]]
+        r = [rms[0] / cb.std["f_c"], rms[1] / cb.std["f_c"], rms[2] / pb.std["f_p"]]
         for key, v in zip(("staged", "joint", "proj"), r):
             ratios[key].append(v)
         print(f"| {psi:g}, {nu:g} | {nu_p:.1f} | {cb['f']:.2f} | {rms[0]:.2f} | {r[0]:.2f} | {rms[1]:.2f} | "
@@ -157,7 +157,7 @@ def part2():
         for a, ex in zip(angles_list, expected):
             R, t = _device_pose(a)
             m = models.project(Kc, R, t, obj)
-            f = sp.calibrate_camera(obj, m, paper.cam_size, principal_point=pp, distortion=None).K[0, 0]
+            f = sp.calibrate_camera(obj, m, paper.cam_size, sp.CameraOptions(principal_point=pp, distortion=None)).K[0, 0]
             cells.append(f"{abs(f - Kc[0, 0]):.1f}/{ex:g}")
         print(f"| {label} | " + " | ".join(cells) + " |")
 

@@ -34,26 +34,26 @@ PROJ = {(0, 2): 303, (0, 10): 14, (10, 5): 25, (10, 10): 11, (10, 13): 7.9, (30,
 @pytest.mark.parametrize("cell,ref", FULL.items())
 def test_camera_full_reference_table(cell, ref):
     b = cam(*cell)
-    assert b["f"] == pytest.approx(ref, rel=0.03, abs=0.06)
-    assert 4.5 < b["cu"] < 8.5  # "sqrt(CRLB(c_u)) ~ 5-8 px everywhere non-degenerate"
+    assert b.std["f_c"] == pytest.approx(ref, rel=0.03, abs=0.06)
+    assert 4.5 < b.std["u0c"] < 8.5  # "sqrt(CRLB(c_u)) ~ 5-8 px everywhere non-degenerate"
 
 
 @pytest.mark.parametrize("cell,ref", KNOWN.items())
 def test_camera_known_distortion_reference_table(cell, ref):
-    assert cam(*cell, model="known_distortion")["f"] == pytest.approx(ref, rel=0.03, abs=0.06)
+    assert cam(*cell, model="known_distortion").std["f_c"] == pytest.approx(ref, rel=0.03, abs=0.06)
 
 
 def test_camera_known_alpha_reference_cells():
-    assert cam(0, 10, model="known_alpha")["f"] == pytest.approx(7.2, abs=0.06)
-    assert cam(0, 20, model="known_alpha")["f"] == pytest.approx(2.5, abs=0.06)
-    assert cam(10, 10, model="known_alpha")["f"] == pytest.approx(4.5, abs=0.06)
+    assert cam(0, 10, model="known_alpha").std["f_c"] == pytest.approx(7.2, abs=0.06)
+    assert cam(0, 20, model="known_alpha").std["f_c"] == pytest.approx(2.5, abs=0.06)
+    assert cam(10, 10, model="known_alpha").std["f_c"] == pytest.approx(4.5, abs=0.06)
 
 
 @pytest.mark.parametrize("cell,ref", PROJ.items())
 def test_projector_reference_table(cell, ref):
     b = projector_bound(KP, rot(*cell), T500, M, 0.2)
-    assert b["f"] == pytest.approx(ref, rel=0.03, abs=0.06)
-    assert 2.0 <= b["v0"] < 22
+    assert b.std["f_p"] == pytest.approx(ref, rel=0.03, abs=0.06)
+    assert 2.0 <= b.std["v0p"] < 22
 
 
 def test_degenerate_poses_are_infinite_not_tiny():
@@ -61,31 +61,31 @@ def test_degenerate_poses_are_infinite_not_tiny():
     for cell in [(0, 0), (0, 20), (20, 0)]:
         for model in ("full", "known_distortion"):
             b = cam(*cell, model=model)
-            assert np.isinf(b["f"]) and np.isinf(b["alpha"]), (cell, model)
-            assert b["condition"] < 1e-12
-    assert np.isinf(cam(0, 0, model="known_alpha")["f"])
-    assert np.isfinite(cam(0, 20, model="known_alpha")["f"])
+            assert np.isinf(b.std["f_c"]) and np.isinf(b.std["alpha_c"]), (cell, model)
+            assert b.condition < 1e-12
+    assert np.isinf(cam(0, 0, model="known_alpha").std["f_c"])
+    assert np.isfinite(cam(0, 20, model="known_alpha").std["f_c"])
     # full model without distortion: the COD (= principal point) is unobservable
     b = camera_bound(KC, None, 0.0, 0.0, rot(20, 20), T500, M, 0.1, "full")
-    assert np.isinf(b["f"]) and np.isinf(b["cu"])
+    assert np.isinf(b.std["f_c"]) and np.isinf(b.std["u0c"])
     # projector (f, v0): degenerate iff nu_p = 0, whatever psi_p
     for psi in (0, 10, 45):
-        assert np.isinf(projector_bound(KP, rot(psi, 0), T500, M)["f"])
+        assert np.isinf(projector_bound(KP, rot(psi, 0), T500, M).std["f_p"])
     # near-degenerate is large but finite
-    assert 300 < projector_bound(KP, rot(10, 0.2), T500, M)["f"] < np.inf
+    assert 300 < projector_bound(KP, rot(10, 0.2), T500, M).std["f_p"] < np.inf
 
 
 def test_bound_is_linear_in_sigma_and_jacobians_agree():
     a, b = cam(10, 20, sigma=0.1), cam(10, 20, sigma=0.3)
-    assert b["f"] == pytest.approx(3 * a["f"], rel=1e-9)
+    assert b.std["f_c"] == pytest.approx(3 * a.std["f_c"], rel=1e-9)
     c = cam(10, 20, jacobian="central")
-    assert c["f"] == pytest.approx(a["f"], rel=1e-4)
-    assert c["k1"] == pytest.approx(a["k1"], rel=1e-4)
+    assert c.std["f_c"] == pytest.approx(a.std["f_c"], rel=1e-4)
+    assert c.std["k1"] == pytest.approx(a.std["k1"], rel=1e-4)
 
 
 def test_distinct_cod_and_principal_point_is_accepted():
     b = camera_bound(KC, (680.0, 500.0), K1, 0.0, rot(20, 20), T500, M, 0.1, "full")
-    assert np.isfinite(b["f"]) and b["f"] == pytest.approx(cam(20, 20)["f"], rel=0.2)
+    assert np.isfinite(b.std["f_c"]) and b.std["f_c"] == pytest.approx(cam(20, 20).std["f_c"], rel=0.2)
     with pytest.raises(ValueError):
         cam(20, 20, model="nonsense")
 
@@ -113,8 +113,8 @@ def test_projector_bound_matches_monte_carlo_ml_estimate():
         fs.append(sol.x[0])
     sd = np.std(fs, ddof=1)
     # 150 trials: the sample std is within ~ +-12 % (2 sigma) of the truth
-    assert sd == pytest.approx(bound["f"], rel=0.2)
-    assert abs(np.mean(fs) - KP[0, 0]) < 3 * bound["f"] / np.sqrt(150) + 1.0
+    assert sd == pytest.approx(bound.std["f_p"], rel=0.2)
+    assert abs(np.mean(fs) - KP[0, 0]) < 3 * bound.std["f_p"] / np.sqrt(150) + 1.0
 
 
 def test_extrinsics_bound():
@@ -122,12 +122,38 @@ def test_extrinsics_bound():
     tp = np.array([170.0, 40.0, 520.0])
     cb, pb = cam(20, 20), projector_bound(KP, Rp, tp, M, 0.2)
     e = extrinsics_bound(cb, pb, Rc, T500, Rp, tp)
-    assert np.all(np.isfinite(e["T"])) and np.all(e["T"] > 0)
-    assert e["sigma_T"] == pytest.approx(np.sqrt(np.sum(e["T"] ** 2)))
-    assert 0 < e["T_norm"] <= e["sigma_T"] + 1e-12
-    assert np.all(e["euler_deg"] < 1.0)
+    assert np.all(np.isfinite(e.T)) and np.all(e.T > 0)
+    assert e.sigma_T == pytest.approx(np.sqrt(np.sum(e.T ** 2)))
+    assert 0 < e.T_norm <= e.sigma_T + 1e-12
+    assert np.all(e.euler_deg < 1.0)
     # bounds grow when the projector pose gets closer to degenerate
     e2 = extrinsics_bound(cb, projector_bound(KP, rot(10, 3), tp, M, 0.2), Rc, T500, rot(10, 3), tp)
-    assert e2["sigma_T"] > e["sigma_T"]
+    assert e2.sigma_T > e.sigma_T
     dead = extrinsics_bound(cb, projector_bound(KP, rot(10, 0), tp, M), Rc, T500, rot(10, 0), tp)
-    assert np.isinf(dead["sigma_T"])
+    assert np.isinf(dead.sigma_T)
+
+
+def test_bound_is_computed_on_the_model_the_solver_fits():
+    """The bound's observation model is the single-pose solver's (procam.models.camera_predict /
+    projector_predict): it equals the inverse Fisher information built from the solver's own prediction
+    function at the truth (the rotation parameterisations differ -- a rotation vector vs a small rotation
+    about the truth -- which leaves the intrinsics' bounds unchanged)."""
+    from procam import models
+    from procam import uncertainty as unc
+
+    R = rot(20, 20)
+    b = cam(20, 20)
+    p = np.r_[KC[0, 0], KC[1, 1] / KC[0, 0], KC[0, 2], KC[1, 2], K1 * models.KAPPA_SCALE ** 2, 0.0,
+              models.matrix_to_rvec(R), T500]
+    J = unc.jacobian(lambda q: models.camera_predict(q, M).ravel(), p, method="complex")
+    s = unc.std(unc.covariance(J, 0.1))
+    for k, key in enumerate(("f_c", "alpha_c", "u0c", "v0c")):
+        assert s[k] == pytest.approx(b.std[key], rel=1e-6), key
+    assert s[4] / models.KAPPA_SCALE ** 2 == pytest.approx(b.std["k1"], rel=1e-6)
+    Kp = intrinsic_matrix(2421.0, 960.0, 1065.0)  # the solver's projector model has alpha_p = 1
+    Rp, tp = rot(10, 13), np.array([170.0, 40.0, 520.0])
+    pb = projector_bound(Kp, Rp, tp, M, 0.2)
+    q = np.r_[Kp[0, 0], Kp[1, 2], models.matrix_to_rvec(Rp), tp]
+    Jp = unc.jacobian(lambda v: models.projector_predict(v, M, 960.0).ravel(), q, method="complex")
+    sp_ = unc.std(unc.covariance(Jp, 0.2))
+    assert sp_[0] == pytest.approx(pb.std["f_p"], rel=1e-6) and sp_[1] == pytest.approx(pb.std["v0p"], rel=1e-6)

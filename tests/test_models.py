@@ -32,6 +32,12 @@ def test_euler_matrix_round_trip():
         assert np.allclose(models.rvec_to_matrix(models.matrix_to_rvec(R)), R)
 
 
+def test_euler_deg_of_the_identity_and_a_known_rotation():
+    assert models.euler_deg(np.eye(3)) == pytest.approx((0.0, 0.0, 0.0))
+    R = models.euler_to_matrix(*np.radians([12.0, -7.0, 3.0]))
+    assert models.euler_deg(R) == pytest.approx((12.0, -7.0, 3.0))
+
+
 def test_invert_compose():
     rng = np.random.default_rng(2)
     R, t = Rotation.random(random_state=3).as_matrix(), rng.normal(size=3)

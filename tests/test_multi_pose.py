@@ -146,15 +146,16 @@ def test_lens_shifted_projector_principal_point_outside_image(shifted_rig):
     with pytest.raises(cv2.error):  # ... which OpenCV refuses as a guess
         cv2.calibrateCamera([o.astype(np.float32) for o in objs], [p.astype(np.float32) for p in projs],
                             (1920, 1080), K0, np.zeros(5), flags=cv2.CALIB_USE_INTRINSIC_GUESS)
-    K, d, rv, tv, rms = multi_pose.calibrate_device(objs, projs, (1920, 1080), init="zhang")
+    dc = multi_pose.calibrate_device(objs, projs, (1920, 1080), init="zhang")
+    K, d, rv, tv, rms = dc.K, dc.coeffs, dc.rvecs, dc.tvecs, dc.rms
     assert abs(K[1, 2] - 1410) < 10 and abs(K[0, 0] - 2421) < 25 and rms < 0.35
     calib = multi_pose.calibrate(views)
     assert abs(calib.projector.K[1, 2] - 1410) < 10 and abs(calib.projector.K[0, 0] - 2421) < 25
     sd_T = np.array(calib.std["T"])
     assert np.all(np.abs(calib.T - base.T) < 4 * sd_T), (calib.T - base.T, sd_T)
     exact = _views(scenes)
-    K, d, rv, tv, rms = multi_pose.calibrate_device([v.obj_pts for v in exact], [v.proj_pts for v in exact],
-                                                    (1920, 1080), init="zhang")
+    K = multi_pose.calibrate_device([v.obj_pts for v in exact], [v.proj_pts for v in exact], (1920, 1080),
+                                    init="zhang").K
     np.testing.assert_allclose(K, base.K_proj, atol=1e-2)  # float32 points in OpenCV
 
 
@@ -212,10 +213,11 @@ def test_real_left_camera_against_published_reference():
     """OpenCV's left*.jpg (13 photos): fx = fy 536.11, cx 342.37, cy 235.60, rms 0.409 px (README)."""
     objs, imgs = _left_corners()
     assert len(objs) == 13
-    K, d, rv, tv, rms = multi_pose.calibrate_device(objs, imgs, (640, 480), fix_aspect_ratio=True)
+    dev = multi_pose.calibrate_device(objs, imgs, (640, 480), fix_aspect_ratio=True)
+    K, rms = dev.K, dev.rms
     assert abs(K[0, 0] - 536.11) < 1.0 and abs(K[1, 1] - 536.11) < 1.0
     assert abs(K[0, 2] - 342.37) < 1.0 and abs(K[1, 2] - 235.60) < 1.0
     assert abs(rms - 0.409) < 0.02
     # the default (free aspect) is close to the same camera too
-    K2, *_ = multi_pose.calibrate_device(objs, imgs, (640, 480))
+    K2 = multi_pose.calibrate_device(objs, imgs, (640, 480)).K
     assert abs(K2[0, 0] - 536.11) < 4.0 and abs(K2[0, 2] - 342.37) < 3.0

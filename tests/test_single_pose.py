@@ -36,7 +36,7 @@ def ideal():
 
 @pytest.mark.parametrize("refine", ["joint", "none"])
 def test_noise_free_ideal_preset_reproduces_truth(ideal, refine):
-    cal = sp.calibrate(_view(ideal), refine=refine)
+    cal = sp.calibrate(_view(ideal), camera=sp.CameraOptions(refine=refine))
     Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
     np.testing.assert_allclose(cal.camera.K, Kc, rtol=1e-6)
     np.testing.assert_allclose(cal.projector.K, Kp, rtol=1e-6)
@@ -66,21 +66,21 @@ def test_noisy_recovery_within_cramer_rao_tolerances(ideal, bounds, seed):
     cb, pb, eb = bounds
     cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=seed))
     Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
-    assert abs(cal.camera.K[0, 0] - Kc[0, 0]) < 5 * cb["f"]
-    assert abs(cal.camera.K[1, 1] / cal.camera.K[0, 0] - Kc[1, 1] / Kc[0, 0]) < 5 * cb["alpha"]
-    assert abs(cal.camera.K[0, 2] - Kc[0, 2]) < 5 * cb["cu"]
-    assert abs(cal.projector.K[0, 0] - Kp[0, 0]) < 5 * pb["f"]
-    assert abs(cal.projector.K[1, 2] - Kp[1, 2]) < 5 * pb["v0"]
+    assert abs(cal.camera.K[0, 0] - Kc[0, 0]) < 5 * cb.std["f_c"]
+    assert abs(cal.camera.K[1, 1] / cal.camera.K[0, 0] - Kc[1, 1] / Kc[0, 0]) < 5 * cb.std["alpha_c"]
+    assert abs(cal.camera.K[0, 2] - Kc[0, 2]) < 5 * cb.std["u0c"]
+    assert abs(cal.projector.K[0, 0] - Kp[0, 0]) < 5 * pb.std["f_p"]
+    assert abs(cal.projector.K[1, 2] - Kp[1, 2]) < 5 * pb.std["v0p"]
     dR = _euler_deg(cal.R @ np.asarray(ideal.R).T)
-    assert np.all(np.abs(dR) < 5 * eb["euler_deg"] + 1e-9)
-    assert np.all(np.abs(cal.T - ideal.T) < 5 * eb["T"])
+    assert np.all(np.abs(dR) < 5 * eb.euler_deg + 1e-9)
+    assert np.all(np.abs(cal.T - ideal.T) < 5 * eb.T)
     # the reported std (from the Jacobian at the estimate, sigma from the residuals) ~ the bound
-    assert 0.5 < cal.std["f_c"] / cb["f"] < 2.0
-    assert 0.5 < cal.std["f_p"] / pb["f"] < 2.0
-    assert 0.5 < cal.std["T"][2] / eb["T"][2] < 2.0
+    assert 0.5 < cal.std["f_c"] / cb.std["f_c"] < 2.0
+    assert 0.5 < cal.std["f_p"] / pb.std["f_p"] < 2.0
+    assert 0.5 < cal.std["T"][2] / eb.T[2] < 2.0
     # the paper's staged estimate is kept alongside
     staged = cal.info["camera"].staged
-    assert abs(staged["f"] - Kc[0, 0]) < 8 * cb["f"]
+    assert abs(staged["f"] - Kc[0, 0]) < 8 * cb.std["f_c"]
     assert 0.05 < cal.cam_rms < 0.2 and 0.1 < cal.proj_rms < 0.4
 
 
@@ -104,7 +104,7 @@ def test_paper_simulation_camera_bias_matches_method_table(angles, expected):
     K = models.intrinsic_matrix(1539.0, 674.0, 512.0, alpha=1.004)
     obj = board.object_points(10, 6, 24.0)
     m = models.project(K, models.euler_to_matrix(*np.radians([*angles, 0.0])), [0, 0, 500.0], obj)
-    cam = sp.calibrate_camera(obj, m, (1280, 800), principal_point=(679.0, 517.0), distortion=None)
+    cam = sp.calibrate_camera(obj, m, (1280, 800), sp.CameraOptions(principal_point=(679.0, 517.0), distortion=None))
     assert abs(cam.K[0, 0] - 1539.0) == pytest.approx(expected, abs=0.1)
     assert cam.principal_point_source == "given"
     np.testing.assert_allclose(cam.K[:2, 2], (679.0, 517.0))
@@ -205,13 +205,13 @@ def test_unreliable_cod_falls_back_with_warning_and_wider_std(ideal):
     cam = cal.info["camera"]
     assert cam.principal_point_source == "image-center"
     assert any("centre of distortion unreliable" in w and "image centre" in w for w in cal.warnings)
-    given = sp.calibrate(view, principal_point=(674.0, 512.0))
+    given = sp.calibrate(view, camera=sp.CameraOptions(principal_point=(674.0, 512.0)))
     assert given.info["camera"].principal_point_source == "given"
     assert cal.std["f_c"] > 1.5 * given.std["f_c"]
     assert np.isfinite(cal.std["u0c"]) and cal.std["u0c"] > 5.0
     # the paper's behaviour can be forced: it uses the (meaningless) centre and warns
     try:
-        forced = sp.calibrate(view, cod="paper")
+        forced = sp.calibrate(view, camera=sp.CameraOptions(cod="paper"))
         assert forced.info["camera"].principal_point_source == "cod"
         assert any("cod='paper'" in w for w in forced.warnings)
     except CalibrationError as e:          # a centre far outside the image can leave no valid solution
@@ -335,13 +335,13 @@ def test_outlier_corners_are_rejected_and_the_truth_recovered(ideal, bounds, see
     # as good as the clean data: the same CRLB tolerances, and close to the clean estimate
     Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
     for c in (cal, clean):
-        assert abs(c.camera.K[0, 0] - Kc[0, 0]) < 5 * cb["f"]
-        assert abs(c.projector.K[0, 0] - Kp[0, 0]) < 5 * pb["f"]
-    assert abs(cal.camera.K[0, 0] - clean.camera.K[0, 0]) < cb["f"]
-    assert abs(cal.projector.K[0, 0] - clean.projector.K[0, 0]) < pb["f"]
+        assert abs(c.camera.K[0, 0] - Kc[0, 0]) < 5 * cb.std["f_c"]
+        assert abs(c.projector.K[0, 0] - Kp[0, 0]) < 5 * pb.std["f_p"]
+    assert abs(cal.camera.K[0, 0] - clean.camera.K[0, 0]) < cb.std["f_c"]
+    assert abs(cal.projector.K[0, 0] - clean.projector.K[0, 0]) < pb.std["f_p"]
     assert cal.cam_rms < 0.2 and cal.proj_rms < 0.4 and cal.stereo_rms < 0.4
     # without the rejection the displaced corners pull the fit
-    off = sp.calibrate(bad_view, reject_outliers=False)
+    off = sp.calibrate(bad_view, robust=sp.RobustOptions(reject_outliers=False))
     assert off.poses[0]["rejected_corners"] == {"camera": [], "projector": []}
     assert off.cam_rms > 2 * cal.cam_rms and off.proj_rms > 2 * cal.proj_rms
 
@@ -418,7 +418,7 @@ def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
     assert "Gaussian prior centred on the image centre (639.5, 399.5) with std 32 px" in msg
     assert f"final ({u0:.1f}, {v0:.1f}) +- ({cal.std['u0c']:.1f}, {cal.std['v0c']:.1f}) px" in msg
     assert "assumed at the image centre" not in msg
-    staged = sp.calibrate(view, refine="none")
+    staged = sp.calibrate(view, camera=sp.CameraOptions(refine="none"))
     (msg,) = [w for w in staged.warnings if "centre of distortion unreliable" in w]
     assert "fixed at the image centre (639.5, 399.5)" in msg
     np.testing.assert_allclose(staged.camera.K[:2, 2], (639.5, 399.5))
@@ -433,7 +433,7 @@ def test_gross_outliers_that_wreck_the_plain_fit_are_rejected(ideal):
     proj[15] += (-1953.2, 1439.8)
     bad = View(view.obj_pts, cam, proj, "gross", view.cam_size, view.proj_size)
     with pytest.raises(CalibrationError, match="projector LM found no valid"):
-        sp.calibrate(bad, reject_outliers=False)
+        sp.calibrate(bad, robust=sp.RobustOptions(reject_outliers=False))
     cal = sp.calibrate(bad)
     rej = cal.poses[0]["rejected_corners"]
     assert [r["index"] for r in rej["camera"]] == [50] and [r["index"] for r in rej["projector"]] == [15]
@@ -450,7 +450,7 @@ def test_outliers_that_send_the_plain_fit_astray_are_still_found(ideal, bounds):
     obj, cam, _ = simulate.correspondences(scene, 0.1, 0.2, seed=0)
     cam = cam.copy()
     cam[[36, 41, 54]] += [[-2.71, 8.32], [6.01, -6.12], [0.47, 3.0]]
-    assert sp.calibrate_camera(obj, cam, ideal.cam_size, reject_outliers=False).K[0, 0] > 1e5
+    assert sp.calibrate_camera(obj, cam, ideal.cam_size, robust=sp.RobustOptions(reject_outliers=False)).K[0, 0] > 1e5
     sol = sp.calibrate_camera(obj, cam, ideal.cam_size)
     assert sol.rejected.tolist() == [36, 41, 54]
     assert abs(sol.K[0, 0] - ideal.K_cam[0, 0]) < 5 * 10.2     # the CRLB of this pose is 10.15 px

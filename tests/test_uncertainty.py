@@ -6,14 +6,15 @@ import pytest
 from procam import uncertainty as unc
 
 
-def test_numeric_jacobian_matches_analytic():
+def test_jacobian_matches_analytic():
     def f(p):
         return np.array([p[0] ** 2 * p[1], np.sin(p[1]), p[0] * 1e3])
 
     p = np.array([3.0, 0.7])
-    J = unc.numeric_jacobian(f, p)
+    J = unc.jacobian(f, p)
     Ja = np.array([[2 * p[0] * p[1], p[0] ** 2], [0.0, np.cos(p[1])], [1e3, 0.0]])
     np.testing.assert_allclose(J, Ja, rtol=1e-8)
+    np.testing.assert_allclose(unc.jacobian(f, p, method="complex"), Ja, rtol=1e-14)
 
 
 def test_linear_regression_covariance_is_textbook():

@@ -18,64 +18,78 @@ Computation (METHOD §13):
 4. Otherwise ``Cov = sigma^2 (J_n^T J_n)^-1``, rescaled to raw units.  ``inv``, not
    ``pinv``: a pseudo-inverse silently reports tiny bounds at degenerate poses.
 
-Every function returns a plain ``dict``: scalar stds (floats) per intrinsic parameter,
-``"omega"`` (3,) rad and ``"t"`` (3,) board units for the pose, plus ``"cov"``
-(P, P) in raw units, ``"params"`` (names of the rows of ``cov``) and ``"condition"``
-(``sigma_min / sigma_max`` of the normalised Jacobian).
+The model is the solver's own (:func:`procam.models.project`, :func:`procam.models.distort_division`),
+and the Jacobian and covariance are :mod:`procam.uncertainty`'s, so the bound is computed on the model
+the single-pose solver fits. The device bounds are :class:`Bound` s (the std bound per intrinsic
+parameter, named as in :mod:`procam.parameters`, the pose's bounds, the covariance and the condition
+number); :func:`extrinsics_bound` gives an :class:`ExtrinsicsBound`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from .models import matrix_to_euler
+from . import models
+from . import uncertainty as unc
 
-__all__ = ["camera_bound", "projector_bound", "extrinsics_bound", "fisher_bound"]
+__all__ = ["Bound", "ExtrinsicsBound", "camera_bound", "projector_bound", "extrinsics_bound", "fisher_bound"]
 
 _CAMERA_MODELS = ("full", "known_distortion", "known_alpha")
 
 
+@dataclass(frozen=True)
+class Bound:
+    """Cramer-Rao lower bound of one device's single-pose calibration at one pose.
+
+    Attributes
+    ----------
+    std : dict
+        Lower bound of the standard deviation of each intrinsic parameter, named as in
+        :mod:`procam.parameters` (camera ``f_c, alpha_c, u0c, v0c, k1, k2``; projector ``f_p, v0p``);
+        0.0 for a parameter the model treats as known, ``inf`` everywhere when the pose is degenerate.
+    omega : (3,) rad, bounds of a small rotation of the board pose about the device axes.
+    t : (3,) board units, bounds of the pose's translation.
+    cov : (P, P) covariance bound in raw units, rows named by ``params``.
+    params : tuple of the parameter names (rows of ``cov``).
+    condition : ``s_min / s_max`` of the column-normalised Jacobian (degenerate below ``cond_limit``).
+    model : ``"full"``, ``"known_distortion"``, ``"known_alpha"`` (camera) or ``"projector"``.
+    """
+
+    std: dict
+    omega: np.ndarray
+    t: np.ndarray
+    cov: np.ndarray
+    params: tuple
+    condition: float
+    model: str
+
+    @property
+    def degenerate(self) -> bool:
+        """True when the pose determines none of the intrinsics (every bound infinite)."""
+        return not np.all(np.isfinite(self.cov))
+
+
+@dataclass(frozen=True)
+class ExtrinsicsBound:
+    """Delta-method bound of the camera -> projector extrinsics (:func:`extrinsics_bound`).
+
+    ``euler_deg`` (3,) stds of the Euler angles of ``R`` (degrees); ``T`` (3,) stds of ``T``; ``sigma_T`` =
+    ``sqrt(sum var T)``; ``T_norm`` std of ``|T|``; ``cov`` (6, 6) of ``(psi, nu, phi [rad], T)``. ``inf``
+    when either device is degenerate.
+    """
+
+    euler_deg: np.ndarray
+    T: np.ndarray
+    sigma_T: float
+    T_norm: float
+    cov: np.ndarray
+
+
 def _perturb(R, w):
-    """``exp([w]_x) @ R``: a rotation perturbed in the device frame (complex-step safe).
-
-    Real ``w`` uses the exact exponential; complex ``w`` (only ever an infinitesimal
-    imaginary step about 0) uses the series ``I + W + W^2/2 + W^3/6``.
-    """
-    if np.iscomplexobj(w):
-        wx, wy, wz = w
-        W = np.array([[0, -wz, wy], [wz, 0, -wx], [-wy, wx, 0]], dtype=complex)
-        return (np.eye(3) + W + W @ W / 2 + W @ W @ W / 6) @ R
-    return Rotation.from_rotvec(np.asarray(w, float)).as_matrix() @ R
-
-
-def _project(K, R, t, X):
-    """``pi(K (R X + t))`` for (N, 3) ``X``; complex-step safe.  Returns (N, 2)."""
-    Xc = X @ R.T + t.reshape(1, 3)
-    m = Xc @ K.T
-    return m[:, :2] / m[:, 2:3]
-
-
-def _distort(m, c, k1, k2, iterations=30):
-    """Division model undistorted -> distorted (METHOD §5.1), complex-step safe.
-
-    With ``r_d = s r_u`` the scale ``s`` solves ``s = 1 + k1 s^2 q + k2 s^4 q^2`` with
-    ``q = r_u^2``; Newton from ``s = 1`` (no square root, so no branch at the centre).
-    """
-    d = m - c.reshape(1, 2)
-    q = d[:, 0] ** 2 + d[:, 1] ** 2
-    s = np.ones_like(q)
-    for _ in range(iterations):
-        g = s - 1.0 - k1 * s ** 2 * q - k2 * s ** 4 * q ** 2
-        dg = 1.0 - 2.0 * k1 * s * q - 4.0 * k2 * s ** 3 * q ** 2
-        s = s - g / dg
-    g = s - 1.0 - k1 * s ** 2 * q - k2 * s ** 4 * q ** 2
-    bad = ~(np.abs(g) < 1e-9) | ~(np.real(s) > 0)
-    out = c.reshape(1, 2) + d * s[:, None]
-    if np.any(bad):
-        out = out.astype(complex if np.iscomplexobj(out) else float)
-        out[bad] = np.nan
-    return out
+    """``exp([w]_x) @ R``: a rotation perturbed in the device frame (complex-step safe)."""
+    return models.rvec_to_matrix(w) @ R
 
 
 def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
@@ -95,58 +109,18 @@ def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="
         ``sigma_min / sigma_max`` of the column-normalised Jacobian below which the
         problem is declared degenerate.
     jacobian : {"complex", "central"}
-        ``"complex"``: complex-step derivatives ``Im(m(p + i h e_k)) / h`` with
-        ``h = 1e-30``, exact to rounding (``model`` must accept complex parameters);
-        ``"central"``: central differences with ``rel_step``.  Exact derivatives keep
-        the degeneracy test clean: at exactly degenerate poses the condition is ~1e-15
-        with complex steps but ~1e-10..1e-8 with central differences.
+        How :func:`procam.uncertainty.jacobian` differentiates ``model``.
 
     Returns
     -------
     cov : ndarray, shape (P, P)
-        ``sigma^2 (J^T J)^-1``, all ``inf`` when degenerate or non-finite.
+        ``sigma^2 (J^T J)^-1`` (:func:`procam.uncertainty.covariance`), all ``inf`` when degenerate or
+        non-finite.
     condition : float
         ``sigma_min / sigma_max`` of the normalised Jacobian (0 when non-finite).
     """
-    p0 = np.asarray(p0, float)
-    P = p0.size
-    cols = []
-    for k in range(P):
-        if jacobian == "complex":
-            h = 1e-30
-            dp = np.zeros(P, dtype=complex)
-            dp[k] = 1j * h
-            cols.append(np.imag(np.asarray(model(p0 + dp))) / h)
-        elif jacobian == "central":
-            h = rel_step * max(1.0, abs(p0[k]))
-            dp = np.zeros(P)
-            dp[k] = h
-            cols.append((np.asarray(model(p0 + dp)) - np.asarray(model(p0 - dp))) / (2.0 * h))
-        else:
-            raise ValueError(f"jacobian must be 'complex' or 'central', got {jacobian!r}")
-    J = np.column_stack(cols)
-    inf = np.full((P, P), np.inf)
-    if not np.all(np.isfinite(J)):
-        return inf, 0.0
-    norms = np.linalg.norm(J, axis=0)
-    if np.any(norms == 0):
-        return inf, 0.0
-    Jn = J / norms
-    s = np.linalg.svd(Jn, compute_uv=False)
-    condition = float(s[-1] / s[0])
-    if condition < cond_limit:
-        return inf, condition
-    try:
-        cov_n = np.linalg.inv(Jn.T @ Jn)
-    except np.linalg.LinAlgError:
-        return inf, condition
-    cov = sigma ** 2 * cov_n / np.outer(norms, norms)
-    return cov, condition
-
-
-def _std(cov, k):
-    v = cov[k, k]
-    return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("inf")
+    J = unc.jacobian(model, np.asarray(p0, float), method=jacobian, rel_step=rel_step)
+    return unc.covariance(J, sigma, rcond=cond_limit), unc.condition(J)
 
 
 def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full", *,
@@ -184,11 +158,10 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
 
     Returns
     -------
-    dict
-        ``"f"``, ``"alpha"``, ``"cu"``, ``"cv"``, ``"k1"``, ``"k2"`` (stds in their units;
+    :class:`Bound`
+        ``std`` with ``"f_c"``, ``"alpha_c"``, ``"u0c"``, ``"v0c"``, ``"k1"``, ``"k2"`` (stds in their units;
         ``0.0`` for parameters the model treats as known, ``inf`` everywhere when the
-        pose is degenerate), ``"omega"`` (3,) rad, ``"t"`` (3,), ``"cov"``, ``"params"``,
-        ``"condition"``, ``"model"``.
+        pose is degenerate), ``omega`` (3,) rad, ``t`` (3,), ``cov``, ``params``, ``condition``, ``model``.
 
     Examples
     --------
@@ -198,7 +171,7 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
     >>> K = intrinsic_matrix(1539.0, 674.0, 512.0, alpha=1.004)
     >>> R = euler_to_matrix(*np.radians([20.0, 20.0, 0.0]))
     >>> b = camera_bound(K, None, -1e-7, 0.0, R, [0, 0, 500], object_points(10, 6, 24.0))
-    >>> round(b["f"], 1)
+    >>> round(b.std["f_c"], 1)
     4.1
     """
     if model not in _CAMERA_MODELS:
@@ -214,28 +187,28 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
     s = float(radius_scale)
 
     def observe(f, alpha, dc, kap1, kap2, w, tt):
-        Kp = np.array([[f, 0.0, pp0[0] + dc[0]], [0.0, alpha * f, pp0[1] + dc[1]], [0.0, 0.0, 1.0]],
-                      dtype=np.result_type(f, alpha, dc, w, tt))
-        m = _project(Kp, _perturb(R, w), tt, M)
-        return _distort(m, c0 + dc, kap1 / s ** 2, kap2 / s ** 4).ravel()
+        # the solver's model (procam.models): pinhole projection, then the division model's inverse
+        K = models.intrinsic_matrix(f, pp0[0] + dc[0], pp0[1] + dc[1], alpha)
+        m = models.project(K, _perturb(R, w), tt, M)
+        return models.distort_division(m, c0 + dc, kap1 / s ** 2, kap2 / s ** 4).ravel()
 
     kap1, kap2 = k1 * s ** 2, k2 * s ** 4
     if model == "full":
-        names = ["f", "alpha", "cu", "cv", "k1", "k2", "wx", "wy", "wz", "tx", "ty", "tz"]
+        names = ["f_c", "alpha_c", "u0c", "v0c", "k1", "k2", "wx", "wy", "wz", "tx", "ty", "tz"]
         p0 = np.r_[f0, alpha0, 0.0, 0.0, kap1, kap2, 0.0, 0.0, 0.0, t]
 
         def fun(p):
             return observe(p[0], p[1], p[2:4], p[4], p[5], p[6:9], p[9:12])
         raw_scale = np.r_[1.0, 1.0, 1.0, 1.0, 1.0 / s ** 2, 1.0 / s ** 4, np.ones(6)]
     elif model == "known_distortion":
-        names = ["f", "alpha", "wx", "wy", "wz", "tx", "ty", "tz"]
+        names = ["f_c", "alpha_c", "wx", "wy", "wz", "tx", "ty", "tz"]
         p0 = np.r_[f0, alpha0, 0.0, 0.0, 0.0, t]
 
         def fun(p):
             return observe(p[0], p[1], np.zeros(2), kap1, kap2, p[2:5], p[5:8])
         raw_scale = np.ones(8)
     else:
-        names = ["f", "wx", "wy", "wz", "tx", "ty", "tz"]
+        names = ["f_c", "wx", "wy", "wz", "tx", "ty", "tz"]
         p0 = np.r_[f0, 0.0, 0.0, 0.0, t]
 
         def fun(p):
@@ -245,7 +218,7 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
     cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
                              jacobian=jacobian)
     cov = cov * np.outer(raw_scale, raw_scale)
-    return _pack(cov, names, cond, model, ["f", "alpha", "cu", "cv", "k1", "k2"])
+    return _pack(cov, names, cond, model, ["f_c", "alpha_c", "u0c", "v0c", "k1", "k2"])
 
 
 def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
@@ -269,9 +242,9 @@ def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e
 
     Returns
     -------
-    dict
-        ``"f"``, ``"v0"`` (pixels; ``inf`` when degenerate, i.e. ``nu_p = 0``), ``"omega"``,
-        ``"t"``, ``"cov"``, ``"params"``, ``"condition"``, ``"model"``.
+    :class:`Bound`
+        ``std`` with ``"f_p"``, ``"v0p"`` (pixels; ``inf`` when degenerate, i.e. ``nu_p = 0``), ``omega``,
+        ``t``, ``cov``, ``params``, ``condition``, ``model``.
 
     Examples
     --------
@@ -280,7 +253,7 @@ def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e
     >>> from procam.models import intrinsic_matrix, euler_to_matrix
     >>> K = intrinsic_matrix(2421.0, 1013.0, 1065.0, alpha=1.002)
     >>> R = euler_to_matrix(*np.radians([10.0, 10.0, 0.0]))
-    >>> round(projector_bound(K, R, [0, 0, 500], object_points(10, 6, 24.0))["f"], 0)
+    >>> round(projector_bound(K, R, [0, 0, 500], object_points(10, 6, 24.0)).std["f_p"], 0)
     11.0
     """
     K = np.asarray(K, float)
@@ -288,33 +261,31 @@ def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e
     t = np.asarray(t, float).reshape(3)
     M = np.asarray(obj_pts, float).reshape(-1, 3)
     alpha0, u0 = K[1, 1] / K[0, 0], K[0, 2]
-    names = ["f", "v0", "wx", "wy", "wz", "tx", "ty", "tz"]
+    names = ["f_p", "v0p", "wx", "wy", "wz", "tx", "ty", "tz"]
     p0 = np.r_[K[0, 0], K[1, 2], 0.0, 0.0, 0.0, t]
 
     def fun(p):
-        Kp = np.array([[p[0], 0.0, u0], [0.0, alpha0 * p[0], p[1]], [0.0, 0.0, 1.0]], dtype=p.dtype)
-        return _project(Kp, _perturb(R, p[2:5]), p[5:8], M).ravel()
+        K = models.intrinsic_matrix(p[0], u0, p[1], alpha0)
+        return models.project(K, _perturb(R, p[2:5]), p[5:8], M).ravel()
 
     cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
                              jacobian=jacobian)
-    return _pack(cov, names, cond, "projector", ["f", "v0"])
+    return _pack(cov, names, cond, "projector", ["f_p", "v0p"])
 
 
-def _pack(cov, names, cond, model, scalar_keys):
-    out = {}
-    for key in scalar_keys:
-        out[key] = _std(cov, names.index(key)) if key in names else 0.0
+def _std(cov, k):
+    v = cov[k, k]
+    return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("inf")
+
+
+def _pack(cov, names, cond, model, scalar_keys) -> Bound:
     if not np.all(np.isfinite(cov)):
-        out = {key: (float("inf") if key in names else 0.0) for key in scalar_keys}
-    idx_w = [names.index(k) for k in ("wx", "wy", "wz")]
-    idx_t = [names.index(k) for k in ("tx", "ty", "tz")]
-    out["omega"] = np.array([_std(cov, k) for k in idx_w])
-    out["t"] = np.array([_std(cov, k) for k in idx_t])
-    out["cov"] = cov
-    out["params"] = list(names)
-    out["condition"] = cond
-    out["model"] = model
-    return out
+        std = {key: (float("inf") if key in names else 0.0) for key in scalar_keys}
+    else:
+        std = {key: (_std(cov, names.index(key)) if key in names else 0.0) for key in scalar_keys}
+    omega = np.array([_std(cov, names.index(k)) for k in ("wx", "wy", "wz")])
+    t = np.array([_std(cov, names.index(k)) for k in ("tx", "ty", "tz")])
+    return Bound(std=std, omega=omega, t=t, cov=cov, params=tuple(names), condition=cond, model=model)
 
 
 def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
@@ -326,7 +297,7 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
 
     Parameters
     ----------
-    cam, proj : dict
+    cam, proj : :class:`Bound`
         Results of :func:`camera_bound` and :func:`projector_bound` at the true poses.
     R_c, t_c, R_p, t_p : array_like
         True board -> camera and board -> projector poses.
@@ -335,23 +306,18 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
 
     Returns
     -------
-    dict
-        ``"euler_deg"`` (3,) stds of ``(psi, nu, phi)`` of ``R`` in degrees; ``"T"`` (3,)
-        stds of ``T``; ``"sigma_T"`` = ``sqrt(sum var T)``; ``"T_norm"`` std of ``|T|``;
-        ``"cov"`` (6, 6) of ``(psi, nu, phi [rad], T)``.  ``inf`` when either device is
-        degenerate.
+    :class:`ExtrinsicsBound`
     """
     R_c, R_p = np.asarray(R_c, float), np.asarray(R_p, float)
     t_c, t_p = np.asarray(t_c, float).reshape(3), np.asarray(t_p, float).reshape(3)
     blocks = []
     for b in (cam, proj):
-        names = b["params"]
-        idx = [names.index(k) for k in ("wx", "wy", "wz", "tx", "ty", "tz")]
-        blocks.append(np.asarray(b["cov"], float)[np.ix_(idx, idx)])
+        idx = [b.params.index(k) for k in ("wx", "wy", "wz", "tx", "ty", "tz")]
+        blocks.append(np.asarray(b.cov, float)[np.ix_(idx, idx)])
     if not all(np.all(np.isfinite(c)) for c in blocks):
         inf3 = np.full(3, np.inf)
-        return {"euler_deg": inf3, "T": inf3.copy(), "sigma_T": float("inf"),
-                "T_norm": float("inf"), "cov": np.full((6, 6), np.inf)}
+        return ExtrinsicsBound(euler_deg=inf3, T=inf3.copy(), sigma_T=float("inf"), T_norm=float("inf"),
+                               cov=np.full((6, 6), np.inf))
     C = np.zeros((12, 12))
     C[:6, :6], C[6:, 6:] = blocks
 
@@ -360,16 +326,10 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
         Rp, tp = _perturb(R_p, q[6:9]), t_p + q[9:12]
         Rx = Rp @ Rc.T
         T = tp - Rx @ tc
-        return np.r_[matrix_to_euler(Rx), T, np.linalg.norm(T)]
+        return np.r_[models.matrix_to_euler(Rx), T, np.linalg.norm(T)]
 
     q0 = np.zeros(12)
-    J = np.empty((7, 12))
-    for k in range(12):
-        h = rel_step * max(1.0, abs(q0[k]))
-        dq = np.zeros(12)
-        dq[k] = h
-        J[:, k] = (fun(q0 + dq) - fun(q0 - dq)) / (2.0 * h)
-    cov = J @ C @ J.T
+    cov = unc.propagate(C, fun, q0, rel_step=rel_step)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    return {"euler_deg": np.degrees(sd[:3]), "T": sd[3:6], "sigma_T": float(np.sqrt(np.sum(sd[3:6] ** 2))),
-            "T_norm": float(sd[6]), "cov": cov[:6, :6]}
+    return ExtrinsicsBound(euler_deg=np.degrees(sd[:3]), T=sd[3:6], sigma_T=float(np.sqrt(np.sum(sd[3:6] ** 2))),
+                           T_norm=float(sd[6]), cov=cov[:6, :6])

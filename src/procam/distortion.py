@@ -4,7 +4,6 @@
   fundamental matrix ``F = [c]_x H`` (Hartley & Kang), with an observability score ``s8/s9``.
 * :func:`estimate_division` -- the linear ("one-shot") solve of the division-model coefficients
   ``k1, k2`` and the board -> undistorted-image homography, given the centre.
-* :func:`undistort` -- distorted -> undistorted pixels (division model, paper Eq. 2).
 * :func:`opencv_from_division` -- an OpenCV ``(k1, k2, p1, p2, k3)`` fit that reproduces a division
   model over the image, for files read by OpenCV-based tools.
 
@@ -60,12 +59,6 @@ def _as_xy(pts) -> np.ndarray:
     return a[:, :2]
 
 
-def _normalizer(pts: np.ndarray) -> np.ndarray:
-    """Hartley similarity (3, 3): centroid to 0, mean distance sqrt(2)."""
-    c = pts.mean(axis=0)
-    d = np.mean(np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]))
-    s = np.sqrt(2.0) / d if d > 0 else 1.0
-    return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
 
 
 def _homog(pts: np.ndarray) -> np.ndarray:
@@ -101,7 +94,7 @@ def estimate_cod(obj_pts, cam_pts, *, image_size=None, min_score: float = MIN_CO
         if len(X) < 9:
             return CODEstimate(nan2, nan9, float("nan"), False,
                                f"only {len(X)} usable corners (the radial fundamental matrix needs >= 9)")
-        Td, Tb = _normalizer(x), _normalizer(X)
+        Td, Tb = models.hartley_normalizer(x), models.hartley_normalizer(X)
         xd = _homog(x) @ Td.T
         Xb = _homog(X) @ Tb.T
         A = np.einsum("ni,nj->nij", xd, Xb).reshape(len(x), 9)
@@ -162,7 +155,7 @@ def estimate_division(obj_pts, cam_pts, center, *, n_coeffs: int = 2, radius_sca
     sr = float(radius_scale) if radius_scale else float(max(r.max(), 1.0))
     xb = xb / sr
     rho2 = (r / sr) ** 2
-    Tb = _normalizer(X)
+    Tb = models.hartley_normalizer(X)
     Xn = _homog(X) @ Tb.T
     # step 1: h1, h2 up to a common scale: xb_y (h1.X) - xb_x (h2.X) = 0
     M = np.hstack([xb[:, 1:2] * Xn, -xb[:, 0:1] * Xn])
@@ -189,10 +182,6 @@ def estimate_division(obj_pts, cam_pts, center, *, n_coeffs: int = 2, radius_sca
     return float(K1 / sr ** 2), float(K2 / sr ** 4), H
 
 
-def undistort(pts, center, k1: float, k2: float = 0.0) -> np.ndarray:
-    """Distorted -> undistorted pixels with the division model, (N, 2) -> (N, 2)."""
-    return models.undistort_division(pts, center, k1, k2)
-
 
 def max_displacement(pts, center, k1: float, k2: float = 0.0) -> float:
     """Largest distance (px) between distorted points ``pts`` (N, 2) and their undistorted positions."""
@@ -200,7 +189,7 @@ def max_displacement(pts, center, k1: float, k2: float = 0.0) -> float:
     p = p[np.isfinite(p).all(1)]
     if len(p) == 0:
         return float("nan")
-    d = undistort(p, center, k1, k2) - p
+    d = models.undistort_division(p, center, k1, k2) - p
     return float(np.max(np.hypot(d[:, 0], d[:, 1])))
 
 
@@ -242,7 +231,7 @@ def opencv_from_division(K, center, k1: float, k2: float, image_size, *, grid: t
     den = 1.0 + k1 * r2 + k2 * r2 * r2
     keep = den > min_denominator
     md = md[keep]
-    mu = undistort(md, center, k1, k2)
+    mu = models.undistort_division(md, center, k1, k2)
     fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     x = (mu[:, 0] - cx) / fx
     y = (mu[:, 1] - cy) / fy

@@ -30,26 +30,12 @@ import numpy as np
 from . import models
 from .calibration import Calibration
 from .errors import CalibrationError
-from .residuals import pnp, rms, stereo_pose  # noqa: F401  (pnp, stereo_pose re-exported)
+from .residuals import pnp, rms, stereo_pose
 from .view import View
 
 
-def pose_angles(R_board_to_device, t=None) -> tuple[float, float, float]:
-    """Board pose angles ``(psi, nu, phi)`` in degrees (intrinsic XYZ; fronto-parallel = (0, 0, 0)).
-
-    Parameters
-    ----------
-    R_board_to_device : (3, 3) rotation mapping board to device coordinates.
-    t : (3,) translation of the pose, optional.  With it the angles are
-        :func:`procam.models.board_angles_deg` (board z away from the device, as single- and
-        multi-pose report them); without it the plain Euler angles :func:`procam.models.euler_deg`.
-    """
-    a = models.euler_deg(R_board_to_device) if t is None else models.board_angles_deg(R_board_to_device, t)
-    return tuple(float(v) for v in a)
 
 
-# shared with the solvers (procam.residuals); the old names stay importable from here
-_rms = rms
 
 @dataclass(frozen=True)
 class PoseEvaluation:
@@ -132,6 +118,10 @@ class Evaluation:
         return out
 
 
+def _angles(a) -> tuple[float, float, float]:
+    return tuple(float(v) for v in a)
+
+
 def _spread(Ts: np.ndarray, ddof: int):
     if len(Ts) <= ddof:
         return np.full(3, np.nan), float("nan"), float("nan")
@@ -192,8 +182,9 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
         st_all += [sc, sp]
         poses.append(PoseEvaluation(
             name=name, n_points=int(len(obj)), cam_rms=rms(ec), proj_rms=rms(ep),
-            stereo_rms=rms(np.vstack([sc, sp])), cam_angles=pose_angles(Rc, tc),
-            proj_angles=pose_angles(Rp, tp), R=Rj, T=Tj, R_angles=pose_angles(Rj),
+            stereo_rms=rms(np.vstack([sc, sp])), cam_angles=_angles(models.board_angles_deg(Rc, tc)),
+            proj_angles=_angles(models.board_angles_deg(Rp, tp)), R=Rj, T=Tj,
+            R_angles=_angles(models.euler_deg(Rj)),
             R_cam=Rc, t_cam=tc, R_proj=Rp, t_proj=tp))
     Ts = np.array([p.T for p in poses])
     sx1, sT1, sA1 = _spread(Ts, 1)
@@ -205,4 +196,4 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
         cam_rms_all=rms(np.vstack(cam_all)), proj_rms_all=rms(np.vstack(proj_all)),
         stereo_rms=rms(np.vstack(st_all)),
         sigma_xyz=sx1, sigma_T=sT1, sigma_abs_T=sA1, sigma_T_ddof0=sT0, sigma_abs_T_ddof0=sA0,
-        T_mean=Ts.mean(axis=0), T_calib=T, R_angles=pose_angles(R))
+        T_mean=Ts.mean(axis=0), T_calib=T, R_angles=_angles(models.euler_deg(R)))

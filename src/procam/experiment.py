@@ -138,7 +138,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
         Moreno & Taubin's (``calibrateCamera`` per device, then ``stereoCalibrate`` with fixed
         intrinsics), as in the paper.  Note that ``procam calibrate`` (multi-pose) refines by default
         (``--no-refine`` turns it off), so its result for the same poses differs from this reference.
-    single_options : keyword options of :func:`procam.single_pose.calibrate`.
+    single_options : keyword options of :func:`procam.single_pose.calibrate` (``camera=CameraOptions(...)``, ...).
 
     Returns
     -------
@@ -249,7 +249,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
                "mean": stat(np.mean, key), "std": stat(sd, key)} for key, label in _PARAMS]
     options = {"min_set": min_set, "cam_dist": cam_dist, "proj_dist": proj_dist, "refine": refine,
                "proj_size": list(proj_size) if proj_size else None, "n_sets": len(sets),
-               "single_options": dict(single_options or {})}
+               "single_options": {k: str(v) for k, v in (single_options or {}).items()}}
     return ExperimentResult(pose_names=names, single=single_rows, single_extrinsics=ext_rows, sets=set_rows,
                             summary=summary, params=params, reference=dict(reference), set_a=dict(set_a),
                             failures=failures, options=options)

@@ -1,10 +1,15 @@
-"""Camera models: pinhole projection, the division distortion model, pose conventions.
+"""Camera models: pinhole projection, the division distortion model, homographies, poses and angles.
 
-Conventions
------------
+Every solver, the Cramer-Rao bounds and the evaluation use these functions, so the bound is computed
+on the model the solver fits (the simulator keeps its own independent copy on purpose: it is the
+oracle). The projection and distortion functions accept complex arrays (complex-step derivatives).
+
+Conventions (``docs/conventions.md``)
+------------------------------------
 * Pixels are ``(x, y)`` = (column, row), origin at the centre of the top-left pixel.
 * ``K = [[f, 0, u0], [0, alpha*f, v0], [0, 0, 1]]`` (zero skew).
-* A pose ``(R, t)`` maps board (world) points into the device frame: ``X_dev = R @ X + t``.
+* A transform named ``R_ab, t_ab`` (or a homography ``H_ab``) maps points of frame/plane ``b`` into
+  ``a``: ``x_a = R_ab @ x_b + t_ab``. A board pose ``(R, t)`` maps board -> device.
 * Division model (Fitzgibbon; paper Eq. 2), **distorted -> undistorted**, about the
   centre of distortion ``c`` with the radius measured in the distorted image::
 
@@ -12,8 +17,12 @@ Conventions
 
   Barrel distortion has ``k1 < 0``.  Its inverse (:func:`distort_division`) is solved
   per point by Newton's method.
-* Euler angles ``(psi, nu, phi)`` are intrinsic XYZ: ``R = Rx(psi) @ Ry(nu) @ Rz(phi)``,
-  i.e. ``scipy Rotation.from_euler('XYZ', ...)`` (upper case).  Radians in code.
+* Angles: the plain intrinsic XYZ Euler angles ``(psi, nu, phi)`` of a rotation,
+  ``R = Rx(psi) @ Ry(nu) @ Rz(phi)`` (scipy ``Rotation.from_euler('XYZ', ...)``), are
+  :func:`euler_to_matrix` / :func:`matrix_to_euler` (radians) and :func:`euler_deg` (degrees); the angles
+  of a **board pose** (board z axis away from the device, so the same physical pose gets the same
+  angles however its corners were numbered) are :func:`board_angles_deg`. Radians in code, degrees at
+  the user surface.
 """
 
 from __future__ import annotations
@@ -21,10 +30,17 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+#: Scale of the conditioned division coefficients in the single-pose camera parameter vector:
+#: ``k1 = kappa1 / S^2``, ``k2 = kappa2 / S^4`` with ``S = KAPPA_SCALE`` pixels.
+KAPPA_SCALE = 1000.0
 
-def intrinsic_matrix(f: float, u0: float, v0: float, alpha: float = 1.0) -> np.ndarray:
+
+# ----------------------------------------------------------------------------------------------
+# intrinsics, rotations, poses
+def intrinsic_matrix(f, u0, v0, alpha=1.0) -> np.ndarray:
     """(3, 3) pinhole matrix with zero skew: ``[[f, 0, u0], [0, alpha f, v0], [0, 0, 1]]``."""
-    return np.array([[f, 0.0, u0], [0.0, alpha * f, v0], [0.0, 0.0, 1.0]])
+    dtype = np.result_type(f, u0, v0, alpha, float)  # complex for complex-step derivatives
+    return np.array([[f, 0.0, u0], [0.0, alpha * f, v0], [0.0, 0.0, 1.0]], dtype=dtype)
 
 
 def euler_to_matrix(psi: float, nu: float, phi: float) -> np.ndarray:
@@ -33,7 +49,8 @@ def euler_to_matrix(psi: float, nu: float, phi: float) -> np.ndarray:
 
 
 def matrix_to_euler(R: np.ndarray) -> np.ndarray:
-    """Intrinsic XYZ angles ``(psi, nu, phi)`` in radians of a (3, 3) rotation.
+    """Intrinsic XYZ angles ``(psi, nu, phi)`` in radians of a (3, 3) rotation (inverse of
+    :func:`euler_to_matrix`).
 
     ``nu = asin(R[0, 2])``, ``psi = atan2(-R[1, 2], R[2, 2])``, ``phi = atan2(-R[0, 1], R[0, 0])``.
     """
@@ -44,11 +61,81 @@ def matrix_to_euler(R: np.ndarray) -> np.ndarray:
     return np.array([psi, nu, phi])
 
 
+def euler_deg(R) -> np.ndarray:
+    """Intrinsic XYZ angles ``(psi, nu, phi)`` of a (3, 3) rotation in **degrees** (3,).
+
+    For rotations that are not a board pose (e.g. the camera -> projector ``R``); a board pose's
+    angles are :func:`board_angles_deg`.
+
+    >>> euler_deg(euler_to_matrix(*np.radians([12.0, -7.0, 3.0]))).round(6)
+    array([12., -7.,  3.])
+    """
+    return np.degrees(matrix_to_euler(R))
+
+
+def board_angles_deg(R, t) -> np.ndarray:
+    """Board angles ``(psi, nu, phi)`` in degrees (3,) of a board -> device pose ``(R, t)``.
+
+    Measured in the board frame whose z points away from the device (a fronto-parallel board gives
+    (0, 0, 0)): if the device is on the board's +z side (``invert(R, t)[1][2] > 0``) the board frame is
+    first turned 180 deg about its x axis, so the same physical pose gets the same angles whichever way
+    its corners were numbered. Single-pose, multi-pose and :mod:`procam.evaluate` all report board
+    angles with this function.
+
+    >>> R = euler_to_matrix(*np.radians([15.0, 12.0, 0.0]))
+    >>> board_angles_deg(R, [0.0, 0.0, 500.0]).round(6)
+    array([15., 12.,  0.])
+    """
+    R = np.asarray(R, float)
+    _, O = invert(R, t)
+    if O[2] > 0:
+        R = R @ np.diag([1.0, -1.0, -1.0])
+    return euler_deg(R)
+
+
+def rvec_to_matrix(rvec) -> np.ndarray:
+    """Rotation vector (3,) -> (3, 3) matrix (Rodrigues).
+
+    Real input goes through scipy's ``Rotation``; complex input (complex-step derivatives) through the
+    Rodrigues formula, with its series near zero.
+    """
+    w = np.asarray(rvec).reshape(3)
+    if not np.iscomplexobj(w):
+        return Rotation.from_rotvec(w.astype(float)).as_matrix()
+    th2 = w @ w
+    W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]], dtype=complex)
+    if abs(th2) < 1e-12:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        th = np.sqrt(th2)
+        a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
+    return np.eye(3) + a * W + b * (W @ W)
+
+
+def matrix_to_rvec(R) -> np.ndarray:
+    """(3, 3) rotation matrix -> rotation vector (3,)."""
+    return Rotation.from_matrix(np.asarray(R, float)).as_rotvec()
+
+
+def compose(R_ab: np.ndarray, t_ab: np.ndarray, R_bc: np.ndarray, t_bc: np.ndarray):
+    """``(R_ac, t_ac)`` with ``x_a = R_ab (R_bc x_c + t_bc) + t_ab`` (b -> a after c -> b)."""
+    R_ab = np.asarray(R_ab, float)
+    return R_ab @ np.asarray(R_bc, float), R_ab @ np.asarray(t_bc, float).reshape(3) + np.asarray(t_ab, float).reshape(3)
+
+
+def invert(R: np.ndarray, t: np.ndarray):
+    """Inverse transform: ``(R_ba, t_ba) = (R^T, -R^T t)`` of ``(R_ab, t_ab)``."""
+    R = np.asarray(R, float)
+    return R.T, -R.T @ np.asarray(t, float).reshape(3)
+
+
+# ----------------------------------------------------------------------------------------------
+# projection and distortion
 def project(K: np.ndarray, R: np.ndarray, t: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """Pinhole projection of (N, 3) points: ``pi(K (R X + t))``, returns (N, 2) pixels."""
-    X = np.asarray(X, dtype=float).reshape(-1, 3)
-    Xc = X @ np.asarray(R, float).T + np.asarray(t, float).reshape(1, 3)
-    m = Xc @ np.asarray(K, float).T
+    """Pinhole projection of (N, 3) points: ``pi(K (R X + t))``, returns (N, 2) pixels (complex-safe)."""
+    X = np.asarray(X).reshape(-1, 3)
+    Xc = X @ np.asarray(R).T + np.asarray(t).reshape(1, 3)
+    m = Xc @ np.asarray(K).T
     return m[:, :2] / m[:, 2:3]
 
 
@@ -60,78 +147,137 @@ def undistort_division(pts: np.ndarray, center, k1: float, k2: float = 0.0) -> n
     return np.asarray(center, float).reshape(1, 2) + d / (1.0 + k1 * r2 + k2 * r2 * r2)
 
 
-def distort_division(pts: np.ndarray, center, k1: float, k2: float = 0.0,
-                     iterations: int = 50) -> np.ndarray:
-    """Inverse of :func:`undistort_division`: undistorted -> distorted pixels, (N, 2).
+def distort_division(pts: np.ndarray, center, k1, k2=0.0, iterations: int = 50) -> np.ndarray:
+    """Inverse of :func:`undistort_division`: undistorted -> distorted pixels, (N, 2) (complex-safe).
 
-    Solves ``r_d - r_u (1 + k1 r_d^2 + k2 r_d^4) = 0`` for ``r_d`` by Newton's method from
-    ``r_d = r_u``.  Points where no root exists (strong pincushion far out) are NaN.
+    With ``r_d = s r_u`` the scale ``s`` solves ``s = 1 + k1 s^2 q + k2 s^4 q^2``, ``q = r_u^2``
+    (the division model at the distorted radius), by Newton's method from ``s = 1`` -- the same
+    iterates as Newton on ``r_d`` from ``r_d = r_u``, without a square root (so no branch at the
+    centre). Points where no root exists (strong pincushion far out) are NaN.
+
+    >>> p = np.array([[900.0, 700.0]])
+    >>> q = distort_division(p, (640.0, 400.0), -1e-7)
+    >>> bool(np.allclose(undistort_division(q, (640.0, 400.0), -1e-7), p, atol=1e-9))
+    True
     """
-    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-    c = np.asarray(center, float).reshape(1, 2)
+    pts = np.asarray(pts).reshape(-1, 2)
+    c = np.asarray(center).reshape(1, 2)
     d = pts - c
-    ru = np.hypot(d[:, 0], d[:, 1])
-    rd = ru.copy()
-    for _ in range(iterations):
-        r2 = rd * rd
-        g = rd - ru * (1.0 + k1 * r2 + k2 * r2 * r2)
-        dg = 1.0 - ru * (2.0 * k1 * rd + 4.0 * k2 * r2 * rd)
-        with np.errstate(divide="ignore", invalid="ignore"):
+    q = d[:, 0] ** 2 + d[:, 1] ** 2
+    s = np.ones_like(q)
+    complex_step = np.iscomplexobj(q) or np.iscomplexobj(k1) or np.iscomplexobj(k2) or np.iscomplexobj(c)
+    with np.errstate(all="ignore"):
+        for _ in range(iterations):
+            g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
+            dg = 1.0 - 2.0 * k1 * s * q - 4.0 * k2 * s ** 3 * q * q
             step = g / dg
-        rd = rd - step
-        if np.all(np.abs(step[np.isfinite(step)]) < 1e-12):
-            break
-    r2 = rd * rd
-    ok = np.isfinite(rd) & (np.abs(rd - ru * (1 + k1 * r2 + k2 * r2 * r2)) < 1e-6) & (rd >= 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = np.where(ru > 0, rd / ru, 1.0)
-    out = c + d * scale[:, None]
-    out[~ok] = np.nan
+            s = s - step
+            if not complex_step and np.all(np.abs(step[np.isfinite(step)]) < 1e-15):
+                break
+        g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
+        ok = np.isfinite(s) & (np.abs(g) * np.sqrt(np.abs(q)) < 1e-6) & (np.real(s) >= 0)
+    out = c + d * s[:, None]
+    if not np.all(ok):
+        out = out.astype(np.result_type(out, float))
+        out[~ok] = np.nan
     return out
 
 
-def rvec_to_matrix(rvec) -> np.ndarray:
-    """Rotation vector (3,) -> (3, 3) matrix."""
-    return Rotation.from_rotvec(np.asarray(rvec, float).reshape(3)).as_matrix()
+def camera_predict(p, obj) -> np.ndarray:
+    """Distorted pixels (N, 2) of board points ``obj`` (N, 3) for the single-pose camera parameters ``p``.
 
-
-def matrix_to_rvec(R) -> np.ndarray:
-    """(3, 3) rotation matrix -> rotation vector (3,)."""
-    return Rotation.from_matrix(np.asarray(R, float)).as_rotvec()
-
-
-def compose(R_ab: np.ndarray, t_ab: np.ndarray, R_bc: np.ndarray, t_bc: np.ndarray):
-    """``(R_ac, t_ac)`` with ``x_a = R_ab (R_bc x_c + t_bc) + t_ab``."""
-    R_ab = np.asarray(R_ab, float)
-    return R_ab @ np.asarray(R_bc, float), R_ab @ np.asarray(t_bc, float).reshape(3) + np.asarray(t_ab, float).reshape(3)
-
-
-def invert(R: np.ndarray, t: np.ndarray):
-    """Inverse pose: ``(R^T, -R^T t)``."""
-    R = np.asarray(R, float)
-    return R.T, -R.T @ np.asarray(t, float).reshape(3)
-
-
-def euler_deg(R) -> np.ndarray:
-    """Intrinsic XYZ angles ``(psi, nu, phi)`` of a (3, 3) rotation in **degrees** (3,).
-
-    For rotations that are not a board pose (e.g. the camera -> projector ``R``); a board pose's
-    angles are :func:`board_angles_deg`.
+    ``p = (f, alpha, u0, v0, kappa1, kappa2, rvec (3), t (3))`` (the parameter vector
+    :data:`procam.parameters.CAMERA_VECTOR`) with ``k1 = kappa1 / S^2``, ``k2 = kappa2 / S^4``,
+    ``S = KAPPA_SCALE``; the division model's centre is the principal point. Complex-safe. Points where
+    the division model has no inverse are NaN.
     """
-    return np.degrees(matrix_to_euler(R))
+    p = np.asarray(p)
+    K = intrinsic_matrix(p[0], p[2], p[3], p[1])
+    mu = project(K, rvec_to_matrix(p[6:9]), p[9:12], obj)
+    k1, k2 = p[4] / KAPPA_SCALE ** 2, p[5] / KAPPA_SCALE ** 4
+    if not np.iscomplexobj(p) and k1 == 0 and k2 == 0:
+        return mu
+    return distort_division(mu, p[2:4], k1, k2)
 
 
-def board_angles_deg(R, t) -> np.ndarray:
-    """Board angles ``(psi, nu, phi)`` in degrees (3,) of a board -> device pose ``(R, t)``.
+def projector_predict(q, obj, u0) -> np.ndarray:
+    """Projector pixels (N, 2) for ``q = (f, v0, rvec (3), t (3))`` (:data:`procam.parameters.PROJECTOR_VECTOR`)
+    with ``u0`` fixed and alpha = 1 (the single-pose projector model). Complex-safe."""
+    q = np.asarray(q)
+    return project(intrinsic_matrix(q[0], u0, q[1]), rvec_to_matrix(q[2:5]), q[5:8], obj)
 
-    Measured in the board frame whose z points away from the device (DESIGN conventions; a
-    fronto-parallel board gives (0, 0, 0)): if the device is on the board's +z side
-    (``invert(R, t)[1][2] > 0``) the board frame is first turned 180 deg about its x axis, so the
-    same physical pose gets the same angles whichever way its corners were numbered.
-    Single-pose, multi-pose and :mod:`procam.evaluate` all report board angles with this function.
+
+# ----------------------------------------------------------------------------------------------
+# homographies
+def hartley_normalizer(pts: np.ndarray) -> np.ndarray:
+    """Hartley similarity (3, 3) of (N, 2) points: centroid to 0, mean distance sqrt(2)."""
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    c = pts.mean(axis=0)
+    d = np.mean(np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1]))
+    s = np.sqrt(2.0) / d if d > 0 else 1.0
+    return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
+
+
+def apply_homography(H, pts) -> np.ndarray:
+    """``pi(H (x, y, 1))`` of (N, 2) points, returns (N, 2)."""
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    p = np.column_stack([pts, np.ones(len(pts))]) @ np.asarray(H).T
+    return p[:, :2] / p[:, 2:3]
+
+
+def homography(src, dst, *, refine: bool = True) -> np.ndarray:
+    """Homography ``H`` (3, 3) with ``dst ~ H src`` and ``H[2, 2] = 1``: normalised DLT, then LM on the
+    dst-side error.
+
+    Exact (to rounding) on noise-free correspondences, which ``cv2.findHomography`` is not (its
+    refinement stops at ~1e-6 px). Raises ``ValueError`` if the points are degenerate (fewer than 4,
+    collinear).
+
+    >>> src = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.2]])
+    >>> H = np.array([[2.0, 0.1, 3], [0.2, 1.5, -1], [0.01, 0.02, 1]])
+    >>> bool(np.allclose(homography(src, apply_homography(H, src)), H))
+    True
     """
-    R = np.asarray(R, float)
-    _, O = invert(R, t)
-    if O[2] > 0:
-        R = R @ np.diag([1.0, -1.0, -1.0])
-    return euler_deg(R)
+    from scipy.optimize import least_squares
+
+    src = np.asarray(src, float).reshape(-1, 2)
+    dst = np.asarray(dst, float).reshape(-1, 2)
+    if len(src) < 4:
+        raise ValueError(f"homography needs >= 4 points, got {len(src)}")
+    Ts, Td = hartley_normalizer(src), hartley_normalizer(dst)
+    a = np.column_stack([src, np.ones(len(src))]) @ Ts.T
+    b = np.column_stack([dst, np.ones(len(dst))]) @ Td.T
+    z = np.zeros_like(a)
+    A = np.vstack([np.hstack([a, z, -b[:, :1] * a]), np.hstack([z, a, -b[:, 1:2] * a])])
+    _, s, Vt = np.linalg.svd(A)
+    if s[-2] <= 1e-12 * s[0]:
+        raise ValueError("homography estimation failed (points collinear or too few)")
+    H = np.linalg.solve(Td, Vt[-1].reshape(3, 3) @ Ts)
+    if not np.all(np.isfinite(H)) or abs(H[2, 2]) < 1e-300:
+        raise ValueError("homography estimation failed (points collinear or too few)")
+    H = H / H[2, 2]
+    if refine:
+        def fun(h):
+            return (apply_homography(np.append(h, 1.0).reshape(3, 3), src) - dst).ravel()
+
+        with np.errstate(all="ignore"):
+            r = least_squares(fun, H.ravel()[:8], method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        if np.all(np.isfinite(r.x)) and r.cost <= 0.5 * np.sum(fun(H.ravel()[:8]) ** 2):
+            H = np.append(r.x, 1.0).reshape(3, 3)
+    return H
+
+
+def pose_from_homography(K, H_db):
+    """Board -> device pose ``(R (3, 3), t (3,))`` from the board -> image homography ``H_db`` and ``K``
+    (Zhang's decomposition, the rotation projected onto SO(3)); the board in front (``t_z > 0``)."""
+    M = np.linalg.solve(np.asarray(K, float), np.asarray(H_db, float))
+    lam = 1.0 / np.sqrt(np.linalg.norm(M[:, 0]) * np.linalg.norm(M[:, 1]))
+    M = M * lam
+    if M[2, 2] < 0:
+        M = -M
+    r1, r2 = M[:, 0], M[:, 1]
+    U, _, Vt = np.linalg.svd(np.column_stack([r1, r2, np.cross(r1, r2)]))
+    R = U @ Vt
+    if np.linalg.det(R) < 0:
+        R = U @ np.diag([1, 1, -1]) @ Vt
+    return R, M[:, 2].copy()

@@ -152,9 +152,28 @@ def _calib_with_guess(obj_list, img_list, image_size, K0, flags, ncoef, criteria
     return rms, K, d, rv, tv
 
 
+@dataclass(frozen=True)
+class DeviceCalibration:
+    """One device's multi-pose calibration (:func:`calibrate_device`).
+
+    ``K`` (3, 3); ``coeffs`` (5,) or (8,) OpenCV distortion vector; ``rvecs``, ``tvecs`` lists of (3,) per
+    pose (board -> device); ``rms`` the RMS reprojection error in pixels over all points
+    (``calibrateCamera``'s); ``init`` the start that won, ``rms_by_init`` the RMS of each start,
+    ``init_errors`` why a start failed.
+    """
+
+    K: np.ndarray
+    coeffs: np.ndarray
+    rvecs: list
+    tvecs: list
+    rms: float
+    init: str
+    rms_by_init: dict
+    init_errors: dict
+
+
 def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *,
-                     init: str = "auto", fix_aspect_ratio: bool = False, iterations: int = 100,
-                     return_info: bool = False):
+                     init: str = "auto", fix_aspect_ratio: bool = False, iterations: int = 100) -> DeviceCalibration:
     """Zhang calibration of one device (camera or projector) from several board poses.
 
     Parameters
@@ -169,13 +188,10 @@ def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *
         ``"zhang"`` (zero-skew closed form; works for a principal point outside the image).
     fix_aspect_ratio : keep ``fy / fx`` at the initial value (``CALIB_FIX_ASPECT_RATIO``).
     iterations : maximum Levenberg–Marquardt iterations (criteria COUNT + EPS, eps = DBL_EPSILON).
-    return_info : also return a dict (which start won, RMS of each start).
 
     Returns
     -------
-    K : (3, 3); coeffs : (5,) or (8,) OpenCV distortion vector; rvecs, tvecs : lists of (3,) per pose
-    (board -> device); rms : RMS reprojection error in pixels over all points (``calibrateCamera``'s).
-    ``(..., info)`` if ``return_info``.
+    :class:`DeviceCalibration`
 
     Raises
     ------
@@ -225,12 +241,9 @@ def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *
     coeffs = np.zeros(ncoef)
     d = np.asarray(d, float).ravel()
     coeffs[:min(ncoef, len(d))] = d[:ncoef]
-    out = (np.asarray(K, float), coeffs, [np.asarray(r, float).ravel() for r in rv],
-           [np.asarray(t, float).ravel() for t in tv], float(rms))
-    if return_info:
-        return out + ({"init": best, "rms_by_init": {k: float(v[0]) for k, v in tries.items()},
-                       "init_errors": errors},)
-    return out
+    return DeviceCalibration(K=np.asarray(K, float), coeffs=coeffs, rvecs=[np.asarray(r, float).ravel() for r in rv],
+                             tvecs=[np.asarray(t, float).ravel() for t in tv], rms=float(rms), init=best,
+                             rms_by_init={k: float(v[0]) for k, v in tries.items()}, init_errors=errors)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -329,6 +342,35 @@ def _stereo_model(x, lay: _Layout, objs, cams, projs, dc0, dp0, want_jac: bool, 
     return r_all
 
 
+@dataclass(frozen=True)
+class StereoRefinement:
+    """The joint refinement's result (:func:`refine_stereo`).
+
+    ``Kc, dc, Kp, dp`` intrinsics and OpenCV distortion vectors; ``R, T`` camera -> projector; ``rvecs,
+    tvecs`` board -> camera per pose; ``residuals`` per pose ``(cam (N, 2), proj (N, 2))``, observed -
+    predicted px, unweighted; ``cov`` the parameter covariance (Gauss-Newton ``s^2 (J^T J)^-1`` of the
+    weighted problem, infinite when ill-conditioned), rows named by ``names`` (:mod:`procam.parameters`
+    vocabulary, ``cam_dist[i]``/``proj_dist[i]`` for distortion coefficient i); ``x`` the solution
+    vector; ``status``, ``nfev``, ``cost`` of ``least_squares``.
+    """
+
+    Kc: np.ndarray
+    dc: np.ndarray
+    Kp: np.ndarray
+    dp: np.ndarray
+    R: np.ndarray
+    T: np.ndarray
+    rvecs: list
+    tvecs: list
+    residuals: list
+    cov: np.ndarray
+    names: tuple
+    x: np.ndarray
+    status: int
+    nfev: int
+    cost: float
+
+
 def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_dist="k1k2p1p2k3",
                   proj_dist="k1k2p1p2k3", loss: str = "soft_l1", loss_scale: float = 1.0,
                   proj_weight: float = 1.0, max_nfev: int = 200, tol: float = 1e-12):
@@ -350,9 +392,7 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
 
     Returns
     -------
-    dict with ``Kc, dc, Kp, dp, R, T, rvecs, tvecs``, ``residuals`` (per-pose (cam (N,2), proj (N,2)), observed - predicted px, unweighted),
-    ``cov`` (parameter covariance, Gauss–Newton, ``s^2 (J^T J)^-1`` of the weighted problem), ``names`` (parameter names),
-    ``x`` (the solution vector), ``status``, ``nfev``, ``cost``.
+    :class:`StereoRefinement`
     """
     _, ncc, cfree = _check_dist(cam_dist)
     _, ncp, pfree = _check_dist(proj_dist)
@@ -385,17 +425,10 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
     x = sol.x
     Kc1, dc1, Kp1, dp1, r1, T1, rv1, tv1 = lay.unpack(x, dc0, dp0)
     rr, J = _stereo_model(x, lay, objs, cams, projs, dc0, dp0, True, w)
-    dof = max(len(rr) - len(x), 1)
-    s2 = float(rr @ rr) / dof
-    try:
-        JTJ = J.T @ J
-        d = np.sqrt(np.diag(JTJ))
-        d[d == 0] = 1.0
-        cov = s2 * (np.linalg.inv(JTJ / np.outer(d, d)) / np.outer(d, d))
-    except np.linalg.LinAlgError:
-        cov = np.full((len(x), len(x)), np.nan)
-    names = (["cam_fx", "cam_fy", "cam_cx", "cam_cy"] + [f"cam_dist{i}" for i in cfree]
-             + ["proj_fx", "proj_fy", "proj_cx", "proj_cy"] + [f"proj_dist{i}" for i in pfree]
+    # Gauss-Newton covariance of the weighted problem, infinite when ill-conditioned (procam.uncertainty)
+    cov = unc.covariance(J, unc.sigma_from_residuals(rr, len(x)) if len(rr) > len(x) else float("nan"))
+    names = (["f_c", "fy_c", "u0c", "v0c"] + [f"cam_dist[{i}]" for i in cfree]
+             + ["f_p", "fy_p", "u0p", "v0p"] + [f"proj_dist[{i}]" for i in pfree]
              + ["R_rx", "R_ry", "R_rz", "T_x", "T_y", "T_z"]
              + [f"pose{j}_{c}" for j in range(len(objs)) for c in ("rx", "ry", "rz", "tx", "ty", "tz")])
     residuals = []
@@ -405,9 +438,9 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
         # reported observed - predicted (the model's residuals are projected - observed)
         residuals.append((-rr[row:row + n2].reshape(-1, 2), -rr[row + n2:row + 2 * n2].reshape(-1, 2) / w))
         row += 2 * n2
-    return {"Kc": Kc1, "dc": dc1, "Kp": Kp1, "dp": dp1, "R": models.rvec_to_matrix(r1), "T": T1,
-            "rvecs": rv1, "tvecs": tv1, "residuals": residuals, "cov": cov, "names": names, "x": x,
-            "status": int(sol.status), "nfev": int(sol.nfev), "cost": float(sol.cost)}
+    return StereoRefinement(Kc=Kc1, dc=dc1, Kp=Kp1, dp=dp1, R=models.rvec_to_matrix(r1), T=T1, rvecs=rv1, tvecs=tv1,
+                            residuals=residuals, cov=cov, names=tuple(names), x=x, status=int(sol.status),
+                            nfev=int(sol.nfev), cost=float(sol.cost))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -419,24 +452,19 @@ def _rms(arrs) -> float:
     return rms(list(arrs))
 
 
-_STD_NAMES = {"cam_fx": "f_c", "cam_fy": "fy_c", "cam_cx": "u0c", "cam_cy": "v0c",
-              "proj_fx": "f_p", "proj_fy": "fy_p", "proj_cx": "u0p", "proj_cy": "v0p"}
-
-
-def _std_dict(ref: dict) -> dict:
-    """Standard deviations from the refinement covariance, named as in the single-pose result:
-    ``f_c, fy_c, u0c, v0c, f_p, fy_p, u0p, v0p`` (px), ``cam_dist<i>``, ``proj_dist<i>``,
-    ``R_euler_deg`` (3,) (delta method through the Euler angles) and ``T`` (3,)."""
-    cov = ref["cov"]
-    names = ref["names"]
-    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    out = {}
-    for n, s in zip(names, sd):
-        if n.startswith(("cam_", "proj_")):
-            out[_STD_NAMES.get(n, n)] = float(s)
+def _std_dict(ref: StereoRefinement, n_cam_dist: int, n_proj_dist: int) -> dict:
+    """Standard deviations from the refinement covariance, named as every procam result
+    (:mod:`procam.parameters`): ``f_c, fy_c, u0c, v0c, f_p, fy_p, u0p, v0p`` (px), ``cam_dist``,
+    ``proj_dist`` (one per coefficient; 0 for a coefficient the model fixes), ``R_euler_deg`` (3,) (delta
+    method through the Euler angles) and ``T`` (3,)."""
+    sd = unc.std(ref.cov)
+    names = list(ref.names)
+    out = {n: float(sd[names.index(n)]) for n in ("f_c", "fy_c", "u0c", "v0c", "f_p", "fy_p", "u0p", "v0p")}
+    for key, n in (("cam_dist", n_cam_dist), ("proj_dist", n_proj_dist)):
+        out[key] = [float(sd[names.index(f"{key}[{i}]")]) if f"{key}[{i}]" in names else 0.0 for i in range(n)]
     i = names.index("R_rx")
-    ce = unc.propagate(cov[i:i + 3, i:i + 3], lambda r: models.euler_deg(models.rvec_to_matrix(r)),
-                       ref["x"][i:i + 3])
+    ce = unc.propagate(ref.cov[i:i + 3, i:i + 3], lambda r: models.euler_deg(models.rvec_to_matrix(r)),
+                       ref.x[i:i + 3])
     out["R_euler_deg"] = unc.std(ce).tolist()
     out["T"] = sd[i + 3:i + 6].tolist()
     return out
@@ -499,12 +527,12 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
         projs.append(v.proj_pts[m])
         names.append(v.name if v.name else f"pose{k + 1}")
 
-    Kc, dc, rvc, tvc, rms_c, info_c = calibrate_device(objs, cams, cam_size, cam_dist, init=init,
-                                                       fix_aspect_ratio=fix_aspect_ratio,
-                                                       iterations=iterations, return_info=True)
-    Kp, dp, rvp, tvp, rms_p, info_p = calibrate_device(objs, projs, proj_size, proj_dist, init=init,
-                                                       fix_aspect_ratio=fix_aspect_ratio,
-                                                       iterations=iterations, return_info=True)
+    cal_c = calibrate_device(objs, cams, cam_size, cam_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
+                             iterations=iterations)
+    cal_p = calibrate_device(objs, projs, proj_size, proj_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
+                             iterations=iterations)
+    Kc, dc, rvc, tvc, rms_c = cal_c.K, cal_c.coeffs, cal_c.rvecs, cal_c.tvecs, cal_c.rms
+    Kp, dp, rms_p = cal_p.K, cal_p.coeffs, cal_p.rms
     o32, c32 = _as_cv(objs, cams)
     _, p32 = _as_cv(objs, projs)
     try:
@@ -515,7 +543,7 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
     rms_s, R0, T0 = float(out[0]), np.asarray(out[5], float), np.asarray(out[6], float).ravel()
     frozen = {"cam_K": Kc.tolist(), "cam_dist": dc.tolist(), "proj_K": Kp.tolist(), "proj_dist": dp.tolist(),
               "R": R0.tolist(), "T": T0.tolist(), "cam_rms": rms_c, "proj_rms": rms_p, "stereo_rms": rms_s,
-              "cam_init": info_c["init"], "proj_init": info_p["init"]}
+              "cam_init": cal_c.init, "proj_init": cal_p.init}
     info = {"frozen": frozen, "cam_dist_model": cam_dist, "proj_dist_model": proj_dist, "refined": bool(refine),
             "pose_names": names}
     warnings = []
@@ -525,17 +553,17 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
         w_proj = max(rms_c, floor) / max(rms_p, floor) if balance else 1.0
         ref = refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R0, T0, rvc, tvc, cam_dist=cam_dist,
                             proj_dist=proj_dist, loss=loss, loss_scale=loss_scale, proj_weight=w_proj)
-        Kc, dc, Kp, dp, R, T = ref["Kc"], ref["dc"], ref["Kp"], ref["dp"], ref["R"], ref["T"]
-        rv_board, tv_board = ref["rvecs"], ref["tvecs"]
-        res = ref["residuals"]
+        Kc, dc, Kp, dp, R, T = ref.Kc, ref.dc, ref.Kp, ref.dp, ref.R, ref.T
+        rv_board, tv_board = ref.rvecs, ref.tvecs
+        res = ref.residuals
         cam_res = [r[0] for r in res]
         proj_res = [r[1] for r in res]
         cam_rms, proj_rms = _rms(cam_res), _rms(proj_res)
         stereo_rms = _rms(cam_res + proj_res)
-        std = _std_dict(ref)
-        info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref["status"],
-                              "nfev": ref["nfev"], "cost": ref["cost"]}
-        if ref["status"] <= 0:
+        std = _std_dict(ref, len(dc), len(dp))
+        info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref.status,
+                              "nfev": ref.nfev, "cost": ref.cost}
+        if ref.status <= 0:
             warnings.append("joint refinement stopped at its evaluation limit; the result may not be converged")
         if not (Kc[0, 0] > 0 and Kc[1, 1] > 0 and Kp[0, 0] > 0 and Kp[1, 1] > 0):
             raise CalibrationError("joint refinement diverged (non-positive focal length); "

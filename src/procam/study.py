@@ -295,11 +295,11 @@ def _calibrate_f(config: StudyConfig, scene, obj, pts) -> float:
             pp = np.array(scene.K_cam[:2, 2], float)
             if config.model_error == "paper":
                 pp = pp + np.array(config.pp_offset)
-            sol = single_pose.calibrate_camera(obj, pts, scene.cam_size, principal_point=(pp[0], pp[1]),
-                                               distortion=None)
+            sol = single_pose.calibrate_camera(
+                obj, pts, scene.cam_size, single_pose.CameraOptions(principal_point=(pp[0], pp[1]), distortion=None))
         else:
             u0 = None if config.model_error == "paper" else float(scene.K_proj[0, 2])
-            sol = single_pose.calibrate_projector(obj, pts, scene.proj_size, u0=u0)
+            sol = single_pose.calibrate_projector(obj, pts, scene.proj_size, single_pose.ProjectorOptions(u0=u0))
         f = float(np.asarray(sol.K)[0, 0])
     except (ProcamError, np.linalg.LinAlgError, ValueError, FloatingPointError):
         return float("nan")
@@ -341,7 +341,7 @@ def _bound(config: StudyConfig, scene, obj, sigma: float) -> float:
                          model="known_distortion")
     else:
         b = projector_bound(scene.K_proj, scene.R_board_proj, scene.t_board_proj, obj, sigma)
-    return float(b["f"])
+    return float(b.std["f_c" if config.device == "camera" else "f_p"])
 
 
 def run_cell(config: StudyConfig, psi: float, nu: float, in_grid: bool = True, slices: str = "",

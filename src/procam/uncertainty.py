@@ -1,10 +1,11 @@
-"""Covariance of estimated parameters from the Jacobian of the residuals at the solution.
+"""The one place for Jacobians and covariances (solvers' ``±``, Cramer-Rao bounds, the delta method).
 
 For residuals ``r(p)`` (m,) with i.i.d. Gaussian noise of standard deviation sigma, the
 Gauss-Newton covariance of the least-squares estimate is ``Cov = sigma^2 (J^T J)^-1`` with
 ``J = dr/dp``. sigma is estimated from the residuals as ``sqrt(sum r^2 / (m - n))``. Evaluated at
-the ground truth with the true sigma this is the Cramer-Rao bound (METHOD §13); evaluated at an
-estimate it is the usual "parameter +- std" of a calibration.
+the ground truth with the true sigma this is the Cramer-Rao bound (:mod:`procam.crlb`); evaluated at an
+estimate it is the usual "parameter +- std" of a calibration: 1 sigma **under the model**, assuming
+the model is right and the corner noise i.i.d.
 
 Degenerate problems: the Jacobian's columns are normalised to unit norm and, if the condition
 number ``s_min / s_max`` is below ``rcond`` (default 1e-9), the covariance is reported as infinite
@@ -20,24 +21,48 @@ import numpy as np
 #: Default condition threshold of the column-normalised Jacobian below which Cov is infinite.
 RCOND = 1e-9
 
+#: Imaginary step of complex-step derivatives (exact to rounding for analytic functions).
+COMPLEX_STEP = 1e-30
 
-def numeric_jacobian(fun: Callable[[np.ndarray], np.ndarray], p, *, rel_step: float = 1e-6,
-                     typical=1.0) -> np.ndarray:
-    """Central-difference Jacobian ``d fun / d p`` (m, n).
 
-    The step of parameter k is ``rel_step * max(typical_k, |p_k|)``; ``typical`` (scalar or (n,))
-    is the parameter's typical magnitude (METHOD §13: step 1e-6 max(1, |p_k|)).
+def jacobian(fun: Callable[[np.ndarray], np.ndarray], p, *, method: str = "central", rel_step: float = 1e-6,
+             typical=1.0) -> np.ndarray:
+    """Jacobian ``d fun / d p`` (m, n).
+
+    Parameters
+    ----------
+    fun : callable ``(n,) -> (m,)``; with ``method="complex"`` it must accept complex parameters and be
+        analytic in them.
+    p : (n,) point.
+    method : ``"central"`` -- central differences with the step of parameter k
+        ``rel_step * max(typical_k, |p_k|)``; ``"complex"`` -- complex-step derivatives
+        ``Im(fun(p + i h e_k)) / h`` with ``h = 1e-30``, exact to rounding (keeps degeneracy tests clean:
+        at an exactly degenerate pose the condition is ~1e-15 with complex steps, ~1e-10..1e-8 with
+        central differences).
+    typical : scalar or (n,), the parameters' typical magnitudes (central differences only).
+
+    >>> J = jacobian(lambda q: np.array([q[0] ** 2 * q[1], np.sin(q[1])]), np.array([3.0, 0.5]), method="complex")
+    >>> J.round(6).tolist()
+    [[3.0, 9.0], [0.0, 0.877583]]
     """
     p = np.asarray(p, float).reshape(-1)
-    typ = np.broadcast_to(np.asarray(typical, float), p.shape)
     cols = []
-    for k in range(p.size):
-        h = rel_step * max(float(typ[k]), abs(p[k]))
-        dp = np.zeros_like(p)
-        dp[k] = h
-        fp = np.asarray(fun(p + dp), float).reshape(-1)
-        fm = np.asarray(fun(p - dp), float).reshape(-1)
-        cols.append((fp - fm) / (2 * h))
+    if method == "complex":
+        for k in range(p.size):
+            dp = np.zeros(p.size, dtype=complex)
+            dp[k] = 1j * COMPLEX_STEP
+            cols.append(np.imag(np.asarray(fun(p + dp))).reshape(-1) / COMPLEX_STEP)
+    elif method == "central":
+        typ = np.broadcast_to(np.asarray(typical, float), p.shape)
+        for k in range(p.size):
+            h = rel_step * max(float(typ[k]), abs(p[k]))
+            dp = np.zeros_like(p)
+            dp[k] = h
+            fp = np.asarray(fun(p + dp), float).reshape(-1)
+            fm = np.asarray(fun(p - dp), float).reshape(-1)
+            cols.append((fp - fm) / (2 * h))
+    else:
+        raise ValueError(f"method must be 'central' or 'complex', got {method!r}")
     return np.column_stack(cols) if cols else np.zeros((np.asarray(fun(p)).size, 0))
 
 
@@ -46,6 +71,28 @@ def sigma_from_residuals(residuals, n_params: int) -> float:
     r = np.asarray(residuals, float).reshape(-1)
     dof = r.size - n_params
     return float(np.sqrt(np.sum(r * r) / dof)) if dof > 0 else float("nan")
+
+
+def _weighted(J, sigma, prior_precision):
+    Ja = np.asarray(J, float) / max(float(sigma), 1e-300)
+    if prior_precision is not None:
+        P = np.asarray(prior_precision, float)
+        P = np.diag(P) if P.ndim == 1 else P
+        w, V = np.linalg.eigh(P)
+        Ja = np.vstack([Ja, (V * np.sqrt(np.clip(w, 0, None))).T])
+    return Ja
+
+
+def condition(J) -> float:
+    """``s_min / s_max`` of the column-normalised (m, n) matrix ``J`` (0 for a zero or non-finite column)."""
+    J = np.asarray(J, float)
+    if J.shape[1] == 0:
+        return 1.0
+    d = np.linalg.norm(J, axis=0)
+    if not np.all(np.isfinite(J)) or np.any(d == 0):
+        return 0.0
+    s = np.linalg.svd(J / d, compute_uv=False)
+    return float(s[-1] / s[0]) if len(s) >= J.shape[1] else 0.0
 
 
 def covariance(J, sigma: float, *, prior_precision=None, rcond: float = RCOND) -> np.ndarray:
@@ -62,17 +109,16 @@ def covariance(J, sigma: float, *, prior_precision=None, rcond: float = RCOND) -
         propagates it into the others (used for a principal point assumed, not measured).
     rcond : float
         Threshold on ``s_min / s_max`` of the column-normalised information matrix's square root.
+
+    >>> X = np.column_stack([np.ones(4), [0.0, 1, 2, 3]])
+    >>> bool(np.allclose(covariance(X, 0.5), 0.25 * np.linalg.inv(X.T @ X)))
+    True
     """
     J = np.asarray(J, float)
     n = J.shape[1]
     if not np.all(np.isfinite(J)) or not np.isfinite(sigma):
         return np.full((n, n), np.inf)
-    Ja = J / max(float(sigma), 1e-300)
-    if prior_precision is not None:
-        P = np.asarray(prior_precision, float)
-        P = np.diag(P) if P.ndim == 1 else P
-        w, V = np.linalg.eigh(P)
-        Ja = np.vstack([Ja, (V * np.sqrt(np.clip(w, 0, None))).T])
+    Ja = _weighted(J, sigma, prior_precision)
     d = np.linalg.norm(Ja, axis=0)
     if np.any(d == 0):
         return np.full((n, n), np.inf)
@@ -91,11 +137,11 @@ def std(cov) -> np.ndarray:
 
 
 def propagate(cov, fun: Callable[[np.ndarray], np.ndarray], p, **jac_kw) -> np.ndarray:
-    """Delta method: covariance of ``fun(p)`` given ``Cov(p)``: ``G Cov G^T`` with ``G = dfun/dp``."""
+    """Delta method: covariance of ``fun(p)`` given ``Cov(p)``: ``G Cov G^T`` with ``G = dfun/dp``
+    (:func:`jacobian`, keyword options passed on)."""
     cov = np.asarray(cov, float)
-    G = numeric_jacobian(fun, p, **jac_kw)
+    G = jacobian(fun, p, **jac_kw)
     if not np.all(np.isfinite(cov)):
         m = G.shape[0]
-        out = np.full((m, m), np.inf)
-        return out
+        return np.full((m, m), np.inf)
     return G @ cov @ G.T

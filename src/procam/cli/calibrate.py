@@ -117,7 +117,8 @@ def calibrate_cmd(
     yaml: Path = typer.Option(None, "--yaml", help="Also write OpenCV FileStorage YAML (cam_K, cam_kc, ...)."),
     png: Path = typer.Option(None, "--png", help="Residual plot."),
     cod: str = typer.Option("auto", "--cod", help="Single-pose principal point: auto (centre of distortion if "
-                                                  "reliable, else fallback), paper (always the COD), center."),
+                                                  "reliable, else the image centre as a prior), paper (always "
+                                                  "the centre of distortion), image-center."),
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
@@ -130,12 +131,14 @@ def calibrate_cmd(
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     from ..plots import save_figure
     from ..plots.residuals import residual_figure
-    from ..report import pose_residuals
+    from ..residuals import pose_residuals
 
     square = parse_square(square)
     cols, rows = parse_board(board)
-    if cod not in ("auto", "paper", "center"):
-        fail(f"--cod must be auto, paper or center, got {cod!r}")
+    from ..single_pose import COD_MODES
+
+    if cod not in COD_MODES:
+        fail(f"--cod must be one of {', '.join(COD_MODES)}, got {cod!r}")
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"))
     output_path(yaml, "--yaml", (".yml", ".yaml"))
@@ -169,7 +172,7 @@ def calibrate_cmd(
         if method == "single":
             from .. import single_pose
 
-            calib = single_pose.calibrate(views[0], cod=cod)
+            calib = single_pose.calibrate(views[0], camera=single_pose.CameraOptions(cod=cod))
         else:
             from .. import multi_pose
 
@@ -204,6 +207,7 @@ def _camera_only(images, cols, rows, square, cod):
                                  "inner corners), the exposure, and that the whole board is in view")
     obj = _board.object_points(cols, rows, square)
     h, w = img.shape[:2]
-    calib = single_pose.calibrate_camera_only(obj, c, (w, h), name=str(path), cod=cod)
+    calib = single_pose.calibrate_camera_only(obj, c, (w, h), name=str(path),
+                                              camera=single_pose.CameraOptions(cod=cod))
     view = View(obj, c, np.full_like(c, np.nan), str(path), (w, h), None)
     return calib.replace(views=(view,))
