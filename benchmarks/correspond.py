@@ -22,6 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
+from procam.board import Board  # noqa: E402
 from procam import board, correspond, decode, patterns, pipeline, simulate  # noqa: E402
 
 
@@ -70,7 +71,7 @@ def main():
                     hom_time[(w, e)].append(time.perf_counter() - t)
                     hom_err[(w, e)].append(rms(p, proj_t))
             t = time.perf_counter()
-            view, _ = pipeline.view_from_stack(stack, ps, (10, 6), 24.0)
+            view, _ = pipeline.view_from_stack(stack, ps, Board(10, 6, 24.0))
             full.append((pose, noise, rms(view.cam_pts, cam_t)[0], *rms(view.proj_pts, proj_t),
                          time.perf_counter() - t))
     print(header("correspondences: accuracy against simulator truth (paper preset, 46-image 1280x800 renders)"))

@@ -78,6 +78,7 @@ def _observations(scene, args, seed):
         return _displace(o, c, p, args.outliers, seed) if args.outliers else (o, c, p)
     try:
         from procam.patterns import pattern_set
+        from procam.board import Board
         from procam.pipeline import view_from_stack
         render = simulate.render
     except (ImportError, AttributeError) as e:
@@ -85,7 +86,7 @@ def _observations(scene, args, seed):
                  f"not available ({e}); use --source points")
     stack, _ = render(scene, order="opencv", seed=seed)
     ps = pattern_set(*scene.proj_size, order="opencv")
-    view, _ = view_from_stack(stack, ps, board=(scene.board_cols, scene.board_rows), square=scene.square,
+    view, _ = view_from_stack(stack, ps, Board(scene.board_cols, scene.board_rows, scene.square),
                               name=f"render-{seed}")
     return view.obj_pts, view.cam_pts, view.proj_pts
 

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from conftest import rms, run_cli
 
+from procam.board import Board
 from procam import board, correspond, decode, patterns, pipeline
 from procam.errors import BoardNotFoundError, CorrespondenceError
 
@@ -31,7 +32,7 @@ def test_object_points_and_canonical_order():
 def test_corners_and_projector_points_against_truth(paper_capture):
     folder, stack, truth, _ = paper_capture
     cam_t, proj_t, obj_t = _truth(truth)
-    view, maps = pipeline.view_from_stack(stack, PS, (10, 6), 24.0)
+    view, maps = pipeline.view_from_stack(stack, PS, Board(10, 6, 24.0))
     assert np.allclose(view.obj_pts, obj_t)
     assert view.valid.all()
     assert rms(view.cam_pts, cam_t) <= 0.1  # camera px
@@ -59,7 +60,7 @@ def test_partially_lit_board_works_corner_by_corner(paper_capture):
     for k in range(PS.count):
         if k != PS.white:
             st[k, :, x_cut:] = stack[PS.black, :, x_cut:]
-    view, _ = pipeline.view_from_stack(st, PS, (10, 6), 24.0)
+    view, _ = pipeline.view_from_stack(st, PS, Board(10, 6, 24.0))
     reason = view.diagnostics["reason"]
     far_left = cam_t[:, 0] < x_cut - 40
     far_right = cam_t[:, 0] > x_cut + 40
@@ -72,7 +73,7 @@ def test_partially_lit_board_works_corner_by_corner(paper_capture):
         if k != PS.white:
             st[k] = stack[PS.black]
     with pytest.raises(CorrespondenceError, match=r"only 0 of 60 corners.*too few decoded pixels"):
-        pipeline.view_from_stack(st, PS, (10, 6), 24.0)
+        pipeline.view_from_stack(st, PS, Board(10, 6, 24.0))
 
 
 def test_board_near_the_image_border(paper_capture):
@@ -96,7 +97,7 @@ def test_board_near_the_image_border(paper_capture):
 def test_board_not_found_message(paper_capture):
     _, stack, _, _ = paper_capture
     with pytest.raises(BoardNotFoundError, match=r"9x6 inner corners not found.*10x7 squares"):
-        pipeline.view_from_stack(stack, PS, (9, 6), 24.0, name="pose1")
+        pipeline.view_from_stack(stack, PS, Board(9, 6, 24.0), name="pose1")
 
 
 def test_cli_correspond(paper_capture, tmp_path):

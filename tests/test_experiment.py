@@ -123,8 +123,8 @@ def fake_folders(views, tmp_path, monkeypatch):
         d.mkdir()
         by_name[d.name] = v
 
-    def fake(folder, board, square, projector=None, order=None, **kw):
-        assert tuple(board) == (10, 6) and square == 24.0
+    def fake(folder, board, projector=None, order=None, **kw):
+        assert board.pattern_size == (10, 6) and board.square == 24.0
         v = by_name[Path(folder).name]
         return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size), None
 
@@ -157,7 +157,7 @@ def test_cli_evaluate(fake_folders, views, tmp_path):
     io.save_calibration(calib, cpath)
     jpath = tmp_path / "eval.json"
     r = CliRunner().invoke(app, ["evaluate", str(cpath), *fake_folders, "--board", "10x6", "--square", "24",
-                                 "--projector", "1920x1080", "--json", str(jpath)])
+                                 "--projector", "1920x1080", "-o", str(jpath)])
     assert r.exit_code == 0, r.output
     assert "σ_T" in r.output and "stereo RMS" in r.output
     d = json.loads(jpath.read_text())

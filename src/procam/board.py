@@ -8,7 +8,68 @@ points away from the devices, so a fronto-parallel board has ``R = I``.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
+
+from .errors import ProcamError
+
+#: Inner corners per side that a board may have (OpenCV's detectors need at least 3; 500 is far beyond
+#: any printed calibration board and keeps every array small).
+CORNERS_PER_SIDE = (3, 500)
+#: Square sizes accepted, in the user's length unit (1e-6 .. 1e6: microns to kilometres in mm).
+SQUARE_RANGE = (1e-6, 1e6)
+
+
+@dataclass(frozen=True)
+class Board:
+    """A printed chessboard: ``cols`` x ``rows`` **inner** corners (OpenCV's ``pattern_size``; a board of
+    11 x 7 squares has 10 x 6 inner corners) and the side ``square`` of a square, which is the length
+    unit of every output (say mm).
+
+    Raises :class:`~procam.errors.ProcamError` for counts outside :data:`CORNERS_PER_SIDE` or a square
+    size that is not a finite number in :data:`SQUARE_RANGE`.
+
+    >>> Board(10, 6, 24.0).object_points().shape
+    (60, 3)
+    """
+
+    cols: int
+    rows: int
+    square: float
+
+    def __post_init__(self):
+        lo, hi = CORNERS_PER_SIDE
+        for what, v in (("columns", self.cols), ("rows", self.rows)):
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+                raise ProcamError(f"board {self.cols}x{self.rows}: {what} of inner corners must be an integer "
+                                  f"from {lo} to {hi}, got {v!r} (count inner corners, not squares)")
+        sq = self.square
+        if isinstance(sq, bool) or not isinstance(sq, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(sq) or not SQUARE_RANGE[0] <= sq <= SQUARE_RANGE[1]:
+            raise ProcamError(f"board square size must be a finite length from {SQUARE_RANGE[0]:g} to "
+                              f"{SQUARE_RANGE[1]:g} (the square's side in your length unit, e.g. 24 for mm), "
+                              f"got {sq!r}")
+        object.__setattr__(self, "cols", int(self.cols))
+        object.__setattr__(self, "rows", int(self.rows))
+        object.__setattr__(self, "square", float(sq))
+
+    @property
+    def pattern_size(self) -> tuple[int, int]:
+        """``(cols, rows)``, OpenCV's ``pattern_size``."""
+        return self.cols, self.rows
+
+    @property
+    def n_corners(self) -> int:
+        return self.cols * self.rows
+
+    def object_points(self) -> np.ndarray:
+        """(cols*rows, 3) board corners (:func:`object_points`)."""
+        return object_points(self.cols, self.rows, self.square)
+
+    def to_dict(self) -> dict:
+        return {"cols": self.cols, "rows": self.rows, "square": self.square}
 
 
 def object_points(cols: int, rows: int, square: float) -> np.ndarray:

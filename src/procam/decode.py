@@ -40,7 +40,6 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from . import _files
@@ -124,6 +123,32 @@ def _hf_pairs(ps: PatternSet) -> list:
     return idx
 
 
+#: Bit classifiers: ``robust`` (direct/global separation, Moreno & Taubin) or ``simple`` (pattern > inverse).
+METHODS = ("robust", "simple")
+
+
+@dataclass(frozen=True)
+class DecodeOptions:
+    """The decoding options a user sets (:func:`decode` has the rest).
+
+    ``method`` one of :data:`METHODS`; ``shadow_threshold`` minimum ``white - black`` and
+    ``contrast_threshold`` minimum ``|pattern - inverse|`` per bit, in 8-bit grey levels (scaled for
+    16-bit data). Raises ``ValueError`` for an unknown method or a threshold that is not a finite
+    number from 0 to 255.
+    """
+
+    method: str = "robust"
+    shadow_threshold: float = 10.0
+    contrast_threshold: float = 3.0
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"decode method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for what, v in (("shadow threshold", self.shadow_threshold), ("contrast threshold", self.contrast_threshold)):
+            if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and 0 <= v <= 255):
+                raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
+
+
 def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *,
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
@@ -168,8 +193,8 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     ps = pattern_set
     if stack.ndim != 3 or stack.shape[0] != ps.count:
         raise ValueError(f"stack must be ({ps.count}, H, W) for this pattern set, got {stack.shape}")
-    if method not in ("robust", "simple"):
-        raise ValueError(f"method must be 'robust' or 'simple', got {method!r}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if stack.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
     fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
@@ -203,6 +228,8 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
 
 def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide, max_dropped):
     """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`)."""
+    import cv2
+
     blk = stack[:, sl, :]
     white = blk[ps.white].astype(wide)
     span = white - blk[ps.black].astype(wide)

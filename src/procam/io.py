@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ._files import atomic_path, to_jsonable, write_text
+from .board import Board
 from .calibration import Calibration, Device, Distortion
 from .correspond import CORNER_REASONS
 from .distortion import opencv_from_division
@@ -25,7 +26,7 @@ def _nan_to_none(a) -> list:
     return [[None if not np.isfinite(v) else float(v) for v in row] for row in a.reshape(len(a), -1)]
 
 
-def view_to_dict(view, board=None, square=None, options: dict | None = None) -> dict:
+def view_to_dict(view, options: dict | None = None) -> dict:
     """JSON-able dict of a :class:`~procam.view.View` (NaN -> null) with per-corner diagnostics."""
 
     d = view.diagnostics
@@ -44,8 +45,8 @@ def view_to_dict(view, board=None, square=None, options: dict | None = None) -> 
            "projector_size": list(view.proj_size) if view.proj_size else None,
            "board_points": _nan_to_none(view.obj_pts), "camera_points": _nan_to_none(view.cam_pts),
            "projector_points": _nan_to_none(view.proj_pts), "corners": corners}
-    if board is not None:
-        out["board"] = {"cols": int(board[0]), "rows": int(board[1]), "square": float(square)}
+    if view.board is not None:
+        out["board"] = view.board.to_dict()
     if options:
         out["options"] = options
     return out
@@ -65,9 +66,11 @@ def view_from_dict(d: dict):
     for key in ("pixels", "window_pixels", "inliers", "residual_px"):
         if corners and key in corners[0]:
             diag[key] = np.array([np.nan if c[key] is None else c[key] for c in corners], float)
+    b = d.get("board")
+    board = Board(int(b["cols"]), int(b["rows"]), float(b["square"])) if isinstance(b, dict) else None
     return View(arr("board_points"), arr("camera_points"), arr("projector_points"), d.get("pose", "view"),
                 tuple(d["camera_size"]) if d.get("camera_size") else None,
-                tuple(d["projector_size"]) if d.get("projector_size") else None, diag)
+                tuple(d["projector_size"]) if d.get("projector_size") else None, diag, board)
 
 
 # --------------------------------------------------------------------------------------------

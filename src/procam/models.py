@@ -28,7 +28,6 @@ Conventions (``docs/conventions.md``)
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 #: Scale of the conditioned division coefficients in the single-pose camera parameter vector:
 #: ``k1 = kappa1 / S^2``, ``k2 = kappa2 / S^4`` with ``S = KAPPA_SCALE`` pixels.
@@ -45,6 +44,8 @@ def intrinsic_matrix(f, u0, v0, alpha=1.0) -> np.ndarray:
 
 def euler_to_matrix(psi: float, nu: float, phi: float) -> np.ndarray:
     """Rotation ``Rx(psi) @ Ry(nu) @ Rz(phi)`` (angles in radians), shape (3, 3)."""
+    from scipy.spatial.transform import Rotation
+
     return Rotation.from_euler("XYZ", [psi, nu, phi]).as_matrix()
 
 
@@ -101,6 +102,8 @@ def rvec_to_matrix(rvec) -> np.ndarray:
     """
     w = np.asarray(rvec).reshape(3)
     if not np.iscomplexobj(w):
+        from scipy.spatial.transform import Rotation
+
         return Rotation.from_rotvec(w.astype(float)).as_matrix()
     th2 = w @ w
     W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]], dtype=complex)
@@ -114,6 +117,8 @@ def rvec_to_matrix(rvec) -> np.ndarray:
 
 def matrix_to_rvec(R) -> np.ndarray:
     """(3, 3) rotation matrix -> rotation vector (3,)."""
+    from scipy.spatial.transform import Rotation
+
     return Rotation.from_matrix(np.asarray(R, float)).as_rotvec()
 
 

@@ -23,9 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-import cv2
 import numpy as np
-from scipy.optimize import least_squares
 
 from . import models
 from . import uncertainty as unc
@@ -34,27 +32,41 @@ from .errors import CalibrationError
 from .residuals import rms
 from .view import View
 
-#: OpenCV distortion models: name -> (calibrateCamera flags, vector length, free coefficient indices).
-DIST_MODELS: dict[str, tuple[int, int, tuple[int, ...]]] = {
-    "none": (cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST, 5, ()),
-    "k1": (cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST, 5, (0,)),
-    "k1k2": (cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST, 5, (0, 1)),
-    "k1k2p1p2": (cv2.CALIB_FIX_K3, 5, (0, 1, 2, 3)),
-    "k1k2p1p2k3": (0, 5, (0, 1, 2, 3, 4)),
-    "rational": (cv2.CALIB_RATIONAL_MODEL, 8, tuple(range(8))),
+#: OpenCV distortion models: name -> (vector length, free coefficient indices in OpenCV's order
+#: (k1, k2, p1, p2, k3[, k4, k5, k6])).
+DIST_MODELS: dict[str, tuple[int, tuple[int, ...]]] = {
+    "none": (5, ()),
+    "k1": (5, (0,)),
+    "k1k2": (5, (0, 1)),
+    "k1k2p1p2": (5, (0, 1, 2, 3)),
+    "k1k2p1p2k3": (5, (0, 1, 2, 3, 4)),
+    "rational": (8, tuple(range(8))),
 }
+
+
+def _dist_flags(dist: str) -> int:
+    """``calibrateCamera`` flags that leave exactly the model's coefficients free."""
+    import cv2
+
+    return {"none": cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,
+            "k1": cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,
+            "k1k2": cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,
+            "k1k2p1p2": cv2.CALIB_FIX_K3, "k1k2p1p2k3": 0, "rational": cv2.CALIB_RATIONAL_MODEL}[dist]
 
 _EPS = np.finfo(float).eps
 
 
 def _criteria(iterations: int):
+    import cv2
+
     return (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, int(iterations), _EPS)
 
 
 def _check_dist(dist: str) -> tuple[int, int, tuple[int, ...]]:
+    """``(calibrateCamera flags, vector length, free coefficient indices)`` of a model name."""
     if dist not in DIST_MODELS:
         raise CalibrationError(f"unknown distortion model {dist!r}; choose one of {', '.join(DIST_MODELS)}")
-    return DIST_MODELS[dist]
+    return (_dist_flags(dist), *DIST_MODELS[dist])
 
 
 # --------------------------------------------------------------------------------------------------
@@ -77,6 +89,8 @@ def zhang_intrinsics(obj_list, img_list, image_size) -> np.ndarray | None:
         constraints (METHOD §10.1), so two non-degenerate poses suffice.  The principal point may
         fall anywhere, inside the image or not.
     """
+    import cv2
+
     W, H = image_size
     s = 1.0 / max(W, H)
     Nrm = np.array([[s, 0, -0.5 * s * W], [0, s, -0.5 * s * H], [0, 0, 1.0]])
@@ -135,6 +149,8 @@ def _as_cv(obj_list, img_list):
 def _calib_with_guess(obj_list, img_list, image_size, K0, flags, ncoef, criteria):
     """calibrateCamera from the guess ``K0`` in a pixel frame translated so that the principal point
     lies inside a virtual image (OpenCV rejects a guess outside the image)."""
+    import cv2
+
     W, H = image_size
     margin = 0.05 * max(W, H)
     lo = np.minimum([0.0, 0.0], K0[:2, 2] - margin)
@@ -198,6 +214,8 @@ def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *
     CalibrationError
         If no start converges to a finite, positive-focal solution, or fewer than 2 poses are given.
     """
+    import cv2
+
     flags, ncoef, _ = _check_dist(dist)
     if fix_aspect_ratio:
         flags |= cv2.CALIB_FIX_ASPECT_RATIO
@@ -304,6 +322,8 @@ class _Layout:
 def _stereo_model(x, lay: _Layout, objs, cams, projs, dc0, dp0, want_jac: bool, w_proj: float = 1.0):
     """Residuals (projected - observed; per view: camera 2N then projector 2N, the projector's scaled
     by ``w_proj``) and Jacobian."""
+    import cv2
+
     Kc, dc, Kp, dp, r, T, rvecs, tvecs = lay.unpack(x, dc0, dp0)
     res = []
     jac_blocks = []
@@ -394,6 +414,8 @@ def refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R, T, rvecs, tvecs, *, cam_
     -------
     :class:`StereoRefinement`
     """
+    from scipy.optimize import least_squares
+
     _, ncc, cfree = _check_dist(cam_dist)
     _, ncp, pfree = _check_dist(proj_dist)
     dc0 = np.zeros(ncc)
@@ -505,6 +527,8 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
     CalibrationError
         Fewer than two poses, missing image sizes, too few corners, or no solution.
     """
+    import cv2
+
     views = list(views)
     if len(views) < 2:
         raise CalibrationError(f"multi-pose calibration needs at least 2 poses (3 or more recommended), "

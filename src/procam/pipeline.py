@@ -1,20 +1,24 @@
-"""From a pose's images to a :class:`~procam.view.View`: decode, detect corners, correspond.
+"""From captures to :class:`~procam.view.View` s: decode, detect corners, correspond -- for one pose folder,
+several, a stack already in memory, or a single photo (camera-only).
 
-The thin glue the CLI, the benchmarks and the experiment share; each stage lives in its own
-module (``capture``, ``decode``, ``board``, ``correspond``).
+The glue the CLI, the benchmarks and the experiment share; each stage lives in its own module
+(``capture``, ``decode``, ``board``, ``correspond``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable, Sequence
 
 import numpy as np
 
+from . import _files
 from . import board as _board
 from . import capture as _capture
 from . import correspond as _corr
 from . import decode as _decode
+from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError
 from .patterns import PatternSet
 from .view import View
@@ -22,15 +26,28 @@ from .view import View
 
 @dataclass(frozen=True)
 class PoseOptions:
-    """Options of :func:`view_from_stack` (see the stage modules for their meaning and units)."""
+    """How a pose's captures become a View (see the stage modules for the meaning and units).
 
-    decode_method: str = "robust"
-    shadow_threshold: float = 10.0
-    contrast_threshold: float = 3.0
+    Attributes
+    ----------
+    decode : :class:`procam.decode.DecodeOptions` (classifier and thresholds).
+    detector : chessboard detector, one of :data:`procam.board.DETECTORS`.
+    refine_window : ``cornerSubPix`` half-window in camera pixels (0 = none).
+    corners : :class:`procam.correspond.CornerOptions` (local homographies).
+    min_corners : a pose with fewer corners that have projector coordinates is an error.
+    """
+
+    decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
     detector: str = "auto"
     refine_window: int = 11
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
+
+    def __post_init__(self):
+        if self.detector not in _board.DETECTORS:
+            raise ValueError(f"detector must be one of {', '.join(_board.DETECTORS)}, got {self.detector!r}")
+        if not 0 <= int(self.refine_window) <= 100:
+            raise ValueError(f"refine window must be from 0 to 100 px, got {self.refine_window!r}")
 
 
 def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=11, name="pose"):
@@ -54,14 +71,14 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
         f"{cols}x{rows} inner corners), the exposure of the white frame, and that the whole board is in view")
 
 
-def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: float, *, name: str = "pose",
+def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *, name: str = "pose",
                     options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None, warnings=()):
     """Decode a stack and build the pose's View.
 
     Parameters
     ----------
     stack : (K, H, W) uint8/uint16 in ``pattern_set``'s order.
-    board : (cols, rows) inner corners; ``square`` the square size (the length unit of all outputs).
+    board : the :class:`~procam.board.Board` (inner corners and square size, the length unit of all outputs).
     cam_pts : optional (N, 2) camera corners to use instead of detecting them.
     warnings : notes about the capture, kept in ``view.diagnostics["warnings"]``.
 
@@ -69,31 +86,63 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: f
     -------
     (View, DecodeResult).  Raises :class:`BoardNotFoundError` or :class:`CorrespondenceError`.
     """
-    cols, rows = int(board[0]), int(board[1])
-    maps = _decode.decode(stack, pattern_set, options.decode_method, shadow_threshold=options.shadow_threshold,
-                          contrast_threshold=options.contrast_threshold)
+    d = options.decode
+    maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
+                          contrast_threshold=d.contrast_threshold)
     if cam_pts is None:
-        cam_pts = find_board(stack, pattern_set, (cols, rows), options.detector, options.refine_window, name)
+        cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name)
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
-    obj = _board.object_points(cols, rows, square)
     H, W = stack.shape[1:]
-    view = View(obj, cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
-                {**diag, "warnings": list(warnings)})
+    view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
+                {**diag, "warnings": list(warnings)}, board)
     n_ok = int(view.valid.sum())
     if n_ok < options.min_corners:
         raise CorrespondenceError(
-            f"{name}: only {n_ok} of {cols * rows} corners have projector coordinates (need "
+            f"{name}: only {n_ok} of {board.n_corners} corners have projector coordinates (need "
             f"{options.min_corners}); failed: {_corr.reason_summary(diag['reason'])} — check that the projector "
             "lights the whole board and that the decode picture (procam decode --png) shows it decoded")
     return view, maps
 
 
-def view_from_folder(folder, board, square: float, projector=None, order=None, *,
-                     options: PoseOptions = PoseOptions(), step=None):
+def view_from_folder(folder, board: Board, projector=None, order=None, *, options: PoseOptions = PoseOptions(),
+                     step=None):
     """Load, validate and process one pose folder; returns (View, DecodeResult).
 
-    The capture's exposure warnings are in ``view.diagnostics["warnings"]``.
+    ``projector`` (width, height), ``order`` and ``step`` default to the folder's ``patterns.json``
+    (:func:`procam.capture.load_capture`). The capture's exposure warnings are in
+    ``view.diagnostics["warnings"]``.
     """
     cap = _capture.load_capture(folder, projector, order, step=step)
-    return view_from_stack(cap.stack, cap.pattern_set, board, square, name=str(Path(folder)), options=options,
+    return view_from_stack(cap.stack, cap.pattern_set, board, name=str(Path(folder)), options=options,
                            warnings=cap.warnings)
+
+
+def views_from_folders(folders: Sequence, board: Board, projector=None, order=None, *,
+                       options: PoseOptions = PoseOptions(), step=None,
+                       progress: Callable[[int, int, str], None] | None = None) -> list[View]:
+    """One View per pose folder (:func:`view_from_folder`), in order; ``progress(done, total, folder)``
+    after each."""
+    views = []
+    for k, folder in enumerate(folders):
+        view, _ = view_from_folder(folder, board, projector, order, options=options, step=step)
+        views.append(view)
+        if progress is not None:
+            progress(k + 1, len(folders), str(folder))
+    return views
+
+
+def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOptions()) -> View:
+    """The View of one photo of the board (no projector: ``proj_pts`` NaN, ``proj_size`` None).
+
+    Raises :class:`BoardNotFoundError` naming the file when the board is not found.
+    """
+    img = _files.read_image(image_path)
+    c = _board.detect_corners(img, board.pattern_size, detector=options.detector,
+                              refine_window=options.refine_window)
+    if c is None:
+        cols, rows = board.pattern_size
+        raise BoardNotFoundError(f"{image_path}: chessboard with {cols}x{rows} inner corners not found; check --board "
+                                 f"(inner corners, not squares: {cols + 1}x{rows + 1} squares have {cols}x{rows} "
+                                 "inner corners), the exposure, and that the whole board is in view")
+    h, w = img.shape[:2]
+    return View(board.object_points(), c, np.full_like(c, np.nan), str(image_path), (w, h), None, board=board)

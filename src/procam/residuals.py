@@ -18,15 +18,14 @@ This module is below :mod:`procam.single_pose`, :mod:`procam.multi_pose` and
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
-from scipy.optimize import least_squares
 
 from . import models
 from .errors import CalibrationError
 
-#: Termination of the final ``cv2.solvePnPRefineLM`` step of :func:`pnp` (iterations, epsilon).
-PNP_REFINE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-15)
+#: Termination of the final ``cv2.solvePnPRefineLM`` step of :func:`pnp`: at most this many iterations,
+#: or a step below this epsilon.
+PNP_REFINE_ITERATIONS, PNP_REFINE_EPS = 100, 1e-15
 
 
 def rms(e) -> float:
@@ -55,7 +54,7 @@ def pnp(obj, pts, K, *, refine: bool = True):
     ``cv2.solvePnP`` with ``SOLVEPNP_ITERATIVE`` (OpenCV's default, as used by the paper); if that
     fails or puts the board behind the device (a rare planar failure of its start), an IPPE start
     refined by the iterative method.  ``refine`` polishes the pose with ``cv2.solvePnPRefineLM``
-    (:data:`PNP_REFINE_CRITERIA`) so the RMS is that of the converged minimum.
+    (:data:`PNP_REFINE_ITERATIONS`, :data:`PNP_REFINE_EPS`) so the RMS is that of the converged minimum.
 
     Parameters
     ----------
@@ -70,6 +69,8 @@ def pnp(obj, pts, K, *, refine: bool = True):
     CalibrationError
         No pose with the board in front of the device.
     """
+    import cv2
+
     obj = np.ascontiguousarray(np.asarray(obj, float).reshape(-1, 3))
     pts = np.asarray(pts, float).reshape(-1, 2)
     K = np.asarray(K, float)
@@ -86,7 +87,9 @@ def pnp(obj, pts, K, *, refine: bool = True):
     if bad(ok, tvec):
         raise CalibrationError("solvePnP found no pose with the board in front of the device")
     if refine:
-        rv, tv = cv2.solvePnPRefineLM(obj, img, K, None, rvec.copy(), tvec.copy(), PNP_REFINE_CRITERIA)
+        rv, tv = cv2.solvePnPRefineLM(obj, img, K, None, rvec.copy(), tvec.copy(),
+                                     (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, PNP_REFINE_ITERATIONS,
+                                      PNP_REFINE_EPS))
         if not bad(True, tv) and np.all(np.isfinite(rv)):
             rvec, tvec = rv, tv
     R = models.rvec_to_matrix(rvec)
@@ -107,6 +110,8 @@ def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12)
     -------
     R_b (3, 3), t_b (3,), cam residuals (N, 2), proj residuals (N, 2) (observed - predicted, pixels)
     """
+    from scipy.optimize import least_squares
+
     obj = np.asarray(obj, float).reshape(-1, 3)
     cam_u = np.asarray(cam_u, float).reshape(-1, 2)
     proj_u = np.asarray(proj_u, float).reshape(-1, 2)

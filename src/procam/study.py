@@ -321,11 +321,12 @@ def _points(config: StudyConfig, scene, sigma: float, seed: int, render: bool = 
 def _rendered_points(config: StudyConfig, scene, seed: int):
     """Corners from a full rendering: render -> decode -> detect -> local homographies (NaN rows if lost)."""
     from . import patterns, pipeline, simulate
+    from .board import Board
 
     stack, _ = simulate.render(scene, order="opencv", seed=seed)
     ps = patterns.pattern_set(scene.proj_size[0], scene.proj_size[1], "opencv")
     try:
-        view, _ = pipeline.view_from_stack(stack, ps, (scene.board_cols, scene.board_rows), scene.square,
+        view, _ = pipeline.view_from_stack(stack, ps, Board(scene.board_cols, scene.board_rows, scene.square),
                                            name=f"study cell seed {seed}")
     except ProcamError:
         n = scene.board_cols * scene.board_rows

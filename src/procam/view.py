@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .board import Board
+
 
 @dataclass(frozen=True)
 class View:
@@ -24,6 +26,7 @@ class View:
     cam_size, proj_size : (width, height) in pixels, or None when unknown.
     diagnostics : dict
         Per-corner diagnostics (arrays of length N) and free-form notes.
+    board : :class:`procam.board.Board` the points were made for, or None when unknown.
     """
 
     obj_pts: np.ndarray
@@ -33,6 +36,7 @@ class View:
     cam_size: tuple[int, int] | None = None
     proj_size: tuple[int, int] | None = None
     diagnostics: dict = field(default_factory=dict, compare=False)
+    board: Board | None = None
 
     def __post_init__(self):
         obj = np.asarray(self.obj_pts, dtype=np.float64)
@@ -61,4 +65,4 @@ class View:
         diag = {k: (np.asarray(v)[mask] if isinstance(v, np.ndarray) and len(v) == len(mask) else v)
                 for k, v in self.diagnostics.items()}
         return View(self.obj_pts[mask], self.cam_pts[mask], self.proj_pts[mask], self.name,
-                    self.cam_size, self.proj_size, diag)
+                    self.cam_size, self.proj_size, diag, self.board)

@@ -1,18 +1,60 @@
-"""The typer application object, consoles and shared option parsing."""
+"""The typer application object, consoles, one-line errors and the options every command shares.
+
+Choice lists come from the library (``patterns.ORDERS``, ``decode.METHODS``, ``board.DETECTORS``,
+``correspond.ESTIMATORS``, ...), so the CLI cannot drift from it; those modules are cheap to import.
+Commands import everything heavy (scipy, matplotlib, the solvers, the simulator) inside their function.
+"""
 
 from __future__ import annotations
 
+import enum
 import functools
+import math
 import re
 import sys
+from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
 from rich.console import Console
+from rich.markup import escape
+from typer.core import TyperGroup
 
+from .. import board as _board
+from .. import correspond as _corr
+from .. import decode as _decode
+from .. import patterns as _patterns
 from ..errors import ProcamError
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+
+class _OneLineErrors(TyperGroup):
+    """A command group whose usage errors (bad option values, missing arguments) are one line on stderr
+    with exit code 2, like procam's own errors, instead of a framed usage panel."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        from typer import _click
+
+        try:
+            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False,
+                              **extra)
+        except _click.exceptions.UsageError as e:
+            cmd = e.ctx.command_path if e.ctx is not None else "procam"
+            err_console.print(f"[bold red]error:[/bold red] {escape(e.format_message())} (see '{escape(cmd)} --help')",
+                              highlight=False, soft_wrap=True)
+            rv = 2
+        except _click.exceptions.ClickException as e:
+            err_console.print(f"[bold red]error:[/bold red] {escape(e.format_message())}", highlight=False,
+                              soft_wrap=True)
+            rv = e.exit_code
+        except _click.exceptions.Abort:
+            err_console.print("interrupted", highlight=False)
+            rv = 130
+        if not standalone_mode:
+            return rv
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+app = typer.Typer(cls=_OneLineErrors, add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Projector-camera calibration from Gray-code captures of a chessboard.")
 # Not a terminal (pipes, CI, logs): wide enough that tables don't wrap.
 console = Console(soft_wrap=True, width=None if sys.stdout.isatty() else 160)
@@ -20,13 +62,23 @@ err_console = Console(stderr=True, soft_wrap=True, width=None if sys.stderr.isat
 
 
 def fail(message: str, code: int = 2):
-    """Print a one-line error to stderr and exit with ``code``."""
-    err_console.print(f"[bold red]error:[/bold red] {message}", highlight=False, soft_wrap=True)
+    """Print a one-line error to stderr and exit with ``code`` (the message is plain text, not markup)."""
+    err_console.print(f"[bold red]error:[/bold red] {escape(str(message))}", highlight=False, soft_wrap=True)
     raise typer.Exit(code)
 
 
+def warn(message: str):
+    """Print a warning line (plain text, not markup)."""
+    console.print(f"[yellow]warning:[/yellow] {escape(str(message))}", highlight=False)
+
+
+def say(message: str):
+    """Print an information line (plain text, not markup)."""
+    console.print(escape(str(message)), highlight=False)
+
+
 def user_errors(fn):
-    """Decorator for commands: turn :class:`ProcamError` (and bad values) into one-line errors."""
+    """Decorator for commands: turn :class:`ProcamError` (and OS errors) into one-line errors, exit code 2."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -44,30 +96,34 @@ def user_errors(fn):
     return wrapper
 
 
+def choice(name: str, values) -> type[enum.Enum]:
+    """A str Enum of ``values`` for a typer option: ``--help`` lists them and typer rejects anything else."""
+    return enum.Enum(name, {v: v for v in values}, type=str)
+
+
+def value(x):
+    """The plain value of a choice option (None stays None)."""
+    return getattr(x, "value", x)
+
+
+Order = choice("Order", _patterns.ORDERS)
+DecodeMethod = choice("DecodeMethod", _decode.METHODS)
+Detector = choice("Detector", _board.DETECTORS)
+Estimator = choice("Estimator", _corr.ESTIMATORS)
+
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
 
 
-def parse_size(text: str, what: str = "size") -> tuple[int, int]:
-    """Parse ``"1920x1080"`` into ``(1920, 1080)``; a clear error otherwise."""
+def parse_size(text: str, what: str = "size", *, lo: int = 2, hi: int = 32768) -> tuple[int, int]:
+    """Parse ``"1920x1080"`` into ``(1920, 1080)``; a clear error for anything else or a size outside
+    ``lo`` .. ``hi`` pixels per side."""
     m = _SIZE.match(text or "")
     if not m:
         fail(f"{what} must look like WIDTHxHEIGHT (e.g. 1920x1080), got {text!r}")
     w, h = int(m.group(1)), int(m.group(2))
-    if w < 2 or h < 2:
-        fail(f"{what} must be at least 2x2, got {text!r}")
+    if not (lo <= w <= hi and lo <= h <= hi):
+        fail(f"{what} {text}: each side must be from {lo} to {hi}")
     return w, h
-
-
-# Options shared by the commands that read capture folders (one definition, one help text).
-BoardOpt = Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6.")]
-SquareOpt = Annotated[float, typer.Option("--square", help="Square size; the length unit of every output (e.g. mm).")]
-ProjectorOpt = Annotated[Optional[str], typer.Option(
-    "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: the folder's patterns.json).")]
-OrderOpt = Annotated[Optional[str], typer.Option("--order", help="Sequence order: opencv (default) or moreno.")]
-StepOpt = Annotated[Optional[int], typer.Option(
-    "--step", help="Projector pixels per Gray code (kamino410's graycode_step; default: patterns.json's, else 1).")]
-WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
-EstimatorOpt = Annotated[str, typer.Option("--estimator", help="Homography fit: lsq, ransac or lmeds.")]
 
 
 def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int] | None:
@@ -75,22 +131,67 @@ def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int
     return parse_size(text, what) if text else None
 
 
-def parse_square(value: float) -> float:
-    """``--square``: a positive, finite length."""
-    import math
+def parse_board(text: str, square: float) -> _board.Board:
+    """``--board COLSxROWS`` and ``--square`` -> a :class:`procam.board.Board` (one-line errors)."""
+    lo, hi = _board.CORNERS_PER_SIDE
+    m = _SIZE.match(text or "")
+    if not m:
+        fail(f"--board must look like COLSxROWS of inner corners (e.g. 10x6), got {text!r}")
+    cols, rows = int(m.group(1)), int(m.group(2))
+    if not (lo <= cols <= hi and lo <= rows <= hi):
+        fail(f"--board {text}: each side must be from {lo} to {hi} inner corners (a board of 11x7 squares has "
+             "10x6 inner corners)")
+    if not (math.isfinite(square) and square > 0):
+        fail(f"--square must be a positive length (the board's square size, e.g. 24 for mm), got {square}")
+    try:
+        return _board.Board(cols, rows, square)
+    except ProcamError as e:
+        fail(f"--square: {e}")
 
-    if not (math.isfinite(value) and value > 0):
-        fail(f"--square must be a positive length (the board's square size, e.g. 24 for mm), got {value}")
-    return float(value)
 
+def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
+                 refine_window: int = 11, window: int = 60, estimator=None, min_corners: int = 10):
+    """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
+    from .. import pipeline
+
+    for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
+        if not (math.isfinite(v) and 0 <= v <= 255):
+            fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
+    if not 0 <= refine_window <= 100:
+        fail(f"--refine-window must be from 0 to 100 px, got {refine_window}")
+    if not 6 <= window <= 1000:
+        fail(f"--window must be from 6 to 1000 camera px, got {window}")
+    dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
+    corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "ransac")
+    return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=int(refine_window),
+                                corners=corners, min_corners=min_corners)
+
+
+# Options shared by the commands that read capture folders (one definition, one help text each).
+BoardOpt = Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6.")]
+SquareOpt = Annotated[float, typer.Option("--square", help="Square size; the length unit of every output (e.g. mm).")]
+ProjectorOpt = Annotated[Optional[str], typer.Option(
+    "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: the folder's patterns.json).")]
+OrderOpt = Annotated[Optional[Order], typer.Option(
+    "--order", help="Sequence order (default: the folder's patterns.json, else opencv).")]
+StepOpt = Annotated[Optional[int], typer.Option(
+    "--step", min=1, max=64,
+    help="Projector pixels per Gray code (kamino410's graycode_step; default: patterns.json's, else 1).")]
+DecodeOpt = Annotated[DecodeMethod, typer.Option("--decode", help="Bit classifier.")]
+ShadowOpt = Annotated[float, typer.Option(
+    "--shadow-threshold", help="Minimum white - black for a lit pixel, 8-bit grey levels (scaled for 16-bit).")]
+ContrastOpt = Annotated[float, typer.Option(
+    "--contrast-threshold", help="Minimum |pattern - inverse| for a certain bit, 8-bit grey levels.")]
+DetectorOpt = Annotated[Detector, typer.Option("--detector", help="Chessboard corner detector.")]
+RefineOpt = Annotated[int, typer.Option("--refine-window", help="cornerSubPix half-window, camera px (0 = none).")]
+WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
+EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 
 def output_path(path, option: str, suffixes: tuple[str, ...]):
     """Check an output path before any work is done: a known suffix and a folder that can be created."""
-    from pathlib import Path
-
     if path is None:
         return None
     path = Path(path)
@@ -105,14 +206,18 @@ def output_path(path, option: str, suffixes: tuple[str, ...]):
     return path
 
 
-@app.callback()
-def _root(version: bool = typer.Option(False, "--version", help="Print the version and exit.")):
-    """Projector-camera calibration from Gray-code captures of a chessboard."""
-    if version:
+def _print_version(flag: bool):
+    if flag:
         from .. import __version__
 
         console.print(f"procam {__version__}")
         raise typer.Exit(0)
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", help="Print the version and exit.", is_eager=True,
+                                       callback=_print_version)):
+    """Projector-camera calibration from Gray-code captures of a chessboard."""
 
 
 def is_tty() -> bool:

@@ -12,6 +12,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from .. import _files, io, patterns, pipeline, simulate, single_pose
+from ..board import Board
 from ..models import euler_deg
 from ..residuals import rms
 from ._app import app, console, fail, user_errors
@@ -51,8 +52,8 @@ def demo_cmd(
                   f"{time.perf_counter() - t0:.1f} s -> {cap_dir}")
     ps = patterns.pattern_set(*truth["projector"]["size"])
     t0 = time.perf_counter()
-    view, maps = pipeline.view_from_stack(stack, ps, (truth["board"]["cols"], truth["board"]["rows"]),
-                                          truth["board"]["square"], name=str(cap_dir))
+    brd = Board(truth["board"]["cols"], truth["board"]["rows"], truth["board"]["square"])
+    view, maps = pipeline.view_from_stack(stack, ps, brd, name=str(cap_dir))
     c = truth["corners"]
     e_cam = view.cam_pts - np.array(c["camera_distorted"])
     e_proj = view.proj_pts - np.array(c["projector"])

@@ -2,17 +2,14 @@
 
 from __future__ import annotations
 
-import contextlib
-import json
 from pathlib import Path
 
 import typer
 from rich.table import Table
 
-from .. import _files, io
-from ._app import (BoardOpt, EstimatorOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, WindowOpt, app, console,
-    fail, optional_size, parse_square, user_errors)
-from .correspond import load_views, parse_board
+from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
+                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, fail,
+                   optional_size, output_path, parse_board, pose_options, say, user_errors, value)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -47,19 +44,30 @@ def evaluate_cmd(
     square: SquareOpt,
     calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) to evaluate."),
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences) to evaluate on."),
-    json_out: Path = typer.Option(None, "--json", help="Write the metrics as JSON here."),
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = "ransac",
+    out: Path = typer.Option(None, "-o", "--out", help="Write the metrics as JSON here."),
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
+    method: DecodeOpt = DecodeMethod.robust,
+    shadow: ShadowOpt = 10.0,
+    contrast: ContrastOpt = 3.0,
+    detector: DetectorOpt = Detector.auto,
+    refine: RefineOpt = 11,
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = Estimator.ransac,
 ):
     """Per pose: camera/projector RMS (PnP, intrinsics fixed), stereo RMS, the procam extrinsics from
-    per-pose PnP; overall: σ_T and σ_|T| (METHOD §11), the board angles in both device frames."""
+    per-pose PnP; overall: the spread σ_T and σ_|T| of those extrinsics, the board angles in both device frames."""
+    import contextlib
+    import json
+
+    from .. import _files, io, pipeline
     from ..evaluate import evaluate
 
-    square = parse_square(square)
-    cols, rows = parse_board(board)
+    brd = parse_board(board, square)
+    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
+                        refine_window=refine, window=window, estimator=estimator)
+    output_path(out, "-o", (".json",))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot be evaluated against projector points; "
@@ -68,7 +76,7 @@ def evaluate_cmd(
     if size is None and not all((Path(p) / "patterns.json").exists() for p in poses):
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
-        views = load_views(poses, cols, rows, square, size, order, estimator, window, step=step)
+        views = pipeline.views_from_folders(poses, brd, size, value(order), options=opts, step=step)
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
@@ -77,7 +85,7 @@ def evaluate_cmd(
     t, s = evaluation_tables(ev)
     console.print(t)
     console.print(s)
-    if json_out is not None:
+    if out is not None:
         d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict()}
-        _files.write_text(json_out, json.dumps(_files.to_jsonable(d), indent=1))
-        console.print(f"wrote {json_out}")
+        _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
+        say(f"wrote {out}")

@@ -9,10 +9,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from .._fmt import fmt_number
-from ._app import (BoardOpt, EstimatorOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, WindowOpt, app, console,
-    err_console, fail, optional_size, parse_square, user_errors)
-from .correspond import parse_board
-from .correspond import load_views
+from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
+                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console,
+                   err_console, fail, optional_size, parse_board, pose_options, user_errors, value)
 
 
 def summary_tables(result) -> list[Table]:
@@ -47,18 +46,27 @@ def experiment_cmd(
                                                         "unlike `procam calibrate`, which refines unless --no-refine."),
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
     proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = "ransac",
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
+    decode_method: DecodeOpt = DecodeMethod.robust,
+    shadow: ShadowOpt = 10.0,
+    contrast: ContrastOpt = 3.0,
+    detector: DetectorOpt = Detector.auto,
+    refine_window: RefineOpt = 11,
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = Estimator.ransac,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
     from .. import experiment
     from ..multi_pose import DIST_MODELS
 
-    square = parse_square(square)
+    from .. import pipeline
+
+    brd = parse_board(board, square)
+    opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
+                        refine_window=refine_window, window=window, estimator=estimator)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
@@ -66,14 +74,14 @@ def experiment_cmd(
     for name, d in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
         if d not in DIST_MODELS:
             fail(f"{name} must be one of {', '.join(DIST_MODELS)}, got {d!r}")
-    cols, rows = parse_board(board)
     size = optional_size(projector)
     n_sets = len(experiment.pose_sets(len(poses), min_set))
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")
-        views = load_views(poses, cols, rows, square, size, order, estimator, window, step=step,
-                           progress=lambda d, t, label: bar.update(t_dec, completed=d, label=Path(label).name))
+        views = pipeline.views_from_folders(
+            poses, brd, size, value(order), options=opts, step=step,
+            progress=lambda d, t, label: bar.update(t_dec, completed=d, label=Path(label).name))
         t_cal = bar.add_task("calibrating", total=n_sets + len(poses), label="")
         result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=refine,
                                 cam_dist=cam_dist, proj_dist=proj_dist,

@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .. import models
 from ..errors import CalibrationError
@@ -173,6 +172,8 @@ def valid_pose(R, t, M, side) -> bool:
 
 def _run_starts(fun, starts, check):
     """LM from each start; returns (best :class:`Start` or None, all runs)."""
+    from scipy.optimize import least_squares
+
     runs = []
     for name, x0 in starts:
         x0 = np.asarray(x0, float)

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-import cv2
 import numpy as np
 
 from .. import models
@@ -115,6 +114,8 @@ def _prescreen(obj, obs, valid, k: float, floor_px: float):
     threshold ``max(floor, k * robust sigma)`` of the homography residuals is wide enough for lens
     distortion, and every corner is re-tested against the real model afterwards.
     """
+    import cv2
+
     src, dst = obj[valid, :2].astype(np.float64), obs[valid].astype(np.float64)
     try:
         H, _ = cv2.findHomography(src, dst, cv2.LMEDS)

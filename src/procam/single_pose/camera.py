@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .. import distortion as dist
 from .. import models
@@ -183,6 +182,8 @@ def _joint_camera(M, m, p0, free, pp_prior, size, max_nfev=150):
     The result is rejected if it is invalid, fits worse than ``p0``, or puts the camera on the other
     side of the board than the (staged) start ``p0`` does (a mirror solution).
     """
+    from scipy.optimize import least_squares
+
     fun = _camera_residual_fn(M, m, p0, free, pp_prior)
     try:
         with np.errstate(all="ignore"):

@@ -1,0 +1,88 @@
+"""A calibration in rows of text: what ``procam calibrate`` prints and the report shows.
+
+Plain data (lists of string tuples), no printing: the CLI renders them as tables, the HTML report as HTML.
+Every ``±`` is 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise i.i.d.
+(:mod:`procam.uncertainty`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import models
+
+#: What every ``±`` in these rows means.
+PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
+
+
+def _std(calib, key, idx=None):
+    v = calib.std.get(key)
+    if v is None:
+        return None
+    try:
+        return float(v[idx]) if idx is not None else float(v)
+    except (TypeError, IndexError, ValueError):
+        return None
+
+
+def pm(value, std, fmt=".2f") -> str:
+    """``"value ± std"`` (just the value when the std is unknown or not finite)."""
+    if std is None or not np.isfinite(std):
+        return f"{value:{fmt}}"
+    return f"{value:{fmt}} ± {std:{fmt}}"
+
+
+def parameter_rows(calib) -> list[tuple[str, str, str]]:
+    """``(parameter, camera, projector)`` rows: intrinsics ± std, distortion, RMS, extrinsics."""
+    rows = []
+    cK = calib.camera.K
+    pK = calib.projector.K if calib.projector is not None else None
+
+    def row(name, ckey, cval, pkey=None, pval=None, fmt=".2f"):
+        rows.append((name, pm(cval, _std(calib, ckey), fmt) if cval is not None else "",
+                     pm(pval, _std(calib, pkey), fmt) if pval is not None else ""))
+
+    row("f (px)", "f_c", cK[0, 0], "f_p", None if pK is None else pK[0, 0])
+    row("fy (px)", "fy_c", cK[1, 1], "fy_p", None if pK is None else pK[1, 1])
+    row("u0 (px)", "u0c", cK[0, 2], "u0p", None if pK is None else pK[0, 2])
+    row("v0 (px)", "v0c", cK[1, 2], "v0p", None if pK is None else pK[1, 2])
+    d = calib.camera.distortion
+    if d.model == "division":
+        rows.append(("distortion", f"division c=({d.center[0]:.1f}, {d.center[1]:.1f})", ""))
+        row("k1 (px^-2)", "k1", d.k1, fmt=".4g")
+        row("k2 (px^-4)", "k2", d.k2, fmt=".4g")
+    elif d.model == "opencv":
+        rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs), ""))
+    if calib.projector is not None and calib.projector.distortion.model == "opencv":
+        rows.append(("distortion", "", "opencv " + " ".join(f"{c:.4g}" for c in calib.projector.distortion.coeffs)))
+    rows.append(("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}"))
+    if calib.R is not None:
+        eul = models.euler_deg(calib.R)
+        for i, n in enumerate(("psi", "nu", "phi")):
+            rows.append((f"R {n} (deg)", pm(eul[i], _std(calib, "R_euler_deg", i)), ""))
+        for i, n in enumerate("XYZ"):
+            rows.append((f"T {n}", pm(float(calib.T[i]), _std(calib, "T", i)), ""))
+        rows.append(("|T| (baseline)", f"{np.linalg.norm(calib.T):.2f}", ""))
+        rows.append(("stereo RMS (px)", f"{calib.stereo_rms:.3f}", ""))
+    return rows
+
+
+def pose_verdict(adv: dict) -> str:
+    """One line from a pose's advice (:func:`procam.single_pose.advice`): the devices' messages."""
+    if not adv:
+        return ""
+    parts = [adv[k]["message"] for k in ("camera", "projector") if isinstance(adv.get(k), dict) and adv[k].get("message")]
+    return "; ".join(parts) or str(adv.get("message", ""))
+
+
+def pose_rows(calib) -> list[tuple[str, str, str, str]]:
+    """``(pose, camera angles, projector angles, verdict)`` per pose (angles in degrees)."""
+    out = []
+    for p in calib.poses:
+        ca = p.get("camera_angles_deg")
+        pa = p.get("projector_angles_deg")
+        out.append((Path(str(p.get("name", ""))).name, ", ".join(f"{a:.1f}" for a in ca) if ca else "",
+                    ", ".join(f"{a:.1f}" for a in pa) if pa else "", pose_verdict(p.get("advice") or {})))
+    return out
