@@ -1,9 +1,69 @@
 """procam: projector-camera calibration from a single pose of a planar target.
 
-Conventions (see README "Conventions"): pixels are (x, y) = (column, row) with the
-origin at the centre of the top-left pixel; ``x_p = R @ x_c + T`` maps camera to
-projector coordinates; lengths are in the board's square-size unit; angles are
-degrees at the user surface and radians inside the code.
+The modules, from the captures up (each imports only those above it in this list)::
+
+    errors        ProcamError and its subclasses (one-line messages), procam's warning classes
+    _files        image reads, natural sort, atomic writes, JSON helpers (the bottom floor)
+    patterns      Gray-code pattern sets and images (pure)
+    capture       the capture-folder format: read + validate a pose folder, write a sequence
+    decode        captured stack -> projector column/row per camera pixel, validity, reasons
+    board         Board (inner corners, square size), object points, chessboard corner detection
+    correspond    camera corners -> projector corners by local homographies
+    view          View: one pose's board, camera and projector points
+    pipeline      folder(s) / stack / photo -> View(s)
+    models        projection, division distortion, homographies, poses, angles (the model every solver fits)
+    parameters    one vocabulary of parameter names
+    distortion    centre of distortion, division-model coefficients, OpenCV fit of the division model
+    uncertainty   the only Jacobian / covariance code
+    crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
+    calibration   Calibration, Device, Distortion (results)
+    residuals     RMS, PnP, stereo pose, per-pose residuals
+    single_pose   the seed method (camera, projector, extrinsics, advice)
+    multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
+    evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
+    summary       a calibration as rows of text
+    io            calibration and correspondence files (JSON, OpenCV YAML)
+    simulate      synthetic procam captures with ground truth (the test oracle)
+    paper         the paper's simulation study and real-data experiment
+    plots         matplotlib figures (matplotlib imported only when a figure is drawn)
+    cli           the ``procam`` command line (thin: parse, call the API, print)
+
+Conventions (``docs/conventions.md``): pixels are (x, y) = (column, row) with the origin at the centre of
+the top-left pixel; ``x_p = R @ x_c + T`` maps camera to projector coordinates; lengths are in the board's
+square-size unit; angles are degrees at the user surface and radians inside the code.
+
+Submodules load on first use (``import procam; procam.single_pose.calibrate(...)``), so importing procam
+is cheap.
+
+>>> import procam
+>>> procam.Board(10, 6, 24.0).n_corners
+60
 """
 
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
+
+_SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
+               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots")
+
+#: Public names re-exported here: name -> module.
+_EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",
+            "Device": "calibration", "Distortion": "calibration", "PoseOptions": "pipeline"}
+
+__all__ = ["__version__", *_SUBMODULES, *_EXPORTS]
+
+
+def __getattr__(name: str):
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

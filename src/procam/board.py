@@ -1,6 +1,6 @@
 """Chessboard geometry and corner detection.
 
-Board frame (METHOD §1, §7.4): corner ``k = j * cols + i`` (``i`` along the ``cols``
+Board frame: corner ``k = j * cols + i`` (``i`` along the ``cols``
 direction, ``j`` along ``rows``) sits at ``(i s, j s, 0) - centroid``; with the canonical
 image order (corner 0 top-left in the image, ``i`` running to the right) the board's z axis
 points away from the devices, so a fronto-parallel board has ``R = I``.

@@ -1,4 +1,4 @@
-"""Camera corners -> projector corners by local homographies (Moreno & Taubin; METHOD §4).
+"""Camera corners -> projector corners by local homographies (Moreno & Taubin).
 
 For each chessboard corner, the decoded pixels in a window around it give a camera -> projector
 homography that is valid locally; the corner's projector coordinates are its image under it.
@@ -35,7 +35,7 @@ class CornerOptions:
         (``cv2.findHomography`` methods 0, RANSAC, LMEDS).
     ransac_threshold : float, projector pixels — RANSAC inlier threshold (Moreno: 3).
     min_valid_fraction : float — minimum fraction of the window's pixels with a decoded column
-        and row (METHOD §4: 25 %).
+        and row (25 %, as the paper).
     max_residual : float, projector pixels — a corner whose fit RMS over the inliers exceeds it fails.
     """
 

@@ -1,4 +1,4 @@
-"""Cramér–Rao lower bounds for single-pose calibration (METHOD §13).
+"""Cramér–Rao lower bounds for single-pose calibration.
 
 For i.i.d. Gaussian pixel noise ``sigma`` on the observations and a model ``m(p)``
 the Fisher information is ``I = J^T J / sigma^2`` with ``J = dm/dp`` at the truth, and
@@ -6,7 +6,7 @@ any unbiased estimator has ``std(p_k) >= sqrt([I^-1]_kk)``.  These bounds say wh
 single-pose method could achieve at a pose; biases from model errors (a principal
 point that is not the COD, ``u0p = W/2``, projector lens distortion) come on top.
 
-Computation (METHOD §13):
+Computation:
 
 1. ``J`` by complex-step differentiation (exact to rounding; central differences with
    step ``rel_step * max(1, |p_k|)`` as an option) in the scaled parameters
@@ -128,7 +128,7 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
     """CRLB of a single-pose camera calibration with the division model.
 
     Observations are the 2N **distorted** corners
-    ``m_hat = D^-1(pi(K (R M + t)); c, k1, k2)`` (METHOD §5.1, §13).
+    ``m_hat = D^-1(pi(K (R M + t)); c, k1, k2)``.
 
     Parameters
     ----------
@@ -224,7 +224,7 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
 def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
     """CRLB of the single-pose projector calibration (unknowns ``f_p, v0p`` and the pose).
 
-    ``u0p`` and ``alpha_p`` are held at the values in ``K`` (METHOD §8.2, §13):
+    ``u0p`` and ``alpha_p`` are held at the values in ``K``:
     ``p = (f, v0, omega, t)``, exactly the 8 dof of the board -> projector homography.
 
     Parameters
@@ -293,7 +293,7 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
 
     The camera and projector observations are independent, so the pose covariances of the
     two device bounds (their ``omega``/``t`` blocks, marginalised over the intrinsics) are
-    combined block-diagonally and pushed through ``(R, T)`` (METHOD §13).
+    combined block-diagonally and pushed through ``(R, T)``.
 
     Parameters
     ----------

@@ -9,7 +9,7 @@ Classifiers
 ``simple``
     bit = [pattern > inverse]; a bit is uncertain when ``|pattern - inverse| < contrast_threshold``.
 ``robust`` (default)
-    Moreno & Taubin's rule (METHOD §3) with Nayar et al.'s direct/global separation from the
+    Moreno & Taubin's rule with Nayar et al.'s direct/global separation from the
     high-frequency pairs (bits 3 and 2), computed on black-subtracted values (the black frame holds
     the ambient light): ``L_d = (L+ - L-)/(1 - b)``, ``L_g = 2 (L- - b L+)/(1 - b^2)``.  If
     ``L_d < m`` the pixel is uncertain; if ``L_d > L_g``, bit = [p > p_inv]; otherwise, for the
@@ -108,7 +108,7 @@ class DecodeResult:
 
 
 def _hf_bits(ps: PatternSet) -> list:
-    """The bits used for the direct/global estimate: 3 and 2 (METHOD §3), lower ones for tiny projectors."""
+    """The bits used for the direct/global estimate: 3 and 2 (Moreno & Taubin), lower ones for tiny projectors."""
     n = min(ps.col_bits, ps.row_bits)
     return [3, 2] if n >= 4 else list(range(min(n, 2)))[::-1]
 

@@ -1,4 +1,4 @@
-"""Evaluation of a calibration on a set of poses (METHOD §11): reprojection, stereo, PnP precision.
+"""Evaluation of a calibration on a set of poses: reprojection, stereo, PnP precision.
 
 For every pose ``j`` and a calibration (single- or multi-pose, any distortion model):
 
@@ -6,12 +6,12 @@ For every pose ``j`` and a calibration (single- or multi-pose, any distortion mo
   (:meth:`procam.calibration.Device.undistort`; division or OpenCV), so every error below is measured
   in undistorted pixels with a plain pinhole, whatever the model;
 * ``cam_rms`` / ``proj_rms``: ``cv2.solvePnP`` (ITERATIVE) with the intrinsics fixed, RMS over the
-  corners (METHOD §11.1);
+  corners;
 * ``stereo_rms``: both intrinsics and ``(R, T)`` fixed, only the board pose (camera frame) optimised
-  over the camera and projector residuals, started from the camera's PnP (METHOD §11.2);
+  over the camera and projector residuals, started from the camera's PnP;
 * the per-pose procam extrinsics ``R_j = R_pj R_cj^T``, ``T_j = T_pj - R_j T_cj`` from the two PnP
   poses, and their spread ``sigma_T = sqrt(var X + var Y + var Z)``, ``sigma_|T| = std |T_j|``
-  (METHOD §11.3), with ``ddof = 1`` (default) and ``ddof = 0``;
+ , with ``ddof = 1`` (default) and ``ddof = 0``;
 * the board's Euler angles ``(psi, nu, phi)`` in the camera and the projector frames
   (:func:`procam.models.board_angles_deg`, as the solvers report them).
 
@@ -130,7 +130,7 @@ def _spread(Ts: np.ndarray, ddof: int):
 
 
 def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) -> Evaluation:
-    """Evaluate ``calib`` on ``views`` (METHOD §11); see the module docstring for the definitions.
+    """Evaluate ``calib`` on ``views``; see the module docstring for the definitions.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Multi-pose (Zhang-style) procam calibration: the baseline the paper compares against.
 
-Pipeline (Moreno & Taubin's reference, METHOD §11.4, plus an optional joint refinement):
+Pipeline (Moreno & Taubin's reference, plus an optional joint refinement):
 
 1. :func:`calibrate_device` for the camera and for the projector separately: OpenCV
    ``calibrateCamera`` with a selectable OpenCV distortion model.  Two starts are tried and the one
@@ -86,7 +86,7 @@ def zhang_intrinsics(obj_list, img_list, image_size) -> np.ndarray | None:
     -------
     K : (3, 3), or None when fewer than 2 poses or the constraints are degenerate.
         With zero skew, ``B = K^-T K^-1`` has 4 degrees of freedom and each homography gives two
-        constraints (METHOD §10.1), so two non-degenerate poses suffice.  The principal point may
+        constraints, so two non-degenerate poses suffice.  The principal point may
         fall anywhere, inside the image or not.
     """
     import cv2

@@ -1,12 +1,12 @@
-"""Reprojection residuals shared by the solvers, the evaluation and the reports (METHOD §11).
+"""Reprojection residuals shared by the solvers, the evaluation and the reports.
 
 One implementation of each measure, so that a calibration's own ``cam_rms`` / ``stereo_rms`` and
 ``procam evaluate`` on the same pose agree:
 
 * :func:`rms` -- ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances), rows with a NaN
   skipped;
-* :func:`pnp` -- board pose from undistorted pixels with the intrinsics fixed (METHOD §11.1);
-* :func:`stereo_pose` -- board pose with both devices' intrinsics and ``(R, T)`` fixed (METHOD §11.2);
+* :func:`pnp` -- board pose from undistorted pixels with the intrinsics fixed;
+* :func:`stereo_pose` -- board pose with both devices' intrinsics and ``(R, T)`` fixed;
 * :func:`pose_residuals` -- every view's residual vectors under a calibration, each device on its own
   (PnP with the calibrated intrinsics), in the device's own distorted pixels (summaries and figures).
 

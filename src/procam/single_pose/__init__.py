@@ -119,8 +119,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     -------
     Calibration
         ``method="single-pose"``; camera with division distortion, projector without; ``R, T``
-        camera -> projector; ``cam_rms, proj_rms`` (METHOD §11.1 on this pose, outliers excluded),
-        ``stereo_rms`` (§11.2, corners used by both devices); ``std`` with ``f_c, alpha_c, fy_c, u0c,
+        camera -> projector; ``cam_rms, proj_rms`` (per-device PnP RMS on this pose, outliers excluded),
+        ``stereo_rms`` (corners used by both devices); ``std`` with ``f_c, alpha_c, fy_c, u0c,
         v0c, k1, k2, f_p, v0p, R_euler_deg (3), T (3)`` and the board angles' std; one entry in
         ``poses`` with the angles, :func:`advice`, ``rejected_corners`` (``{"camera": [{"index",
         "residual_px"}, ...], "projector": [...]}``, indices into the view's corners) and
@@ -183,7 +183,7 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
     """Camera-only single-pose calibration (one photo of a chessboard, no projector): K and division distortion.
 
     Options as :func:`calibrate`. Returns a :class:`Calibration` with ``projector=None, R=T=None``, ``cam_rms``
-    (METHOD §11.1 on this pose, outliers excluded), ``std`` and one pose entry (with
+    (PnP RMS on this pose, outliers excluded), ``std`` and one pose entry (with
     ``rejected_corners``).
     """
     cam = calibrate_camera(obj_pts, cam_pts, image_size, camera, robust=robust, name=name)

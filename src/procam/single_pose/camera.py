@@ -148,7 +148,7 @@ def _inside(pt, size) -> bool:
 
 
 def _staged_camera(M, m, c, size, use_dist, n_coeffs, board_width, name, warnings):
-    """METHOD §5.3-§8.1 with the principal point / COD ``c``: returns (p_full (12,), staged dict, fit_k2)."""
+    """The paper's staged estimate with the principal point / COD ``c``: returns (p_full (12,), staged dict, fit_k2)."""
     k1 = k2 = 0.0
     fit_k2 = use_dist and n_coeffs >= 2
     if use_dist:
