@@ -1,0 +1,191 @@
+"""Multi-pose (Zhang-style) procam calibration: the baseline the paper compares against.
+
+Pipeline (Moreno & Taubin's reference, plus an optional joint refinement):
+
+1. :func:`calibrate_device` for the camera and for the projector separately: OpenCV
+   ``calibrateCamera`` with a selectable OpenCV distortion model.  Two starts are tried and the one
+   with the lower RMS is kept: OpenCV's own initialisation (principal point at the image centre) and
+   a zero-skew Zhang closed form.  A lens-shifted projector has its principal point outside the
+   image, which OpenCV refuses as an initial guess; the guess is then applied in a translated pixel
+   frame whose (virtual) image contains the principal point, and the result translated back (exact:
+   every OpenCV distortion model is a function of ``(x - c) / f`` only).
+2. ``stereoCalibrate`` with ``CALIB_FIX_INTRINSIC`` for ``(R, T)`` (the "frozen" step every peer
+   tool ships: the intrinsics are not improved by the stereo constraint).
+3. ``refine=True`` (default): a joint least-squares refinement of both intrinsics, both distortion
+   vectors, ``(R, T)`` and every board pose (scipy ``least_squares``, robust loss, analytic Jacobian
+   from ``cv2.projectPoints`` and ``cv2.composeRT``).
+
+Conventions as in :mod:`procam.calibration`: board poses map board -> camera, ``x_p = R x_c + T``.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .. import models
+from .. import uncertainty as unc
+from ..calibration import Calibration, Device, Distortion
+from ..errors import CalibrationError
+from ..residuals import rms
+from ..view import View
+from .device import DIST_MODELS, DeviceCalibration, _as_cv, _criteria, calibrate_device, zhang_intrinsics
+from .refine import StereoRefinement, refine_stereo
+
+__all__ = ["calibrate", "calibrate_device", "refine_stereo", "zhang_intrinsics", "DIST_MODELS", "DeviceCalibration",
+           "StereoRefinement"]
+
+
+def _rms(arrs) -> float:
+    """Pooled RMS (px) of a list of (N, 2) residual arrays (:func:`procam.residuals.rms`)."""
+    return rms(list(arrs))
+
+
+def _std_dict(ref: StereoRefinement, n_cam_dist: int, n_proj_dist: int) -> dict:
+    """Standard deviations from the refinement covariance, named as every procam result
+    (:mod:`procam.parameters`): ``f_c, fy_c, u0c, v0c, f_p, fy_p, u0p, v0p`` (px), ``cam_dist``,
+    ``proj_dist`` (one per coefficient; 0 for a coefficient the model fixes), ``R_euler_deg`` (3,) (delta
+    method through the Euler angles) and ``T`` (3,)."""
+    sd = unc.std(ref.cov)
+    names = list(ref.names)
+    out = {n: float(sd[names.index(n)]) for n in ("f_c", "fy_c", "u0c", "v0c", "f_p", "fy_p", "u0p", "v0p")}
+    for key, n in (("cam_dist", n_cam_dist), ("proj_dist", n_proj_dist)):
+        out[key] = [float(sd[names.index(f"{key}[{i}]")]) if f"{key}[{i}]" in names else 0.0 for i in range(n)]
+    i = names.index("R_rx")
+    ce = unc.propagate(ref.cov[i:i + 3, i:i + 3], lambda r: models.euler_deg(models.rvec_to_matrix(r)),
+                       ref.x[i:i + 3])
+    out["R_euler_deg"] = unc.std(ce).tolist()
+    out["T"] = sd[i + 3:i + 6].tolist()
+    return out
+
+
+def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist: str = "k1k2p1p2k3",
+              proj_dist: str = "k1k2p1p2k3", refine: bool = True, loss: str = "soft_l1",
+              loss_scale: float = 1.0, balance: bool = True, init: str = "auto", fix_aspect_ratio: bool = False,
+              iterations: int = 100, stereo_iterations: int = 150, min_corners: int = 6) -> Calibration:
+    """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined).
+
+    Parameters
+    ----------
+    views : two or more :class:`procam.view.View` (three or more recommended); NaN corners are
+        dropped per view (``view.valid``).
+    cam_size, proj_size : (width, height) in pixels; default: taken from the views.
+    cam_dist, proj_dist : OpenCV distortion model of each device (:data:`DIST_MODELS`); the default
+        ``"k1k2p1p2k3"`` is OpenCV's (and Moreno & Taubin's).
+    refine : run the joint refinement after the frozen-intrinsics stereo step.
+    loss, loss_scale : robust loss of the refinement and its soft threshold in camera pixels.
+    balance : weight the projector residuals by ``rms_cam / rms_proj`` of the per-device step
+        (maximum likelihood when each device has its own Gaussian noise; projector corners are
+        usually noisier).  ``False`` weights both equally, as ``stereoCalibrate`` does.
+    init, fix_aspect_ratio, iterations : passed to :func:`calibrate_device`.
+    stereo_iterations : iteration cap of ``stereoCalibrate`` (Moreno & Taubin: 150).
+    min_corners : poses with fewer valid corners are an error.
+
+    Returns
+    -------
+    :class:`procam.calibration.Calibration` with ``method="multi-pose"``, OpenCV distortion on both
+    devices, ``cam_rms``/``proj_rms`` (per-device RMS of the final model), ``stereo_rms`` (RMS over
+    all camera and projector points of the final stereo model), ``std`` (from the refinement's
+    covariance, keys as :func:`_std_dict`; empty without refinement), ``poses`` (per-pose angles and RMS) and ``info`` with the
+    frozen-step result under ``"frozen"`` (K, dist, R, T, RMS) for comparison.
+
+    Raises
+    ------
+    CalibrationError
+        Fewer than two poses, missing image sizes, too few corners, or no solution.
+    """
+    import cv2
+
+    views = list(views)
+    if len(views) < 2:
+        raise CalibrationError(f"multi-pose calibration needs at least 2 poses (3 or more recommended), "
+                               f"got {len(views)}; use --method single for one pose")
+    cam_size = cam_size or views[0].cam_size
+    proj_size = proj_size or views[0].proj_size
+    if cam_size is None or proj_size is None:
+        raise CalibrationError("multi-pose calibration needs the camera and projector image sizes "
+                               "(set View.cam_size/proj_size or pass cam_size=, proj_size=)")
+    cam_size = (int(cam_size[0]), int(cam_size[1]))
+    proj_size = (int(proj_size[0]), int(proj_size[1]))
+    objs, cams, projs, names = [], [], [], []
+    for k, v in enumerate(views):
+        m = v.valid
+        if m.sum() < min_corners:
+            raise CalibrationError(f"pose {v.name!r}: only {int(m.sum())} corners have both camera and "
+                                   f"projector points (need {min_corners}); re-capture or drop this pose")
+        objs.append(v.obj_pts[m])
+        cams.append(v.cam_pts[m])
+        projs.append(v.proj_pts[m])
+        names.append(v.name if v.name else f"pose{k + 1}")
+
+    cal_c = calibrate_device(objs, cams, cam_size, cam_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
+                             iterations=iterations)
+    cal_p = calibrate_device(objs, projs, proj_size, proj_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
+                             iterations=iterations)
+    Kc, dc, rvc, tvc, rms_c = cal_c.K, cal_c.coeffs, cal_c.rvecs, cal_c.tvecs, cal_c.rms
+    Kp, dp, rms_p = cal_p.K, cal_p.coeffs, cal_p.rms
+    o32, c32 = _as_cv(objs, cams)
+    _, p32 = _as_cv(objs, projs)
+    try:
+        out = cv2.stereoCalibrate(o32, c32, p32, Kc, dc, Kp, dp, cam_size, flags=cv2.CALIB_FIX_INTRINSIC,
+                                  criteria=_criteria(stereo_iterations))
+    except cv2.error as e:
+        raise CalibrationError(f"stereo step failed: {str(e).strip().splitlines()[-1]}") from None
+    rms_s, R0, T0 = float(out[0]), np.asarray(out[5], float), np.asarray(out[6], float).ravel()
+    frozen = {"cam_K": Kc.tolist(), "cam_dist": dc.tolist(), "proj_K": Kp.tolist(), "proj_dist": dp.tolist(),
+              "R": R0.tolist(), "T": T0.tolist(), "cam_rms": rms_c, "proj_rms": rms_p, "stereo_rms": rms_s,
+              "cam_init": cal_c.init, "proj_init": cal_p.init}
+    info = {"frozen": frozen, "cam_dist_model": cam_dist, "proj_dist_model": proj_dist, "refined": bool(refine),
+            "pose_names": names}
+    warnings = []
+    std = {}
+    if refine:
+        floor = 1e-3  # px: noise-free data have RMS ~ 0; keep the weight finite
+        w_proj = max(rms_c, floor) / max(rms_p, floor) if balance else 1.0
+        ref = refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R0, T0, rvc, tvc, cam_dist=cam_dist,
+                            proj_dist=proj_dist, loss=loss, loss_scale=loss_scale, proj_weight=w_proj)
+        Kc, dc, Kp, dp, R, T = ref.Kc, ref.dc, ref.Kp, ref.dp, ref.R, ref.T
+        rv_board, tv_board = ref.rvecs, ref.tvecs
+        res = ref.residuals
+        cam_res = [r[0] for r in res]
+        proj_res = [r[1] for r in res]
+        cam_rms, proj_rms = _rms(cam_res), _rms(proj_res)
+        stereo_rms = _rms(cam_res + proj_res)
+        std = _std_dict(ref, len(dc), len(dp))
+        info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref.status,
+                              "nfev": ref.nfev, "cost": ref.cost}
+        if ref.status <= 0:
+            warnings.append("joint refinement stopped at its evaluation limit; the result may not be converged")
+        if not (Kc[0, 0] > 0 and Kc[1, 1] > 0 and Kp[0, 0] > 0 and Kp[1, 1] > 0):
+            raise CalibrationError("joint refinement diverged (non-positive focal length); "
+                                   "try --no-refine or more varied poses")
+    else:
+        R, T = R0, T0
+        rv_board, tv_board = rvc, tvc
+        cam_res, proj_res = [], []
+        for j in range(len(objs)):
+            pc = models.project(Kc, models.rvec_to_matrix(rvc[j]), tvc[j], objs[j])
+            cam_res.append(cams[j] - Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc))
+            Rp, tp = models.compose(R, T, models.rvec_to_matrix(rvc[j]), tvc[j])
+            pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, Rp, tp, objs[j]), Kp)
+            proj_res.append(projs[j] - pp)
+        cam_rms, proj_rms, stereo_rms = rms_c, rms_p, rms_s
+
+    poses = []
+    for j in range(len(objs)):
+        Rc = models.rvec_to_matrix(rv_board[j])
+        Rp, tp = models.compose(R, T, Rc, tv_board[j])
+        poses.append({"name": names[j], "n_corners": int(len(objs[j])),
+                      "camera_angles_deg": models.board_angles_deg(Rc, tv_board[j]).tolist(),
+                      "projector_angles_deg": models.board_angles_deg(Rp, tp).tolist(),
+                      "R_cam": Rc.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
+                      "cam_rms": _rms([cam_res[j]]), "proj_rms": _rms([proj_res[j]]),
+                      "stereo_rms": _rms([cam_res[j], proj_res[j]])})
+    if len(views) < 3:
+        warnings.append("only 2 poses: the multi-pose intrinsics are weakly constrained; use 3 or more")
+    camera = Device(Kc, cam_size, Distortion("opencv", coeffs=tuple(float(c) for c in dc)))
+    projector = Device(Kp, proj_size, Distortion("opencv", coeffs=tuple(float(c) for c in dp)))
+    return Calibration(camera=camera, projector=projector, R=np.asarray(R, float), T=np.asarray(T, float).ravel(),
+                       method="multi-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo_rms, std=std,
+                       poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info)
