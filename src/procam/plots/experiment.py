@@ -1,4 +1,4 @@
-"""Figures of the experiment (:mod:`procam.experiment`): focal errors against the pose angles, σ_T per set.
+"""Figures of the experiment (:mod:`procam.paper.experiment`): focal errors against the pose angles, σ_T per set.
 
 Matplotlib with the Agg backend only; functions return ``Figure`` objects.
 """

@@ -1,4 +1,4 @@
-"""Figures of the simulation study (:mod:`procam.study`): heat maps and the paper's slices.
+"""Figures of the simulation study (:mod:`procam.paper.study`): heat maps and the paper's slices.
 
 Matplotlib with the Agg backend only; every function returns the ``Figure`` (and
 :func:`save_study_figures` writes PNGs).
@@ -36,7 +36,7 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
 
     Parameters
     ----------
-    result : procam.study.StudyResult
+    result : procam.paper.study.StudyResult
     metric : a column of the result (``median_abs_df``, ``abs_df_noise_free``, ``bound_f``, ...).
     log : logarithmic colour scale (|Δf| spans 1–1000 px).
     vmin, vmax : colour limits (default: the finite data's range, clipped to >= 0.1 on a log scale,
@@ -91,7 +91,7 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
 
 
 def slices(result):
-    """The paper's slices (METHOD §12) with the Cramér–Rao bound drawn in.
+    """The paper's slices (its Figs 5 and 7) with the Cramér–Rao bound drawn in.
 
     One panel per slice: median |Δf| over the trials (markers), the noise-free |Δf| (the
     deterministic bias of the model error; dashed), √CRLB(f) at the study's σ (solid grey) and
@@ -102,7 +102,7 @@ def slices(result):
     -------
     matplotlib.figure.Figure
     """
-    from ..study import slice_specs
+    from ..paper.study import slice_specs
 
     specs = slice_specs(result.config)
     fig, axes = plt.subplots(1, len(specs), figsize=(5.2 * len(specs), 4.3), constrained_layout=True,
