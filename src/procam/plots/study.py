@@ -1,21 +1,16 @@
 """Figures of the simulation study (:mod:`procam.paper.study`): heat maps and the paper's slices.
 
-Matplotlib with the Agg backend only; every function returns the ``Figure`` (and
-:func:`save_study_figures` writes PNGs).
+Every function returns a :class:`matplotlib.figure.Figure` (no pyplot, no backend switch), and
+:func:`save_study_figures` writes PNGs.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
-
-from . import save_figure  # noqa: E402
+from . import _figure, save_figure
 
 __all__ = ["heatmap", "slices", "save_study_figures"]
 
@@ -49,9 +44,12 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
     matplotlib.figure.Figure
         Non-finite cells (failed or degenerate) are grey.
     """
+    from matplotlib.colors import LogNorm, TwoSlopeNorm
+
     psi, nu, val = result.grid(metric)
     finite = val[np.isfinite(val)]
-    fig, ax = plt.subplots(figsize=(7.2, 6.0), constrained_layout=True)
+    fig = _figure(figsize=(7.2, 6.0), constrained_layout=True)
+    ax = fig.subplots()
     ax.set_facecolor("0.8")
     if finite.size:
         lo = vmin if vmin is not None else (max(0.1, float(finite[finite > 0].min())) if log and np.any(finite > 0)
@@ -105,8 +103,8 @@ def slices(result):
     from ..paper.study import slice_specs
 
     specs = slice_specs(result.config)
-    fig, axes = plt.subplots(1, len(specs), figsize=(5.2 * len(specs), 4.3), constrained_layout=True,
-                             squeeze=False)
+    fig = _figure(figsize=(5.2 * len(specs), 4.3), constrained_layout=True)
+    axes = fig.subplots(1, len(specs), squeeze=False)
     s = _SYM[result.config.device]
     for ax, (label, axis, fixed, val) in zip(axes[0], specs):
         rows = result.slice(label)
