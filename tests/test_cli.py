@@ -77,6 +77,35 @@ def test_examples_run(tmp_path):
     assert (tmp_path / "d.png").is_file()
 
 
+def test_commands_that_draw_nothing_import_no_matplotlib_or_simulator(tmp_path):
+    """`procam patterns` and `procam decode` without --png run without importing matplotlib or the simulator
+    (checked in a fresh interpreter, through the console-script entry point)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import json, sys
+from procam.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+loaded = [m for m in ("matplotlib", "procam.simulate", "procam.plots", "procam.paper") if m in sys.modules]
+print(json.dumps({"code": code, "loaded": loaded}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    folder = tmp_path / "seq"
+    for args in (["patterns", "--projector", "64x32", "-o", folder], ["decode", folder, "-o", tmp_path / "m.npz"]):
+        res = subprocess.run([sys.executable, "-c", script, *map(str, args)], env=env, capture_output=True,
+                             text=True, timeout=120)
+        report = json.loads(res.stderr.strip().splitlines()[-1])
+        assert report == {"code": 0, "loaded": []}, (args, res.stderr)
+    assert (tmp_path / "m.npz").is_file()
+
+
 def test_user_mistakes_give_one_line_errors(ideal_capture, tmp_path, shared_data):
     """Review findings: each of these used to print a traceback or a misleading message."""
     folder, _, _, _ = ideal_capture
