@@ -1,9 +1,12 @@
 """The CLI end to end on a rendered capture, including its error messages."""
 
 import json
+import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 from conftest import run_cli
 
 from procam import io
@@ -60,21 +63,30 @@ def test_demo_runs(tmp_path):
     assert (tmp_path / "demo" / "calib.yml").is_file() and (tmp_path / "demo" / "capture" / "truth.json").is_file()
 
 
-def test_examples_run(tmp_path):
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_examples_run():
     """The examples are documentation: they must run."""
     import runpy
-    import sys
-    from pathlib import Path
 
-    ex = Path(__file__).resolve().parents[1] / "examples"
-    runpy.run_path(str(ex / "single_pose_from_points.py"), run_name="__main__")
-    old = sys.argv
-    sys.argv = ["plot_decode.py", str(tmp_path / "d.png")]
-    try:
-        runpy.run_path(str(ex / "plot_decode.py"), run_name="__main__")
-    finally:
-        sys.argv = old
-    assert (tmp_path / "d.png").is_file()
+    runpy.run_path(str(EXAMPLES / "single_pose_from_points.py"), run_name="__main__")
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("plot_*.py")))
+def test_gallery_examples_run(name, tmp_path, monkeypatch):
+    """Every gallery example (examples/plot_*.py) runs and writes its figure to the path it is given."""
+    import runpy
+
+    out = tmp_path / "figure.png"
+    monkeypatch.setattr(sys, "argv", [name, str(out)])
+    runpy.run_path(str(EXAMPLES / name), run_name="__main__")
+    assert out.is_file() and out.read_bytes().startswith(b"\x89PNG")
+
+
+def test_gallery_is_complete():
+    assert {"plot_decode.py", "plot_correspondences.py", "plot_residuals.py",
+            "plot_study_slice.py"} <= {p.name for p in EXAMPLES.glob("plot_*.py")}
 
 
 def test_commands_that_draw_nothing_import_no_matplotlib_or_simulator(tmp_path):
@@ -82,8 +94,6 @@ def test_commands_that_draw_nothing_import_no_matplotlib_or_simulator(tmp_path):
     (checked in a fresh interpreter, through the console-script entry point)."""
     import os
     import subprocess
-    import sys
-    from pathlib import Path
 
     script = """
 import json, sys
