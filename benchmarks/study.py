@@ -3,7 +3,7 @@
 One workload per device (a ψ × ν grid without the slices, ``--trials`` noisy calibrations plus a
 noise-free one and the CRLB per cell), run
 1. serially with OpenBLAS's default thread count (what a plain loop would do),
-2. serially with one BLAS thread (``procam.study`` does this itself),
+2. serially with one BLAS thread (``procam.paper.study`` does this itself),
 3. with joblib processes (``--jobs``),
 4. optionally on a local Dask cluster through joblib's dask backend (``--dask``).
 Each parallel result is checked to equal the serial one.
@@ -23,7 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
-from procam import study  # noqa: E402
+from procam.paper import study  # noqa: E402
 
 
 def _same(a, b) -> bool:

@@ -1,9 +1,12 @@
 """The CLI end to end on a rendered capture, including its error messages."""
 
 import json
+import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 from conftest import run_cli
 
 from procam import io
@@ -60,21 +63,50 @@ def test_demo_runs(tmp_path):
     assert (tmp_path / "demo" / "calib.yml").is_file() and (tmp_path / "demo" / "capture" / "truth.json").is_file()
 
 
-def test_examples_run(tmp_path):
-    """The examples are documentation: they must run."""
-    import runpy
-    import sys
-    from pathlib import Path
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
-    ex = Path(__file__).resolve().parents[1] / "examples"
-    runpy.run_path(str(ex / "single_pose_from_points.py"), run_name="__main__")
-    old = sys.argv
-    sys.argv = ["plot_decode.py", str(tmp_path / "d.png")]
-    try:
-        runpy.run_path(str(ex / "plot_decode.py"), run_name="__main__")
-    finally:
-        sys.argv = old
-    assert (tmp_path / "d.png").is_file()
+
+@pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("plot_*.py")))
+def test_gallery_examples_run(name, tmp_path, monkeypatch):
+    """Every gallery example (examples/plot_*.py) runs and writes its figure to the path it is given."""
+    import runpy
+
+    out = tmp_path / "figure.png"
+    monkeypatch.setattr(sys, "argv", [name, str(out)])
+    runpy.run_path(str(EXAMPLES / name), run_name="__main__")
+    assert out.is_file() and out.read_bytes().startswith(b"\x89PNG")
+
+
+def test_gallery_is_complete():
+    assert {"plot_decode.py", "plot_correspondences.py", "plot_single_pose.py", "plot_residuals.py",
+            "plot_study_slice.py"} <= {p.name for p in EXAMPLES.glob("plot_*.py")}
+
+
+def test_commands_that_draw_nothing_import_no_matplotlib_or_simulator(tmp_path):
+    """`procam patterns` and `procam decode` without --png run without importing matplotlib or the simulator
+    (checked in a fresh interpreter, through the console-script entry point)."""
+    import os
+    import subprocess
+
+    script = """
+import json, sys
+from procam.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+loaded = [m for m in ("matplotlib", "procam.simulate", "procam.plots", "procam.paper") if m in sys.modules]
+print(json.dumps({"code": code, "loaded": loaded}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    folder = tmp_path / "seq"
+    for args in (["patterns", "--projector", "64x32", "-o", folder], ["decode", folder, "-o", tmp_path / "m.npz"]):
+        res = subprocess.run([sys.executable, "-c", script, *map(str, args)], env=env, capture_output=True,
+                             text=True, timeout=120)
+        report = json.loads(res.stderr.strip().splitlines()[-1])
+        assert report == {"code": 0, "loaded": []}, (args, res.stderr)
+    assert (tmp_path / "m.npz").is_file()
 
 
 def test_user_mistakes_give_one_line_errors(ideal_capture, tmp_path, shared_data):

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from procam import evaluate, experiment, io, multi_pose, pipeline, simulate
+from procam import evaluate, io, multi_pose, pipeline, simulate
+from procam.paper import experiment, report
 from procam.errors import CalibrationError
 from procam.view import View
 
@@ -78,7 +79,7 @@ def test_run_tables(result, views):
 
 def test_write_report(result, tmp_path):
     res, _ = result
-    paths = experiment.write_report(res, tmp_path / "rep")
+    paths = report.write_report(res, tmp_path / "rep")
     names = {p.name for p in paths}
     assert {"report.md", "experiment.json", "focal_errors.png", "sigma_T.png", "multi_sets.csv",
             "multi_summary.csv", "multi_params.csv", "single_pose.csv", "single_extrinsics.csv"} <= names

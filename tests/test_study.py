@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from procam.errors import ProcamError
-from procam.study import StudyConfig, StudyResult, cell_scene, parse_grid, run_cell, run_study, study_cells
+from procam.paper.study import StudyConfig, StudyResult, cell_scene, parse_grid, run_cell, run_study, study_cells
 
 
 def test_parse_grid():

@@ -1,4 +1,4 @@
-"""Text of a number in a report or console table (shared by :mod:`procam.experiment` and the CLI)."""
+"""Text of a number in a report or console table (shared by :mod:`procam.paper.report` and the CLI)."""
 
 from __future__ import annotations
 

@@ -11,12 +11,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from .. import _files, io, patterns, pipeline, simulate, single_pose
-from ..board import Board
-from ..models import euler_deg
-from ..residuals import rms
 from ._app import app, console, fail, user_errors
-from .calibrate import print_summary
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
@@ -34,6 +29,16 @@ def demo_cmd(
     seed: int = typer.Option(0, "--seed", help="Noise seed."),
 ):
     """Render a procam capture at a recommended pose, calibrate it from that one pose, compare with the truth."""
+    # the simulator, the solvers and matplotlib load only when the demo runs, not with every command
+    from .. import _files, io, patterns, pipeline, simulate, single_pose
+    from ..board import Board
+    from ..models import euler_deg
+    from ..plots import save_figure
+    from ..plots.correspond import correspond_figure
+    from ..plots.decode import decode_figure
+    from ..residuals import rms
+    from .calibrate import print_summary
+
     if preset not in simulate.PRESETS:
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
     scene = simulate.with_board_pose(simulate.preset(preset), simulate.RECOMMENDED_POSE)
@@ -66,10 +71,6 @@ def demo_cmd(
     print_summary(calib)
     io.save_calibration(calib, out_dir / "calib.json")
     io.save_opencv_yaml(calib, out_dir / "calib.yml")
-    from ..plots.correspond import correspond_figure
-    from ..plots import save_figure
-    from ..plots.decode import decode_figure
-
     save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), out_dir / "decode.png")
     save_figure(correspond_figure(view, stack[ps.white], title="demo: correspondences"), out_dir / "corners.png")
 

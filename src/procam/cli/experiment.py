@@ -59,7 +59,7 @@ def experiment_cmd(
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
-    from .. import experiment
+    from ..paper import experiment, report
     from ..multi_pose import DIST_MODELS
 
     from .. import pipeline
@@ -86,7 +86,7 @@ def experiment_cmd(
         result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=refine,
                                 cam_dist=cam_dist, proj_dist=proj_dist,
                                 progress=lambda d, t, label: bar.update(t_cal, completed=d, total=t, label=label))
-        paths = experiment.write_report(result, out)
+        paths = report.write_report(result, out)
     for t in summary_tables(result):
         console.print(t)
     for f in result.failures:

@@ -21,7 +21,7 @@ from ._app import app, console, err_console, user_errors
 @user_errors
 def study(
     device: str = typer.Argument(..., help="camera or projector: the device whose board rotation is swept."),
-    output: Path = typer.Option(..., "-o", "--output", help="Output folder (CSV, JSON summary, PNG figures)."),
+    output: Path = typer.Option(..., "-o", "--out", help="Output folder (CSV, JSON summary, PNG figures)."),
     grid: str = typer.Option("-45:45:5", help="Heat-map angles for both ψ and ν: START:STOP:STEP or a comma list (deg)."),
     psi_grid: Optional[str] = typer.Option(None, "--psi", help="ψ angles (deg), overrides --grid for ψ."),
     nu_grid: Optional[str] = typer.Option(None, "--nu", help="ν angles (deg), overrides --grid for ν."),
@@ -40,9 +40,9 @@ def study(
 ):
     """Sweep the board's rotation (ψ, ν) relative to a device: median |Δf| per cell and the Cramér–Rao bound.
 
-    Reproduces the paper's simulation study (METHOD §12) and draws the single-pose CRLB (§13) into it.
+    Reproduces the paper's simulation study and draws the single-pose Cramér–Rao bound into it.
     """
-    from ..study import StudyConfig, parse_grid, run_study
+    from ..paper.study import StudyConfig, parse_grid, run_study
 
     device = device.lower()
     if device not in ("camera", "projector"):
@@ -71,7 +71,7 @@ def study(
         backend = "dask"
         err_console.print(f"dask: {client}")
 
-    from ..study import study_cells
+    from ..paper.study import study_cells
 
     total = len(study_cells(cfg))
     try:
@@ -99,7 +99,7 @@ def study(
     console.print(f"{s['cells']} cells in {s['seconds']:.1f} s ({s['cells_per_second']:.1f} cells/s, "
                   f"{s['backend']}, {s['n_jobs']} worker(s)); σ = {cfg.sigma:g} px, {cfg.trials} trials")
     if slices:
-        from ..study import slice_specs
+        from ..paper.study import slice_specs
 
         for label, axis, fixed, val in slice_specs(cfg):
             t = Table(title=f"{device}: slice {label} (|Δf| in px)", show_lines=False)

@@ -1,14 +1,34 @@
-"""Figures (the only package that imports matplotlib; always the Agg backend)."""
+"""Figures (the only package that imports matplotlib, and only inside its functions).
+
+Every function builds a :class:`matplotlib.figure.Figure` directly (no pyplot) and returns it;
+:func:`save_figure` writes it.  Nothing here selects a backend or touches matplotlib's global
+state: importing :mod:`procam.plots` imports no matplotlib at all, and drawing a figure leaves a
+notebook's or an application's backend as it was.
+"""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-
 __all__ = ["save_figure"]
+
+
+def _figure(**kwargs):
+    """A :class:`matplotlib.figure.Figure` not registered with pyplot (``kwargs`` go to ``Figure``).
+
+    Figures made this way need no GUI backend and are freed when no longer referenced.
+    """
+    from matplotlib.figure import Figure
+
+    return Figure(**kwargs)
+
+
+def _close(fig) -> None:
+    """Close ``fig`` if pyplot manages it (a figure made with ``plt.subplots``); others need nothing."""
+    plt = sys.modules.get("matplotlib.pyplot")
+    if plt is not None:
+        plt.close(fig)
 
 
 def save_figure(fig, path, dpi: int = 110) -> Path:
@@ -16,9 +36,9 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
 
     Parameters
     ----------
-    fig : matplotlib Figure.
+    fig : matplotlib Figure (made by this package, or by pyplot: then it is closed too).
     path : output file; its suffix picks the format (``.png``, ``.pdf``, ``.svg``, ... - whatever
-        matplotlib's Agg canvas supports).
+        matplotlib can write without a GUI).
     dpi : resolution of raster formats (dots per inch).
 
     Returns
@@ -29,8 +49,6 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
     ------
     ProcamError : the suffix is missing or not a format matplotlib can write (the figure is closed).
     """
-    import matplotlib.pyplot as plt
-
     from ..errors import ProcamError
     from .._files import atomic_path
 
@@ -38,7 +56,7 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
     fmt = path.suffix.lstrip(".").lower()
     supported = fig.canvas.get_supported_filetypes()
     if fmt not in supported:
-        plt.close(fig)
+        _close(fig)
         what = f"unsupported figure format '.{fmt}'" if fmt else "no suffix to choose the figure format from"
         raise ProcamError(f"{path}: {what}; give a file name ending in one of "
                           f"{', '.join('.' + k for k in sorted(supported))}")
@@ -46,5 +64,5 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
         with atomic_path(path) as tmp:
             fig.savefig(tmp, dpi=dpi, format=fmt)
     finally:
-        plt.close(fig)
+        _close(fig)
     return path

@@ -2,19 +2,19 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..correspond import CORNER_REASONS  # noqa: E402
+from ..correspond import CORNER_REASONS
+from . import _figure
 
 
 def correspond_figure(view, white=None, title: str = ""):
     """Two panels: the camera image (white frame) with the detected corners, coloured by status, and
     the projector's image plane (the paper's "projector image") with the projector corners."""
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), constrained_layout=True)
+    from matplotlib.patches import Rectangle
+
+    fig = _figure(figsize=(13, 4.8), constrained_layout=True)
+    axes = fig.subplots(1, 2)
     reason = view.diagnostics.get("reason", np.zeros(len(view.obj_pts), np.uint8))
     ok = reason == 0
     ax = axes[0]
@@ -33,7 +33,7 @@ def correspond_figure(view, white=None, title: str = ""):
     ax.legend(loc="lower right", fontsize=8)
     ax = axes[1]
     W, H = view.proj_size or (int(np.nanmax(view.proj_pts[:, 0])) + 1, int(np.nanmax(view.proj_pts[:, 1])) + 1)
-    ax.add_patch(plt.Rectangle((-0.5, -0.5), W, H, fill=False, color="k"))
+    ax.add_patch(Rectangle((-0.5, -0.5), W, H, fill=False, color="k"))
     p = view.proj_pts
     cols = int(round(len(p) / max(1, len(np.unique(view.obj_pts[:, 1])))))
     grid = p.reshape(-1, cols, 2) if len(p) % cols == 0 else None

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..decode import REASONS  # noqa: E402
-from . import save_figure  # noqa: E402,F401  (re-exported: cli.calibrate/correspond/demo import it from here)
+from ..decode import REASONS
+from . import _figure
+from . import save_figure  # noqa: F401  (re-exported: cli.calibrate/correspond/demo import it from here)
 
 
 def decode_figure(result, white=None, title: str = ""):
@@ -17,8 +14,13 @@ def decode_figure(result, white=None, title: str = ""):
     validity reasons, and the white frame (if given). Returns the matplotlib Figure."""
     ps = result.pattern_set
     panels = 4 if white is not None else 3
-    fig, axes = plt.subplots(1, panels, figsize=(5 * panels, 4.2), constrained_layout=True)
-    cmap = plt.get_cmap("turbo").with_extremes(bad="black")
+    from matplotlib import colormaps
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    fig = _figure(figsize=(5 * panels, 4.2), constrained_layout=True)
+    axes = fig.subplots(1, panels)
+    cmap = colormaps["turbo"].with_extremes(bad="black")
     for ax, data, vmax, name in ((axes[0], result.col, ps.width - 1, "projector column"),
                                  (axes[1], result.row, ps.height - 1, "projector row")):
         im = ax.imshow(np.ma.masked_invalid(data), cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
@@ -26,10 +28,10 @@ def decode_figure(result, white=None, title: str = ""):
         fig.colorbar(im, ax=ax, shrink=0.8)
     reason = np.maximum(result.reason_col, result.reason_row)
     colors = ["#2ca02c", "#404040", "#ff7f0e", "#d62728", "#9467bd"]
-    rcmap = matplotlib.colors.ListedColormap(colors)
+    rcmap = ListedColormap(colors)
     axes[2].imshow(reason, cmap=rcmap, vmin=-0.5, vmax=len(REASONS) - 0.5, interpolation="nearest")
     counts = np.bincount(reason.ravel(), minlength=len(REASONS)) / reason.size * 100
-    handles = [matplotlib.patches.Patch(color=colors[k], label=f"{REASONS[k].split(':')[0]} {counts[k]:.1f}%")
+    handles = [Patch(color=colors[k], label=f"{REASONS[k].split(':')[0]} {counts[k]:.1f}%")
                for k in range(len(REASONS))]
     axes[2].legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.8)
     axes[2].set_title(f"validity ({result.valid.mean() * 100:.1f}% decoded)")

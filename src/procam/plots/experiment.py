@@ -1,17 +1,13 @@
-"""Figures of the experiment (:mod:`procam.experiment`): focal errors against the pose angles, σ_T per set.
+"""Figures of the experiment (:mod:`procam.paper.experiment`): focal errors against the pose angles, σ_T per set.
 
-Matplotlib with the Agg backend only; functions return ``Figure`` objects.
+Functions return :class:`matplotlib.figure.Figure` objects (no pyplot, no backend switch).
 """
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from . import save_figure  # noqa: E402
+from . import _figure, save_figure
 
 __all__ = ["focal_error_figure", "sigma_t_figure", "experiment_figures", "save_figure"]
 
@@ -27,7 +23,8 @@ def focal_error_figure(result):
     The angles are the board's under the reference calibration (``*_ref`` columns), which stay
     meaningful when a single-pose solution is degenerate."""
     rows = result.single
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    fig = _figure(figsize=(11, 4.2), constrained_layout=True)
+    axes = fig.subplots(1, 2)
     cam_x = np.abs(_col(rows, "psi_c_ref")) + np.abs(_col(rows, "nu_c_ref"))
     specs = [(axes[0], cam_x, _col(rows, "abs_df_c"), "|ψ_c| + |ν_c| (deg, reference calibration)",
               "|Δf_c| (px)", 10.0, "camera"),
@@ -57,7 +54,8 @@ def sigma_t_figure(result):
     sT = _col(rows, "sigma_T")
     sA = _col(rows, "sigma_abs_T")
     size = _col(rows, "size")
-    fig, ax = plt.subplots(figsize=(11, 4.6), constrained_layout=True)
+    fig = _figure(figsize=(11, 4.6), constrained_layout=True)
+    ax = fig.subplots()
     sc = ax.scatter(k, sT, c=size, cmap="viridis", s=18, label="σ_T")
     ax.scatter(k, sA, c=size, cmap="viridis", s=12, marker="x", label="σ_|T|")
     ref = result.reference

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from . import _figure
 
 
 def residual_figure(per_pose, cam_size, proj_size=None, scale: float = 100.0, title: str = ""):
@@ -17,9 +15,12 @@ def residual_figure(per_pose, cam_size, proj_size=None, scale: float = 100.0, ti
     """
     has_proj = proj_size is not None and any(p.get("proj_res") is not None for p in per_pose)
     n = 2 if has_proj else 1
-    fig, axes = plt.subplots(2, n, figsize=(6.5 * n, 8), constrained_layout=True, squeeze=False,
-                             gridspec_kw={"height_ratios": [3, 2]})
-    colors = plt.get_cmap("tab10")
+    from matplotlib import colormaps
+    from matplotlib.patches import Rectangle
+
+    fig = _figure(figsize=(6.5 * n, 8), constrained_layout=True)
+    axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [3, 2]})
+    colors = colormaps["tab10"]
     panels = [("camera", "cam", cam_size)] + ([("projector", "proj", proj_size)] if has_proj else [])
     for col, (label, key, size) in enumerate(panels):
         ax, hx = axes[0, col], axes[1, col]
@@ -32,7 +33,7 @@ def residual_figure(per_pose, cam_size, proj_size=None, scale: float = 100.0, ti
             ax.quiver(pts[ok, 0], pts[ok, 1], res[ok, 0] * scale, res[ok, 1] * scale, angles="xy",
                       scale_units="xy", scale=1, color=colors(i % 10), width=0.003, label=p["name"])
             all_r.append(np.linalg.norm(res[ok], axis=1))
-        ax.add_patch(plt.Rectangle((-0.5, -0.5), size[0], size[1], fill=False, color="k"))
+        ax.add_patch(Rectangle((-0.5, -0.5), size[0], size[1], fill=False, color="k"))
         ax.set_xlim(-0.05 * size[0], 1.05 * size[0])
         ax.set_ylim(1.05 * size[1], -0.05 * size[1])
         ax.set_aspect("equal")

@@ -1,21 +1,16 @@
-"""Figures of the simulation study (:mod:`procam.study`): heat maps and the paper's slices.
+"""Figures of the simulation study (:mod:`procam.paper.study`): heat maps and the paper's slices.
 
-Matplotlib with the Agg backend only; every function returns the ``Figure`` (and
-:func:`save_study_figures` writes PNGs).
+Every function returns a :class:`matplotlib.figure.Figure` (no pyplot, no backend switch), and
+:func:`save_study_figures` writes PNGs.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
-
-from . import save_figure  # noqa: E402
+from . import _figure, save_figure
 
 __all__ = ["heatmap", "slices", "save_study_figures"]
 
@@ -36,7 +31,7 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
 
     Parameters
     ----------
-    result : procam.study.StudyResult
+    result : procam.paper.study.StudyResult
     metric : a column of the result (``median_abs_df``, ``abs_df_noise_free``, ``bound_f``, ...).
     log : logarithmic colour scale (|Δf| spans 1–1000 px).
     vmin, vmax : colour limits (default: the finite data's range, clipped to >= 0.1 on a log scale,
@@ -49,9 +44,12 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
     matplotlib.figure.Figure
         Non-finite cells (failed or degenerate) are grey.
     """
+    from matplotlib.colors import LogNorm, TwoSlopeNorm
+
     psi, nu, val = result.grid(metric)
     finite = val[np.isfinite(val)]
-    fig, ax = plt.subplots(figsize=(7.2, 6.0), constrained_layout=True)
+    fig = _figure(figsize=(7.2, 6.0), constrained_layout=True)
+    ax = fig.subplots()
     ax.set_facecolor("0.8")
     if finite.size:
         lo = vmin if vmin is not None else (max(0.1, float(finite[finite > 0].min())) if log and np.any(finite > 0)
@@ -91,7 +89,7 @@ def heatmap(result, metric: str = "median_abs_df", *, log: bool = True, vmin=Non
 
 
 def slices(result):
-    """The paper's slices (METHOD §12) with the Cramér–Rao bound drawn in.
+    """The paper's slices (its Figs 5 and 7) with the Cramér–Rao bound drawn in.
 
     One panel per slice: median |Δf| over the trials (markers), the noise-free |Δf| (the
     deterministic bias of the model error; dashed), √CRLB(f) at the study's σ (solid grey) and
@@ -102,11 +100,11 @@ def slices(result):
     -------
     matplotlib.figure.Figure
     """
-    from ..study import slice_specs
+    from ..paper.study import slice_specs
 
     specs = slice_specs(result.config)
-    fig, axes = plt.subplots(1, len(specs), figsize=(5.2 * len(specs), 4.3), constrained_layout=True,
-                             squeeze=False)
+    fig = _figure(figsize=(5.2 * len(specs), 4.3), constrained_layout=True)
+    axes = fig.subplots(1, len(specs), squeeze=False)
     s = _SYM[result.config.device]
     for ax, (label, axis, fixed, val) in zip(axes[0], specs):
         rows = result.slice(label)

@@ -1,16 +1,16 @@
 """The paper's simulation study: |Δf| over the board's rotation (ψ, ν) relative to a device.
 
-Reproduces Lawal & Greenspan's sweeps (their Figs 4–7; METHOD §12) and adds, per cell, the
-Cramér–Rao bound of the same single-pose problem (METHOD §13, :mod:`procam.crlb`), i.e. what any
-unbiased method could achieve at that pose with that noise.
+Reproduces Lawal & Greenspan's simulation sweeps (their Figs 4–7) and adds, per cell, the
+Cramér–Rao bound of the same single-pose problem (:mod:`procam.crlb`), i.e. what any unbiased
+method could achieve at that pose with that noise.
 
-Set-up (METHOD §12): the ``paper`` preset of :mod:`procam.simulate` without camera lens
-distortion; the board (10 × 6 corners at 24 mm) centred on the device's optical axis at
-``distance`` (500 mm), rotated about its centre by ``Rx(ψ) Ry(ν)`` with φ = 0, in the frame of
-the studied device.  Per cell and trial, noisy correspondences from the exact geometry
-(:func:`procam.simulate.correspondences`) are calibrated by the single-pose method
-(:mod:`procam.single_pose`), and the median |Δf| over the trials is recorded together with a
-noise-free run (the deterministic bias) and the bound.
+Set-up (the paper's, with procam's choices where it is silent: the square size, the distance, the
+noise): the ``paper`` preset of :mod:`procam.simulate` without camera lens distortion; the board
+(10 × 6 corners at 24 mm) centred on the device's optical axis at ``distance`` (500 mm), rotated
+about its centre by ``Rx(ψ) Ry(ν)`` with φ = 0, in the frame of the studied device.  Per cell and
+trial, noisy correspondences from the exact geometry (:func:`procam.simulate.correspondences`) are
+calibrated by the single-pose method (:mod:`procam.single_pose`), and the median |Δf| over the
+trials is recorded together with a noise-free run (the deterministic bias) and the bound.
 
 Model errors (``model_error``):
 
@@ -24,27 +24,27 @@ Model errors (``model_error``):
     the estimator can only be limited by the noise: its spread is to be compared with the bound.
 
 Parallelism: cells are independent and seeded from ``(seed, device, ψ, ν, trial)``, so a study gives
-the same numbers serially, with joblib processes or on a Dask cluster (joblib's ``dask`` backend).
-joblib is an optional dependency (``procam[parallel]``); the serial path does not need it.
+the same numbers serially, with joblib processes or on a Dask cluster (joblib's ``dask`` backend;
+:mod:`procam.paper._parallel`).  joblib is an optional dependency (``procam[parallel]``); the serial
+path does not need it.
 """
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import math
 import time
-from contextlib import contextmanager
-from functools import lru_cache
+from functools import lru_cache, partial
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from .crlb import camera_bound, projector_bound
-from .errors import ProcamError
-from ._files import atomic_path
+from .._files import atomic_path
+from ..crlb import camera_bound, projector_bound
+from ..errors import ProcamError
+from ._parallel import run_chunks, single_threaded_blas
 
 __all__ = ["StudyConfig", "StudyResult", "parse_grid", "study_cells", "study_scene", "cell_scene",
            "run_cell", "run_study", "slice_specs", "COLUMNS"]
@@ -52,10 +52,10 @@ __all__ = ["StudyConfig", "StudyResult", "parse_grid", "study_cells", "study_sce
 DEVICES = ("camera", "projector")
 MODEL_ERRORS = ("paper", "none")
 
-#: Default corner noise per device (px, per coordinate; METHOD §12).
+#: Default corner noise per device (px, per coordinate; the paper does not give its noise level).
 DEFAULT_NOISE = {"camera": 0.1, "projector": 0.2}
 
-#: The paper's slices (METHOD §12): (varying axis, fixed axis, fixed value in degrees).
+#: The paper's slices (its Figs 5 and 7): (varying axis, fixed axis, fixed value in degrees).
 SLICES = {
     "camera": (("psi", "nu", 10.0), ("nu", "psi", 10.0)),
     "projector": (("nu", "psi", 10.0), ("psi", "nu", 3.5), ("psi", "nu", -3.5)),
@@ -184,7 +184,7 @@ def study_cells(config: StudyConfig) -> list[tuple[float, float, bool, str]]:
 @lru_cache(maxsize=8)
 def _preset(name: str):
     # simulate.preset() places its board by optimisation (~1 s); the scene is immutable, so cache it
-    from . import simulate
+    from .. import simulate
 
     return simulate.preset(name)
 
@@ -202,82 +202,12 @@ def study_scene(config: StudyConfig):
 
 def cell_scene(config: StudyConfig, psi: float, nu: float, base=None):
     """The study scene with the board at ``(psi, nu, 0)`` centred at ``(0, 0, distance)`` in the
-    studied device's frame (METHOD §12)."""
-    from . import simulate
+    studied device's frame (the paper's simulation set-up)."""
+    from .. import simulate
 
     base = study_scene(config) if base is None else base
     return simulate.with_board_pose(base, (psi, nu, 0.0), frame=config.device,
                                     center=(0.0, 0.0, config.distance))
-
-
-@contextmanager
-def single_threaded_blas():
-    """Limit BLAS to one thread inside the block (best effort; restores the previous setting).
-
-    Every linear-algebra call of a cell is tiny (matrices of ~120 × 9), so multi-threaded BLAS
-    only costs: on a loaded 2-core machine a calibration took 0.12 s with OpenBLAS's default
-    threads against 0.02 s with one.  Uses ``threadpoolctl`` when installed, otherwise the
-    ``*_set_num_threads`` entry points of the OpenBLAS copies bundled with numpy and scipy.
-    Parallel workers need nothing: joblib's loky workers already get ``cpu_count // n_jobs``
-    BLAS threads.
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        threadpool_limits = None
-    if threadpool_limits is not None:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-        return
-    handles = _openblas_handles()
-    old = []
-    for get, set_ in handles:
-        try:
-            old.append((set_, int(get())))
-            set_(1)
-        except Exception:  # pragma: no cover - exotic builds
-            pass
-    try:
-        yield
-    finally:
-        for set_, n in old:
-            try:
-                set_(n)
-            except Exception:  # pragma: no cover
-                pass
-
-
-_BLAS_HANDLES = None
-
-
-def _openblas_handles():
-    """``(get_num_threads, set_num_threads)`` ctypes pairs of the loaded OpenBLAS libraries."""
-    global _BLAS_HANDLES
-    if _BLAS_HANDLES is not None:
-        return _BLAS_HANDLES
-    import ctypes
-    import glob
-    import os
-
-    import scipy
-
-    found = []
-    dirs = {os.path.join(os.path.dirname(os.path.dirname(m.__file__)), f"{m.__name__}.libs") for m in (np, scipy)}
-    for d in sorted(dirs):
-        for path in sorted(glob.glob(os.path.join(d, "*openblas*.so*"))):
-            try:
-                lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_LOCAL)
-            except OSError:
-                continue
-            for suffix in ("scipy_openblas_{}64_", "scipy_openblas_{}_64_", "scipy_openblas_{}", "openblas_{}"):
-                g, st = (getattr(lib, suffix.format(x), None) for x in ("get_num_threads", "set_num_threads"))
-                if g is not None and st is not None:
-                    g.restype = ctypes.c_int
-                    st.argtypes = [ctypes.c_int]
-                    found.append((g, st))
-                    break
-    _BLAS_HANDLES = found
-    return found
 
 
 def _trial_seed(config: StudyConfig, psi: float, nu: float, trial: int) -> int:
@@ -288,7 +218,7 @@ def _trial_seed(config: StudyConfig, psi: float, nu: float, trial: int) -> int:
 
 def _calibrate_f(config: StudyConfig, scene, obj, pts) -> float:
     """Single-pose focal length of the studied device (NaN if the method fails)."""
-    from . import single_pose
+    from .. import single_pose
 
     try:
         if config.device == "camera":
@@ -307,7 +237,7 @@ def _calibrate_f(config: StudyConfig, scene, obj, pts) -> float:
 
 
 def _points(config: StudyConfig, scene, sigma: float, seed: int, render: bool = False):
-    from . import simulate
+    from .. import simulate
 
     if render:
         return _rendered_points(config, scene, seed)
@@ -320,8 +250,8 @@ def _points(config: StudyConfig, scene, sigma: float, seed: int, render: bool = 
 
 def _rendered_points(config: StudyConfig, scene, seed: int):
     """Corners from a full rendering: render -> decode -> detect -> local homographies (NaN rows if lost)."""
-    from . import patterns, pipeline, simulate
-    from .board import Board
+    from .. import patterns, pipeline, simulate
+    from ..board import Board
 
     stack, _ = simulate.render(scene, order="opencv", seed=seed)
     ps = patterns.pattern_set(scene.proj_size[0], scene.proj_size[1], "opencv")
@@ -397,10 +327,6 @@ def _run_chunk(config: StudyConfig, cells: Sequence[tuple]) -> list[dict]:
     return [run_cell(config, p, n, g, s, base=base) for p, n, g, s in cells]
 
 
-def _chunks(items: list, size: int) -> list[list]:
-    return [items[i:i + size] for i in range(0, len(items), size)]
-
-
 def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = None,
               chunk_size: int | None = None, progress: Callable[[int, int], None] | None = None,
               cells: Iterable[tuple] | None = None) -> "StudyResult":
@@ -411,7 +337,7 @@ def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = Non
     n_jobs : worker count for joblib (``1`` = serial, no joblib needed; ``-1`` = all cores).
     backend : joblib backend: ``None`` (``"loky"`` processes when ``n_jobs != 1``) or ``"dask"`` —
         the latter needs a ``dask.distributed.Client`` connected in this process (see
-        :mod:`procam.cli.study`, option ``--dask``); the work then runs on that cluster.
+        ``procam study``, option ``--dask``); the work then runs on that cluster.
     chunk_size : cells per task (default: about 4 tasks per worker, at most 16 cells).
     progress : called as ``progress(cells_done, cells_total)`` after each finished chunk.
     cells : override :func:`study_cells` (tuples ``(psi, nu, in_grid, slices)``).
@@ -448,39 +374,9 @@ def run_study(config: StudyConfig, *, n_jobs: int = 1, backend: str | None = Non
             if progress is not None:
                 progress(i + 1, total)
         return StudyResult(config, rows, time.perf_counter() - t0, {"n_jobs": 1, "backend": "serial"})
-    try:
-        import joblib
-    except ImportError:
-        raise ProcamError("parallel runs need joblib: pip install 'procam[parallel]' "
-                          "(or run serially with --jobs 1)") from None
-    workers = joblib.cpu_count() if n_jobs in (-1, 0, None) else max(1, int(n_jobs))
-    if chunk_size is None:
-        chunk_size = int(min(16, max(1, math.ceil(total / (4 * workers)))))
-    chunks = _chunks(list(enumerate(todo)), chunk_size)
-
-    results: dict[int, dict] = {}
-    done = 0
-    ctx = joblib.parallel_config(backend=backend) if backend is not None else contextlib.nullcontext()
-    jobs = n_jobs if backend is None or n_jobs != 1 else -1
-    with ctx:
-        try:  # joblib >= 1.4: results as they finish (live progress)
-            par = joblib.Parallel(n_jobs=jobs, return_as="generator_unordered")
-        except (TypeError, ValueError):
-            par = joblib.Parallel(n_jobs=jobs)
-        for idx, out in par(joblib.delayed(_task)(config, chunk) for chunk in chunks):
-            for i, r in zip(idx, out):
-                results[i] = r
-            done += len(idx)
-            if progress is not None:
-                progress(done, total)
-    rows = [results[i] for i in range(total)]
-    return StudyResult(config, rows, time.perf_counter() - t0,
-                       {"n_jobs": workers, "backend": backend or "loky", "chunk_size": chunk_size})
-
-
-def _task(config: StudyConfig, chunk):
-    """Module-level joblib task (picklable): ``(indices, rows)`` of a chunk of cells."""
-    return [i for i, _ in chunk], _run_chunk(config, [c for _, c in chunk])
+    rows, run = run_chunks(partial(_run_chunk, config), todo, n_jobs=n_jobs, backend=backend,
+                           chunk_size=chunk_size, progress=progress)
+    return StudyResult(config, rows, time.perf_counter() - t0, run)
 
 
 @dataclass
