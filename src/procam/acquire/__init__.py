@@ -19,7 +19,7 @@ The capture-folder *format* (reading and validating a pose folder) stays in :mod
 Nothing here imports pygame, screeninfo, harvesters or the simulator until it is used.
 """
 
-from .cameras import (Camera, FolderWatchCamera, Frame, HarvestersCamera, OpenCVCamera, VirtualCamera,  # noqa: F401
-                      open_camera, parse_camera_spec)
+from .cameras import (Camera, FolderWatchCamera, Frame, HarvestersCamera, OpenCVCamera,  # noqa: F401
+                      VirtualCamera, open_camera, parse_camera_spec)
 from .projector import CaptureAborted, Display, ProjectorWindow, VirtualProjector, list_displays  # noqa: F401
 from .session import CaptureFailed, CaptureOptions, CaptureResult, Event, capture_pose, capture_poses  # noqa: F401

@@ -134,13 +134,14 @@ class OpenCVCamera(_Camera):
 
     Parameters
     ----------
-    source : device index (``/dev/videoN`` on Linux) or a device path.
+    source : device index (``/dev/videoN`` on Linux), a device path, or a video file (for tests).
     size : requested (width, height) in pixels, or None for the driver's default.
     exposure_ms : manual exposure in milliseconds (auto exposure is switched off), or None to
         leave the camera's setting.  Converted to the API's unit: V4L2 100-microsecond steps,
         MSMF/DSHOW log2(seconds); elsewhere passed as is (the driver's unit, noted).
     gain : gain in the driver's unit, or None.
-    api : an OpenCV ``cv2.CAP_*`` constant, or None for V4L2 on Linux and ``CAP_ANY`` elsewhere.
+    api : an OpenCV ``cv2.CAP_*`` constant, or None for V4L2 for a device on Linux and ``CAP_ANY``
+        otherwise.
     flush_frames : frames grabbed and dropped by :meth:`flush` (default: the driver's buffer count
         plus one).
 
@@ -167,7 +168,9 @@ class OpenCVCamera(_Camera):
 
         if self._cap is not None:
             return self
-        api = self.api if self.api is not None else (cv2.CAP_V4L2 if sys.platform.startswith("linux") else cv2.CAP_ANY)
+        device = isinstance(self.source, int) or str(self.source).startswith("/dev/")
+        api = self.api if self.api is not None else (
+            cv2.CAP_V4L2 if device and sys.platform.startswith("linux") else cv2.CAP_ANY)
         cap = cv2.VideoCapture(self.source, api)
         if not cap.isOpened():
             cap.release()
@@ -203,7 +206,7 @@ class OpenCVCamera(_Camera):
         cap = self._cap
         backend = cap.getBackendName()
         self._set(cv2.CAP_PROP_BUFFERSIZE, 1)  # fewer stale frames where the API supports it
-        ok, back, eff = self._set(cv2.CAP_PROP_AUTOFOCUS, 0)
+        _, back, eff = self._set(cv2.CAP_PROP_AUTOFOCUS, 0)
         self._settings["autofocus"] = _setting("off", 0, back, eff,
                                                "" if eff else "autofocus could not be switched off (or the camera has none)")
         if self.size is not None:
@@ -212,7 +215,7 @@ class OpenCVCamera(_Camera):
         if self.exposure_request is not None:
             manual = False
             for value in (1, 0.25):  # V4L2_EXPOSURE_MANUAL; some builds map 0.25 to manual
-                ok, back, eff = self._set(cv2.CAP_PROP_AUTO_EXPOSURE, value)
+                _, _, eff = self._set(cv2.CAP_PROP_AUTO_EXPOSURE, value)
                 if eff:
                     manual = True
                     break
@@ -223,7 +226,7 @@ class OpenCVCamera(_Camera):
                 value, unit = float(round(math.log2(ms / 1000.0))), "log2(s)"
             else:
                 value, unit = ms, "driver unit"
-            ok, back, eff = self._set(cv2.CAP_PROP_EXPOSURE, value, tol=0.5 if unit != "driver unit" else 1e-3)
+            _, back, eff = self._set(cv2.CAP_PROP_EXPOSURE, value, tol=0.5 if unit != "driver unit" else 1e-3)
             note = [] if manual else ["auto exposure could not be switched off"]
             if not eff:
                 note.append(f"{backend} did not accept exposure {value:g} ({unit}); it reads back {back:g}")
@@ -231,7 +234,7 @@ class OpenCVCamera(_Camera):
             if note:
                 self._notes.append(f"exposure: {'; '.join(note)}")
         if self.gain_request is not None:
-            ok, back, eff = self._set(cv2.CAP_PROP_GAIN, float(self.gain_request))
+            _, back, eff = self._set(cv2.CAP_PROP_GAIN, float(self.gain_request))
             self._settings["gain"] = _setting(float(self.gain_request), float(self.gain_request), back, eff,
                                               "" if eff else f"{backend} did not accept the gain; it reads back {back:g}")
             if not eff:
@@ -388,7 +391,10 @@ class HarvestersCamera(_Camera):
                 back = node.value
             except Exception:
                 continue
-            ok = (back == value) if isinstance(value, str) else abs(float(back) - float(value)) <= 1e-3 * max(1.0, abs(float(value)))
+            if isinstance(value, str):
+                ok = back == value
+            else:
+                ok = abs(float(back) - float(value)) <= 1e-3 * max(1.0, abs(float(value)))
             return name, back, ok
         return None, None, False
 

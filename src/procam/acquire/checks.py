@@ -13,8 +13,9 @@ Pre-flight (:func:`preflight`)
 
 Per frame (:func:`check_frame`)
     The white frame must be at ``p`` ~ 1, the black one at ~ 0, a pattern within [0, 1].  The
-    inverse of a pair must be anti-correlated with its pattern (else it is a stale copy of it).  The first frame of a pair that matches the frame before it is suspect:
-    stale, or the two patterns coincide where the camera looks (the capture loop re-grabs to tell).
+    inverse of a pair must be anti-correlated with its pattern (else it is a stale copy of it).
+    The first frame of a pair that matches the frame before it is suspect: stale, or the two
+    patterns coincide where the camera looks (the capture loop re-grabs to tell).
 
 Per pair (:func:`check_pair`)
     A pattern and its inverse: where the pattern is clearly white or black, the difference
@@ -346,7 +347,7 @@ def check_frame(p: np.ndarray, key, ps, previous=None, partner: np.ndarray | Non
         if abs(med - want) <= level_tol:
             return FrameCheck(True, "ok", "", stats)
         if match is not None:
-            return FrameCheck(False, "stale", f"frame {label} matches {match} shown before it instead of being "
+            return FrameCheck(False, "stale", f"frame {label} looks like {match} shown before it instead of being "
                               f"{'white' if want else 'black'}: a stale frame from the camera's buffer", stats)
         return FrameCheck(False, "level", f"frame {label} is at {med:.2f} of the pre-flight white - black, expected "
                           f"{want:.0f}: the exposure, gain or projector brightness changed (switch off auto exposure "
