@@ -504,7 +504,7 @@ def test_projector_window_is_full_screen_and_pixel_exact(xvfb):
 
 def test_projector_window_refuses_a_display_of_another_size(xvfb):
     xvfb((640, 480))
-    with pytest.raises(ProcamError, match=r"is 640x480 but the patterns are 512x384.*--projector 640x480") as info:
+    with pytest.raises(ProcamError, match=r"display 0 is 640x480 but the patterns are 512x384.*--projector 640x480") as info:
         ProjectorWindow((512, 384), display=0).open()
     assert "\n" not in str(info.value)
     with pytest.raises(ProcamError, match="only one display is connected"):

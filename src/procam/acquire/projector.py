@@ -201,16 +201,20 @@ class ProjectorWindow(_Projector):
         d = self.display
         if d.size != self.size:
             raise ProcamError(
-                f"{d.label()} is {d.width}x{d.height} but the patterns are {self.size[0]}x{self.size[1]}: "
+                f"display {d.index} is {d.width}x{d.height} but the patterns are {self.size[0]}x{self.size[1]}: "
                 f"set that display to the projector's native resolution, or pass --projector {d.width}x{d.height} "
                 "if that is the projector's native size (a scaled pattern cannot be decoded pixel-exact)")
-        pg = _import("pygame")
         # SDL reads these hints from the environment: keep the full-screen window up when the
-        # terminal on the other display takes the focus; do not override a user's own setting.
+        # terminal on the other display takes the focus; no banner on import; a user's own setting wins.
         for key, value in (("SDL_VIDEO_MINIMIZE_ON_FOCUS_LOSS", "0"), ("PYGAME_HIDE_SUPPORT_PROMPT", "1")):
             if key not in os.environ:
                 os.environ[key] = value
                 self._env_set.append(key)
+        try:
+            pg = _import("pygame")
+        except ProcamError:
+            self._restore_env()
+            raise
         try:
             pg.display.init()
             win = pg.Window(self.title, size=d.size, position=(d.x, d.y), borderless=True)

@@ -183,7 +183,8 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
 
     Returns
     -------
-    CaptureResult.  Raises :class:`CaptureFailed` (one line) when a check stops the capture; on
+    CaptureResult (its ``folder`` is the hook for a verdict on the pose).  Raises
+    :class:`CaptureFailed` (one line) when a check stops the capture; on
     any error or interruption the partial folder is removed (kept, hidden, with ``keep_failed``).
     """
     o = options
@@ -233,12 +234,17 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
                 run.retries += 1
                 run.emit("retry", b, ps.count, pc.reason, pc.to_dict())
         seq_s = clock() - t_seq
+        warnings = list(pre.advice)
         post = None
         if o.postflight:
             img, _ = _steady(run, white_img)
             pc = checks.check_drift(ref.normalise(img), level_tol=o.level_tol)
             post = pc.to_dict()
-            run.emit("postflight", -1, ps.count, pc.reason, post)
+            if pc.ok and abs(pc.stats["level"] - 1.0) > o.level_tol / 2:
+                warnings.append(f"the white frame after the sequence is at {pc.stats['level']:.2f} of the one before "
+                                "it: the exposure or the projector's brightness drifts (switch off auto exposure; let "
+                                "the projector warm up)")
+            run.emit("postflight", -1, ps.count, pc.reason or (warnings[-1] if warnings else ""), post)
             if not pc.ok:
                 raise CaptureFailed(pc.reason)
         projector.show(black_img)
@@ -258,7 +264,7 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
             "preflight": pre_record, "postflight": post, "retries": run.retries,
             "timings": {"total_s": round(total, 4), "sequence_s": round(seq_s, 4),
                         "per_frame_s": round(seq_s / ps.count, 4)},
-            "frames": frames, "warnings": list(pre.advice), "extra": extra or {},
+            "frames": frames, "warnings": warnings, "extra": extra or {},
         }
         for name, text in (extra_files or {}).items():
             write_text(tmp / name, text)
@@ -277,7 +283,7 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
                 shutil.rmtree(tmp, ignore_errors=True)
         raise
     run.emit("done", -1, ps.count, f"wrote {ps.count} frames to {out}", {"retries": run.retries})
-    return CaptureResult(out, tuple(out / f.name for f in files_), pre, run.retries, record, tuple(pre.advice))
+    return CaptureResult(out, tuple(out / f.name for f in files_), pre, run.retries, record, tuple(warnings))
 
 
 def _preflight(run: _Run, white_img, black_img, ps):
@@ -372,12 +378,14 @@ def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, fi
 
 def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], object],
                   options: CaptureOptions = CaptureOptions(), *, before_pose: Callable[[int], None] | None = None,
+                  after_pose: Callable[[int, CaptureResult], None] | None = None,
                   progress: Callable[[int, Event], None] | None = None,
                   extra_files_for: Callable[[int], dict] | None = None) -> list[CaptureResult]:
     """Capture ``n_poses`` poses into ``out_dir/pose01``, ``pose02`` ...
 
     ``camera_for(i)`` returns the open camera for pose ``i`` (0-based; usually the same one),
     ``before_pose(i)`` is called before each pose (the CLI prompts there to move the board),
+    ``after_pose(i, result)`` after each (the place for a verdict on the pose before the next one),
     ``progress(i, event)`` reports each pose's events.  The pose folders are checked before the
     first one is captured.  Returns the poses' results; a failure stops the session (poses already
     captured stay).
@@ -395,4 +403,6 @@ def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], 
         extra = extra_files_for(i) if extra_files_for is not None else None
         results.append(capture_pose(folder, projector, camera_for(i), options, progress=cb, extra_files=extra,
                                     extra={"pose": i + 1, "poses": n_poses}))
+        if after_pose is not None:
+            after_pose(i, results[-1])
     return results

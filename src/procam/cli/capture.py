@@ -118,6 +118,8 @@ def capture_cmd(
     _number(exposure, "--exposure", 0, 60000, lo_open=True, unit=" ms")
     _number(gain, "--gain", 0, 1000)
     _number(timeout, "--timeout", 0, 3600, lo_open=True, unit=" s")
+    if seed < 0:
+        fail(f"--seed must be >= 0, got {seed}")
     if order not in ORDERS:
         fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
     if not 1 <= step <= 64:
@@ -202,18 +204,21 @@ def capture_cmd(
         reporter = stack.enter_context(_Reporter())
         if poses == 1:
             before_pose(0)
-            results = [session.capture_pose(out_dir, proj, camera_for(0), options, progress=reporter.pose(0),
-                                             extra_files=extra_files(0))]
+            result = session.capture_pose(out_dir, proj, camera_for(0), options, progress=reporter.pose(0),
+                                          extra_files=extra_files(0))
+            after_pose(0, result)
         else:
-            results = session.capture_poses(out_dir, poses, proj, camera_for, options, before_pose=before_pose,
-                                            progress=lambda i, e: reporter.pose(i)(e), extra_files_for=extra_files)
-    for r in results:
-        t = r.record["timings"]
-        console.print(f"wrote {len(r.files)} frames, patterns.json and capture.json to {r.folder} "
-                      f"({r.retries} re-grabs, {t['total_s']:.1f} s)", highlight=False)
-    first = results[0].folder
-    console.print(f"next: procam decode {first} --png decode.png   (or procam calibrate ... --board COLSxROWS --square S)",
-                  highlight=False)
+            session.capture_poses(out_dir, poses, proj, camera_for, options, before_pose=before_pose,
+                                  after_pose=after_pose, progress=lambda i, e: reporter.pose(i)(e),
+                                  extra_files_for=extra_files)
+
+
+def after_pose(i: int, result) -> None:
+    """Report a captured pose (the place for an instant verdict on it, before the next pose)."""
+    t = result.record["timings"]
+    console.print(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
+                  f"({result.retries} re-grabs, {t['total_s']:.1f} s)", highlight=False)
+    console.print(f"check it: procam decode {result.folder} --png decode.png", highlight=False)
 
 
 def _describe_projector(proj) -> str:
