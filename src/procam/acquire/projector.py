@@ -106,13 +106,13 @@ def choose_display(displays: list[Display], index: int | None = None) -> Display
     raise ProcamError(f"cannot tell which display is the projector ({listing}); pass --display N")
 
 
-def _to_rgb(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(H, W) uint8 grey -> contiguous (H, W, 3) uint8, after checking the shape and type."""
+def _checked(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """``image`` as a contiguous (H, W) uint8 array, after checking its shape and type."""
     image = np.asarray(image)
     w, h = size
     if image.shape != (h, w) or image.dtype != np.uint8:
         raise ValueError(f"the projector shows ({h}, {w}) uint8 images, got {image.shape} {image.dtype}")
-    return np.ascontiguousarray(np.repeat(image[:, :, None], 3, axis=2))
+    return np.ascontiguousarray(image)
 
 
 class _Projector:
@@ -161,8 +161,7 @@ class VirtualProjector(_Projector):
 
     def show(self, image: np.ndarray) -> None:
         """Record ``image`` (H, W) uint8 as the one now shown."""
-        _to_rgb(image, self.size)  # same checks as the window
-        self._record(np.array(image, copy=True))
+        self._record(np.array(_checked(image, self.size), copy=True))
 
     def describe(self) -> dict:
         return {"backend": "virtual", "size": list(self.size)}
@@ -226,6 +225,7 @@ class ProjectorWindow(_Projector):
             raise ProcamError(f"cannot open a window on {d.label()} ({e}); run procam in the desktop session the "
                               "projector is connected to") from None
         self._pg, self._window, self._surface = pg, win, surface
+        self._palette = [(v, v, v) for v in range(256)]
         got = tuple(surface.get_size())
         if got != self.size or tuple(win.size) != self.size:
             self.close()
@@ -259,12 +259,14 @@ class ProjectorWindow(_Projector):
         """Show ``image`` (H, W) uint8 full screen, pixel for pixel; returns after the flip."""
         if self._window is None:
             raise RuntimeError("ProjectorWindow.show() before open()")
-        rgb = _to_rgb(image, self.size)
+        grey = _checked(image, self.size)
         self._pump()
-        src = self._pg.image.frombuffer(rgb.tobytes(), self.size, "RGB")
+        # an 8-bit surface with a grey palette: SDL expands it exactly (v -> (v, v, v)) while blitting
+        src = self._pg.image.frombuffer(grey, self.size, "P")
+        src.set_palette(self._palette)
         self._surface.blit(src, (0, 0))
         self._window.flip()
-        self._record(np.array(image, copy=True))
+        self._record(grey.copy())
 
     def wait(self, seconds: float) -> None:
         """Sleep ``seconds`` while handling the window's events (Esc aborts)."""
