@@ -150,9 +150,10 @@ class _Run:
         o = self.opts
         t_show = self.clock() - self.t0
         self.projector.show(image)
-        self.camera.arm()
+        if hasattr(self.camera, "arm"):
+            self.camera.arm()
         self.projector.wait(o.settle_s)
-        if o.flush:
+        if o.flush and hasattr(self.camera, "flush"):
             self.camera.flush()
         frame = self.camera.grab()
         t_grab = self.clock() - self.t0
