@@ -74,6 +74,20 @@ class CaptureOptions:
     postflight: bool = True
     keep_failed: bool = False
 
+    def __post_init__(self):
+        import math
+
+        if not (isinstance(self.settle_s, (int, float)) and math.isfinite(self.settle_s) and self.settle_s >= 0):
+            raise ValueError(f"settle_s must be a finite number >= 0, got {self.settle_s}")
+        if int(self.retries) != self.retries or self.retries < 0:
+            raise ValueError(f"retries must be an integer >= 0, got {self.retries}")
+        if self.order not in patterns.ORDERS:
+            raise ValueError(f"order must be one of {patterns.ORDERS}, got {self.order!r}")
+        for name in ("max_saturated", "min_span", "level_tol", "stale_frac", "min_agreement"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+
 
 @dataclass(frozen=True)
 class Event:
