@@ -1,0 +1,298 @@
+"""``procam capture``: show the Gray-code sequence on the projector, grab and check a camera frame per pattern.
+
+Importing this module registers the command on :data:`procam.cli._app.app`.
+"""
+
+from __future__ import annotations
+
+import math
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import ProcamError
+from ..patterns import ORDERS
+from ._app import app, console, err_console, fail, is_tty, parse_size, user_errors
+
+#: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
+VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
+
+
+def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
+    """A finite number within [lo, hi] (or (lo, hi] with ``lo_open``), else a one-line error."""
+    if value is None:
+        return None
+    ok = isinstance(value, (int, float)) and math.isfinite(value) and value <= hi and (value > lo if lo_open else value >= lo)
+    if not ok:
+        low = f"> {lo:g}" if lo_open else f">= {lo:g}"
+        fail(f"{option} must be a finite number {low} and <= {hi:g}{unit}, got {value}")
+    return value
+
+
+def _list_devices(camera: str | None) -> None:
+    from ..acquire import cameras as cams
+    from ..acquire.projector import choose_display, list_displays
+
+    console.print("[bold]displays[/bold] (--display N)")
+    try:
+        displays = list_displays()
+        try:
+            default = choose_display(displays).index
+        except ProcamError:
+            default = None
+        for d in displays:
+            console.print(f"  {d.label()}" + ("   <- default projector" if d.index == default else ""), highlight=False)
+    except ProcamError as e:
+        console.print(f"  none: {e}", highlight=False)
+    console.print("[bold]cameras[/bold] (--camera)")
+    found = cams.list_opencv_cameras()
+    for c in found:
+        console.print(f"  {c['spec']:<12} {c['device']:<14} {c['name']}", highlight=False)
+    if not found:
+        console.print("  no OpenCV (UVC/V4L2) camera found", highlight=False)
+    if camera and camera.lower().startswith("genicam:"):
+        _, arg = cams.parse_camera_spec(camera)
+        for c in cams.list_genicam_cameras(arg.partition("#")[0]):
+            console.print(f"  {c['spec']}  {c['vendor']} {c['model']} serial {c['serial_number']}", highlight=False)
+    else:
+        console.print("  GenICam cameras: add --camera genicam:PRODUCER.cti to list a producer's cameras", highlight=False)
+    console.print("  folder:PATH (files saved by the camera's own software), virtual (the simulator)", highlight=False)
+
+
+@app.command("capture")
+@user_errors
+def capture_cmd(
+    out_dir: Optional[Path] = typer.Argument(None, help="The pose folder to create (with --poses N: the folder that "
+                                             "gets pose01 ... poseN). Must not exist, or be empty."),
+    projector: Optional[str] = typer.Option(None, "--projector", "-p", help="Pattern size WIDTHxHEIGHT, the projector's "
+                                            "native resolution (default: the display's size; 1920x1080 with --virtual)."),
+    display: Optional[int] = typer.Option(None, "--display", help="Display that shows the patterns (default: the one "
+                                          "that is not the primary; --list-devices lists them)."),
+    camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | "
+                               "folder:PATH | virtual."),
+    poses: int = typer.Option(1, "--poses", help="Capture N poses into OUT_DIR/pose01 ..., with a prompt to move the "
+                              "board between them."),
+    settle_ms: Optional[float] = typer.Option(None, "--settle-ms", help="Wait after showing each pattern before "
+                                              "grabbing, ms (default 250; 0 with --virtual)."),
+    exposure: Optional[float] = typer.Option(None, "--exposure", help="Manual camera exposure in ms (default: leave "
+                                             "the camera's setting; switch its auto exposure off yourself then)."),
+    gain: Optional[float] = typer.Option(None, "--gain", help="Camera gain in the camera's unit (GenICam: dB)."),
+    camera_size: Optional[str] = typer.Option(None, "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV)."),
+    retries: int = typer.Option(3, "--retries", help="Re-grabs allowed per frame before the capture stops."),
+    board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
+                                        "and judges the exposure on it (default: on the projector's light)."),
+    order: str = typer.Option("opencv", "--order", help="Sequence order: opencv (default) or moreno."),
+    step: int = typer.Option(1, "--step", help="Projector pixels per Gray code (kamino410's graycode_step)."),
+    timeout: float = typer.Option(60.0, "--timeout", help="folder camera: seconds to wait for each new file."),
+    keep_failed: bool = typer.Option(False, "--keep-failed", help="Keep the frames of a failed capture in a hidden "
+                                     "partial folder."),
+    list_devices: bool = typer.Option(False, "--list-devices", help="List the displays and cameras and exit."),
+    virtual: bool = typer.Option(False, "--virtual", help="Demo without devices: a virtual projector and the "
+                                 "simulator as the camera (writes truth.json too)."),
+    seed: int = typer.Option(0, "--seed", help="--virtual: noise seed of the rendered frames."),
+):
+    """Show the pattern sequence full screen on the projector, grab and check one camera frame per pattern,
+    and write a pose folder that decode/calibrate read as is (images, patterns.json, capture.json)."""
+    from ..acquire import cameras as cams
+    from ..acquire import session
+
+    if list_devices:
+        _list_devices(camera)
+        return
+    if out_dir is None:
+        fail("give the pose folder to create (OUT_DIR), or --list-devices")
+    # every number and spec is checked before a device is opened
+    size = parse_size(projector, "--projector") if projector else None
+    if size and max(size) > 16384:
+        fail(f"--projector {projector}: larger than 16384 pixels; give the projector's native resolution")
+    cam_size = parse_size(camera_size, "--camera-size") if camera_size else None
+    if display is not None and not 0 <= display <= 64:
+        fail(f"--display must be a display index >= 0 (see --list-devices), got {display}")
+    if not 1 <= poses <= 99:
+        fail(f"--poses must be between 1 and 99, got {poses}")
+    if not 0 <= retries <= 20:
+        fail(f"--retries must be between 0 and 20, got {retries}")
+    _number(settle_ms, "--settle-ms", 0, 10000, unit=" ms")
+    _number(exposure, "--exposure", 0, 60000, lo_open=True, unit=" ms")
+    _number(gain, "--gain", 0, 1000)
+    _number(timeout, "--timeout", 0, 3600, lo_open=True, unit=" s")
+    if seed < 0:
+        fail(f"--seed must be >= 0, got {seed}")
+    if order not in ORDERS:
+        fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
+    if not 1 <= step <= 64:
+        fail(f"--step must be between 1 and 64, got {step}")
+    board_size = parse_size(board, "--board") if board else None
+    if virtual and camera not in ("opencv:0", "virtual"):
+        fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
+    kind, _ = cams.parse_camera_spec("virtual" if virtual else camera)
+    if kind == "virtual" and step != 1:
+        fail("the virtual camera renders step-1 sequences only; leave out --step")
+    if poses == 1:
+        session.check_out_dir(out_dir)
+    else:
+        for i in range(poses):
+            session.check_out_dir(Path(out_dir) / f"pose{i + 1:02d}")
+    options = session.CaptureOptions(order=order, step=step, retries=retries, board=board_size, keep_failed=keep_failed,
+                                     settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
+
+    from ..acquire.projector import ProjectorWindow, VirtualProjector
+
+    with ExitStack() as stack:
+        if virtual:
+            size = size or (1920, 1080)
+            proj = VirtualProjector(size)
+        else:
+            if size is None:
+                from ..acquire.projector import choose_display, list_displays
+
+                size = choose_display(list_displays(), display).size
+            proj = ProjectorWindow(size, display)
+        stack.enter_context(proj)
+        console.print(f"projector: {_describe_projector(proj)}", highlight=False)
+
+        scenes = {}
+        shared_cam = None
+
+        def scene_for(i):
+            if i not in scenes:
+                from ..acquire.cameras import demo_scene
+
+                scenes[i] = demo_scene(size, VIRTUAL_POSES[i % len(VIRTUAL_POSES)])
+            return scenes[i]
+
+        def camera_for(i):
+            nonlocal shared_cam
+            if kind == "virtual":
+                from .. import simulate
+
+                cam = cams.VirtualCamera(proj, scene_for(i), order=order, seed=seed + i, gain=1.0 if gain is None else gain)
+                with _spinner(f"rendering the simulator's view of pose {i + 1}"):
+                    cam.stack, _ = simulate.render(cam.scene, order=order, seed=seed + i)
+                return stack.enter_context(cam)
+            if shared_cam is None:
+                shared_cam = stack.enter_context(cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain,
+                                                                  timeout_s=timeout))
+                _print_camera(shared_cam)
+            return shared_cam
+
+        def extra_files(i):
+            if kind != "virtual":
+                return None
+            import json
+
+            from .. import simulate
+            from ..io import to_jsonable
+
+            return {"truth.json": json.dumps(to_jsonable(simulate.truth(scene_for(i))), indent=1)}
+
+        def before_pose(i):
+            if poses > 1:
+                console.print(f"[bold]pose {i + 1}/{poses}[/bold]", highlight=False)
+            if kind == "folder":
+                console.print("take one shot per pattern with the camera's software; procam waits for each new file",
+                              highlight=False)
+            if poses > 1 and not virtual:
+                import numpy as np
+
+                proj.show(np.full((size[1], size[0]), 255, np.uint8))  # light the board while it is placed
+                typer.prompt(f"place the board for pose {i + 1} in the projector's light, then press Enter",
+                             default="", show_default=False, prompt_suffix=" ", err=True)
+
+        reporter = stack.enter_context(_Reporter())
+        if poses == 1:
+            before_pose(0)
+            result = session.capture_pose(out_dir, proj, camera_for(0), options, progress=reporter.pose(0),
+                                          extra_files=extra_files(0))
+            after_pose(0, result)
+        else:
+            session.capture_poses(out_dir, poses, proj, camera_for, options, before_pose=before_pose,
+                                  after_pose=after_pose, progress=lambda i, e: reporter.pose(i)(e),
+                                  extra_files_for=extra_files)
+
+
+def after_pose(i: int, result) -> None:
+    """Report a captured pose (the place for an instant verdict on it, before the next pose)."""
+    t = result.record["timings"]
+    console.print(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
+                  f"({result.retries} re-grabs, {t['total_s']:.1f} s)", highlight=False)
+    console.print(f"check it: procam decode {result.folder} --png decode.png", highlight=False)
+
+
+def _describe_projector(proj) -> str:
+    d = proj.describe()
+    w, h = d["size"]
+    if d["backend"] == "virtual":
+        return f"virtual {w}x{h}"
+    disp = d.get("display", {})
+    return f"full-screen window {w}x{h} on display {disp.get('index')} at ({disp.get('x')}, {disp.get('y')})"
+
+
+def _print_camera(cam) -> None:
+    d = cam.describe()
+    size = d.get("size")
+    console.print(f"camera: {cam.name} ({d.get('api', d['backend'])}" + (f", {size[0]}x{size[1]}" if size else "") + ")",
+                  highlight=False)
+    for note in d.get("notes", []):
+        console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
+
+
+class _spinner:
+    """A transient status line while something slow runs (nothing when not a terminal)."""
+
+    def __init__(self, text):
+        self.text = text
+        self._status = None
+
+    def __enter__(self):
+        if is_tty():
+            self._status = err_console.status(self.text)
+            self._status.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        if self._status is not None:
+            self._status.__exit__(*exc)
+        return False
+
+
+class _Reporter:
+    """Prints a capture's events: the pre-flight verdict, re-grabs, a progress bar per pose."""
+
+    def __init__(self):
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                            console=console, transient=True, disable=not is_tty())
+        self.tasks = {}
+
+    def __enter__(self):
+        self.bar.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self.bar.__exit__(*exc)
+        return False
+
+    def pose(self, i):
+        def cb(e):
+            if e.kind == "preflight":
+                d = e.data
+                if d.get("ok"):
+                    console.print(f"pre-flight: white {d['white_level']:.0%} of full scale on the {d['region']} "
+                                  f"({d['white_saturated']:.1%} saturated), black {d['dark_level']:.0%}, "
+                                  f"contrast {d['contrast']:.0%}", highlight=False)
+                    for line in d.get("advice", []):
+                        console.print(f"[yellow]advice:[/yellow] {line}", highlight=False)
+                if i not in self.tasks:
+                    self.tasks[i] = self.bar.add_task(f"pose {i + 1}", total=e.total)
+            elif e.kind == "frame":
+                if i in self.tasks:
+                    self.bar.update(self.tasks[i], completed=e.index + 1)
+            elif e.kind == "retry":
+                console.print(f"[yellow]re-grab:[/yellow] {e.message}", highlight=False)
+            elif e.kind == "postflight" and e.message:
+                console.print(f"[yellow]post-flight:[/yellow] {e.message}", highlight=False)
+        return cb
