@@ -15,6 +15,7 @@ from conftest import run_cli
 
 from procam import capture as capmod
 from procam import patterns, pipeline, simulate, single_pose
+from procam.board import Board
 from procam.acquire import (CaptureFailed, CaptureOptions, FolderWatchCamera, ProjectorWindow, VirtualCamera,
                             VirtualProjector, capture_pose, capture_poses, checks)
 from procam.acquire.cameras import parse_camera_spec
@@ -67,7 +68,7 @@ def test_capture_then_calibrate_recovers_the_simulated_rig(rig, tmp_path):
     assert all(f["check"]["ok"] for f in rec["frames"])
     assert json.loads((res.folder / "patterns.json").read_text())["files"][-1] == "37.png"
 
-    view, _ = pipeline.view_from_folder(res.folder, (10, 6), 24.0)
+    view, _ = pipeline.view_from_folder(res.folder, Board(10, 6, 24.0))
     calib = single_pose.calibrate(view)
     assert abs(calib.camera.K[0, 0] - truth["camera"]["f"]) < 20       # 769.5 px
     assert abs(calib.projector.K[0, 0] - truth["projector"]["f"]) < 8  # 645.6 px
@@ -75,7 +76,7 @@ def test_capture_then_calibrate_recovers_the_simulated_rig(rig, tmp_path):
     # and exactly what calibrate gives on the simulator's own folder of the same render
     ref = tmp_path / "rendered"
     simulate.write_capture(ref, stack, truth)
-    calib_ref = single_pose.calibrate(pipeline.view_from_folder(ref, (10, 6), 24.0)[0])
+    calib_ref = single_pose.calibrate(pipeline.view_from_folder(ref, Board(10, 6, 24.0))[0])
     np.testing.assert_allclose(calib.camera.K, calib_ref.camera.K, rtol=1e-9)
     np.testing.assert_allclose(calib.projector.K, calib_ref.projector.K, rtol=1e-9)
     np.testing.assert_allclose(calib.T, calib_ref.T, rtol=1e-9, atol=1e-9)
@@ -364,10 +365,10 @@ def cli():
     (["--retries", "100"], "--retries must be between 0 and 20"),
     (["--poses", "0"], "--poses must be between 1 and 99"),
     (["--display", "-1"], "--display must be a display index"),
-    (["--projector", "1x1"], "--projector must be at least 2x2"),
-    (["--projector", "99999x2"], "larger than 16384"),
+    (["--projector", "1x1"], "--projector 1x1: each side must be from 2"),
+    (["--projector", "99999x2"], "--projector 99999x2: each side must be"),
     (["--camera", "webcam:0"], "unknown camera"),
-    (["--order", "zigzag"], "--order must be one of"),
+    (["--order", "zigzag"], "'zigzag' is not one of 'opencv', 'moreno'"),
     (["--virtual", "--camera", "folder:x"], "--virtual uses the simulator"),
     (["--virtual", "--step", "2"], "renders step-1 sequences only"),
 ])

@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import __version__, patterns
 from ..errors import ProcamError
-from ..io import to_jsonable, write_image, write_text
+from .._files import to_jsonable, write_image, write_text
 from . import checks
 from .cameras import to_gray
 

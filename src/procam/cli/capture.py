@@ -13,8 +13,7 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ..patterns import ORDERS
-from ._app import app, console, err_console, fail, is_tty, parse_size, user_errors
+from ._app import Order, app, console, err_console, fail, is_tty, parse_size, user_errors, value
 
 #: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
 VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
@@ -83,7 +82,7 @@ def capture_cmd(
     retries: int = typer.Option(3, "--retries", help="Re-grabs allowed per frame before the capture stops."),
     board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
                                         "and judges the exposure on it (default: on the projector's light)."),
-    order: str = typer.Option("opencv", "--order", help="Sequence order: opencv (default) or moreno."),
+    order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
     step: int = typer.Option(1, "--step", help="Projector pixels per Gray code (kamino410's graycode_step)."),
     timeout: float = typer.Option(60.0, "--timeout", help="folder camera: seconds to wait for each new file."),
     keep_failed: bool = typer.Option(False, "--keep-failed", help="Keep the frames of a failed capture in a hidden "
@@ -120,8 +119,7 @@ def capture_cmd(
     _number(timeout, "--timeout", 0, 3600, lo_open=True, unit=" s")
     if seed < 0:
         fail(f"--seed must be >= 0, got {seed}")
-    if order not in ORDERS:
-        fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
+    order = value(order)
     if not 1 <= step <= 64:
         fail(f"--step must be between 1 and 64, got {step}")
     board_size = parse_size(board, "--board") if board else None
@@ -184,7 +182,7 @@ def capture_cmd(
             import json
 
             from .. import simulate
-            from ..io import to_jsonable
+            from .._files import to_jsonable
 
             return {"truth.json": json.dumps(to_jsonable(simulate.truth(scene_for(i))), indent=1)}
 
