@@ -200,7 +200,9 @@ def triangulate_dense(calib, col, row, valid_col=None, valid_row=None, *, use: s
     valid_col, valid_row : (H, W) bool, default ``isfinite(col)`` / ``isfinite(row)``.
     use : ``"both"`` (default): least squares on both planes where both coordinates are valid,
         the column plane where only the column is, the row plane where only the row is;
-        ``"col"`` / ``"row"``: that coordinate only.
+        ``"col"`` / ``"row"``: that coordinate only.  With a mostly horizontal baseline the row
+        planes nearly contain the camera rays, so ``"row"`` alone is ill-conditioned (the
+        least-squares ``"both"`` weights each plane by how well it constrains the depth).
     pixels : optional (N, 2) int camera pixels ``(x, y)`` to triangulate instead of every valid one.
     newton_iterations : with a distorted projector and one coordinate only, the surface of a
         projector column is not a plane: the depth along the camera ray is found by Newton steps
