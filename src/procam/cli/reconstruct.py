@@ -1,0 +1,100 @@
+"""``procam reconstruct``: a coloured point cloud (binary PLY) of one captured pose."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from .. import io
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_size,
+    user_errors)
+
+
+@app.command("reconstruct")
+@user_errors
+def reconstruct_cmd(
+    calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) of this camera and "
+                                                 "projector."),
+    pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
+    out: Path = typer.Option(..., "-o", "--out", help="Point cloud, binary PLY (x, y, z in the camera frame, "
+                                                    "calibration units; colour from the white frame)."),
+    board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: fit the board's plane "
+                                                            "and report how flat the reconstruction is."),
+    residuals: Path = typer.Option(None, "--residuals", help="PNG of the board's distances to its plane "
+                                                             "(needs --board)."),
+    use: str = typer.Option("both", "--use", help="Projector coordinates: both (column and row where decoded), "
+                                                  "col or row."),
+    max_residual: float = typer.Option(2.0, "--max-residual", help="Drop points whose projector column and row "
+                                                                   "disagree by more than this many projector px."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
+):
+    """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
+    from .. import capture, decode, pipeline
+    from .. import reconstruct as rc
+
+    output_path(out, "-o", (".ply",))
+    output_path(residuals, "--residuals", (".png",))
+    if use not in ("both", "col", "row"):
+        fail(f"--use must be both, col or row, got {use!r}")
+    if not (math.isfinite(max_residual) and max_residual > 0):
+        fail(f"--max-residual must be a positive number of projector pixels, got {max_residual}")
+    if residuals is not None and board is None:
+        fail("--residuals needs --board (the plane is fitted to the board's points)")
+    pattern = parse_size(board, "--board") if board is not None else None
+    calib = io.load_calibration(calibration)
+    if calib.projector is None or calib.R is None:
+        fail(f"{calibration}: a camera-only calibration cannot triangulate; give a procam calibration")
+    size = optional_size(projector)
+    if size is None and not (Path(pose_dir) / "patterns.json").exists():
+        size = tuple(calib.projector.image_size)
+    cap = capture.load_capture(pose_dir, size, order, step=step)
+    for w in cap.warnings:
+        console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
+    ps = cap.pattern_set
+    H, W = cap.stack.shape[1:]
+    if (W, H) != tuple(calib.camera.image_size):
+        fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
+             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the calibrated camera")
+    if (ps.width, ps.height) != tuple(calib.projector.image_size):
+        fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
+             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}; check --projector")
+    maps = decode.decode(cap.stack, ps)
+    colour = io.read_image(cap.files[ps.white], gray=False)
+    cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
+    if len(cloud) == 0:
+        fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
+             "check the decode picture (procam decode --png)")
+    rc.write_ply(out, cloud.points, cloud.colours,
+                 comments=["procam reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
+                           "frame: camera (x right, y down, z forward), units of the calibration's T"])
+    t = Table(title=f"{Path(pose_dir).name}: point cloud")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    t.add_row("points", f"{len(cloud)}")
+    t.add_row("from column and row", f"{np.mean(cloud.both):.1%}")
+    t.add_row("median depth z", f"{np.median(cloud.points[:, 2]):.1f}")
+    if pattern is not None:
+        corners = pipeline.find_board(cap.stack, ps, pattern, name=str(pose_dir))
+        on_board = cloud.image_mask(rc.board_region(corners, (W, H)))
+        if on_board.sum() < 3:
+            fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
+        plane = rc.fit_plane(cloud.points[on_board])
+        t.add_row("board points", f"{int(on_board.sum())}")
+        t.add_row("board plane RMS (inliers)", f"{plane.rms:.3f}")
+        t.add_row("board plane robust sigma", f"{plane.sigma:.3f}")
+        t.add_row("board plane inliers", f"{np.mean(plane.inliers):.1%}")
+        t.add_row("board plane distance from camera", f"{plane.offset:.1f}")
+        if residuals is not None:
+            res = rc.residual_map(cloud.subset(on_board), plane)
+            io.write_image(residuals, rc.residual_image(res))
+    console.print(t)
+    console.print(f"wrote {out}")
+    if residuals is not None:
+        console.print(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")

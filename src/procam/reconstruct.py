@@ -1,0 +1,348 @@
+"""Point clouds from a decoded capture: triangulate every decoded camera pixel, fit the board's plane,
+write binary PLY.
+
+* :func:`reconstruct` -- decoded maps (:class:`procam.decode.DecodeResult`) + calibration (+ the white
+  frame for colour) -> :class:`PointCloud` (camera frame, board units), by
+  :func:`procam.triangulate.triangulate_dense`.
+* :func:`board_region` -- the camera pixels inside the convex hull of the detected board corners
+  (all of them lie on the printed board).
+* :func:`fit_plane` -- robust plane (least median of squares, then a least-squares refit on the
+  inliers); :func:`residual_map` -- the signed distances as an image, the visual check of a
+  calibration (a correct one leaves noise; wrong intrinsics bend or tilt the board).
+* :func:`write_ply` / :func:`read_ply` -- binary little-endian PLY through the ``plyfile`` library
+  (``pip install plyfile``), written atomically.
+
+Coordinates: camera frame (origin at the camera centre, x right, y down, z forward), the unit of
+the calibration's ``T`` (the board's square unit, e.g. mm).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ProcamError
+from .io import atomic_path
+from .triangulate import triangulate_dense
+
+
+@dataclass(frozen=True)
+class PointCloud:
+    """Triangulated camera pixels.
+
+    Attributes
+    ----------
+    points : (N, 3) float64, camera frame, board units.
+    colours : (N, 3) uint8 RGB (grey replicated for grey captures), or None.
+    pixels : (N, 2) int64 camera pixel ``(x, y)`` of each point.
+    both : (N,) bool -- projector column and row both used (else one of them).
+    residual_px : (N,) projector reprojection error where both were used (pixels), else 0.
+    image_size : (width, height) of the camera image.
+    """
+
+    points: np.ndarray
+    colours: np.ndarray | None
+    pixels: np.ndarray
+    both: np.ndarray
+    residual_px: np.ndarray
+    image_size: tuple
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def subset(self, mask) -> "PointCloud":
+        """The points where ``mask`` (N,) is True."""
+        m = np.asarray(mask, bool)
+        return PointCloud(self.points[m], None if self.colours is None else self.colours[m], self.pixels[m],
+                          self.both[m], self.residual_px[m], self.image_size)
+
+    def image_mask(self, region) -> np.ndarray:
+        """(N,) bool: points whose camera pixel is True in the (H, W) bool image ``region``."""
+        region = np.asarray(region, bool)
+        return region[self.pixels[:, 1], self.pixels[:, 0]]
+
+
+def to_rgb8(image) -> np.ndarray:
+    """An image as (H, W, 3) uint8 RGB: grey replicated, OpenCV BGR(A) reordered, 16 bit scaled by
+    its full scale (:func:`procam.decode.full_scale_of`)."""
+    from .decode import full_scale_of
+
+    img = np.asarray(image)
+    if img.dtype == np.uint16:
+        img = np.clip(np.rint(img.astype(np.float64) * (255.0 / full_scale_of(img))), 0, 255).astype(np.uint8)
+    elif img.dtype != np.uint8:
+        raise ValueError(f"colour image must be uint8 or uint16, got {img.dtype}")
+    if img.ndim == 2:
+        return np.repeat(img[:, :, None], 3, axis=2)
+    if img.ndim == 3 and img.shape[2] == 1:
+        return np.repeat(img, 3, axis=2)
+    if img.ndim == 3 and img.shape[2] in (3, 4):
+        return np.ascontiguousarray(img[:, :, 2::-1])
+    raise ValueError(f"colour image must be (H, W), (H, W, 3) or (H, W, 4), got {img.shape}")
+
+
+def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px: float | None = 2.0,
+                region=None) -> PointCloud:
+    """Triangulate every decoded camera pixel of one pose.
+
+    Parameters
+    ----------
+    calib : :class:`procam.calibration.Calibration` with a projector and ``(R, T)``.
+    maps : :class:`procam.decode.DecodeResult` of the pose (``col``, ``row``, ``valid_col``,
+        ``valid_row``), or any object with those (H, W) attributes.
+    colour : optional (H, W[, 3|4]) uint8/uint16 image for the points' colour (the white frame;
+        BGR as OpenCV reads it).
+    use : ``"both"`` (column and row where both are decoded, one of them elsewhere), ``"col"`` or
+        ``"row"`` (see :func:`procam.triangulate.triangulate_dense`).
+    max_residual_px : drop points whose column and row disagree by more than this (projector pixels,
+        the reprojection error of the least-squares point): decoding errors. None keeps all.
+    region : optional (H, W) bool: only these camera pixels.
+
+    Returns
+    -------
+    :class:`PointCloud`
+
+    Raises
+    ------
+    ProcamError
+        The maps' size differs from the calibration's camera image size.
+    """
+    H, W = np.asarray(maps.col).shape
+    cw, ch = (int(v) for v in calib.camera.image_size)
+    if (W, H) != (cw, ch):
+        raise ProcamError(f"the decoded maps are {W}x{H} but the calibration's camera is {cw}x{ch}; "
+                          "reconstruct captures of the calibrated camera at its calibrated resolution")
+    vc = np.asarray(maps.valid_col, bool)
+    vr = np.asarray(maps.valid_row, bool)
+    if region is not None:
+        region = np.asarray(region, bool)
+        vc, vr = vc & region, vr & region
+    out = triangulate_dense(calib, maps.col, maps.row, vc, vr, use=use)
+    keep = np.ones(len(out["points"]), bool)
+    if max_residual_px is not None:
+        keep = out["residual_px"] <= float(max_residual_px)
+    pix = out["pixels"][keep]
+    cols = None
+    if colour is not None:
+        rgb = to_rgb8(colour)
+        if rgb.shape[:2] != (H, W):
+            raise ProcamError(f"the colour image is {rgb.shape[1]}x{rgb.shape[0]}, the maps {W}x{H}")
+        cols = rgb[pix[:, 1], pix[:, 0]]
+    return PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H))
+
+
+def board_region(cam_corners, image_size, *, shrink: float = 0.0) -> np.ndarray:
+    """(H, W) bool: camera pixels inside the convex hull of the board's corners.
+
+    Parameters
+    ----------
+    cam_corners : (N, 2) detected (distorted) camera corners; NaN rows ignored.
+    image_size : (width, height).
+    shrink : pull the hull towards its centroid by this fraction (0 = the hull itself).
+    """
+    import cv2
+
+    pts = np.asarray(cam_corners, float).reshape(-1, 2)
+    pts = pts[np.isfinite(pts).all(1)]
+    W, H = (int(v) for v in image_size)
+    mask = np.zeros((H, W), np.uint8)
+    if len(pts) < 3:
+        return mask.astype(bool)
+    if shrink:
+        c = pts.mean(0)
+        pts = c + (1.0 - float(shrink)) * (pts - c)
+    hull = cv2.convexHull(np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2))
+    cv2.fillConvexPoly(mask, hull, 1, lineType=cv2.LINE_8, shift=4)
+    return mask.astype(bool)
+
+
+@dataclass(frozen=True)
+class Plane:
+    """A plane ``normal . X + offset = 0`` (unit ``normal`` pointing to the camera side, so signed
+    distances are positive in front of the plane).
+
+    Attributes
+    ----------
+    normal : (3,); offset : float (board units; the camera centre's distance to the plane).
+    inliers : (N,) bool over the fitted points.
+    residuals : (N,) signed distances of all fitted points, board units.
+    rms : RMS distance of the inliers; sigma : robust (MAD) scale of the inliers' residuals, board units.
+    """
+
+    normal: np.ndarray
+    offset: float
+    inliers: np.ndarray
+    residuals: np.ndarray
+    rms: float
+    sigma: float
+
+    def distance(self, X) -> np.ndarray:
+        """Signed distances (N,) of points X (N, 3)."""
+        return np.asarray(X, float).reshape(-1, 3) @ self.normal + self.offset
+
+
+def _tls_plane(X):
+    c = X.mean(axis=0)
+    _, _, Vt = np.linalg.svd(X - c, full_matrices=False)
+    n = Vt[-1]
+    d = -float(n @ c)
+    if d < 0:
+        n, d = -n, -d
+    return n, d
+
+
+def fit_plane(points, *, robust: bool = True, k: float = 3.0, trials: int = 300, max_sample: int = 20000,
+              seed: int = 0) -> Plane:
+    """Plane through 3-D points, robust to a minority of outliers.
+
+    ``robust=True``: least median of squares over ``trials`` random point triples (scored on at
+    most ``max_sample`` points, seeded), then three rounds of: total-least-squares refit on the
+    inliers, ``sigma = 1.4826 median |r|`` over the inliers, inliers ``|r| <= k sigma``.
+    ``robust=False``: total least squares on all points (all inliers).
+
+    Parameters
+    ----------
+    points : (N, 3), N >= 3, board units.
+
+    Returns
+    -------
+    :class:`Plane`.  Raises ValueError for fewer than 3 finite points.
+    """
+    X = np.asarray(points, float).reshape(-1, 3)
+    fin = np.isfinite(X).all(1)
+    if fin.sum() < 3:
+        raise ValueError(f"a plane needs at least 3 finite points, got {int(fin.sum())}")
+    Xf = X[fin]
+    if not robust:
+        n, d = _tls_plane(Xf)
+        inl = np.ones(len(Xf), bool)
+    else:
+        rng = np.random.default_rng(seed)
+        S = Xf if len(Xf) <= max_sample else Xf[rng.choice(len(Xf), max_sample, replace=False)]
+        best = (np.inf, None, None)
+        for _ in range(int(trials)):
+            a, b, c = S[rng.choice(len(S), 3, replace=False)]
+            n = np.cross(b - a, c - a)
+            nn = np.linalg.norm(n)
+            if not nn > 0:
+                continue
+            n = n / nn
+            med = float(np.median(np.abs((S - a) @ n)))
+            if med < best[0]:
+                best = (med, n, -float(n @ a))
+        if best[1] is None:
+            n, d = _tls_plane(Xf)
+        else:
+            n, d = best[1], best[2]
+        r = Xf @ n + d
+        inl = np.abs(r) <= max(2.5 * 1.4826 * float(np.median(np.abs(r))), 1e-12)
+        for _ in range(3):
+            if inl.sum() < 3:
+                break
+            n, d = _tls_plane(Xf[inl])
+            r = Xf @ n + d
+            sig = 1.4826 * float(np.median(np.abs(r[inl])))
+            inl = np.abs(r) <= max(k * sig, 1e-12)
+    if d < 0:
+        n, d = -n, -d
+    r = Xf @ n + d
+    sig = 1.4826 * float(np.median(np.abs(r[inl]))) if inl.any() else float("nan")
+    r_all = np.full(len(X), np.nan)
+    r_all[fin] = r
+    inliers = np.zeros(len(X), bool)
+    inliers[fin] = inl
+    rms = float(np.sqrt(np.mean(r[inl] ** 2))) if inl.any() else float("nan")
+    return Plane(np.asarray(n, float), float(d), inliers, r_all, rms, sig)
+
+
+def residual_map(cloud: PointCloud, plane: Plane, mask=None) -> np.ndarray:
+    """(H, W) float32 image of the signed distances of ``cloud``'s points to ``plane`` (board units),
+    NaN where there is no point (or outside ``mask`` (N,) bool over the cloud)."""
+    W, H = cloud.image_size
+    out = np.full((H, W), np.nan, np.float32)
+    m = np.ones(len(cloud), bool) if mask is None else np.asarray(mask, bool)
+    px = cloud.pixels[m]
+    out[px[:, 1], px[:, 0]] = plane.distance(cloud.points[m]).astype(np.float32)
+    return out
+
+
+def residual_image(res_map: np.ndarray, scale: float | None = None) -> np.ndarray:
+    """A (H, W, 3) uint8 BGR picture of a residual map: blue (below) - green (0) - red (above) over
+    ``[-scale, scale]`` (default 3 x the robust sigma of the map), black where NaN."""
+    import cv2
+
+    r = np.asarray(res_map, float)
+    fin = np.isfinite(r)
+    if scale is None:
+        scale = 3.0 * 1.4826 * float(np.median(np.abs(r[fin]))) if fin.any() else 1.0
+    scale = scale if scale > 0 else 1.0
+    u = np.clip((np.where(fin, r, 0.0) / scale + 1.0) * 127.5, 0, 255).astype(np.uint8)
+    img = cv2.applyColorMap(u, cv2.COLORMAP_JET)
+    img[~fin] = 0
+    return img
+
+
+def write_ply(path, points, colours=None, *, extra: dict | None = None, comments=()) -> Path:
+    """Write a binary little-endian PLY point cloud through ``plyfile``, atomically.
+
+    Parameters
+    ----------
+    path : output file (``.ply``).
+    points : (N, 3) -> vertex properties ``x, y, z`` (float32).
+    colours : optional (N, 3) uint8 RGB -> ``red, green, blue`` (uchar).
+    extra : optional ``{name: (N,) array}`` of further vertex properties (their dtype is kept).
+    comments : header comment lines (e.g. the units and the frame).
+
+    Raises
+    ------
+    ProcamError
+        ``plyfile`` is not installed.
+    """
+    try:
+        from plyfile import PlyData, PlyElement
+    except ImportError:
+        raise ProcamError("writing PLY needs the plyfile package: pip install plyfile") from None
+    P = np.asarray(points, float).reshape(-1, 3)
+    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
+    cols = None
+    if colours is not None:
+        cols = np.asarray(colours).reshape(-1, 3)
+        if len(cols) != len(P):
+            raise ValueError(f"{len(cols)} colours for {len(P)} points")
+        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    extra = dict(extra or {})
+    for name, arr in extra.items():
+        a = np.asarray(arr).reshape(-1)
+        if len(a) != len(P):
+            raise ValueError(f"extra property {name!r} has {len(a)} values for {len(P)} points")
+        fields.append((name, a.dtype.newbyteorder("<").str))
+    vert = np.empty(len(P), dtype=fields)
+    vert["x"], vert["y"], vert["z"] = P[:, 0], P[:, 1], P[:, 2]
+    if cols is not None:
+        vert["red"], vert["green"], vert["blue"] = cols[:, 0], cols[:, 1], cols[:, 2]
+    for name, arr in extra.items():
+        vert[name] = np.asarray(arr).reshape(-1)
+    ply = PlyData([PlyElement.describe(vert, "vertex")], text=False, byte_order="<",
+                  comments=[str(c) for c in comments])
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            ply.write(f)
+    return path
+
+
+def read_ply(path):
+    """Read a PLY point cloud: ``(points (N, 3) float64, colours (N, 3) uint8 or None, comments)``."""
+    try:
+        from plyfile import PlyData
+    except ImportError:
+        raise ProcamError("reading PLY needs the plyfile package: pip install plyfile") from None
+    ply = PlyData.read(str(path))
+    v = ply["vertex"].data
+    pts = np.column_stack([v["x"], v["y"], v["z"]]).astype(np.float64)
+    names = v.dtype.names
+    cols = (np.column_stack([v["red"], v["green"], v["blue"]]).astype(np.uint8)
+            if all(c in names for c in ("red", "green", "blue")) else None)
+    return pts, cols, list(ply.comments)
