@@ -24,7 +24,7 @@ import numpy as np
 
 from .calibration import Calibration, Device, Distortion
 from .errors import CalibrationError, CalibrationFileError
-from .io import atomic_path
+from ._files import atomic_path
 
 #: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])

@@ -35,6 +35,7 @@ from typing import Sequence
 
 import numpy as np
 
+from . import multi_pose, single_pose
 from .errors import CalibrationError, ProcamError
 from .triangulate import triangulate_points
 from .view import View
@@ -294,8 +295,6 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
         Fewer than ``min_train + 1`` poses: there is no honest held-out figure; report the
         in-sample one (:func:`verify`) and say why.
     """
-    from . import multi_pose
-
     views = list(views)
     if len(views) < min_train + 1:
         raise CalibrationError(f"leave-one-out needs at least {min_train + 1} poses ({min_train} to calibrate, "
@@ -324,8 +323,6 @@ def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_p
     Poses whose calibration fails are recorded in ``failures``.  Needs at least 2 poses
     (:class:`procam.errors.CalibrationError` otherwise).
     """
-    from . import single_pose
-
     views = list(views)
     if len(views) < 2:
         raise CalibrationError(f"single-pose cross-verification needs at least 2 poses (calibrate on one, verify "

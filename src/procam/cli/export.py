@@ -10,7 +10,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from .. import io
+from .. import _files, io
 from ._app import app, console, fail, output_path, user_errors
 
 FORMATS = ("opengl", "maps", "kamino410")
@@ -58,7 +58,7 @@ def export_cmd(
     if fmt == "opengl":
         doc = ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
         doc["calibration"] = str(calibration)
-        io.write_text(out, json.dumps(io.to_jsonable(doc), indent=1))
+        _files.write_text(out, json.dumps(_files.to_jsonable(doc), indent=1))
         console.print(f"wrote {out}")
     elif fmt == "kamino410":
         ex.save_kamino410(calib, out)

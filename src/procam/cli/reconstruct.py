@@ -10,9 +10,8 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from .. import io
 from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_size,
-    user_errors)
+                   user_errors, value)
 
 
 @app.command("reconstruct")
@@ -36,7 +35,7 @@ def reconstruct_cmd(
     step: StepOpt = None,
 ):
     """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
-    from .. import capture, decode, pipeline
+    from .. import _files, capture, decode, io, pipeline
     from .. import reconstruct as rc
 
     output_path(out, "-o", (".ply",))
@@ -54,7 +53,7 @@ def reconstruct_cmd(
     size = optional_size(projector)
     if size is None and not (Path(pose_dir) / "patterns.json").exists():
         size = tuple(calib.projector.image_size)
-    cap = capture.load_capture(pose_dir, size, order, step=step)
+    cap = capture.load_capture(pose_dir, size, value(order), step=step)
     for w in cap.warnings:
         console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
     ps = cap.pattern_set
@@ -66,7 +65,7 @@ def reconstruct_cmd(
         fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
              f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}; check --projector")
     maps = decode.decode(cap.stack, ps)
-    colour = io.read_image(cap.files[ps.white], gray=False)
+    colour = _files.read_image(cap.files[ps.white], gray=False)
     cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
     if len(cloud) == 0:
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
@@ -93,7 +92,7 @@ def reconstruct_cmd(
         t.add_row("board plane distance from camera", f"{plane.offset:.1f}")
         if residuals is not None:
             res = rc.residual_map(cloud.subset(on_board), plane)
-            io.write_image(residuals, rc.residual_image(res))
+            _files.write_image(residuals, rc.residual_image(res))
     console.print(t)
     console.print(f"wrote {out}")
     if residuals is not None:
