@@ -76,6 +76,10 @@ class DecodeResult:
     dropped_col, dropped_row : uint8
         Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
         value is then the centre of the block of ``2^dropped`` codes the certain bits leave.
+    codes_col, codes_row : int64 (n,) or None
+        How many camera pixels decoded to each projector column / row (index = the projector pixel of
+        the code's block start), **including codes outside the projector** (index >= width/height): the
+        extent of the codes tells the projector's real size when the given one is wrong.
     """
 
     col: np.ndarray
@@ -90,6 +94,8 @@ class DecodeResult:
     pattern_set: PatternSet
     dropped_col: np.ndarray | None = None
     dropped_row: np.ndarray | None = None
+    codes_col: np.ndarray | None = None
+    codes_row: np.ndarray | None = None
 
     @property
     def valid(self) -> np.ndarray:
@@ -217,17 +223,19 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
         threads = 1
     if threads > 1 and len(bands) > 1:
         with ThreadPoolExecutor(threads) as ex:
-            list(ex.map(lambda sl: _decode_band(stack, sl, out, **params), bands))
+            hists = list(ex.map(lambda sl: _decode_band(stack, sl, out, **params), bands))
     else:
-        for sl in bands:
-            _decode_band(stack, sl, out, **params)
+        hists = [_decode_band(stack, sl, out, **params) for sl in bands]
+    codes_col = np.sum([h[0] for h in hists], axis=0)
+    codes_row = np.sum([h[1] for h in hists], axis=0)
     rcol, rrow = out["rcol"], out["rrow"]
     return DecodeResult(out["col"], out["row"], rcol == OK, rrow == OK, rcol, rrow, out["conf"],
-                        out["direct"], out["global"], ps, out["dcol"], out["drow"])
+                        out["direct"], out["global"], ps, out["dcol"], out["drow"], codes_col, codes_row)
 
 
 def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide, max_dropped):
-    """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`)."""
+    """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`); returns the band's
+    histograms of decoded codes (column, row) in projector pixels, out-of-range codes included."""
     import cv2
 
     blk = stack[:, sl, :]
@@ -264,6 +272,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
         ld_h, lg_h, bl_h = ld.ravel()[hard], lg.ravel()[hard], blackf.ravel()[hard]
     minabs = None
+    hists = []
     for axis, key, rkey, dkey, size, full, offset in (
             ("col", "col", "rcol", "dcol", ps.code_width, ps.width, ps.col_offset),
             ("row", "row", "rrow", "drow", ps.code_height, ps.height, ps.row_offset)):
@@ -319,6 +328,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         r = np.zeros(span.shape, np.uint8)
         r[(hi < 0) | (lo >= size)] = OUT_OF_RANGE
         too_coarse = dropped > max_dropped
+        counted = ~too_coarse & ~shadow & (hi >= 0)   # codes known well enough, in range or not
+        nbins = (1 << nbits) * ps.step
+        hists.append(np.bincount(np.clip(lo[counted] * ps.step, 0, nbins - 1), minlength=nbins))
         if robust:
             r[too_coarse & amb_break] = AMBIGUOUS
         r[too_coarse & ~amb_break] = LOW_CONTRAST
@@ -334,3 +346,4 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
     with np.errstate(divide="ignore", invalid="ignore"):
         conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
     out["conf"][sl] = np.clip(conf, 0.0, 1.0)
+    return hists

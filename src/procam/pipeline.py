@@ -18,6 +18,7 @@ from . import board as _board
 from . import capture as _capture
 from . import correspond as _corr
 from . import decode as _decode
+from . import plausibility as _plausible
 from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError
 from .patterns import PatternSet
@@ -72,7 +73,8 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
 
 
 def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *, name: str = "pose",
-                    options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None, warnings=()):
+                    options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None, warnings=(),
+                    files=None):
     """Decode a stack and build the pose's View.
 
     Parameters
@@ -81,10 +83,13 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     board : the :class:`~procam.board.Board` (inner corners and square size, the length unit of all outputs).
     cam_pts : optional (N, 2) camera corners to use instead of detecting them.
     warnings : notes about the capture, kept in ``view.diagnostics["warnings"]``.
+    files : the stack's file names, to name frames in messages (optional).
 
     Returns
     -------
-    (View, DecodeResult).  Raises :class:`BoardNotFoundError` or :class:`CorrespondenceError`.
+    (View, DecodeResult).  Raises :class:`BoardNotFoundError`, :class:`CorrespondenceError`, or
+    :class:`~procam.errors.CaptureError` when the decoded capture is not a plausible picture of the projector
+    (:mod:`procam.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
     """
     d = options.decode
     maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
@@ -92,9 +97,12 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     if cam_pts is None:
         cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name)
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
+    warnings = list(warnings) + _plausible.check_projector_size(maps, name, files)
+    _plausible.check_swapped_bits(maps, name, files)
+    _plausible.check_orientation(cam_pts, proj, board.cols, board.rows, name, maps, files)
     H, W = stack.shape[1:]
     view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
-                {**diag, "warnings": list(warnings)}, board)
+                {**diag, "warnings": warnings}, board)
     n_ok = int(view.valid.sum())
     if n_ok < options.min_corners:
         raise CorrespondenceError(
@@ -114,7 +122,7 @@ def view_from_folder(folder, board: Board, projector=None, order=None, *, option
     """
     cap = _capture.load_capture(folder, projector, order, step=step)
     return view_from_stack(cap.stack, cap.pattern_set, board, name=str(Path(folder)), options=options,
-                           warnings=cap.warnings)
+                           warnings=cap.warnings, files=cap.files)
 
 
 def views_from_folders(folders: Sequence, board: Board, projector=None, order=None, *,

@@ -1,0 +1,205 @@
+"""Is a decoded capture a plausible picture of a projector? Checks that blame the capture, not the pose.
+
+A capture can pass every frame-level check and still be wrong in a way that gives a confident wrong
+calibration: the projector size given is not the projector's, a pattern was swapped with its own inverse
+(the pair is still anti-correlated), the camera or the projector mirrors its image. Each leaves a mark in
+the decoded maps or the corners:
+
+* **codes beyond the projector** (:func:`check_projector_size`): with the wrong width or height but the same
+  bit count, many pixels decode to columns/rows past the edge; their extent names the real size;
+* **a swapped pair** (:func:`check_swapped_bits`): decoding a Gray-code bit the wrong way round reverses the
+  order of the codes inside each block of ``2^(b+1)`` codes, so the map is full of jumps of about that size;
+  decoding that bit the other way round makes it continuous again;
+* **a mirror** (:func:`check_orientation`): a camera and a projector looking at the same side of a plane map it
+  onto each other preserving orientation; a mirrored camera image, a mirroring projector setting, or the most
+  significant pattern swapped with its inverse (which mirrors the codes) reverses it.
+
+The checks raise :class:`~procam.errors.CaptureError` naming the frames or the setting to check.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .decode import DecodeResult
+from .errors import CaptureError
+
+#: Fraction of the decoded pixels beyond the projector's edge above which the size is called wrong.
+MAX_BEYOND = 0.02
+
+
+def _frame(k: int, files) -> str:
+    return f"#{k} ({Path(files[k]).name})" if files is not None and k < len(files) else f"#{k}"
+
+
+def code_extent(hist: np.ndarray, fraction: float = 0.999) -> int:
+    """The number of projector pixels (columns or rows) that hold ``fraction`` of the decoded codes, rounded up
+    to a multiple of 8 when it is within 8 of one (projector panels have such sizes)."""
+    c = np.cumsum(hist)
+    if c[-1] == 0:
+        return 0
+    e = int(np.searchsorted(c, fraction * c[-1]) + 1)
+    up = -(-e // 8) * 8
+    return up if up - e < 8 else e
+
+
+def beyond_fraction(maps: DecodeResult) -> tuple[float, float]:
+    """Fractions of the decoded camera pixels whose codes point beyond the projector's width / height."""
+    out = []
+    for hist, size in ((maps.codes_col, maps.pattern_set.width), (maps.codes_row, maps.pattern_set.height)):
+        total = hist.sum() if hist is not None else 0
+        out.append(float(hist[size:].sum() / total) if total else 0.0)
+    return out[0], out[1]
+
+
+def _axes(maps: DecodeResult):
+    ps = maps.pattern_set
+    return (("column", "col", maps.codes_col, ps.width, ps.col_bits, ps.col_offset),
+            ("row", "row", maps.codes_row, ps.height, ps.row_bits, ps.row_offset))
+
+
+def _flipped_beyond(hist: np.ndarray, size: int, bit: int, step: int, offset: int) -> float:
+    """Fraction of the codes in ``hist`` beyond ``[0, size)`` after decoding Gray-code ``bit`` the other way."""
+    px = np.flatnonzero(hist)
+    code = px // step + offset
+    px2 = ((code ^ ((1 << (bit + 1)) - 1)) - offset) * step
+    out = (px2 < 0) | (px2 >= size)
+    return float(hist[px][out].sum() / hist.sum())
+
+
+def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]:
+    """Raise when many codes point beyond the given projector size: naming the swapped pattern pair when
+    decoding one bit the other way round brings them all inside, else the size the codes point to. Returns
+    warnings when the codes use only part of the given size."""
+    ps = maps.pattern_set
+    warnings = []
+    fractions = beyond_fraction(maps)
+    bad = []
+    for (label, axis, hist, size, nbits, offset), f in zip(_axes(maps), fractions):
+        if f <= MAX_BEYOND:
+            continue
+        flips = [(_flipped_beyond(hist, size, b, ps.step, offset), b) for b in range(nbits)]
+        f2, b = min(flips)
+        if f2 < MAX_BEYOND / 4:
+            a, i = ps.pair_indices(axis)[nbits - 1 - b]
+            raise CaptureError(
+                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: as captured "
+                f"{f:.0%} of the decoded pixels point to projector {label}s beyond the {size} of the projector, with "
+                f"that pair the other way round {f2:.1%} — a pattern and its inverse were exchanged (or come from "
+                "another capture); re-capture, or check that the file names sort in capture order")
+        bad.append((label, f, code_extent(hist), size))
+    if bad:
+        what = "; ".join(f"{f:.0%} of the decoded pixels point to projector {label}s beyond the given {size} "
+                         f"(up to {e - 1})" for label, f, e, size in bad)
+        real = [ps.width, ps.height]
+        for label, f, e, size in bad:
+            real[0 if label == "column" else 1] = max(e, size)
+        raise CaptureError(f"{name}: the projector is larger than {ps.width}x{ps.height}: {what}; the codes point to "
+                           f"a projector of about {real[0]}x{real[1]} — check --projector (or the folder's "
+                           "patterns.json)")
+    for label, axis, hist, size, nbits, offset in _axes(maps):
+        e = code_extent(hist)
+        if 0 < e < 0.8 * size:
+            warnings.append(f"{name}: the decoded projector {label}s span only 0-{e - 1} of the given {size}: if the "
+                            f"projector has {e} {label}s (not {size}), pass the right --projector; otherwise part of "
+                            "the projection is outside the camera's view")
+    return warnings
+
+
+def _scores(v: np.ndarray, axis: int) -> tuple[float, int]:
+    """``(roughness, breaks)`` of a decoded map along ``axis``: the mean deviation (capped) of neighbouring
+    pixels' absolute differences from their median, and the number of neighbouring pairs whose signed difference
+    departs from the median slope by more than the decoding noise (a break)."""
+    d = np.diff(v, axis=axis)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0, 0
+    ad = np.abs(d)
+    slope = float(np.median(ad))
+    rough = float(np.mean(np.minimum(np.abs(ad - slope), 8.0 + 4.0 * slope)))
+    breaks = int(np.count_nonzero(np.abs(d - np.median(d)) > 2.5 + 1.5 * slope))
+    return rough, breaks
+
+
+def check_swapped_bits(maps: DecodeResult, name: str, files=None, *, sample: int = 4) -> None:
+    """Raise when decoding one Gray-code bit the other way round makes the decoded map clearly continuous:
+    that bit's pattern and inverse were swapped in the capture (or one of them comes from another sequence).
+
+    A swapped bit ``b`` reverses the order of the codes inside every block of ``2^(b+1)`` codes. Small blocks
+    make the map rough (neighbouring differences far from the slope); large blocks leave it smooth inside and
+    break it at every block boundary. A correct decoding only gets worse when a bit is flipped; a swapped bit
+    gets at least 1.6 times smoother, or loses two thirds of its breaks, when it is flipped back (the bit whose
+    flip leaves the fewest breaks is named). (The most
+    significant bits are also caught by :func:`check_projector_size`, the most significant alone by
+    :func:`check_orientation`.)
+    """
+    ps = maps.pattern_set
+    for label, axis, vals, dropped, nbits, offset, cam_axis in (
+            ("column", "col", maps.col, maps.dropped_col, ps.col_bits, ps.col_offset, 1),
+            ("row", "row", maps.row, maps.dropped_row, ps.row_bits, ps.row_offset, 0)):
+        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
+        ok = np.isfinite(v)
+        if dropped is not None:
+            ok &= (dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0
+        n_ok = int(np.count_nonzero(ok))
+        if n_ok < 2000:
+            continue
+        v = np.where(ok, v, np.nan)
+        rough0, breaks0 = _scores(v, cam_axis)
+        code = np.rint((np.nan_to_num(v) - (ps.step - 1) / 2.0) / ps.step).astype(np.int64) + offset
+        candidates = []
+        for b in range(nbits - 1):
+            v2 = np.where(ok, ((code ^ ((1 << (b + 1)) - 1)) - offset) * ps.step + (ps.step - 1) / 2.0, np.nan)
+            rough, breaks = _scores(v2, cam_axis)
+            smoother = rough * 1.6 < rough0 and rough0 - rough > 0.2 * ps.step
+            fewer = breaks * 3 < breaks0 and breaks0 - breaks > 0.002 * n_ok
+            if smoother or fewer:
+                candidates.append((breaks, rough, b, smoother))
+        if candidates:
+            breaks, rough, b, smoother = min(candidates)
+            a, i = ps.pair_indices(axis)[nbits - 1 - b]
+            how = (f"{rough0 / max(rough, 1e-9):.0f} times smoother" if smoother else
+                   f"continuous ({breaks} breaks instead of {breaks0})")
+            raise CaptureError(
+                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: the "
+                f"decoded projector {label}s are {how} with that pair the other way round — a pattern and its "
+                "inverse were exchanged (or come from another capture); re-capture, or check that the file names "
+                "sort in capture order")
+
+
+def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows: int, name: str, maps=None,
+                      files=None) -> None:
+    """Raise when the camera -> projector map of the board reverses orientation (a mirror somewhere).
+
+    For every square of the corner grid, the sign of its oriented area in the camera times that in the
+    projector; a camera and a projector on the same side of a plane give +1.
+    """
+    c = np.asarray(cam_pts, float).reshape(rows, cols, 2)
+    p = np.asarray(proj_pts, float).reshape(rows, cols, 2)
+
+    def area(g):
+        a, b, d = g[:-1, :-1], g[:-1, 1:], g[1:, :-1]
+        return (b[..., 0] - a[..., 0]) * (d[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (d[..., 0] - a[..., 0])
+
+    with np.errstate(invalid="ignore"):
+        s = np.sign(area(c)) * np.sign(area(p))
+    s = s[np.isfinite(s) & (s != 0)]
+    if len(s) < 4 or np.count_nonzero(s < 0) <= 0.75 * len(s):
+        return
+    hint = ""
+    if maps is not None:
+        fc, fr = beyond_fraction(maps)
+        ps = maps.pattern_set
+        if max(fc, fr) > 0.005:
+            axis = "col" if fc >= fr else "row"
+            a, i = ps.pair_indices(axis)[0]
+            hint = (f"; {max(fc, fr):.0%} of the pixels also decode beyond the projector's edge, which is what "
+                    f"swapping the most significant {'column' if axis == 'col' else 'row'} pattern with its inverse "
+                    f"({_frame(a, files)} and {_frame(i, files)}) does: check those two frames first")
+    raise CaptureError(
+        f"{name}: the camera and projector images of the board are mirror images of each other ({int(np.sum(s < 0))} "
+        f"of {len(s)} squares reversed): the camera image looks mirrored (some webcams flip left-right: turn the "
+        "mirror/flip setting off), or the projector mirrors its image (rear-projection setting), or the most "
+        f"significant pattern of an axis was swapped with its inverse{hint}")
