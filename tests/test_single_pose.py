@@ -6,6 +6,7 @@ probability ~6e-7 per parameter; the staged (paper) camera estimate is ~1.5x the
 8 sigma. Noise-free correspondences must reproduce the truth to 1e-6 (relative).
 """
 
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,7 +14,8 @@ import numpy as np
 import pytest
 
 from procam import board, crlb, models, simulate, single_pose as sp
-from procam.errors import CalibrationError
+from procam.errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, ProcamWarning,
+                           WeakPoseWarning)
 from procam.view import View
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
@@ -128,6 +130,7 @@ def test_fronto_parallel_or_single_axis_camera_pose_is_flagged(ideal, angles):
     cal = sp.calibrate(view)
     adv = cal.poses[0]["advice"]
     assert adv["degenerate"] and adv["camera"]["degenerate"] and not adv["ok"]
+    assert cal.verdict == "degenerate"
     assert any("degenerate" in w and "camera" in w for w in cal.warnings)
     with pytest.raises(CalibrationError, match="degenerate"):
         sp.calibrate(view, strict=True)
@@ -136,29 +139,41 @@ def test_fronto_parallel_or_single_axis_camera_pose_is_flagged(ideal, angles):
 def test_projector_pose_without_nu_is_flagged(ideal):
     scene = simulate.with_board_pose(ideal, (20.0, 0.0, 0.0), frame="projector")
     view = _view(scene, 0.1, 0.2, seed=4)
-    cal = sp.calibrate(view, on_failure="warn")
+    with pytest.warns(DegeneratePoseWarning, match="projector: degenerate pose"):
+        cal = sp.calibrate(view)
     adv = cal.poses[0]["advice"]
-    assert adv["projector"]["degenerate"] and not adv["camera"]["degenerate"]
-    assert any("projector" in w and ("degenerate" in w or "FAILED" in w) for w in cal.warnings)
-    if adv["projector"]["failed"]:     # an impossible f_p is an error by default
-        with pytest.raises(CalibrationError, match="projector: FAILED"):
-            sp.calibrate(view)
+    assert adv["projector"]["level"] == "degenerate" and adv["camera"]["level"] != "degenerate"
+    assert cal.verdict == "degenerate" and not cal.trusted
+    assert any("projector" in w and "degenerate" in w for w in cal.warnings)
+    with pytest.raises(DegeneratePoseError, match="degenerate pose"):
+        sp.calibrate(view, strict=True)
 
 
-@pytest.mark.parametrize("nu_p", [-1.4, -1.5])
-def test_near_degenerate_projector_pose_is_a_failure_not_a_number(nu_p):
-    """Issue 5 follow-up: nu_p ~ -1.5 deg (paper preset, u0p assumed W/2) gave an absurd f_p reported as
-    valid. An f outside [0.2, 5] x the image diagonal is impossible: an error by default, flagged with
-    on_failure='warn'."""
-    scene = simulate.with_board_pose(simulate.preset("paper"), (10.0, nu_p, 0.0), frame="projector")
-    view = _view(scene, 0.1, 0.2, seed=0)
-    with pytest.raises(CalibrationError, match=r"pose 'sim'.*projector: FAILED estimate: f_p = .* is impossible"):
-        sp.calibrate(view)
-    cal = sp.calibrate(view, on_failure="warn")
-    adv = cal.poses[0]["advice"]
-    assert adv["failed"] and adv["degenerate"] and not adv["ok"]
-    assert adv["projector"]["failed"] and not adv["camera"]["failed"]
-    assert any("FAILED" in w for w in cal.warnings)
+@pytest.mark.parametrize("preset,nu_p", [("paper", -1.4), ("paper", -1.5), ("ideal", 0.5), ("ideal", -0.5)])
+def test_near_degenerate_projector_pose_has_one_verdict_whatever_the_fit_does(preset, nu_p):
+    """Issue 5 follow-up / issue 10: at nu_p ~ -1.5 deg (paper preset) the projector LM lands on f_p = 18 px on
+    some CPUs and elsewhere on others. The numbers may be anything there, but the verdict may not flip: it rests
+    on the stable prediction (angles from the homography with the model's u0p, the Cramer-Rao std at that pose),
+    for every noise draw, and never reads 'good', 'weak' or 'failed'. (On the paper rig the true u0p is 1013, so
+    the model's nu_p, the one that decides its degeneracy, is ~1.2 deg off the true angle.)"""
+    scene = simulate.with_board_pose(simulate.preset(preset), (10.0, nu_p, 0.0), frame="projector")
+    levels = set()
+    for seed in range(4):
+        view = _view(scene, 0.1, 0.2, seed=seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ProcamWarning)
+            try:
+                cal = sp.calibrate(view)
+                levels.add(cal.verdict)
+                adv = cal.poses[0]["advice"]["projector"]
+                assert "turn the board left/right" in adv["message"]
+                assert adv["nu_abs_deg"] < 1.0 or adv["predicted_rel_std_f"] > 0.1
+            except DegeneratePoseError as e:  # no solution at all: the same verdict in the error
+                assert "degenerate pose" in str(e)
+                levels.add("degenerate")
+    assert levels == {"degenerate"}
+    with pytest.raises(DegeneratePoseError):
+        sp.calibrate(_view(scene, 0.1, 0.2, seed=0), strict=True)
 
 
 def test_advice_flags_an_impossible_focal_length_whatever_its_std():

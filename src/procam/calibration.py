@@ -125,6 +125,9 @@ class Calibration:
     views : the :class:`procam.view.View` s it was computed from.
     warnings : human-readable caveats (unreliable centre of distortion, degenerate pose, ...).
     info : anything else worth keeping (solver costs, covariance matrices as lists, ...).
+    verdict : ``"good"``, ``"weak"`` (usable, less precise than it could be), ``"degenerate"`` (the poses do
+        not determine some parameters: they may be anything) or ``"failed"`` (an impossible estimate).
+    verdict_reasons : the verdict's reasons in words (also in ``warnings``).
     """
 
     camera: Device
@@ -140,6 +143,13 @@ class Calibration:
     views: tuple = ()
     warnings: tuple = ()
     info: dict = field(default_factory=dict)
+    verdict: str = "good"
+    verdict_reasons: tuple = ()
+
+    @property
+    def trusted(self) -> bool:
+        """The verdict is good or weak: the numbers mean what they say (within their ±)."""
+        return self.verdict in ("good", "weak")
 
     def replace(self, **kw) -> "Calibration":
         return replace(self, **kw)

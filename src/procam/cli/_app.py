@@ -12,6 +12,7 @@ import functools
 import math
 import re
 import sys
+import warnings
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -24,7 +25,7 @@ from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
 from .. import patterns as _patterns
-from ..errors import ProcamError
+from ..errors import ProcamError, ProcamWarning
 
 
 class _OneLineErrors(TyperGroup):
@@ -83,7 +84,9 @@ def user_errors(fn):
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
-            return fn(*args, **kwargs)
+            with warnings.catch_warnings():  # results carry their warnings; commands print them themselves
+                warnings.simplefilter("ignore", ProcamWarning)
+                return fn(*args, **kwargs)
         except ProcamError as e:
             fail(str(e))
         except OSError as e:  # unwritable output folder, disk full, permission denied ...

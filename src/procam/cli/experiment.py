@@ -23,13 +23,13 @@ def summary_tables(result) -> list[Table]:
         t.add_row(r["row"], *(fmt_number(r[k], 3) for k in ("cam_rms", "proj_rms", "stereo_rms")),
                   *(fmt_number(r[k], 2) for k in ("sigma_X", "sigma_Y", "sigma_Z", "sigma_T", "sigma_abs_T")))
     s = Table(title="single-pose calibration of every pose (errors: mean over all poses)")
-    for c in ("set", "f_c", "Δf_c", "ψc+νc", "cam", "f_p", "Δf_p", "|νp|", "proj", "σ_T"):
+    for c in ("set", "f_c", "Δf_c", "ψc+νc", "cam", "f_p", "Δf_p", "|νp|", "proj", "σ_T", "verdict"):
         s.add_column(c, justify="right", overflow="fold")
     for r, e in zip(result.single, result.single_extrinsics):
         s.add_row(str(r["set"]), fmt_number(r["f_c"], 1), fmt_number(r["abs_df_c"], 1),
                   fmt_number(abs(r["psi_c_ref"]) + abs(r["nu_c_ref"]), 1), fmt_number(r["cam_err"], 2),
                   fmt_number(r["f_p"], 1), fmt_number(r["abs_df_p"], 1), fmt_number(abs(r["nu_p_ref"]), 1),
-                  fmt_number(r["proj_err"], 2), fmt_number(e["sigma_T"], 2))
+                  fmt_number(r["proj_err"], 2), fmt_number(e["sigma_T"], 2), r.get("verdict", ""))
     return [t, s]
 
 

@@ -21,6 +21,7 @@ Sets are numbered in lexicographic order of their pose indices, by size (all 3-s
 from __future__ import annotations
 
 import itertools
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
@@ -29,7 +30,7 @@ import numpy as np
 from .. import evaluate as _evaluate
 from .. import models
 from .. import multi_pose
-from ..errors import CalibrationError, ProcamError
+from ..errors import CalibrationError, DegeneratePoseError, ProcamError, ProcamWarning
 from ..view import View
 
 #: Progress callback: ``progress(done, total, label)``.
@@ -199,7 +200,10 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
         ref_angles = {"psi_c_ref": ref_poses[j].cam_angles[0], "nu_c_ref": ref_poses[j].cam_angles[1],
                       "psi_p_ref": ref_poses[j].proj_angles[0], "nu_p_ref": ref_poses[j].proj_angles[1]}
         try:
-            calib = single_pose.calibrate(v, proj_size, **(single_options or {}))
+            with warnings.catch_warnings():  # each pose's verdict goes into its row
+                warnings.simplefilter("ignore", ProcamWarning)
+                calib = single_pose.calibrate(v, proj_size, **(single_options or {}))
+            row["verdict"] = calib.verdict
             ev = _evaluate.evaluate(calib, views)
             p = _params(calib)
             ca = calib.poses[0].get("camera_angles_deg") if calib.poses else None
@@ -215,7 +219,11 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
                         "sigma_abs_T": ev.sigma_abs_T, "sigma_T": ev.sigma_T, "stereo": ev.stereo_rms,
                         "sigma_T_ddof0": ev.sigma_T_ddof0, "sigma_abs_T_ddof0": ev.sigma_abs_T_ddof0})
         except ProcamError as e:
-            failures.append({"what": f"single-pose {j + 1} ({names[j]})", "message": _err(e)})
+            if isinstance(e, DegeneratePoseError):  # no solution at a degenerate pose: a verdict, not a failure
+                row["verdict"] = "degenerate"
+            else:
+                row["verdict"] = "error"
+                failures.append({"what": f"single-pose {j + 1} ({names[j]})", "message": _err(e)})
             row.update(_nan_row(["f_c", "fy_c", "u0c", "v0c", "f_p", "v0p", "psi_c", "nu_c", "abs_psi_c+abs_nu_c",
                                  "abs_df_c", "cam_err", "psi_p", "nu_p", "abs_df_p", "proj_err", "u0p"]))
             row.update(ref_angles)

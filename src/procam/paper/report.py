@@ -74,7 +74,7 @@ def markdown(result: ExperimentResult, figures: Sequence[str] = ()) -> str:
         ("set", "set"), ("f_c", "f_c"), ("fy_c", "α_c f_c"), ("u0c", "u0c"), ("v0c", "v0c"), ("f_p", "f_p"),
         ("v0p", "v0p"), ("psi_c", "ψ_c"), ("nu_c", "ν_c"), ("abs_psi_c+abs_nu_c", "\\|ψ_c\\|+\\|ν_c\\|"),
         ("abs_df_c", "\\|Δf_c\\|"), ("cam_err", "cam err"), ("psi_p", "ψ_p"), ("nu_p", "ν_p"),
-        ("abs_df_p", "\\|Δf_p\\|"), ("proj_err", "proj err")]))
+        ("abs_df_p", "\\|Δf_p\\|"), ("proj_err", "proj err"), ("verdict", "verdict")]))
     lines += ["", "Board angles of every pose under the reference calibration (PnP; unaffected by a degenerate "
               "single-pose solution; used by the focal-error plot):", ""]
     lines.append(_markdown_table(result.single, [("set", "set"), ("psi_c_ref", "ψ_c"), ("nu_c_ref", "ν_c"),

@@ -21,15 +21,17 @@ psi = nu = 0).
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from .. import models
 from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
-from ..errors import CalibrationError
+from ..errors import CalibrationError, DegeneratePoseError
 from ..residuals import pnp, rms, stereo_pose
 from ._robust import RobustOptions, check_corners, clean, robust_sigma
-from .advice import AdviceOptions, advice, judge
+from .advice import AdviceOptions, Prediction, advice, judge, predict
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
 
@@ -91,14 +93,39 @@ def _std_dict(cam: CameraSolution, proj: ProjectorSolution | None) -> dict:
     return s
 
 
+@contextlib.contextmanager
+def _degenerate_if_unsolved(name, predicted: dict, o: AdviceOptions):
+    """A fit that finds no solution at a pose the stable prediction calls degenerate raises
+    :class:`DegeneratePoseError` (the same verdict whatever the fit did), not a plain failure."""
+    try:
+        yield
+    except CalibrationError as e:
+        if isinstance(e, DegeneratePoseError):
+            raise
+        adv = advice(predicted=predicted, options=o)
+        bad = [adv[k]["message"] for k in ("camera", "projector")
+               if isinstance(adv.get(k), dict) and adv[k]["level"] == "degenerate"]
+        if bad:
+            raise DegeneratePoseError(f"pose {name!r}: degenerate pose, no solution: " + "; ".join(bad)) from None
+        raise
+
+
+def _with_noise(pred: Prediction | None, sigma, device, o: AdviceOptions) -> Prediction | None:
+    """The stable prediction for the noise the fit measured, when that is larger than the typical one (the
+    bound is linear in the noise)."""
+    floor = o.camera_noise_px if device == "camera" else o.projector_noise_px
+    if pred is None or sigma is None or not np.isfinite(sigma) or sigma <= floor:
+        return pred
+    return Prediction(pred.angles_deg, pred.rel_std_f * float(sigma) / pred.sigma_px, pred.f_nominal, float(sigma))
+
+
 def _rejected_list(sol) -> list:
     return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
 
 
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
-              advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
-              on_failure: str = "raise") -> Calibration:
+              advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
 
     Parameters
@@ -110,10 +137,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     robust : :class:`RobustOptions` -- minimum corners and outlier rejection, for both devices.
     advice_options : :class:`AdviceOptions` -- the verdict's thresholds.
     cam_size : (W, H) of the camera (default ``view.cam_size``).
-    strict : raise :class:`CalibrationError` on a degenerate pose instead of warning.
-    on_failure : ``"raise"`` (default: raise :class:`CalibrationError` when an estimated focal length is
-        impossible, see :func:`advice`) or ``"warn"`` (return it, flagged ``failed`` in the advice, with a
-        warning).
+    strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of
+        returning it with its verdict and a warning.
 
     Returns
     -------
@@ -124,14 +149,16 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         v0c, k1, k2, f_p, v0p, R_euler_deg (3), T (3)`` and the board angles' std; one entry in
         ``poses`` with the angles, :func:`advice`, ``rejected_corners`` (``{"camera": [{"index",
         "residual_px"}, ...], "projector": [...]}``, indices into the view's corners) and
-        ``outlier_threshold_px``; ``info["camera"]``/``info["projector"]`` hold the full solutions.
+        ``outlier_threshold_px``; ``info["camera"]``/``info["projector"]`` hold the full solutions;
+        ``verdict`` (good / weak / degenerate / failed, :mod:`.advice`) and ``verdict_reasons`` -- a weak,
+        degenerate or failed pose is also a :class:`~procam.errors.ProcamWarning`.
 
     Raises
     ------
     CalibrationError
         Too few usable corners (the message says how many are usable and needed), corners on one
-        line, no valid solution, an impossible focal length (``on_failure="raise"``), or a degenerate
-        pose with ``strict``.
+        line, no valid solution (:class:`~procam.errors.DegeneratePoseError` when the pose is degenerate), or a
+        degenerate or failed pose with ``strict``.
     """
     cam_size = cam_size or view.cam_size
     proj_size = proj_size or view.proj_size
@@ -144,16 +171,25 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     def only_valid(a):
         return np.where(valid[:, None], a, np.nan)
 
+    # the verdict's stable part comes first: it does not depend on where the fits stop
+    predicted = {"camera": predict("camera", obj_all, only_valid(view.cam_pts), cam_size, advice_options.camera_noise_px),
+                 "projector": predict("projector", obj_all, only_valid(view.proj_pts), proj_size,
+                                      advice_options.projector_noise_px, u0=projector.u0)}
     # NaN for corners invalid in either device, so that both fits use the same corners and the
     # rejected corners' indices are the view's
-    cam = calibrate_camera(obj_all, only_valid(view.cam_pts), cam_size, camera, robust=robust, name=name)
-    proj = calibrate_projector(obj_all, only_valid(view.proj_pts), proj_size, projector, robust=robust, name=name)
+    with _degenerate_if_unsolved(name, predicted, advice_options):
+        cam = calibrate_camera(obj_all, only_valid(view.cam_pts), cam_size, camera, robust=robust, name=name)
+        proj = calibrate_projector(obj_all, only_valid(view.proj_pts), proj_size, projector, robust=robust,
+                                   name=name)
     R, T = extrinsics(cam, proj)
     std = _std_dict(cam, proj)
+    predicted = {k: _with_noise(v, d.info.get("sigma_px"), k, advice_options)
+                 for (k, v), d in zip(predicted.items(), (cam, proj))}
     adv = advice(cam.angles_deg, proj.angles_deg, std, values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]},
-                 camera_size=cam.image_size, projector_size=proj.image_size, options=advice_options)
+                 camera_size=cam.image_size, projector_size=proj.image_size, predicted=predicted,
+                 options=advice_options)
     warnings = list(cam.warnings) + list(proj.warnings)
-    judge(adv, name, strict, on_failure, warnings)
+    verdict, reasons = judge(adv, name, strict, warnings)
     cin, pin = cam.mask, proj.mask
     both = cin & pin
     with np.errstate(all="ignore"):
@@ -174,25 +210,29 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                        poses=(pose,), views=(view,), warnings=tuple(warnings),
                        info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
                              "cod_score": None if cam.cod is None else cam.cod.score,
-                             "refine": cam.info["refine"]})
+                             "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
 
 
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
                           robust: RobustOptions = RobustOptions(), advice_options: AdviceOptions = AdviceOptions(),
-                          name: str = "view", strict: bool = False, on_failure: str = "raise") -> Calibration:
+                          name: str = "view", strict: bool = False) -> Calibration:
     """Camera-only single-pose calibration (one photo of a chessboard, no projector): K and division distortion.
 
     Options as :func:`calibrate`. Returns a :class:`Calibration` with ``projector=None, R=T=None``, ``cam_rms``
     (PnP RMS on this pose, outliers excluded), ``std`` and one pose entry (with
     ``rejected_corners``).
     """
-    cam = calibrate_camera(obj_pts, cam_pts, image_size, camera, robust=robust, name=name)
-    std = _std_dict(cam, None)
-    adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size,
-                 options=advice_options)
-    warnings = list(cam.warnings)
-    judge(adv, name, strict, on_failure, warnings)
     obj, pts, finite = clean(obj_pts, cam_pts, name)
+    predicted = {"camera": predict("camera", obj, pts, image_size, advice_options.camera_noise_px)
+                 if image_size is not None else None}
+    with _degenerate_if_unsolved(name, predicted, advice_options):
+        cam = calibrate_camera(obj_pts, cam_pts, image_size, camera, robust=robust, name=name)
+    std = _std_dict(cam, None)
+    predicted["camera"] = _with_noise(predicted["camera"], cam.info.get("sigma_px"), "camera", advice_options)
+    adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size,
+                 predicted=predicted, options=advice_options)
+    warnings = list(cam.warnings)
+    verdict, reasons = judge(adv, name, strict, warnings)
     mask = cam.mask
     cam_rms = _pnp_rms(obj[mask], cam.distortion.undistort(pts[mask], cam.K), cam.K)
     pose = {"name": name, "camera_angles_deg": [float(a) for a in cam.angles_deg], "projector_angles_deg": None,
@@ -202,4 +242,5 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
                        method="camera-only", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
                        info={"camera": cam, "principal_point_source": cam.principal_point_source,
-                             "cod_score": None if cam.cod is None else cam.cod.score, "refine": cam.info["refine"]})
+                             "cod_score": None if cam.cod is None else cam.cod.score, "refine": cam.info["refine"]},
+                       verdict=verdict, verdict_reasons=reasons)

@@ -1,13 +1,39 @@
-"""Is a pose good for single-pose calibration? The paper's rule, the true degeneracies, the predicted
-uncertainty and the plausibility of the estimate, in one verdict per device."""
+"""Is a pose good for single-pose calibration? One verdict per device -- good, weak, degenerate or failed --
+with the real reason in words.
+
+The verdict must not depend on where Levenberg-Marquardt happened to stop: at a pose that determines nothing
+the fitted numbers may be anything (another CPU's BLAS kernels send LM elsewhere), but the verdict may not
+flip. So it rests on **stable** quantities first (:func:`predict`): the board's angles from the
+board -> image homography with nominal intrinsics (the image diagonal as focal length unless Zhang's closed
+form gives a plausible one; the principal point at the image centre, or ``u0p``), and the Cramer-Rao
+standard deviation of the focal length at that pose (:mod:`procam.crlb`, for the noise the fit measured but
+at least a typical corner noise). Only a pose those call sound can then be
+
+* ``failed`` -- the fitted focal length is impossible for the image size (outside ``plausible_f_range`` x the
+  diagonal), or
+* made ``weak``/``degenerate`` by the fit's own standard deviation (it includes what the stable prediction
+  leaves out: the principal point and the distortion).
+
+The paper's empirical rules (camera ``|psi_c| + |nu_c| > 10 deg``, projector ``|nu_p| > 13 deg``) are
+reported, and make a pose weak, but the true degeneracies are these: the camera's ``(f, alpha)`` are
+unobservable iff ``psi_c = 0`` or ``nu_c = 0`` (the board parallel to an image axis, fronto-parallel
+included); the projector's ``(f, v0)`` with ``u0`` fixed iff ``nu_p = 0``, whatever ``psi_p``.
+"""
 
 from __future__ import annotations
 
+import warnings as _warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import CalibrationError
+from .. import crlb, distortion, models
+from ..errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning,
+                      WeakPoseWarning)
+from ._principal_axis import homography, zhang_camera, zhang_projector
+
+#: The verdict levels, from best to worst.
+LEVELS = ("good", "weak", "degenerate", "failed")
 
 
 @dataclass(frozen=True)
@@ -23,6 +49,7 @@ class AdviceOptions:
     degenerate_rel_std, weak_rel_std : relative std of f above which the pose is degenerate / weak.
     plausible_f_range : focal lengths outside this range x the image diagonal (diagonal fields of view of
         ~136 deg down to ~11 deg) are impossible for a real device.
+    camera_noise_px, projector_noise_px : the least corner noise (px) the stable prediction assumes.
     """
 
     camera_rule_deg: float = 10.0
@@ -32,137 +59,220 @@ class AdviceOptions:
     degenerate_rel_std: float = 0.10
     weak_rel_std: float = 0.02
     plausible_f_range: tuple = (0.2, 5.0)
+    camera_noise_px: float = 0.1
+    projector_noise_px: float = 0.2
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Stable quantities of one device at a pose (:func:`predict`).
+
+    ``angles_deg`` (3,) the board's ``(psi, nu, phi)`` from the homography with nominal intrinsics;
+    ``rel_std_f`` the Cramer-Rao std of f over f (``inf`` when the pose determines nothing); ``f_nominal``
+    (px) and ``sigma_px`` the focal length and corner noise it assumes.
+    """
+
+    angles_deg: np.ndarray
+    rel_std_f: float
+    f_nominal: float
+    sigma_px: float
+
+
+def _nominal_f(closed_form_f, size) -> float:
+    diag = float(np.hypot(*size))
+    if closed_form_f is not None and np.isfinite(closed_form_f) and 0.3 * diag <= closed_form_f <= 3.0 * diag:
+        return float(closed_form_f)
+    return diag
+
+
+def predict(device: str, obj, pts, image_size, sigma: float, *, u0: float | None = None) -> Prediction | None:
+    """The stable prediction for ``device`` (``"camera"`` or ``"projector"``) from its corners.
+
+    Parameters
+    ----------
+    obj : (N, 3) board points; pts : (N, 2) the device's pixels (NaN rows ignored; the camera's are distorted
+        and undistorted here with a one-term division model about the image centre, solved linearly).
+    image_size : (W, H); sigma : corner noise (px) for the bound.
+    u0 : the projector's fixed principal point column (default ``W / 2``).
+
+    Returns None when the corners cannot give a homography.
+    """
+    if image_size is None:
+        return None
+    obj = np.asarray(obj, float)
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    if obj.ndim != 2 or obj.shape[1] != 3 or len(obj) != len(pts):
+        return None
+    ok = np.isfinite(obj).all(1) & np.isfinite(pts).all(1)
+    if ok.sum() < 4:
+        return None
+    M, m = obj[ok], pts[ok]
+    W, Hh = image_size
+    if device == "camera" and len(M) >= 8:
+        # lens distortion would tilt the homography's pose: remove it first with the linear division-model
+        # solve about the image centre (closed form: no iteration that could stop elsewhere)
+        c = ((W - 1) / 2.0, (Hh - 1) / 2.0)
+        try:
+            with np.errstate(all="ignore"):
+                k1 = distortion.estimate_division(M, m, c, n_coeffs=1)[0]
+                und = models.undistort_division(m, c, k1)
+            if np.all(np.isfinite(und)):
+                m = und
+        except (TypeError, ValueError, np.linalg.LinAlgError):
+            pass
+    try:
+        with np.errstate(all="ignore"):
+            H = homography(M[:, :2], m)
+    except CalibrationError:
+        return None
+    if not np.all(np.isfinite(H)):
+        return None
+    if device == "camera":
+        pp = ((W - 1) / 2.0, (Hh - 1) / 2.0)
+        cf = zhang_camera(H, pp)
+        f0 = _nominal_f(cf[0] if cf else None, image_size)
+        K = models.intrinsic_matrix(f0, pp[0], pp[1])
+    else:
+        u0 = W / 2.0 if u0 is None else float(u0)
+        cf = zhang_projector(H, u0)
+        f0 = _nominal_f(cf[0] if cf else None, image_size)
+        v0 = cf[1] if cf and f0 == cf[0] else Hh / 2.0
+        K = models.intrinsic_matrix(f0, u0, v0)
+    R, t = models.pose_from_homography(K, H)
+    angles = models.board_angles_deg(R, t)
+    if device == "camera":
+        b = crlb.camera_bound(K, None, 0.0, 0.0, R, t, M, sigma, model="known_distortion")
+        s = b.std["f_c"]
+    else:
+        s = crlb.projector_bound(K, R, t, M, sigma).std["f_p"]
+    return Prediction(angles_deg=angles, rel_std_f=float(s / f0) if np.isfinite(s) else float("inf"),
+                      f_nominal=f0, sigma_px=float(sigma))
+
+
+def _pct(r) -> str:
+    return "±inf" if r is None or not np.isfinite(r) else f"±{100 * r:.1f} %"
+
+
+def _device_advice(device: str, angles, prediction: Prediction | None, std_f, f, size, o: AdviceOptions) -> dict:
+    """One device's verdict (see the module docstring)."""
+    key = "f_c" if device == "camera" else "f_p"
+    a = prediction.angles_deg if prediction is not None else np.asarray(angles, float)
+    psi, nu = abs(float(a[0])), abs(float(a[1]))
+    fit_rel = None
+    if std_f is not None and f is not None and f:
+        fit_rel = float(std_f) / abs(float(f)) if np.isfinite(std_f) else float("inf")
+    pred_rel = prediction.rel_std_f if prediction is not None else None
+    if device == "camera":
+        angle, angle_txt = min(psi, nu), f"|psi_c| = {psi:.1f}, |nu_c| = {nu:.1f} deg"
+        paper_ok = psi + nu > o.camera_rule_deg
+        rule = f"the paper's rule wants |psi_c| + |nu_c| > {o.camera_rule_deg:g} deg"
+        turn = "tilt the board about both image axes (e.g. 15-25 deg each)"
+        unseen = "f_c and alpha_c are not determined when the board is not tilted about BOTH image axes"
+    else:
+        angle, angle_txt = nu, f"|nu_p| = {nu:.1f} deg"
+        paper_ok = nu > o.projector_rule_deg
+        rule = f"the paper's rule wants |nu_p| > {o.projector_rule_deg:g} deg"
+        turn = "turn the board left/right about the projector's vertical axis (|nu_p| 15-30 deg)"
+        unseen = "with u0p fixed, f_p and v0p are not determined without a rotation about the projector's vertical axis"
+    impossible = None
+    if f is not None and size is not None:
+        lo, hi = (o.plausible_f_range[0] * np.hypot(*size), o.plausible_f_range[1] * np.hypot(*size))
+        if not (np.isfinite(f) and lo <= f <= hi):
+            impossible = (f"{key} = {f:.4g} px is impossible for a {size[0]}x{size[1]} image (plausible {lo:.0f}-"
+                          f"{hi:.0f} px)")
+    noise = f"for {prediction.sigma_px:.2g} px corner noise" if prediction is not None else ""
+    # 1. stable quantities decide degeneracy
+    if angle < o.degenerate_angle_deg:
+        level, msg = "degenerate", f"{device}: degenerate pose ({angle_txt}): {unseen}; {turn}"
+    elif pred_rel is not None and pred_rel > o.degenerate_rel_std:
+        level = "degenerate"
+        msg = (f"{device}: degenerate pose: here {key} can only be known to {_pct(pred_rel)} (predicted {noise}; "
+               f"{angle_txt}); {turn}")
+    # 2. then the estimate
+    elif impossible:
+        level, msg = "failed", f"{device}: FAILED estimate: {impossible}; {turn}"
+    elif fit_rel is not None and fit_rel > o.degenerate_rel_std:
+        level = "degenerate"
+        msg = f"{device}: degenerate pose: {key} = {f:.1f} ± {fit_rel * abs(f):.3g} px ({_pct(fit_rel)}); {turn}"
+    else:
+        reasons = []
+        rel = max(r for r in (pred_rel, fit_rel, 0.0) if r is not None)
+        if rel > o.weak_rel_std:
+            reasons.append(f"{key} {_pct(rel)} (aim for under {_pct(o.weak_rel_std)[1:]})")
+        if angle < o.weak_angle_deg:
+            reasons.append(f"an angle is close to zero ({angle_txt})")
+        if not paper_ok:
+            reasons.append(rule)
+        if reasons:
+            level = "weak"
+            msg = f"{device}: weak pose: " + "; ".join(reasons) + f" -- {turn}"
+        else:
+            level, msg = "good", f"{device}: pose OK ({key} {_pct(rel)}; {angle_txt})"
+    out = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), level=level,
+               degenerate=level in ("degenerate", "failed"), weak=level == "weak", failed=level == "failed",
+               rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, message=msg)
+    if device == "camera":
+        out.update(sum_abs_deg=psi + nu, min_abs_deg=min(psi, nu))
+    return out
 
 
 def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, camera_size=None,
-           projector_size=None, options: AdviceOptions = AdviceOptions()) -> dict:
-    """Is this pose good for single-pose calibration? The paper's rule and the true conditions.
-
-    The paper's empirical rule: camera ``|psi_c| + |nu_c| > 10 deg``, projector ``|nu_p| > 13 deg``.
-    The true degeneracies (Zhang's constraints with a known principal point): the camera's (f, alpha) are unobservable iff
-    ``psi_c = 0`` or ``nu_c = 0`` (board plane parallel to an image axis, including fronto-parallel);
-    the projector's (f, v0) with u0 fixed iff ``nu_p = 0``, whatever psi_p.
+           projector_size=None, predicted: dict | None = None, options: AdviceOptions = AdviceOptions()) -> dict:
+    """Is this pose good for single-pose calibration? A verdict per device and for the pose.
 
     Parameters
     ----------
     camera_angles_deg, projector_angles_deg : (psi, nu, phi) degrees of the board in each device
-        frame, or None when the device is absent.
+        frame (the fitted pose), or None when the device is absent.
     std : dict with ``f_c`` and/or ``f_p`` (px), optional; with ``values`` (dict with ``f_c``, ``f_p``)
-        the relative uncertainty is also judged.
+        the fit's relative uncertainty is judged too.
     camera_size, projector_size : (W, H) pixels; with ``values`` a focal length outside
-        ``options.plausible_f_range`` x the image diagonal is impossible for a real device: the estimate
-        has **failed** (``failed``, and ``degenerate``), whatever its std says.
+        ``options.plausible_f_range`` x the image diagonal is impossible for a real device.
+    predicted : ``{"camera": Prediction, "projector": Prediction}`` (:func:`predict`), the stable
+        quantities; their angles replace the fitted ones in the rules. Without them the verdict rests on
+        the given angles and the fit's std alone (as for angles typed in by hand).
     options : :class:`AdviceOptions`, the thresholds.
 
     Returns
     -------
-    dict with ``camera`` and ``projector`` sub-dicts (``paper_rule_ok``, ``degenerate``, ``weak``,
-    ``failed``, ``rel_std_f``, ``message``) and ``ok`` (neither degenerate nor weak), ``degenerate``
-    and ``failed``.
+    dict with ``camera`` and ``projector`` sub-dicts (``level`` one of :data:`LEVELS`, ``degenerate`` (not
+    determined, or failed), ``weak``, ``failed``, ``paper_rule_ok``, ``rel_std_f`` (fit), ``predicted_rel_std_f``, ``message``) and
+    for the pose: ``level`` (the worst device's), ``ok`` (good), ``degenerate`` and ``failed``.
     """
-    o = options
-    camera_rule_deg, projector_rule_deg, degenerate_angle_deg = o.camera_rule_deg, o.projector_rule_deg, \
-        o.degenerate_angle_deg
-    weak_angle_deg, degenerate_rel_std, weak_rel_std = o.weak_angle_deg, o.degenerate_rel_std, o.weak_rel_std
-    plausible_f_range = o.plausible_f_range
     std = std or {}
     values = values or {}
+    predicted = predicted or {}
     out: dict = {}
-
-    def rel(key):
-        s, v = std.get(key), values.get(key)
-        if s is None or v is None or not v:
-            return None
-        return float(s) / abs(float(v)) if np.isfinite(s) else float("inf")
-
-    def implausible(key, size, device):
-        """Message if the focal length is impossible for this image size, else None."""
-        f = values.get(key)
-        if f is None or size is None:
-            return None
-        lo, hi = (plausible_f_range[0] * np.hypot(*size), plausible_f_range[1] * np.hypot(*size))
-        if np.isfinite(f) and lo <= f <= hi:
-            return None
-        return (f"{device}: FAILED estimate: {key} = {f:.4g} px is impossible for a {size[0]}x{size[1]} image "
-                f"(plausible {lo:.0f}-{hi:.0f} px = {plausible_f_range[0]:g}-{plausible_f_range[1]:g} x the "
-                f"diagonal); this pose does not determine the {device}'s intrinsics")
-
-    def rel_txt(key, r):
-        v = values.get(key)
-        return f"{key} = {v:.1f} +- {r * abs(v):.3g} px" if v is not None and np.isfinite(r) else f"{key} +- inf"
-
-    if camera_angles_deg is not None:
-        psi, nu = abs(float(camera_angles_deg[0])), abs(float(camera_angles_deg[1]))
-        r = rel("f_c")
-        failed = implausible("f_c", camera_size, "camera")
-        paper_ok = psi + nu > camera_rule_deg
-        degen = (failed is not None or min(psi, nu) < degenerate_angle_deg
-                 or (r is not None and r > degenerate_rel_std))
-        weak = not degen and (not paper_ok or min(psi, nu) < weak_angle_deg or (r is not None and r > weak_rel_std))
-        if failed:
-            msg = failed + " (tilt the board about both image axes, e.g. 15-25 deg each)"
-        elif degen and min(psi, nu) >= degenerate_angle_deg:
-            msg = (f"camera: degenerate pose: {rel_txt('f_c', r)} ({100 * r:.0f} %) is not determined by this pose "
-                   f"(|psi_c| = {psi:.1f}, |nu_c| = {nu:.1f} deg as estimated); tilt the board about both image "
-                   f"axes (e.g. 15-25 deg each)")
-        elif degen:
-            msg = (f"camera: degenerate pose (|psi_c| = {psi:.1f} deg, |nu_c| = {nu:.1f} deg): f_c and alpha_c "
-                   f"are not determined when the board is not tilted about BOTH image axes; tilt the board "
-                   f"about both (e.g. 15-25 deg each)")
-        elif weak:
-            msg = (f"camera: weak pose (|psi_c| = {psi:.1f}, |nu_c| = {nu:.1f} deg"
-                   + (f", f_c +-{100 * r:.1f} %" if r is not None else "")
-                   + f"); the paper's rule wants |psi_c| + |nu_c| > {camera_rule_deg:g} deg and each angle "
-                     f"should be clearly non-zero")
-        else:
-            msg = "camera: pose OK"
-        out["camera"] = dict(psi_abs_deg=psi, nu_abs_deg=nu, sum_abs_deg=psi + nu, min_abs_deg=min(psi, nu),
-                             paper_rule_ok=bool(paper_ok), degenerate=bool(degen), weak=bool(weak),
-                             failed=failed is not None, rel_std_f=r, message=msg)
-    if projector_angles_deg is not None:
-        psi, nu = abs(float(projector_angles_deg[0])), abs(float(projector_angles_deg[1]))
-        r = rel("f_p")
-        failed = implausible("f_p", projector_size, "projector")
-        paper_ok = nu > projector_rule_deg
-        degen = failed is not None or nu < degenerate_angle_deg or (r is not None and r > degenerate_rel_std)
-        weak = not degen and (not paper_ok or (r is not None and r > weak_rel_std))
-        if failed:
-            msg = failed + " (with u0p fixed it needs the board turned left/right about the projector's vertical axis)"
-        elif degen and nu >= degenerate_angle_deg:
-            msg = (f"projector: degenerate pose: {rel_txt('f_p', r)} ({100 * r:.0f} %) is not determined by this "
-                   f"pose (|nu_p| = {nu:.1f} deg as estimated); with u0p fixed, f_p and v0p need a clear rotation "
-                   f"of the board about the projector's vertical axis; turn the board left/right")
-        elif degen:
-            msg = (f"projector: degenerate pose (|nu_p| = {nu:.1f} deg): with u0p fixed, f_p and v0p need a "
-                   f"rotation of the board about the projector's vertical axis; turn the board left/right")
-        elif weak:
-            msg = (f"projector: weak pose (|nu_p| = {nu:.1f} deg"
-                   + (f", f_p +-{100 * r:.1f} %" if r is not None else "")
-                   + f"); the paper's rule wants |nu_p| > {projector_rule_deg:g} deg")
-        else:
-            msg = "projector: pose OK"
-        out["projector"] = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), degenerate=bool(degen),
-                                weak=bool(weak), failed=failed is not None, rel_std_f=r, message=msg)
+    for device, angles, key, size in (("camera", camera_angles_deg, "f_c", camera_size),
+                                      ("projector", projector_angles_deg, "f_p", projector_size)):
+        if angles is None and predicted.get(device) is None:
+            continue
+        out[device] = _device_advice(device, angles, predicted.get(device), std.get(key), values.get(key), size,
+                                     options)
     subs = [v for v in out.values() if isinstance(v, dict)]
+    level = max((s["level"] for s in subs), key=LEVELS.index, default="good")
+    out["level"] = level
     out["degenerate"] = any(s["degenerate"] for s in subs)
     out["failed"] = any(s["failed"] for s in subs)
-    out["ok"] = not any(s["degenerate"] or s["weak"] for s in subs)
+    out["ok"] = level == "good"
     return out
 
 
-def judge(adv, name, strict, on_failure, warnings):
-    """Warnings from the advice; raise on a failed estimate (``on_failure="raise"``) or, if ``strict``,
-    on a degenerate pose."""
-    if on_failure not in ("raise", "warn"):
-        raise ValueError(f"on_failure must be 'raise' or 'warn', got {on_failure!r}")
+_WARNING = {"weak": WeakPoseWarning, "degenerate": DegeneratePoseWarning, "failed": FailedEstimateWarning}
+
+
+def judge(adv: dict, name: str, strict: bool, warnings: list) -> tuple[str, tuple]:
+    """The pose's verdict from its advice: ``(level, reasons)``. Appends the reasons to ``warnings``, emits
+    them as procam warnings (:class:`~procam.errors.WeakPoseWarning`, ...), and with ``strict`` raises
+    :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose."""
     keys = [k for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
-    for key in keys:
-        if adv[key]["degenerate"] or adv[key]["weak"]:
-            warnings.append(f"pose {name!r}: {adv[key]['message']}")
-    if adv["failed"] and on_failure == "raise":
-        raise CalibrationError(f"pose {name!r}: single-pose calibration failed: "
-                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["failed"])
-                               + "; use another pose (on_failure='warn' returns the failed estimate anyway)")
-    if strict and adv["degenerate"]:
-        raise CalibrationError(f"pose {name!r}: degenerate pose for single-pose calibration: "
-                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["degenerate"]))
+    reasons = tuple(f"pose {name!r}: {adv[k]['message']}" for k in keys if adv[k]["level"] != "good")
+    level = adv["level"]
+    warnings.extend(reasons)
+    if strict and level in ("degenerate", "failed"):
+        raise DegeneratePoseError(f"pose {name!r}: {level} pose for single-pose calibration: "
+                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["level"] == level))
+    for r in reasons:
+        cls = _WARNING[max((adv[k]["level"] for k in keys if r.endswith(adv[k]["message"])), key=LEVELS.index)]
+        _warnings.warn(r, cls, stacklevel=3)
+    return level, reasons
