@@ -36,18 +36,21 @@ class PoseOptions:
 def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=11, name="pose"):
     """Camera corners (N, 2) from the white frame; falls back to white - black, then the black frame.
 
-    Raises :class:`BoardNotFoundError` with what to check.
+    Raises :class:`BoardNotFoundError` with what to check (at once, naming the right ``--board``,
+    when a board of another size is in view).
     """
     white = stack[ps.white]
     black = stack[ps.black]
-    candidates = (lambda: white,  # the white - black image is only built when the white frame fails
+    candidates = (white,  # the white - black image is only built when the white frame fails
                   lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
-                  lambda: black)
-    for image in candidates:
-        c = _board.detect_corners(image(), pattern_size, detector=detector, refine_window=refine_window)
-        if c is not None:
-            return c
+                  black)
+    c, hint = _board.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window)
+    if c is not None:
+        return c
     cols, rows = pattern_size
+    if hint is not None:
+        raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
+                                 f"(#{ps.white}); {_board.size_hint_text(pattern_size, hint)}")
     raise BoardNotFoundError(
         f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
         f"(#{ps.white}); check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "

@@ -197,7 +197,10 @@ def _camera_only(images, cols, rows, square, cod):
         fail(f"--camera-only takes one image, got {len(images)}")
     path = images[0]
     img = io.read_image(path)
-    c = _board.detect_corners(img, (cols, rows))
+    c, hint = _board.find_corners([img], (cols, rows))
+    if hint is not None:
+        raise BoardNotFoundError(f"{path}: chessboard with {cols}x{rows} inner corners not found; "
+                                 f"{_board.size_hint_text((cols, rows), hint)}")
     if c is None:
         raise BoardNotFoundError(f"{path}: chessboard with {cols}x{rows} inner corners not found; check --board "
                                  f"(inner corners, not squares: {cols + 1}x{rows + 1} squares have {cols}x{rows} "
