@@ -120,7 +120,8 @@ def detect_small(width):
 
 
 DETECTORS = {"classic full": detect_old, "classic 1024": detect_small(1024), "classic 640": detect_small(640),
-             **{k: detect_sb(v) for k, v in SB_FLAGS.items()}}
+             **{k: detect_sb(v) for k, v in SB_FLAGS.items()},
+             "default": lambda img, size: board.detect_corners(img, size)}
 
 
 def refine_old(frames, c, size):
@@ -175,6 +176,7 @@ def refine_saddle(frames, c, size):
 
 #: label -> (detector, refinement or None, group)
 OPTIONS = {
+    "procam default: detect_corners() (auto chain, 640 px, fit 15)": ("default", None, "default"),
     "old default: classic full + cornerSubPix 11": ("classic full", refine_old, "old"),
     "classic 640, no refinement": ("classic 640", None, "classic"),
     **{f"classic 640 + cornerSubPix {w}": ("classic 640", refine_subpix(w), "classic") for w in (3, 5, 7, 11, 15)},
@@ -191,10 +193,10 @@ OPTIONS = {
     "classic 1024 + fit 11": ("classic 1024", refine_fit(11), "scale"),
     "classic full + fit 11": ("classic full", refine_fit(11), "scale"),
 }
-DEFAULT = "classic 640 + fit 11"
+DEFAULT = "procam default: detect_corners() (auto chain, 640 px, fit 15)"
 KEY = ["old default: classic full + cornerSubPix 11", "classic 640 + cornerSubPix 5", "SB + accuracy",
        "SB + accuracy, then fit 11", "classic 640 + saddle (sigma 1, h 3)", "classic 640 + fit 11",
-       "classic 640 + fit 15"]
+       "classic 640 + fit 15", DEFAULT]
 
 
 def frames_of(stack, ps):
@@ -368,7 +370,7 @@ def section_speed(cache, ps):
     print(f"load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
     names = ["paper 0,28,0", "paper 0,28,0 1280x1024", "paper 0,28,0 1920x1080"]
     print("| image | detect full | detect 1024 | detect 640 | cornerSubPix 11 | fit 11 | fit 15 | "
-          "old default total | new default total (detect_corners) |")
+          "old default total | new default total (detect_corners, fit 15) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 
     def tm(f, *a, **kw):

@@ -72,6 +72,9 @@ def test_refinement_options(paper_capture):
     fit = board.detect_corners(white, (10, 6), refine="fit")
     assert rms(fit, cam_t) < rms(sub, cam_t) < rms(raw, cam_t)
     assert np.array_equal(board.detect_corners(white, (10, 6), refine_window=0), raw)
+    # the pipeline passes the choice through (refine="subpix": procam's earlier refinement)
+    assert np.array_equal(pipeline.find_board(stack, PS, (10, 6), refine="subpix"), sub)
+    assert np.array_equal(pipeline.find_board(stack, PS, (10, 6)), fit)
     with pytest.raises(ValueError, match="refine"):
         board.detect_corners(white, (10, 6), refine="saddle")
     with pytest.raises(ValueError, match="detector"):

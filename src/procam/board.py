@@ -33,6 +33,11 @@ REFINERS = ("fit", "subpix", "none")
 #: Images wider than this are searched for the board on a downscaled copy first (pixels).
 DETECT_MAX_WIDTH = 640
 
+#: Default refinement half-window (pixels) per method, the measured best within ~0.1 s per pose
+#: (``benchmarks/correspond.py``): the fit gains up to 20 px, ``cornerSubPix`` is best at 11 (OpenCV's
+#: usual ``winSize=(11, 11)``) and worse above.
+REFINE_WINDOW = {"fit": 15, "subpix": 11, "none": 0}
+
 
 
 def _gray(image: np.ndarray) -> np.ndarray:
@@ -201,7 +206,7 @@ def find_grid(image: np.ndarray, pattern_size, *, detector: str = "auto",
 
 
 def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], *, detector: str = "auto",
-                   refine_window: int = 11, refine: str = "fit",
+                   refine_window: int | None = None, refine: str = "fit",
                    max_width: int | None = DETECT_MAX_WIDTH) -> np.ndarray | None:
     """Find the inner corners of a chessboard in one image.
 
@@ -213,8 +218,9 @@ def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], *, detector
         ``"sb"`` (``findChessboardCornersSB``, exhaustive + accuracy flags: slower, more tolerant of
         blur and uneven light) or ``"auto"`` (classic, then SB if classic fails).  See
         :func:`find_grid`.
-    refine_window : half-size in pixels of the refinement window (0 = no refinement); clamped per
-        corner so the window stays clear of the neighbouring corners.
+    refine_window : half-size in pixels of the refinement window (0 = no refinement; None = the
+        method's :data:`REFINE_WINDOW`); clamped per corner so the window stays clear of the
+        neighbouring corners.
     refine : ``"fit"`` (default, :func:`fit_corners`), ``"subpix"`` (``cornerSubPix`` only) or ``"none"``.
     max_width : detect on a copy downscaled to this width when the image is wider (None/0: never);
         the corners are refined at full size either way.
@@ -230,11 +236,10 @@ def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], *, detector
 
 
 def _refine(pyr, c, size, refine, window):
-    return refine_corners(pyr.gray, c, size, method=refine if window else "none", window=window,
-                          start_error=1.0 / pyr.scale)
+    return refine_corners(pyr.gray, c, size, method=refine, window=window, start_error=1.0 / pyr.scale)
 
 
-def find_corners(images, pattern_size, *, detector: str = "auto", refine_window: int = 11,
+def find_corners(images, pattern_size, *, detector: str = "auto", refine_window: int | None = None,
                  refine: str = "fit", max_width: int | None = DETECT_MAX_WIDTH):
     """Corners of the board in the first of several images of it that shows it; fails fast.
 
@@ -332,7 +337,7 @@ def subpix_window(corners, cols, rows, window):
 
 
 def refine_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, method: str = "fit",
-                   window: int = 11, start_error: float = 1.0) -> np.ndarray:
+                   window: int | None = None, start_error: float = 1.0) -> np.ndarray:
     """Sub-pixel corners from approximate ones.
 
     Parameters
@@ -343,7 +348,8 @@ def refine_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, meth
     method : ``"fit"`` — ``cornerSubPix`` with a small window, then :func:`fit_corners` (a corner it
         cannot fit gets the ``"subpix"`` refinement); ``"subpix"`` — ``cornerSubPix`` with
         :func:`subpix_window` (procam's earlier refinement); ``"none"``.
-    window : half-size of the window in pixels (see :func:`subpix_window` and :func:`fit_corners`).
+    window : half-size of the window in pixels (see :func:`subpix_window` and :func:`fit_corners`);
+        None = :data:`REFINE_WINDOW`.
     start_error : rough error of ``corners`` in pixels (the detector's pixel size); widens the first
         ``cornerSubPix`` pass of ``"fit"`` when the board was found on a downscaled image.
 
@@ -354,7 +360,9 @@ def refine_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, meth
     if method not in REFINERS:
         raise ValueError(f"refine method must be one of {REFINERS}, got {method!r}")
     c = np.asarray(corners, float).reshape(-1, 2)
-    if method == "none" or not window or window <= 0:
+    if window is None:
+        window = REFINE_WINDOW[method]
+    if method == "none" or window <= 0:
         return c.copy()
     cols, rows = int(pattern_size[0]), int(pattern_size[1])
     img = np.asarray(image)
@@ -366,11 +374,11 @@ def refine_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, meth
     c = _subpix(img, c, subpix_window(c, cols, rows, min(window, coarse)), eps=0.01)
     out, ok = fit_corners(img, c, (cols, rows), window=window)
     if not ok.all():  # the few corners the model does not fit get the "subpix" refinement
-        out[~ok] = _subpix(img, c[~ok], subpix_window(c, cols, rows, window))
+        out[~ok] = _subpix(img, c[~ok], subpix_window(c, cols, rows, min(window, REFINE_WINDOW["subpix"])))
     return out
 
 
-def fit_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, window: float = 11.0,
+def fit_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, window: float = 15.0,
                 reach: float = 0.4, iterations: int = 12, passes: int = 2):
     """Least-squares fit of a blurred, unevenly lit X-junction to the pixels around each corner.
 

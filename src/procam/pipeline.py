@@ -28,12 +28,14 @@ class PoseOptions:
     shadow_threshold: float = 10.0
     contrast_threshold: float = 3.0
     detector: str = "auto"
-    refine_window: int = 11
+    refine_window: int | None = None  # None: procam.board.REFINE_WINDOW of the method
+    refine: str = "fit"
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
 
 
-def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=11, name="pose"):
+def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=None, name="pose",
+               refine="fit"):
     """Camera corners (N, 2) from the white frame; falls back to white - black, then the black frame.
 
     Raises :class:`BoardNotFoundError` with what to check (at once, naming the right ``--board``,
@@ -44,7 +46,8 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
     candidates = (white,  # the white - black image is only built when the white frame fails
                   lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
                   black)
-    c, hint = _board.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window)
+    c, hint = _board.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
+                                  refine=refine)
     if c is not None:
         return c
     cols, rows = pattern_size
@@ -76,7 +79,8 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board, square: f
     maps = _decode.decode(stack, pattern_set, options.decode_method, shadow_threshold=options.shadow_threshold,
                           contrast_threshold=options.contrast_threshold)
     if cam_pts is None:
-        cam_pts = find_board(stack, pattern_set, (cols, rows), options.detector, options.refine_window, name)
+        cam_pts = find_board(stack, pattern_set, (cols, rows), options.detector, options.refine_window, name,
+                             options.refine)
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     obj = _board.object_points(cols, rows, square)
     H, W = stack.shape[1:]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 import typer
@@ -19,7 +20,7 @@ def parse_board(text: str) -> tuple[int, int]:
     return cols, rows
 
 
-def pose_options(estimator: str, window: int, refine: int, detector: str, method: str,
+def pose_options(estimator: str, window: int, refine: int | None, detector: str, method: str,
                  min_corners: int = 10) -> pipeline.PoseOptions:
     if estimator not in corr.ESTIMATORS:
         fail(f"--estimator must be one of {', '.join(corr.ESTIMATORS)}, got {estimator!r}")
@@ -36,7 +37,7 @@ def pose_options(estimator: str, window: int, refine: int, detector: str, method
 
 def load_views(poses, cols, rows, square, projector, order, estimator, window, *, progress=None, step=None):
     """Decode every pose folder into a View (``progress(done, total, label)`` after each)."""
-    opts = pose_options(estimator, window, 11, "auto", "robust")
+    opts = pose_options(estimator, window, None, "auto", "robust")
     views = []
     for k, p in enumerate(poses):
         v, _ = pipeline.view_from_folder(p, (cols, rows), square, projector, order, options=opts, step=step)
@@ -56,7 +57,8 @@ def correspond_cmd(
     png: Path = typer.Option(None, "--png", help="Picture: corners on the camera image and on the projector plane."),
     window: WindowOpt = 60,
     estimator: EstimatorOpt = "ransac",
-    refine: int = typer.Option(11, "--refine-window", help="cornerSubPix half-window, px (0 = none)."),
+    refine: Optional[int] = typer.Option(None, "--refine-window",
+                                         help="Corner fit half-window, px (default 15; 0 = none)."),
     detector: str = typer.Option("auto", "--detector", help="Corner detector: auto, classic or sb."),
     method: str = typer.Option("robust", "--method", help="Decode classifier: robust or simple."),
     projector: ProjectorOpt = None,
