@@ -96,7 +96,8 @@ def test_board_near_the_image_border(paper_capture):
 
 def test_board_not_found_message(paper_capture):
     _, stack, _, _ = paper_capture
-    with pytest.raises(BoardNotFoundError, match=r"9x6 inner corners not found.*10x7 squares"):
+    # a board of another size is in view: the message names the right --board
+    with pytest.raises(BoardNotFoundError, match=r"9x6 inner corners not found.*use --board 10x6"):
         pipeline.view_from_stack(stack, PS, Board(9, 6, 24.0), name="pose1")
 
 

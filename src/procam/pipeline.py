@@ -33,39 +33,49 @@ class PoseOptions:
     ----------
     decode : :class:`procam.decode.DecodeOptions` (classifier and thresholds).
     detector : chessboard detector, one of :data:`procam.board.DETECTORS`.
-    refine_window : ``cornerSubPix`` half-window in camera pixels (0 = none).
+    refine_window : half-window of the corner refinement in camera pixels (0 = none; None = the method's
+        default, :data:`procam.board.REFINE_WINDOW`).
+    refine : corner refinement, one of :data:`procam.board.REFINERS`.
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
     """
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
     detector: str = "auto"
-    refine_window: int = 11
+    refine_window: int | None = None  # None: procam.board.REFINE_WINDOW of the method
+    refine: str = "fit"
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
 
     def __post_init__(self):
         if self.detector not in _board.DETECTORS:
             raise ValueError(f"detector must be one of {', '.join(_board.DETECTORS)}, got {self.detector!r}")
-        if not 0 <= int(self.refine_window) <= 100:
+        if self.refine_window is not None and not 0 <= int(self.refine_window) <= 100:
             raise ValueError(f"refine window must be from 0 to 100 px, got {self.refine_window!r}")
+        if self.refine not in _board.REFINERS:
+            raise ValueError(f"refine must be one of {', '.join(_board.REFINERS)}, got {self.refine!r}")
 
 
-def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=11, name="pose"):
+def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=None, name="pose",
+               refine="fit"):
     """Camera corners (N, 2) from the white frame; falls back to white - black, then the black frame.
 
-    Raises :class:`BoardNotFoundError` with what to check.
+    Raises :class:`BoardNotFoundError` with what to check (at once, naming the right ``--board``,
+    when a board of another size is in view).
     """
     white = stack[ps.white]
     black = stack[ps.black]
-    candidates = (lambda: white,  # the white - black image is only built when the white frame fails
+    candidates = (white,  # the white - black image is only built when the white frame fails
                   lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
-                  lambda: black)
-    for image in candidates:
-        c = _board.detect_corners(image(), pattern_size, detector=detector, refine_window=refine_window)
-        if c is not None:
-            return c
+                  black)
+    c, hint = _board.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
+                                  refine=refine)
+    if c is not None:
+        return c
     cols, rows = pattern_size
+    if hint is not None:
+        raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
+                                 f"(#{ps.white}); {_board.size_hint_text(pattern_size, hint)}")
     raise BoardNotFoundError(
         f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
         f"(#{ps.white}); check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "
@@ -95,7 +105,8 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
                           contrast_threshold=d.contrast_threshold)
     if cam_pts is None:
-        cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name)
+        cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
+                             options.refine)
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     warnings = list(warnings) + _plausible.check_projector_size(maps, name, files)
     _plausible.check_swapped_bits(maps, name, files)
@@ -145,8 +156,11 @@ def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOpt
     Raises :class:`BoardNotFoundError` naming the file when the board is not found.
     """
     img = _files.read_image(image_path)
-    c = _board.detect_corners(img, board.pattern_size, detector=options.detector,
-                              refine_window=options.refine_window)
+    c, hint = _board.find_corners([img], board.pattern_size, detector=options.detector,
+                                  refine_window=options.refine_window, refine=options.refine)
+    if hint is not None:
+        raise BoardNotFoundError(f"{image_path}: chessboard with {board.cols}x{board.rows} inner corners not found; "
+                                 f"{_board.size_hint_text(board.pattern_size, hint)}")
     if c is None:
         cols, rows = board.pattern_size
         raise BoardNotFoundError(f"{image_path}: chessboard with {cols}x{rows} inner corners not found; check --board "

@@ -112,6 +112,7 @@ def value(x):
 Order = choice("Order", _patterns.ORDERS)
 DecodeMethod = choice("DecodeMethod", _decode.METHODS)
 Detector = choice("Detector", _board.DETECTORS)
+Refiner = choice("Refiner", _board.REFINERS)
 Estimator = choice("Estimator", _corr.ESTIMATORS)
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
@@ -153,21 +154,22 @@ def parse_board(text: str, square: float) -> _board.Board:
 
 
 def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
-                 refine_window: int = 11, window: int = 60, estimator=None, min_corners: int = 10):
+                 refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
+                 min_corners: int = 10):
     """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
     from .. import pipeline
 
     for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
         if not (math.isfinite(v) and 0 <= v <= 255):
             fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
-    if not 0 <= refine_window <= 100:
+    if refine_window is not None and not 0 <= refine_window <= 100:
         fail(f"--refine-window must be from 0 to 100 px, got {refine_window}")
     if not 6 <= window <= 1000:
         fail(f"--window must be from 6 to 1000 camera px, got {window}")
     dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
     corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "ransac")
-    return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=int(refine_window),
-                                corners=corners, min_corners=min_corners)
+    return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
+                                refine=value(refine) or "fit", corners=corners, min_corners=min_corners)
 
 
 # Options shared by the commands that read capture folders (one definition, one help text each).
@@ -186,7 +188,11 @@ ShadowOpt = Annotated[float, typer.Option(
 ContrastOpt = Annotated[float, typer.Option(
     "--contrast-threshold", help="Minimum |pattern - inverse| for a certain bit, 8-bit grey levels.")]
 DetectorOpt = Annotated[Detector, typer.Option("--detector", help="Chessboard corner detector.")]
-RefineOpt = Annotated[int, typer.Option("--refine-window", help="cornerSubPix half-window, camera px (0 = none).")]
+RefineOpt = Annotated[Optional[int], typer.Option(
+    "--refine-window", help="Half-window of the corner refinement, camera px (default: 15 for fit, 11 for subpix).")]
+RefinerOpt = Annotated[Refiner, typer.Option(
+    "--refine", help="Corner refinement: fit (a blurred X-corner model with uneven lighting; default), subpix "
+                     "(OpenCV cornerSubPix, the paper's) or none.")]
 WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
 EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
 

@@ -11,9 +11,9 @@ from .. import multi_pose as _mp
 from .. import single_pose as _sp
 from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
-                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app,
-                   choice, console, fail, optional_size, output_path, parse_board, pose_options, say, user_errors,
-                   value, warn)
+                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
+                   WindowOpt, app, choice, console, fail, optional_size, output_path, parse_board, pose_options, say,
+                   user_errors, value, warn)
 
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_MODELS)
@@ -79,7 +79,8 @@ def calibrate_cmd(
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
     detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = 11,
+    refine: RefineOpt = None,
+    refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
     estimator: EstimatorOpt = Estimator.ransac,
 ):
@@ -90,7 +91,7 @@ def calibrate_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, window=window, estimator=estimator)
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"))

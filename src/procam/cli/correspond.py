@@ -7,8 +7,8 @@ from pathlib import Path
 import typer
 
 from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
-                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app,
-                   optional_size, output_path, parse_board, pose_options, say, user_errors, value, warn)
+                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
+                   WindowOpt, app, optional_size, output_path, parse_board, pose_options, say, user_errors, value, warn)
 
 
 @app.command("correspond")
@@ -26,7 +26,8 @@ def correspond_cmd(
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
     detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = 11,
+    refine: RefineOpt = None,
+    refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
     estimator: EstimatorOpt = Estimator.ransac,
 ):
@@ -41,7 +42,7 @@ def correspond_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, window=window, estimator=estimator)
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
     output_path(out, "-o", (".json",))
     output_path(png, "--png", FIGURE_SUFFIXES)
     cap = capture.load_capture(pose_dir, optional_size(projector), value(order), step=step)

@@ -8,8 +8,8 @@ import typer
 from rich.table import Table
 
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, fail,
-                   optional_size, output_path, parse_board, pose_options, say, user_errors, value)
+                   OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
+                   app, console, fail, optional_size, output_path, parse_board, pose_options, say, user_errors, value)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -52,7 +52,8 @@ def evaluate_cmd(
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
     detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = 11,
+    refine: RefineOpt = None,
+    refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
     estimator: EstimatorOpt = Estimator.ransac,
 ):
@@ -66,7 +67,7 @@ def evaluate_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, window=window, estimator=estimator)
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
     output_path(out, "-o", (".json",))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:

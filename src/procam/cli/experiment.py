@@ -10,8 +10,8 @@ from rich.table import Table
 
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console,
-                   err_console, fail, optional_size, parse_board, pose_options, user_errors, value)
+                   OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
+                   app, console, err_console, fail, optional_size, parse_board, pose_options, user_errors, value)
 
 
 def summary_tables(result) -> list[Table]:
@@ -53,7 +53,8 @@ def experiment_cmd(
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
     detector: DetectorOpt = Detector.auto,
-    refine_window: RefineOpt = 11,
+    refine_window: RefineOpt = None,
+    refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
     estimator: EstimatorOpt = Estimator.ransac,
 ):
@@ -66,7 +67,7 @@ def experiment_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine_window, window=window, estimator=estimator)
+                        refine_window=refine_window, refine=refiner, window=window, estimator=estimator)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
