@@ -283,7 +283,7 @@ def _json_for_script(obj) -> str:
                                                                                                          "\\u0026")
 
 
-def rig_svg(geom: dict, yaw: float = -35.0, pitch: float = 22.0, interactive: bool = True) -> str:
+def rig_svg(geom: dict, yaw: float = 15.0, pitch: float = 35.0, interactive: bool = True) -> str:
     """Inline SVG of :func:`rig_geometry` in a fixed oblique orthographic view, plus (``interactive``) a
     small inline script that turns it when dragged (double-click: back to the start)."""
     v = _rig_view(geom, yaw, pitch)
@@ -330,7 +330,8 @@ th{background:#f0f0ee}th[colspan]{text-align:center}td.l,th.l{text-align:left}tr
 .note{color:#555;font-size:.9em}.warn{color:#8a4b00}
 figure{margin:.6em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
 figcaption{color:#555;font-size:.88em}
-#rig-svg{border:1px solid #ddd;background:#fcfcfc;cursor:grab;max-width:100%;height:auto;touch-action:none}
+#rig-svg{border:1px solid #ddd;background:#fcfcfc;cursor:grab;max-width:100%;height:auto;touch-action:none;
+user-select:none;-webkit-user-select:none}
 .rig-camera{stroke:#1f77b4;stroke-width:1.6;fill:none}.rig-projector{stroke:#e07b00;stroke-width:1.6;fill:none}
 .rig-board{stroke:#555;stroke-width:1.2;fill:rgba(120,120,120,.12)}.rig-board0{stroke:#c62828;stroke-width:2;fill:none}
 .rig-axis{stroke:#999;stroke-width:1;fill:none}
