@@ -65,8 +65,10 @@ class Verdict:
     reasons: tuple = ()
 
     def line(self) -> str:
-        """``"word: first reason"`` (one line, for figure titles and terminals)."""
-        return f"{self.word}: {self.reasons[0]}" if self.reasons else self.word
+        """``"word: first reason"`` (a good verdict: all its reasons), for figure titles and terminals."""
+        if not self.reasons:
+            return self.word
+        return f"{self.word}: " + ("; ".join(self.reasons) if self.word == "good" else self.reasons[0])
 
 
 def calibration_verdict(calib) -> Verdict:

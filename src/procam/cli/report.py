@@ -27,7 +27,7 @@ def print_check(check) -> None:
     if check.leave_one_out is not None:
         console.print(cross_table(check.leave_one_out))
     for n in check.notes:
-        warn(n)
+        say(f"note: {n}")
 
 
 def write_calibration_report(calib, path, *, views=None, decodes=None, check=None, name: str | None = None,
