@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-from . import models
 from .residuals import calibration_residuals, pnp
 from .summary import PLUS_MINUS, parameter_rows, pose_rows
 from .verify import CalibrationCheck, check_calibration

@@ -394,17 +394,15 @@ def multi_pose_options(calib) -> dict:
 
 
 def _same_pose(a: View, b: View) -> bool:
-    """The same capture: identical corners (NaN where the other has NaN), or with no corners, the same name."""
-    if a.cam_pts.shape == b.cam_pts.shape and a.obj_pts.shape == b.obj_pts.shape:
-        if np.array_equal(a.cam_pts, b.cam_pts, equal_nan=True) and np.array_equal(a.proj_pts, b.proj_pts,
-                                                                                     equal_nan=True):
-            return True
-    return False
+    """The same capture: identical camera and projector corners (NaN where the other has NaN)."""
+    return (a.cam_pts.shape == b.cam_pts.shape and a.proj_pts.shape == b.proj_pts.shape
+            and np.array_equal(a.cam_pts, b.cam_pts, equal_nan=True)
+            and np.array_equal(a.proj_pts, b.proj_pts, equal_nan=True))
 
 
 def _verify_each(calib, views, min_corners, notes) -> Verification | None:
     ok = []
-    for k, v in enumerate(views):
+    for v in views:
         try:
             verify_pose(calib, v, min_corners=min_corners)
             ok.append(v)
