@@ -1,7 +1,7 @@
 """Calibrate from three simulated poses and draw the reprojection residuals of every corner.
 
-The residual stage: with the calibrated intrinsics, each pose's board is placed by PnP in each
-device, and the residuals observed - predicted are drawn (scaled up) where they were observed.
+The residual stage: the residuals of the calibration's own model at its own board poses (whose RMS is
+the RMS it reports), observed - predicted, drawn where they were observed at an automatic scale.
 
     python examples/plot_residuals.py [out.png]    # default: a new temporary folder
 """
@@ -13,7 +13,8 @@ from pathlib import Path
 from procam import multi_pose, simulate
 from procam.plots import save_figure
 from procam.plots.residuals import residual_figure
-from procam.residuals import pose_residuals
+from procam.report import calibration_verdict
+from procam.residuals import calibration_residuals
 from procam.view import View
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp(prefix="procam-")) / "residuals.png"
@@ -26,7 +27,7 @@ for k, angles in enumerate([(15, -35, 0), (-15, 20, 5), (10, 25, -5)]):  # board
 calib = multi_pose.calibrate(views)
 print(f"RMS camera {calib.cam_rms:.3f} px, projector {calib.proj_rms:.3f} px "
       f"(corner noise 0.1 and 0.2 px per coordinate)")
-fig = residual_figure(pose_residuals(calib, views), base.cam_size, base.proj_size, scale=200,
-                      title="multi-pose calibration from 3 simulated poses")
+fig = residual_figure(calibration_residuals(calib), base.cam_size, base.proj_size,
+                      title="multi-pose calibration from 3 simulated poses", verdict=calibration_verdict(calib).line())
 save_figure(fig, out)
 print(f"wrote {out}")

@@ -15,7 +15,8 @@ import numpy as np
 from procam import simulate, single_pose
 from procam.plots import save_figure
 from procam.plots.residuals import residual_figure
-from procam.residuals import pose_residuals
+from procam.report import calibration_verdict
+from procam.residuals import calibration_residuals
 from procam.view import View
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp(prefix="procam-")) / "single_pose.png"
@@ -28,7 +29,7 @@ print(f"f_c = {calib.camera.K[0, 0]:.1f} ± {calib.std['f_c']:.1f} px (true {tru
 print(f"f_p = {calib.projector.K[0, 0]:.1f} ± {calib.std['f_p']:.1f} px (true {truth['projector']['f']})")
 print(f"|T| = {np.linalg.norm(calib.T):.1f} mm (true {truth['extrinsics']['baseline']:.1f})")
 print("advice:", calib.poses[0]["advice"]["camera"]["message"], "/", calib.poses[0]["advice"]["projector"]["message"])
-fig = residual_figure(pose_residuals(calib, [view]), scene.cam_size, scene.proj_size, scale=200,
-                      title="single-pose calibration of one simulated pose")
+fig = residual_figure(calibration_residuals(calib), scene.cam_size, scene.proj_size,
+                      title="single-pose calibration of one simulated pose", verdict=calibration_verdict(calib).line())
 save_figure(fig, out)
 print(f"wrote {out}")

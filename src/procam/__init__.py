@@ -26,6 +26,7 @@ The modules, from the captures up (each imports only those above it in this list
     simulate      synthetic procam captures with ground truth (the test oracle)
     paper         the paper's simulation study and real-data experiment
     plots         matplotlib figures (matplotlib imported only when a figure is drawn)
+    report        a calibration as one self-contained HTML page (verdict, parameters, figures, verification)
     cli           the ``procam`` command line (thin: parse, call the API, print)
 
 Conventions (``docs/conventions.md``): pixels are (x, y) = (column, row) with the origin at the centre of
@@ -48,7 +49,7 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
-               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots")
+               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

@@ -347,3 +347,116 @@ def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_p
         raise CalibrationError("every single-pose calibration failed: " + "; ".join(f"{n}: {m}" for n, m in failures))
     return CrossVerification("single-pose-cross", _verify_raws(in_raws),
                              _verify_raws(out_raws) if out_raws else None, tuple(failures))
+
+
+# --------------------------------------------------------------------------------------------------
+# the verification a calibration's summaries show
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CalibrationCheck:
+    """The metric verification of one calibration, as ``procam calibrate`` / ``evaluate`` / ``report`` show it.
+
+    Attributes
+    ----------
+    in_sample : :class:`Verification` on the given poses the calibration was fitted to (optimistic), or None.
+    held_out : :class:`Verification` on the given poses it was not fitted to, or None.
+    leave_one_out : :class:`CrossVerification` of a multi-pose calibration's own poses (refit without
+        pose i with the calibration's options, verify on pose i), or None.
+    notes : why a figure is missing or partial (too few poses for leave-one-out, poses that could
+        not be verified), one line each.
+    """
+
+    in_sample: Verification | None
+    held_out: Verification | None
+    leave_one_out: CrossVerification | None
+    notes: tuple = ()
+
+    def to_dict(self) -> dict:
+        return {"in_sample": None if self.in_sample is None else self.in_sample.to_dict(),
+                "held_out": None if self.held_out is None else self.held_out.to_dict(),
+                "leave_one_out": None if self.leave_one_out is None else self.leave_one_out.to_dict(),
+                "notes": list(self.notes)}
+
+
+def multi_pose_options(calib) -> dict:
+    """The :func:`procam.multi_pose.calibrate` options a multi-pose calibration was made with (from its
+    ``info``: distortion models and whether it was refined), for refits such as :func:`leave_one_out`."""
+    info = calib.info or {}
+    out = {}
+    if info.get("cam_dist_model"):
+        out["cam_dist"] = info["cam_dist_model"]
+    if info.get("proj_dist_model"):
+        out["proj_dist"] = info["proj_dist_model"]
+    if "refined" in info:
+        out["refine"] = bool(info["refined"])
+    return out
+
+
+def _same_pose(a: View, b: View) -> bool:
+    """The same capture: identical camera and projector corners (NaN where the other has NaN)."""
+    return (a.cam_pts.shape == b.cam_pts.shape and a.proj_pts.shape == b.proj_pts.shape
+            and np.array_equal(a.cam_pts, b.cam_pts, equal_nan=True)
+            and np.array_equal(a.proj_pts, b.proj_pts, equal_nan=True))
+
+
+def _verify_each(calib, views, min_corners, notes) -> Verification | None:
+    ok = []
+    for v in views:
+        try:
+            verify_pose(calib, v, min_corners=min_corners)
+            ok.append(v)
+        except ProcamError as e:
+            notes.append(f"not verified: {e}")
+    return verify(calib, ok, min_corners=min_corners) if ok else None
+
+
+def check_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_corners: int = 6) -> CalibrationCheck:
+    """The metric verification a calibration's summaries show.
+
+    * the given poses (default: the calibration's own ``views``) split into those the calibration
+      was fitted to (same corners as one of ``calib.views``, or with no stored views the same name as
+      one of ``calib.poses``) -- ``in_sample`` -- and the others -- ``held_out``;
+    * a multi-pose calibration with at least ``leave_one_out_poses`` stored views: also
+      :func:`leave_one_out` on them with the calibration's options (:func:`multi_pose_options`).
+
+    Poses that cannot be verified (too few corners, triangulation failure) are left out with a note;
+    nothing here raises for them.  A calibration without projector gives an empty check with a note.
+
+    Returns
+    -------
+    :class:`CalibrationCheck`
+    """
+    notes: list[str] = []
+    if calib.projector is None or calib.R is None:
+        return CalibrationCheck(None, None, None, ("a camera-only calibration has no metric verification "
+                                                   "(it needs the projector to triangulate the board)",))
+    own = list(calib.views)
+    views = own if views is None else list(views)
+    own_names = {str(p.get("name", "")) for p in calib.poses}
+
+    def fitted(v):
+        return any(_same_pose(v, w) for w in own) if own else str(v.name) in own_names
+
+    ins = [v for v in views if fitted(v)]
+    outs = [v for v in views if not fitted(v)]
+    in_sample = _verify_each(calib, ins, min_corners, notes) if ins else None
+    held_out = _verify_each(calib, outs, min_corners, notes) if outs else None
+    loo = None
+    if calib.method == "multi-pose":
+        if len(own) >= leave_one_out_poses:
+            try:
+                loo = leave_one_out(own, min_train=leave_one_out_poses - 1, min_corners=min_corners,
+                                    calibration=calib, **multi_pose_options(calib))
+                notes += [f"leave-one-out: refit without {n} failed: {m}" for n, m in loo.failures]
+            except ProcamError as e:
+                notes.append(f"leave-one-out not available: {e}")
+        else:
+            why = ("the calibration file holds no poses" if not own else
+                   f"the calibration has {len(own)} poses")
+            notes.append(f"leave-one-pose-out needs at least {leave_one_out_poses} poses and {why}; "
+                         "the in-sample figures are optimistic")
+    elif calib.method == "single-pose" and held_out is None:
+        notes.append("a single-pose calibration verified on its own pose only (optimistic); give other poses "
+                     "(procam evaluate CALIB POSES..., procam report CALIB POSES...) for a held-out figure")
+    return CalibrationCheck(in_sample, held_out, loo, tuple(notes))

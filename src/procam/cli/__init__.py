@@ -10,8 +10,8 @@ from __future__ import annotations
 from ._app import app, console, err_console  # noqa: F401
 
 # Sub-commands register themselves on import, in the order `procam --help` lists them.
-from . import (capture, patterns, decode, simulate, correspond, calibrate, evaluate, reconstruct, export,  # noqa: F401,E402
-               experiment, study, demo)
+from . import (capture, patterns, decode, simulate, correspond, calibrate, evaluate, report, reconstruct,  # noqa: F401,E402
+               export, experiment, study, demo)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -65,6 +65,7 @@ def calibrate_cmd(
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from one photo of the board."),
     yaml: Path = typer.Option(None, "--yaml", help="Also write OpenCV FileStorage YAML (cam_K, cam_kc, ...)."),
     png: Path = typer.Option(None, "--png", help="Residual plot."),
+    report: Path = typer.Option(None, "--report", help="Also write the HTML report (one self-contained file)."),
     cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
                                                     "when reliable, else the image centre as a prior), paper "
                                                     "(always the centre of distortion) or image-center."),
@@ -97,6 +98,7 @@ def calibrate_cmd(
     output_path(out, "-o", (".json", ".yml", ".yaml"))
     output_path(yaml, "--yaml", (".yml", ".yaml"))
     output_path(png, "--png", FIGURE_SUFFIXES)
+    output_path(report, "--report", (".html", ".htm"))
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
@@ -125,16 +127,28 @@ def calibrate_cmd(
     print_summary(calib)
     io.save_calibration(calib, out)
     say(f"wrote {out}")
+    check = None
+    if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
+        from ..verify import check_calibration
+        from .report import print_check
+
+        check = check_calibration(calib)
+        print_check(check)
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")
     if png is not None:
         from ..plots import save_figure
         from ..plots.residuals import residual_figure
-        from ..residuals import pose_residuals
+        from ..report import calibration_verdict
+        from ..residuals import calibration_residuals
 
-        fig = residual_figure(pose_residuals(calib, calib.views), calib.camera.image_size,
+        fig = residual_figure(calibration_residuals(calib), calib.camera.image_size,
                               calib.projector.image_size if calib.projector is not None else None,
-                              title=f"{out.name}: {calib.method}")
+                              title=f"{out.name}: {calib.method}", verdict=calibration_verdict(calib).line())
         save_figure(fig, png)
         say(f"wrote {png}")
+    if report is not None:
+        from .report import write_calibration_report
+
+        write_calibration_report(calib, report, check=check, name=out.name)

@@ -86,7 +86,14 @@ def evaluate_cmd(
     t, s = evaluation_tables(ev)
     console.print(t)
     console.print(s)
+    # the metric verification: the given poses the calibration was fitted to (in-sample) and the others (held
+    # out); a multi-pose calibration that holds >= 4 poses also leave-one-pose-out
+    from ..verify import check_calibration
+    from .report import print_check
+
+    check = check_calibration(calib, views)
+    print_check(check)
     if out is not None:
-        d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict()}
+        d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict(), "verification": check.to_dict()}
         _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
         say(f"wrote {out}")

@@ -40,6 +40,8 @@ def experiment_cmd(
     square: SquareOpt,
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences), at least 3."),
     out: Path = typer.Option(..., "-o", "--out", help="Report folder (created if missing)."),
+    html_report: Path = typer.Option(None, "--report", help="Also write the HTML report of the multi-pose "
+                                                            "calibration from all poses (self-contained .html)."),
     min_set: int = typer.Option(3, "--min-set", help="Smallest pose set for the multi-pose calibrations."),
     refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
                                                         "here (Moreno-Taubin's frozen-intrinsics stereo, as the paper), "
@@ -76,6 +78,10 @@ def experiment_cmd(
         if d not in DIST_MODELS:
             fail(f"{name} must be one of {', '.join(DIST_MODELS)}, got {d!r}")
     size = optional_size(projector)
+    if html_report is not None:
+        from ._app import output_path
+
+        output_path(html_report, "--report", (".html", ".htm"))
     n_sets = len(experiment.pose_sets(len(poses), min_set))
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
@@ -94,3 +100,10 @@ def experiment_cmd(
         console.print(f"[yellow]failed:[/yellow] {f['what']}: {f['message']}", highlight=False)
     console.print(f"reference (lowest σ_T) = set {result.reference['set']} {result.reference['poses']}; "
                   f"wrote {len(paths)} files to {out} (report.md, CSV tables, PNG figures)")
+    if html_report is not None:  # Set A (all poses) with the experiment's multi-pose options
+        from .. import multi_pose
+        from .report import write_calibration_report
+
+        calib = multi_pose.calibrate(views, proj_size=size or views[0].proj_size, cam_dist=cam_dist,
+                                     proj_dist=proj_dist, refine=refine)
+        write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")

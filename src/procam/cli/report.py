@@ -1,0 +1,98 @@
+"""``procam report``: a calibration as one self-contained HTML page (also ``--report`` on calibrate / experiment)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ._app import (ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt, OrderOpt,
+                   ProjectorOpt, RefineOpt, ShadowOpt, StepOpt, WindowOpt, app, console, fail, optional_size,
+                   output_path, parse_board, pose_options, say, user_errors, value, warn)
+
+REPORT_SUFFIXES = (".html", ".htm")
+
+
+def print_check(check) -> None:
+    """Print a :class:`procam.verify.CalibrationCheck` as rich tables, and its notes."""
+    from .verification import cross_table, verification_table
+
+    if check.in_sample is not None:
+        console.print(verification_table(check.in_sample, "metric verification on the poses the calibration was "
+                                                          "fitted to (in-sample, optimistic; board units)"))
+    if check.held_out is not None:
+        console.print(verification_table(check.held_out, "metric verification on other poses (held out; board "
+                                                         "units)"))
+    if check.leave_one_out is not None:
+        console.print(cross_table(check.leave_one_out))
+    for n in check.notes:
+        say(f"note: {n}")
+
+
+def write_calibration_report(calib, path, *, views=None, decodes=None, check=None, name: str | None = None,
+                             notes=()) -> Path:
+    """Build and write the HTML report of ``calib`` (:func:`procam.report.build_report`) and say so."""
+    from ..report import build_report, write_report
+
+    text = build_report(calib, views, decodes=decodes, check=check, name=name or Path(path).stem, notes=notes)
+    write_report(text, path)
+    say(f"wrote {path} ({len(text.encode('utf-8')) / 1e6:.2f} MB)")
+    return Path(path)
+
+
+@app.command("report")
+@user_errors
+def report_cmd(
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, or OpenCV YAML with pose folders)."),
+    poses: Optional[list[Path]] = typer.Argument(None, help="Pose folders to show and verify (default: the poses "
+                                                            "stored in the calibration JSON)."),
+    out: Path = typer.Option(..., "-o", "--out", help="The report (.html): one self-contained file."),
+    board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS, e.g. 10x6 (with pose "
+                                                              "folders)."),
+    square: Optional[float] = typer.Option(None, "--square", help="Square size, the length unit (with pose folders)."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
+    decode_method: DecodeOpt = DecodeMethod.robust,
+    shadow: ShadowOpt = 10.0,
+    contrast: ContrastOpt = 3.0,
+    detector: DetectorOpt = Detector.auto,
+    refine: RefineOpt = 11,
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = Estimator.ransac,
+):
+    """One HTML page a person reads top to bottom: the verdict, the parameters with their uncertainty and
+    assumptions, coverage, residuals, the metric verification, the rig in 3-D and (multi-pose) leave-one-out."""
+    import contextlib
+
+    from .. import io, pipeline
+
+    output_path(out, "-o", REPORT_SUFFIXES)
+    views = decodes = None
+    if poses:
+        if board is None or square is None:
+            fail("give --board COLSxROWS and --square with the pose folders (the board they show)")
+        brd = parse_board(board, square)
+        opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
+                            refine_window=refine, window=window, estimator=estimator)
+    calib = io.load_calibration(calibration)
+    if poses:
+        size = optional_size(projector)
+        if size is None and calib.projector is not None and not all((Path(p) / "patterns.json").exists()
+                                                                    for p in poses):
+            size = tuple(calib.projector.image_size)
+        views, decodes = [], []
+        with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
+            for p in poses:
+                v, maps = pipeline.view_from_folder(p, brd, size, value(order), options=opts, step=step)
+                if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
+                    fail(f"{p}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
+                         f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")
+                views.append(v)
+                decodes.append(maps)
+                say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
+    elif not calib.views:
+        warn(f"{calibration} holds no poses: the report has no coverage, residuals or verification; give the pose "
+             "folders (procam report CALIB POSE_DIR... --board ... --square ...)")
+    write_calibration_report(calib, out, views=views, decodes=decodes, name=calibration.name)
