@@ -144,7 +144,7 @@ def test_user_strings_are_escaped():
 
 
 def test_degenerate_pose_says_so_first():
-    calib, _ = _single((20, 0.3, 0), outliers=False, on_failure="warn")
+    calib, _ = _single((20, 0.3, 0), outliers=False)
     v = calibration_verdict(calib)
     assert v.word == "degenerate" and "degenerate pose" in v.reasons[0]
     page = build_report(calib, verify=False)
@@ -157,13 +157,13 @@ def test_verdict_words():
     assert calibration_verdict(calib) == Verdict("good", ("5 poses, jointly refined, no warnings",))
     two = multi_pose.calibrate(list(_views()[:2]))
     assert calibration_verdict(two).word == "weak"
-    assert calibration_verdict(calib.replace(poses=())).word == "unknown"
+    assert calibration_verdict(calib.replace(poses=(), verdict="unknown")).word == "unknown"
 
-    def advised(**flags):
+    def advised(**flags):  # a file that records advice but no verdict: derived from the advice
         adv = {"camera": {"failed": False, "degenerate": False, "weak": False, "message": "camera: pose OK"},
                "projector": {"failed": False, "degenerate": False, "weak": False, "message": "projector: pose OK"}}
         adv["projector"].update(flags, message="projector: " + ",".join(flags))
-        return calib.replace(poses=({"name": "p", "advice": adv},), warnings=(), method="single-pose")
+        return calib.replace(poses=({"name": "p", "advice": adv},), warnings=(), method="single-pose", verdict="unknown")
 
     assert calibration_verdict(advised()).word == "good"
     assert calibration_verdict(advised(weak=True)).word == "weak"

@@ -128,7 +128,13 @@ def test_report_of_a_file_without_poses_says_so(views, tmp_path):
     assert code == 0, err
     assert "holds no poses" in stdout
     page = (tmp_path / "r.html").read_text(encoding="utf-8")
-    assert "Verdict: <span class=\"word\">unknown</span>" in page
+    assert f"Verdict: <span class=\"word\">{calib.verdict}</span>" in page  # the YAML records the verdict
+    # an OpenCV YAML from another tool records none
+    other = tmp_path / "other.yml"
+    other.write_text("".join(line for line in yml.read_text().splitlines(keepends=True) if "verdict" not in line))
+    code, stdout, err = run_cli(["report", other, "-o", tmp_path / "o.html"])
+    assert code == 0, err
+    assert "Verdict: <span class=\"word\">unknown</span>" in (tmp_path / "o.html").read_text(encoding="utf-8")
 
 
 def test_experiment_report(folders, tmp_path):

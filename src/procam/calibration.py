@@ -82,13 +82,16 @@ class Distortion:
 
     @staticmethod
     def from_dict(d: dict) -> "Distortion":
+        """Inverse of :meth:`to_dict`; raises ``ValueError`` for a model procam does not know (never guesses)."""
         m = d.get("model", "none")
         if m == "division":
             return Distortion("division", tuple(float(v) for v in d["center"]), float(d["k1"]),
                               float(d.get("k2", 0.0)))
         if m == "opencv":
             return Distortion("opencv", coeffs=tuple(float(c) for c in d["coeffs"]))
-        return Distortion()
+        if m == "none":
+            return Distortion()
+        raise ValueError(f"unknown distortion model {m!r} (procam reads 'division', 'opencv' and 'none')")
 
 
 @dataclass(frozen=True)

@@ -129,6 +129,37 @@ def _spread(Ts: np.ndarray, ddof: int):
     return sx, float(np.sqrt(np.sum(sx ** 2))), float(np.std(np.linalg.norm(Ts, axis=1), ddof=ddof))
 
 
+def check_units(calib: Calibration, views: Sequence[View], tolerance: float = 0.01) -> None:
+    """Raise :class:`CalibrationError` when the views' board square differs from the one the calibration was made
+    with (recorded with its views): ``T`` is in square units, so another square size is another length unit and
+    every stereo residual is wrong (a 75 mm calibration evaluated with 24 mm squares gives 120 px)."""
+    made = {round(v.board.square, 9) for v in calib.views if getattr(v, "board", None) is not None}
+    given = {round(v.board.square, 9) for v in views if getattr(v, "board", None) is not None}
+    if len(made) != 1 or not given:
+        return
+    s0 = made.pop()
+    for s in given:
+        if abs(s - s0) > tolerance * s0:
+            raise CalibrationError(f"the calibration was made with a board of {s0:g}-unit squares, these poses are "
+                                   f"read with {s:g}: its T and every length are in units of {s0:g}; evaluate with "
+                                   f"--square {s0:g} (or the calibration of this board)")
+
+
+def check_baseline(ev: "Evaluation", factor: float = 1.5) -> None:
+    """Raise :class:`CalibrationError` when the poses, each placed by PnP in both devices, put the projector at a
+    distance from the camera that differs from the calibration's ``|T|`` by more than ``factor``: the length unit
+    differs (another square size than the calibration's, when the file does not record it) or the calibration is
+    not of this rig. (Single-pose calibrations differ from the per-pose baselines by a few percent.)"""
+    base = float(np.median(np.linalg.norm([p.T for p in ev.poses], axis=1)))
+    ratio = base / max(float(np.linalg.norm(ev.T_calib)), 1e-300)
+    if not 1 / factor <= ratio <= factor:
+        raise CalibrationError(
+            f"the poses put the projector {ratio:.2f} times as far from the camera as the calibration does (baseline "
+            f"{base:.4g} against {np.linalg.norm(ev.T_calib):.4g}): the board's square size is not the one the "
+            f"calibration was made with (--square {1 / ratio:.3g} times the one given?), or the calibration is not of "
+            "this camera and projector")
+
+
 def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) -> Evaluation:
     """Evaluate ``calib`` on ``views``; see the module docstring for the definitions.
 
@@ -152,6 +183,7 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
         raise CalibrationError("nothing to evaluate: give at least one pose")
     if calib.projector is None or calib.R is None or calib.T is None:
         raise CalibrationError("the calibration has no projector or no camera->projector extrinsics")
+    check_units(calib, views)
     Kc, Kp = np.asarray(calib.camera.K, float), np.asarray(calib.projector.K, float)
     R, T = np.asarray(calib.R, float), np.asarray(calib.T, float).ravel()
     poses = []

@@ -97,11 +97,28 @@ def _device_dict(dev, rms) -> dict | None:
             "distortion": dev.distortion.to_dict(), "rms_px": rms}
 
 
+#: What each verdict level means, written next to it.
+VERDICT_MEANING = {
+    "good": "fit to use",
+    "weak": "usable: less precise than a better pose (set) would make it; see the reasons",
+    "degenerate": "do not use: the poses do not determine some parameters, whose values may be anything",
+    "failed": "do not use: an estimate is impossible for a real device",
+    "unknown": "the file records no verdict",
+}
+#: What every standard deviation in the file means.
+UNCERTAINTY_NOTE = ("std: 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise "
+                    "independent and Gaussian; single-pose results also assume u0p = W/2, alpha_p = 1 and no "
+                    "projector distortion")
+
+
 def calibration_to_dict(calib, include_views: bool = True) -> dict:
     """The JSON document of a :class:`~procam.calibration.Calibration` (schema: docs/file-formats.md)."""
     info = {k: v for k, v in calib.info.items() if isinstance(v, (str, int, float, bool, list, dict, type(None)))}
     out = {
         "format": "procam-calibration", "version": 1, "method": calib.method,
+        "verdict": {"level": calib.verdict, "reasons": list(calib.verdict_reasons),
+                    "meaning": VERDICT_MEANING.get(calib.verdict, "")},
+        "uncertainty": UNCERTAINTY_NOTE,
         "conventions": CONVENTIONS,
         "camera": _device_dict(calib.camera, calib.cam_rms),
         "projector": _device_dict(calib.projector, calib.proj_rms),
@@ -142,7 +159,13 @@ def calibration_from_dict(d: dict):
         cam_rms=num((d.get("camera") or {}).get("rms_px")), proj_rms=num((d.get("projector") or {}).get("rms_px")),
         stereo_rms=num(d.get("stereo_rms_px")), std=d.get("std", {}), poses=tuple(d.get("poses", [])),
         views=tuple(view_from_dict(v) for v in d.get("views", [])), warnings=tuple(d.get("warnings", [])),
-        info=d.get("info", {}))
+        info=d.get("info", {}), verdict=_verdict(d.get("verdict")),
+        verdict_reasons=tuple((d.get("verdict") or {}).get("reasons", [])) if isinstance(d.get("verdict"), dict) else ())
+
+
+def _verdict(v) -> str:
+    level = v.get("level") if isinstance(v, dict) else v
+    return level if level in VERDICT_MEANING else "unknown"
 
 
 def save_calibration(calib, path) -> Path:
@@ -191,6 +214,8 @@ def save_opencv_yaml(calib, path) -> Path:
         fs.write("cam_size", np.array(calib.camera.image_size, np.int32).reshape(1, 2))
         fs.write("proj_size", np.array(calib.projector.image_size, np.int32).reshape(1, 2))
         fs.write("method", calib.method)
+        fs.write("verdict", calib.verdict)
+        fs.write("verdict_meaning", VERDICT_MEANING.get(calib.verdict, ""))
         fs.release()
     return path
 
@@ -235,7 +260,8 @@ def load_calibration(path):
             projector=Device(pK, size("proj_size", pK), Distortion("opencv", coeffs=tuple(pkc.ravel()))
                              if pkc is not None and np.any(pkc) else Distortion()),
             R=mat("R"), T=mat("T").ravel(), method=fs.getNode("method").string() or "opencv-yaml",
-            cam_rms=real("cam_error"), proj_rms=real("proj_error"), stereo_rms=real("stereo_error"))
+            cam_rms=real("cam_error"), proj_rms=real("proj_error"), stereo_rms=real("stereo_error"),
+            verdict=_verdict(fs.getNode("verdict").string()))
         fs.release()
         return calib
     try:
@@ -249,4 +275,5 @@ def load_calibration(path):
     except KeyError as e:
         raise CalibrationFileError(f"{path}: not a procam calibration JSON file (missing key {e})") from None
     except (ValueError, TypeError, AttributeError, IndexError) as e:
-        raise CalibrationFileError(f"{path}: not a procam calibration JSON file ({e})") from None
+        raise CalibrationFileError(f"{path}: not a usable procam calibration ({e}); fix the file or calibrate "
+                                   "again") from None

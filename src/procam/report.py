@@ -73,7 +73,9 @@ class Verdict:
 def calibration_verdict(calib) -> Verdict:
     """The verdict of a calibration in words, from what the calibration carries.
 
-    The single place the report, the figures and the CLI read a verdict from.  It is derived from each
+    The single place the report, the figures and the CLI read a verdict from: the calibration's own
+    ``verdict`` and ``verdict_reasons``. For a file that records none (``verdict == "unknown"``) it is derived
+    from each
     pose's advice (``calib.poses[i]["advice"]``: ``failed``, ``degenerate``, ``ok``) and the
     calibration's ``warnings``: any failed device -> ``failed``; any degenerate one -> ``degenerate``;
     any weak one, or any warning -> ``weak``; else ``good``.  A multi-pose calibration (no per-pose
@@ -84,6 +86,15 @@ def calibration_verdict(calib) -> Verdict:
     -------
     :class:`Verdict`
     """
+    if calib.verdict != "unknown":  # the calibration's own verdict (procam.single_pose.advice / multi_pose)
+        reasons = list(calib.verdict_reasons)
+        if not reasons:
+            reasons = [a["message"] for p in calib.poses for k in ("camera", "projector")
+                       if isinstance(a := (p.get("advice") or {}).get(k), dict) and a.get("message")]
+        if not reasons and calib.method == "multi-pose":
+            how = "jointly refined" if calib.info.get("refined") else "without a joint refinement"
+            reasons = [f"{len(calib.poses)} poses, {how}, no warnings"]
+        return Verdict(calib.verdict, tuple(reasons))
     word, reasons = "good", []
     rank = {w: i for i, w in enumerate(VERDICTS)}
 

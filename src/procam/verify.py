@@ -30,13 +30,14 @@ verify on every other pose).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
 
 from . import multi_pose, single_pose
-from .errors import CalibrationError, ProcamError
+from .errors import CalibrationError, ProcamError, ProcamWarning
 from .triangulate import triangulate_points
 from .view import View
 
@@ -112,12 +113,15 @@ class CrossVerification:
         without it (one entry per pose); single-pose-cross: pose j verified by the calibration from
         pose i, for every ordered pair i != j (entries named ``"j <- i"``).
     failures : tuple of ``(name, message)``: fits that failed and were left out.
+    refits : the calibrations fitted without each pose (leave-one-out), for their parameters' spread
+        (:func:`parameter_spread`).
     """
 
     kind: str
     in_sample: Verification
     held_out: Verification | None
     failures: tuple = field(default=())
+    refits: tuple = field(default=(), compare=False)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "in_sample": self.in_sample.to_dict(),
@@ -302,16 +306,52 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
     names = [v.name or f"pose{k + 1}" for k, v in enumerate(views)]
     full = calibration if calibration is not None else multi_pose.calibrate(views, **multi_pose_options)
     in_raws = [_pose_raw(full, v, n, min_corners) for v, n in zip(views, names)]
-    out_raws, failures = [], []
+    out_raws, failures, refits = [], [], []
     for i, (v, n) in enumerate(zip(views, names)):
         train = views[:i] + views[i + 1:]
         try:
-            calib_i = multi_pose.calibrate(train, **multi_pose_options)
+            with warnings.catch_warnings():  # a refit's warnings are the full calibration's, minus a pose
+                warnings.simplefilter("ignore", ProcamWarning)
+                calib_i = multi_pose.calibrate(train, **multi_pose_options)
+            refits.append(calib_i)
             out_raws.append(_pose_raw(calib_i, v, n, min_corners))
         except ProcamError as e:
             failures.append((n, str(e)))
     return CrossVerification("leave-one-out", _verify_raws(in_raws), _verify_raws(out_raws) if out_raws else None,
-                             tuple(failures))
+                             tuple(failures), tuple(refits))
+
+
+def parameter_spread(calib, refits) -> dict:
+    """The spread of the leave-one-out refits' parameters next to the calibration's own ± (Jacobian std).
+
+    Returns ``{name: (value, jacobian_std, refit_std)}`` for the intrinsics and ``T`` (named as in
+    :mod:`procam.parameters`). ``refit_std`` is the jackknife standard error
+    ``sqrt((n - 1) / n * sum (x_i - mean)^2)`` over the ``n`` refits: what the data say the parameter's
+    uncertainty is, with no model of the noise; a Jacobian std much smaller than it means the ± is
+    optimistic (correlated or non-Gaussian corner errors, a model that does not fit).
+    """
+    def params(c):
+        Kc, Kp = c.camera.K, c.projector.K
+        out = {"f_c": Kc[0, 0], "fy_c": Kc[1, 1], "u0c": Kc[0, 2], "v0c": Kc[1, 2], "f_p": Kp[0, 0], "fy_p": Kp[1, 1],
+               "u0p": Kp[0, 2], "v0p": Kp[1, 2]}
+        out.update({f"T[{i}]": float(c.T[i]) for i in range(3)})
+        return out
+
+    n = len(refits)
+    if n < 2:
+        return {}
+    base = params(calib)
+    sets = [params(r) for r in refits]
+    out = {}
+    for k, v in base.items():
+        xs = np.array([p[k] for p in sets], float)
+        jack = float(np.sqrt((n - 1) / n * np.sum((xs - xs.mean()) ** 2)))
+        js = calib.std.get(k)
+        if k.startswith("T["):
+            t = calib.std.get("T")
+            js = t[int(k[2])] if t is not None else None
+        out[k] = (float(v), None if js is None else float(js), jack)
+    return out
 
 
 def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_pose_options) -> CrossVerification:

@@ -62,9 +62,10 @@ console = Console(soft_wrap=True, width=None if sys.stdout.isatty() else 160)
 err_console = Console(stderr=True, soft_wrap=True, width=None if sys.stderr.isatty() else 160)
 
 
-def fail(message: str, code: int = 2):
-    """Print a one-line error to stderr and exit with ``code`` (the message is plain text, not markup)."""
-    err_console.print(f"[bold red]error:[/bold red] {escape(str(message))}", highlight=False, soft_wrap=True)
+def fail(message: str, code: int = 2, label: str = "error"):
+    """Print a one-line ``label: message`` to stderr and exit with ``code`` (plain text, not markup). Exit codes:
+    2 the user's input is wrong, 3 the result must not be trusted (a degenerate or failed calibration)."""
+    err_console.print(f"[bold red]{escape(label)}:[/bold red] {escape(str(message))}", highlight=False, soft_wrap=True)
     raise typer.Exit(code)
 
 

@@ -16,7 +16,7 @@ from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeO
                    user_errors, value, warn)
 
 Cod = choice("Cod", _sp.COD_MODES)
-DistModel = choice("DistModel", _mp.DIST_MODELS)
+DistModel = choice("DistModel", _mp.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
 
 
@@ -44,6 +44,19 @@ def pose_table(calib) -> Table | None:
     return t
 
 
+def spread_table(calib, refits) -> Table:
+    """Rich table: each parameter's ± (Jacobian) next to the spread of the leave-one-out refits."""
+    from ..verify import parameter_spread
+
+    t = Table(title=f"uncertainty: ± from the fit (model, i.i.d. noise) vs the spread of {len(refits)} "
+                    "leave-one-pose-out refits (jackknife; no noise model)")
+    for c in ("parameter", "value", "± fit", "± leave-one-out"):
+        t.add_column(c, justify="right" if c != "parameter" else "left")
+    for k, (v, js, jack) in parameter_spread(calib, refits).items():
+        t.add_row(k, f"{v:.2f}", "" if js is None else f"{js:.3g}", f"{jack:.3g}")
+    return t
+
+
 def print_summary(calib):
     console.print(summary_table(calib))
     pt = pose_table(calib)
@@ -51,6 +64,7 @@ def print_summary(calib):
         console.print(pt)
     for w in calib.warnings:
         warn(w)
+    say(f"verdict: {calib.verdict}")
 
 
 @app.command("calibrate")
@@ -69,10 +83,12 @@ def calibrate_cmd(
     cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
                                                     "when reliable, else the image centre as a prior), paper "
                                                     "(always the centre of distortion) or image-center."),
-    cam_dist: DistModel = typer.Option(DistModel.k1k2p1p2k3, "--cam-dist", help="Multi-pose camera distortion model."),
-    proj_dist: DistModel = typer.Option(DistModel.k1k2p1p2k3, "--proj-dist",
-                                        help="Multi-pose projector distortion model."),
+    cam_dist: DistModel = typer.Option(DistModel.auto, "--cam-dist", help="Multi-pose camera distortion model (auto: "
+                                       "the richest OpenCV model whose terms the poses determine)."),
+    proj_dist: DistModel = typer.Option(DistModel.auto, "--proj-dist", help="Multi-pose projector distortion model."),
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
+    force: bool = typer.Option(False, "--force", help="Write a degenerate or failed calibration anyway (marked as "
+                                                      "such in the files; the exit code is still 3)."),
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
@@ -125,8 +141,12 @@ def calibrate_cmd(
         else:
             calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
     print_summary(calib)
+    trusted = calib.trusted
+    if not trusted and not force:
+        fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
+             "(--force writes it anyway, marked as such)", code=3, label="not trusted")
     io.save_calibration(calib, out)
-    say(f"wrote {out}")
+    say(f"wrote {out}" + ("" if trusted else f" (marked {calib.verdict})"))
     check = None
     if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
         from ..verify import check_calibration
@@ -134,6 +154,8 @@ def calibrate_cmd(
 
         check = check_calibration(calib)
         print_check(check)
+        if check.leave_one_out is not None and check.leave_one_out.refits:
+            console.print(spread_table(calib, check.leave_one_out.refits))
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")
@@ -152,3 +174,6 @@ def calibrate_cmd(
         from .report import write_calibration_report
 
         write_calibration_report(calib, report, check=check, name=out.name)
+    if not trusted:
+        fail(f"{calib.verdict} calibration (written because of --force): "
+             f"{'; '.join(calib.verdict_reasons) or calib.verdict}", code=3, label="not trusted")

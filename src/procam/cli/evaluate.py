@@ -63,7 +63,7 @@ def evaluate_cmd(
     import json
 
     from .. import _files, io, pipeline
-    from ..evaluate import evaluate
+    from ..evaluate import check_baseline, evaluate
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
@@ -83,6 +83,7 @@ def evaluate_cmd(
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
                  f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")
     ev = evaluate(calib, views)
+    check_baseline(ev)
     t, s = evaluation_tables(ev)
     console.print(t)
     console.print(s)

@@ -63,7 +63,7 @@ def experiment_cmd(
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
     from ..paper import experiment, report
-    from ..multi_pose import DIST_MODELS
+    from ..multi_pose import DIST_CHOICES
 
     from .. import pipeline
 
@@ -75,8 +75,8 @@ def experiment_cmd(
     if len(poses) < min_set:
         fail(f"the experiment needs at least {min_set} pose folders (--min-set), got {len(poses)}")
     for name, d in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
-        if d not in DIST_MODELS:
-            fail(f"{name} must be one of {', '.join(DIST_MODELS)}, got {d!r}")
+        if d not in DIST_CHOICES:
+            fail(f"{name} must be one of {', '.join(DIST_CHOICES)}, got {d!r}")
     size = optional_size(projector)
     if html_report is not None:
         from ._app import output_path

@@ -20,6 +20,7 @@ Conventions as in :mod:`procam.calibration`: board poses map board -> camera, ``
 
 from __future__ import annotations
 
+import warnings as _warnings
 from typing import Sequence
 
 import numpy as np
@@ -27,13 +28,14 @@ import numpy as np
 from .. import models
 from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
-from ..errors import CalibrationError
+from ..errors import CalibrationError, WeakPoseWarning
 from ..residuals import rms
 from ..view import View
 from .device import DIST_MODELS, DeviceCalibration, _as_cv, _criteria, calibrate_device, zhang_intrinsics
 from .refine import StereoRefinement, refine_stereo
 
-__all__ = ["calibrate", "calibrate_device", "refine_stereo", "zhang_intrinsics", "DIST_MODELS", "DeviceCalibration",
+__all__ = ["calibrate", "calibrate_models", "check_distinct", "undetermined_distortion", "calibrate_device",
+           "AUTO_MODELS", "DIST_CHOICES", "refine_stereo", "zhang_intrinsics", "DIST_MODELS", "DeviceCalibration",
            "StereoRefinement"]
 
 
@@ -60,11 +62,58 @@ def _std_dict(ref: StereoRefinement, n_cam_dist: int, n_proj_dist: int) -> dict:
     return out
 
 
-def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist: str = "k1k2p1p2k3",
-              proj_dist: str = "k1k2p1p2k3", refine: bool = True, loss: str = "soft_l1",
-              loss_scale: float = 1.0, balance: bool = True, init: str = "auto", fix_aspect_ratio: bool = False,
-              iterations: int = 100, stereo_iterations: int = 150, min_corners: int = 6) -> Calibration:
-    """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined).
+#: Distortion models tried by ``"auto"``, richest first: a device steps down while the poses do not
+#: determine all its terms (:func:`undetermined_distortion`).
+AUTO_MODELS = ("k1k2p1p2k3", "k1k2p1p2", "k1k2", "k1", "none")
+#: The choices of ``cam_dist`` / ``proj_dist``.
+DIST_CHOICES = ("auto", *DIST_MODELS)
+
+
+def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True,
+              **options) -> Calibration:
+    """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined), with the distortion
+    models the poses can determine.
+
+    ``cam_dist`` / ``proj_dist``: an OpenCV distortion model of :data:`DIST_MODELS`, or ``"auto"`` (default):
+    start from ``"k1k2p1p2k3"`` (OpenCV's and Moreno & Taubin's) and, for a device whose poses do not determine
+    all its terms (a large term with a standard deviation over half its value: :func:`undetermined_distortion`),
+    step down :data:`AUTO_MODELS` until they do. Without the joint refinement there is no covariance to judge
+    by, and ``"auto"`` is ``"k1k2p1p2k3"``. The models used are in ``info["cam_dist_model"]`` /
+    ``info["proj_dist_model"]``, the steps taken in ``info["auto_dist"]``. Other options: :func:`calibrate_models`.
+    """
+    for name, d in (("cam_dist", cam_dist), ("proj_dist", proj_dist)):
+        if d not in DIST_CHOICES:
+            raise CalibrationError(f"unknown distortion model {d!r} for {name}; choose one of {', '.join(DIST_CHOICES)}")
+    models_ = {"camera": cam_dist, "projector": proj_dist}
+    auto = {k: v == "auto" for k, v in models_.items()}
+    models_ = {k: (AUTO_MODELS[0] if v == "auto" else v) for k, v in models_.items()}
+    steps = []
+    while True:
+        with _warnings.catch_warnings():
+            _warnings.simplefilter("ignore", WeakPoseWarning)
+            calib = calibrate_models(views, cam_dist=models_["camera"], proj_dist=models_["projector"], refine=refine,
+                                     **options)
+        bad = [d for d in ("camera", "projector") if auto[d] and calib.info.get("undetermined", {}).get(d)]
+        if not bad or not refine:
+            break
+        for d in bad:
+            i = AUTO_MODELS.index(models_[d])
+            steps.append(f"{d}: {models_[d]} -> {AUTO_MODELS[min(i + 1, len(AUTO_MODELS) - 1)]} "
+                         f"({', '.join(calib.info['undetermined'][d])} undetermined)")
+            models_[d] = AUTO_MODELS[min(i + 1, len(AUTO_MODELS) - 1)]
+    if any(auto.values()):
+        calib = calib.replace(info={**calib.info, "auto_dist": steps})
+    if calib.verdict == "weak":
+        _warnings.warn("; ".join(calib.verdict_reasons), WeakPoseWarning, stacklevel=2)
+    return calib
+
+
+def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist: str = "k1k2p1p2k3",
+                     proj_dist: str = "k1k2p1p2k3", refine: bool = True, loss: str = "soft_l1",
+                     loss_scale: float = 1.0, balance: bool = True, init: str = "auto", fix_aspect_ratio: bool = False,
+                     iterations: int = 100, stereo_iterations: int = 150, min_corners: int = 6) -> Calibration:
+    """Multi-pose procam calibration with given distortion models (Zhang / Moreno–Taubin, optionally jointly
+    refined).
 
     Parameters
     ----------
@@ -101,6 +150,7 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
     if len(views) < 2:
         raise CalibrationError(f"multi-pose calibration needs at least 2 poses (3 or more recommended), "
                                f"got {len(views)}; use --method single for one pose")
+    check_distinct(views)
     cam_size = cam_size or views[0].cam_size
     proj_size = proj_size or views[0].proj_size
     if cam_size is None or proj_size is None:
@@ -184,8 +234,89 @@ def calibrate(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist:
                       "stereo_rms": _rms([cam_res[j], proj_res[j]])})
     if len(views) < 3:
         warnings.append("only 2 poses: the multi-pose intrinsics are weakly constrained; use 3 or more")
+    info["undetermined"] = {}
+    if std:
+        for device, K, d, sd, size, model, option, pts in (
+                ("camera", Kc, dc, std.get("cam_dist"), cam_size, cam_dist, "--cam-dist", cams),
+                ("projector", Kp, dp, std.get("proj_dist"), proj_size, proj_dist, "--proj-dist", projs)):
+            msg, names = undetermined_distortion(K, d, sd, size, model, device, option, pts)
+            warnings += msg
+            info["undetermined"][device] = names
     camera = Device(Kc, cam_size, Distortion("opencv", coeffs=tuple(float(c) for c in dc)))
     projector = Device(Kp, proj_size, Distortion("opencv", coeffs=tuple(float(c) for c in dp)))
+    verdict = "weak" if warnings else "good"
     return Calibration(camera=camera, projector=projector, R=np.asarray(R, float), T=np.asarray(T, float).ravel(),
                        method="multi-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo_rms, std=std,
-                       poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info)
+                       poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info, verdict=verdict,
+                       verdict_reasons=tuple(warnings))
+
+
+def check_distinct(views: Sequence[View], min_px: float = 1.0) -> None:
+    """Raise :class:`CalibrationError` when two views are the same pose (their camera corners within
+    ``min_px`` pixels RMS): a pose given twice adds no constraint, only weight, and skews every parameter."""
+    for i in range(len(views)):
+        for j in range(i + 1, len(views)):
+            a, b = views[i], views[j]
+            if a.cam_pts.shape != b.cam_pts.shape:
+                continue
+            d = a.cam_pts - b.cam_pts
+            ok = np.isfinite(d).all(1)
+            if ok.sum() >= 4 and np.sqrt(np.mean(np.sum(d[ok] ** 2, axis=1))) < min_px:
+                raise CalibrationError(f"poses {a.name!r} and {b.name!r} are the same pose (their board corners lie "
+                                       f"within {min_px:g} px of each other): give every pose once -- a pose given "
+                                       "twice counts twice and skews the calibration")
+
+
+#: OpenCV's coefficient names, in its order.
+_COEFF_NAMES = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+
+
+def undetermined_distortion(K, coeffs, std, image_size, model: str, device: str, option: str, points,
+                            max_px: float = 10.0) -> tuple[list[str], list[str]]:
+    """The distortion coefficients the poses do not determine: ``(warnings, names)``.
+
+    A coefficient is undetermined when its standard deviation exceeds half its value while the distortion it
+    alone adds at the image's farthest corner exceeds ``max_px`` pixels: a large term that correlated terms
+    cancel where the corners are and that nobody knows beyond them (e.g. k3 = 37 with k2 = -2.2 from poses
+    that cover only the image's centre). The message names the terms and a model without them.
+
+    Parameters
+    ----------
+    K : (3, 3); coeffs : OpenCV distortion vector; std : its standard deviations (same length) or None.
+    image_size : (W, H); model : the :data:`DIST_MODELS` name in use; device, option : for the message.
+    points : per-pose (N, 2) pixels of the corners, for the coverage in the message.
+    """
+    if std is None:
+        return [], []
+    coeffs = np.asarray(coeffs, float).ravel()
+    std = np.asarray(std, float).ravel()
+    W, H = image_size
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    corners = np.array([[-0.5, -0.5], [W - 0.5, -0.5], [-0.5, H - 0.5], [W - 0.5, H - 0.5]])
+    xn = (corners[:, 0] - cx) / fx
+    yn = (corners[:, 1] - cy) / fy
+    r2 = float(np.max(xn * xn + yn * yn))
+    r = np.sqrt(r2)
+    f = max(fx, fy)
+    # displacement (px) at radius r of each coefficient alone (radial: k r^(2i+1); tangential: ~3 p r^2)
+    effect = {0: r ** 3, 1: r ** 5, 4: r ** 7, 5: r ** 3, 6: r ** 5, 7: r ** 7, 2: 3 * r2, 3: 3 * r2}
+    bad, names = [], []
+    for i, (c, s) in enumerate(zip(coeffs, std)):
+        if s == 0 or not np.isfinite(c):
+            continue
+        moves = abs(c) * effect.get(i, r ** 3) * f
+        if (not np.isfinite(s) or s > 0.5 * abs(c)) and moves > max_px:
+            bad.append(f"{_COEFF_NAMES[i]} = {c:.3g} ± {s:.2g} (alone it would move the image corners by {moves:.0f} px)")
+            names.append(_COEFF_NAMES[i])
+    if not bad:
+        return [], []
+    pts = np.vstack([np.asarray(q, float).reshape(-1, 2) for q in points]) if len(points) else np.zeros((0, 2))
+    pts = pts[np.isfinite(pts).all(1)]
+    covered = ""
+    if len(pts):
+        rr = np.sqrt(((pts[:, 0] - cx) / fx) ** 2 + ((pts[:, 1] - cy) / fy) ** 2)
+        covered = f"; the corners reach {100 * rr.max() / r:.0f} % of the way to the image corners"
+    simpler = {"rational": "k1k2p1p2k3", "k1k2p1p2k3": "k1k2p1p2", "k1k2p1p2": "k1k2", "k1k2": "k1"}.get(model, "k1")
+    return [f"{device}: the poses do not determine {', '.join(bad)}: the distortion model '{model}' has more terms "
+            f"than these poses can fix{covered}; use {option} {simpler} (or auto) or poses that reach the image's "
+            "edges and corners (the calibration is unreliable away from where the corners were)"], names

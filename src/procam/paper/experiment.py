@@ -149,6 +149,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
     from .. import single_pose
 
     views = list(views)
+    multi_pose.check_distinct(views)
     n = len(views)
     if n < max(min_set, 2):
         raise CalibrationError(f"the experiment needs at least {max(min_set, 2)} poses, got {n}")
