@@ -399,6 +399,8 @@ def test_cli_virtual_demo_writes_a_capture_that_calibrates(cli, tmp_path):
     code, out, err = cli(["capture", tmp_path / "pose", "--virtual", "--projector", "640x400", "--board", "10x6"])
     assert code == 0, err
     assert "wrote 40 frames, patterns.json and capture.json" in out
+    # the instant verdict, before the next pose: printed, and its picture next to the folder
+    assert "verdict: good" in out and (tmp_path / "pose.check.png").is_file()
     truth = json.loads((tmp_path / "pose" / "truth.json").read_text())
     code, out, err = cli(["calibrate", tmp_path / "pose", "--board", "10x6", "--square", "24", "-o", tmp_path / "c.json"])
     assert code == 0, err

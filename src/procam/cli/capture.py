@@ -11,9 +11,11 @@ from pathlib import Path
 from typing import Optional
 
 import typer
+from rich.markup import escape
 
 from ..errors import ProcamError
-from ._app import Order, app, console, err_console, fail, is_tty, parse_size, user_errors, value
+
+from ._app import Order, app, console, err_console, fail, is_tty, parse_board, parse_size, user_errors, value
 
 #: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
 VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
@@ -80,6 +82,8 @@ def capture_cmd(
     gain: Optional[float] = typer.Option(None, "--gain", help="Camera gain in the camera's unit (GenICam: dB)."),
     camera_size: Optional[str] = typer.Option(None, "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV)."),
     retries: int = typer.Option(3, "--retries", help="Re-grabs allowed per frame before the capture stops."),
+    square: Optional[float] = typer.Option(None, "--square", help="Square size (for the instant verdict's lengths; "
+                                           "default 1: lengths in squares)."),
     board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
                                         "and judges the exposure on it (default: on the projector's light)."),
     order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
@@ -123,6 +127,7 @@ def capture_cmd(
     if not 1 <= step <= 64:
         fail(f"--step must be between 1 and 64, got {step}")
     board_size = parse_size(board, "--board") if board else None
+    brd = parse_board(board, 1.0 if square is None else square) if board else None
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
     kind, _ = cams.parse_camera_spec("virtual" if virtual else camera)
@@ -199,6 +204,18 @@ def capture_cmd(
                 typer.prompt(f"place the board for pose {i + 1} in the projector's light, then press Enter",
                              default="", show_default=False, prompt_suffix=" ", err=True)
 
+        def after_pose(i, result):
+            _report_pose(result)
+            if brd is not None:  # the instant verdict, before the next pose
+                from ..check import check_pose
+                from .check import report_check
+
+                png = result.folder.with_name(result.folder.name + ".check.png")
+                try:
+                    report_check(check_pose(result.folder, brd), png)
+                except ProcamError as e:
+                    console.print(f"[yellow]check:[/yellow] {escape(str(e))}", highlight=False)
+
         reporter = stack.enter_context(_Reporter())
         if poses == 1:
             before_pose(0)
@@ -211,12 +228,11 @@ def capture_cmd(
                                   extra_files_for=extra_files)
 
 
-def after_pose(i: int, result) -> None:
-    """Report a captured pose (the place for an instant verdict on it, before the next pose)."""
+def _report_pose(result) -> None:
+    """Report a captured pose's files."""
     t = result.record["timings"]
-    console.print(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
-                  f"({result.retries} re-grabs, {t['total_s']:.1f} s)", highlight=False)
-    console.print(f"check it: procam decode {result.folder} --png decode.png", highlight=False)
+    console.print(escape(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
+                         f"({result.retries} re-grabs, {t['total_s']:.1f} s)"), highlight=False)
 
 
 def _describe_projector(proj) -> str:

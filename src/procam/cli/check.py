@@ -1,0 +1,60 @@
+"""``procam check``: the instant verdict on one pose folder (seconds, no calibration file)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
+                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
+                   WindowOpt, app, fail, optional_size, output_path, parse_board, pose_options, say, user_errors,
+                   value)
+
+
+def report_check(check, png=None) -> None:
+    """Print a :class:`procam.check.PoseCheck` and write its overlay picture to ``png`` (optional)."""
+    for line in check.lines:
+        say(line)
+    say(f"({check.seconds:.1f} s)")
+    if png is not None:
+        from .._files import write_image
+        from ..check import overlay
+
+        write_image(png, overlay(check))
+        say(f"wrote {png}")
+
+
+@app.command("check")
+@user_errors
+def check_cmd(
+    pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
+    board: BoardOpt = ...,
+    square: SquareOpt = 1.0,
+    png: Path = typer.Option(None, "--png", help="Overlay picture: white frame, decoded area, corners, verdict."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
+    method: DecodeOpt = DecodeMethod.robust,
+    shadow: ShadowOpt = 10.0,
+    contrast: ContrastOpt = 3.0,
+    detector: DetectorOpt = Detector.auto,
+    refine: RefineOpt = None,
+    refiner: RefinerOpt = Refiner.fit,
+    window: WindowOpt = 60,
+    estimator: EstimatorOpt = Estimator.ransac,
+):
+    """Is this pose good for single-pose calibration? Checks the capture, decodes it, finds the corners,
+    calibrates it from this one pose and says: good, weak, degenerate or failed, and why (exit code 3 for
+    degenerate or failed)."""
+    from ..check import check_pose
+
+    brd = parse_board(board, square)
+    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
+    output_path(png, "--png", FIGURE_SUFFIXES)
+    check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step)
+    report_check(check, png)
+    if check.verdict in ("degenerate", "failed"):
+        fail(f"{pose_dir}: {check.verdict} pose for single-pose calibration: "
+             f"{'; '.join(r.split(': ', 1)[-1] for r in check.reasons)}", code=3, label="not good")

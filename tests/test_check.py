@@ -1,0 +1,50 @@
+"""procam check / procam capture's instant verdict on one pose folder."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from conftest import run_cli
+from sim_small import small_scene
+
+from procam import simulate
+from procam.board import Board
+from procam.check import check_pose, overlay
+
+
+@pytest.fixture(scope="module")
+def degenerate_folder(tmp_path_factory):
+    """The small rig with the board at nu_p = 0 (no turn about the projector's vertical axis)."""
+    scene = simulate.with_board_pose(small_scene(), (18.0, 0.0, 0.0), frame="projector")
+    stack, truth = simulate.render(scene, seed=4)
+    folder = tmp_path_factory.mktemp("flat") / "pose"
+    simulate.write_capture(folder, stack, truth)
+    return folder
+
+
+def test_check_of_a_good_pose(paper_capture, tmp_path):
+    folder = paper_capture[0]
+    chk = check_pose(folder, Board(10, 6, 24.0))
+    assert chk.verdict in ("good", "weak") and chk.calibration is not None
+    assert chk.lines[-1].startswith(f"verdict: {chk.verdict}")
+    f_true = paper_capture[2]["camera"]["f"]
+    assert abs(chk.calibration.camera.K[0, 0] - f_true) < 0.03 * f_true
+    img = overlay(chk)
+    assert img.shape[2] == 3 and img.dtype == np.uint8
+    code, out, err = run_cli(["check", folder, "--board", "10x6", "--square", "24", "--png", tmp_path / "c.png"])
+    assert code == 0, err
+    assert f"verdict: {chk.verdict}" in out and cv2.imread(str(tmp_path / "c.png")) is not None
+
+
+def test_check_of_a_degenerate_pose_exits_3(degenerate_folder, tmp_path):
+    chk = check_pose(degenerate_folder, Board(10, 6, 24.0))
+    assert chk.verdict == "degenerate" and any("projector" in r for r in chk.reasons)
+    code, out, err = run_cli(["check", degenerate_folder, "--board", "10x6"])
+    assert code == 3 and "verdict: degenerate" in out
+    assert len(err.strip().splitlines()) == 1 and "not good" in err and "turn the board" in err
+
+
+def test_check_of_an_unusable_folder_is_a_user_error(tmp_path):
+    code, out, err = run_cli(["check", tmp_path, "--board", "10x6"])
+    assert code == 2 and "no images found" in err and "Traceback" not in err
