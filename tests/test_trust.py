@@ -180,3 +180,38 @@ def test_multi_pose_distortion_terms_the_poses_cannot_determine():
         auto = multi_pose.calibrate(views)
     assert auto.verdict == "good" and auto.info["cam_dist_model"] != "k1k2p1p2k3" and auto.info["auto_dist"]
     assert abs(auto.camera.K[0, 0] - 3450.0) < 0.01 * 3450.0
+
+
+def _bent(bend_mm, seed=0):
+    """The ideal rig at the recommended pose with the board bent into a bowl ``bend_mm`` deep at its corners;
+    the calibration is told the board is flat."""
+    from procam import models
+
+    sc = simulate.with_board_pose(simulate.preset("ideal"), simulate.RECOMMENDED_POSE)
+    obj, _, _ = simulate.correspondences(sc, 0.0, 0.0, 0)
+    bent = obj.copy()
+    xy = bent[:, :2] / np.abs(bent[:, :2]).max(axis=0)
+    bent[:, 2] = bend_mm * (xy[:, 0] ** 2 + xy[:, 1] ** 2 - 1)
+    rng = np.random.default_rng(seed)
+    cam = simulate.distort(sc, models.project(sc.K_cam, sc.R_board, sc.t_board, bent)) + rng.normal(0, 0.1, (60, 2))
+    proj = models.project(sc.K_proj, sc.R_board_proj, sc.t_board_proj, bent) + rng.normal(0, 0.2, (60, 2))
+    return View(obj, cam, proj, "bent", sc.cam_size, sc.proj_size)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_no_model_error_when_the_model_holds(seed):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", WeakPoseWarning)
+        warnings.simplefilter("error", ProcamWarning)
+        cal = single_pose.calibrate(_bent(0.0, seed))
+    assert not any(m["model_error"] for m in cal.poses[0]["misfit"].values())
+
+
+def test_a_board_that_is_not_flat_is_a_model_error_not_noise():
+    from procam.errors import ModelErrorWarning
+
+    with pytest.warns(ModelErrorWarning, match="projector: model error: its residuals form a smooth pattern"):
+        cal = single_pose.calibrate(_bent(1.0))
+    m = cal.poses[0]["misfit"]
+    assert m["projector"]["model_error"] and m["projector"]["explained"] > 0.5
+    assert cal.verdict != "good" and any("not flat" in r and "model error" in r for r in cal.verdict_reasons)

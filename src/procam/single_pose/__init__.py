@@ -22,13 +22,15 @@ psi = nu = 0).
 from __future__ import annotations
 
 import contextlib
+import warnings as _warnings
 
 import numpy as np
 
 from .. import models
 from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
-from ..errors import CalibrationError, DegeneratePoseError
+from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
+from ..misfit import misfit
 from ..residuals import pnp, rms, stereo_pose
 from ._robust import RobustOptions, check_corners, clean, robust_sigma
 from .advice import AdviceOptions, Prediction, advice, judge, predict
@@ -119,6 +121,29 @@ def _with_noise(pred: Prediction | None, sigma, device, o: AdviceOptions) -> Pre
     return Prediction(pred.angles_deg, pred.rel_std_f * float(sigma) / pred.sigma_px, pred.f_nominal, float(sigma))
 
 
+def _misfit(obj, sol, floor_px: float):
+    """The misfit test (:mod:`procam.misfit`) of a device solution's residuals on the corners it used."""
+    res = np.where(sol.mask[:, None], sol.residuals, np.nan)
+    return misfit(obj, res, device="camera" if isinstance(sol, CameraSolution) else "projector", floor_px=floor_px)
+
+
+def _model_error(fits: dict, name, verdict: str, reasons: tuple, warnings: list):
+    """Model error makes a good pose weak, with its reason, a warning line and a :class:`ModelErrorWarning`."""
+    for mf in fits.values():
+        if mf.model_error:
+            msg = f"pose {name!r}: {mf.message}"
+            warnings.append(msg)
+            reasons = reasons + (msg,)
+            verdict = "weak" if verdict == "good" else verdict
+            _warnings.warn(msg, ModelErrorWarning, stacklevel=3)
+    return verdict, reasons
+
+
+def _misfit_dict(mf) -> dict:
+    return {"model_error": mf.model_error, "field_rms_px": mf.field_rms_px, "rms_px": mf.rms_px,
+            "explained": mf.explained, "p_value": mf.p_value}
+
+
 def _rejected_list(sol) -> list:
     return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
 
@@ -190,6 +215,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                  options=advice_options)
     warnings = list(cam.warnings) + list(proj.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)
+    fits = {"camera": _misfit(obj_all, cam, 0.1), "projector": _misfit(obj_all, proj, 0.2)}
+    verdict, reasons = _model_error(fits, name, verdict, reasons, warnings)
     cin, pin = cam.mask, proj.mask
     both = cin & pin
     with np.errstate(all="ignore"):
@@ -203,7 +230,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
             "cam_rms": cam_rms, "proj_rms": proj_rms, "stereo_rms": stereo, "n_corners": int(valid.sum()),
             "n_used": {"camera": int(cin.sum()), "projector": int(pin.sum())},
             "rejected_corners": {"camera": _rejected_list(cam), "projector": _rejected_list(proj)},
-            "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px}}
+            "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px},
+            "misfit": {k: _misfit_dict(v) for k, v in fits.items()}}
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion),
                        projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
                        method="single-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
@@ -233,12 +261,15 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
                  predicted=predicted, options=advice_options)
     warnings = list(cam.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)
+    fits = {"camera": _misfit(obj, cam, 0.1)}
+    verdict, reasons = _model_error(fits, name, verdict, reasons, warnings)
     mask = cam.mask
     cam_rms = _pnp_rms(obj[mask], cam.distortion.undistort(pts[mask], cam.K), cam.K)
     pose = {"name": name, "camera_angles_deg": [float(a) for a in cam.angles_deg], "projector_angles_deg": None,
             "advice": adv, "cam_rms": cam_rms, "n_corners": int(finite.sum()),
             "n_used": {"camera": int(mask.sum())}, "rejected_corners": {"camera": _rejected_list(cam)},
-            "outlier_threshold_px": {"camera": cam.outlier_threshold_px}}
+            "outlier_threshold_px": {"camera": cam.outlier_threshold_px},
+            "misfit": {k: _misfit_dict(v) for k, v in fits.items()}}
     return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
                        method="camera-only", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
                        info={"camera": cam, "principal_point_source": cam.principal_point_source,
