@@ -36,7 +36,7 @@ from . import uncertainty as unc
 
 __all__ = ["Bound", "ExtrinsicsBound", "camera_bound", "projector_bound", "extrinsics_bound", "fisher_bound"]
 
-_CAMERA_MODELS = ("full", "known_distortion", "known_alpha")
+_CAMERA_MODELS = ("full", "known_distortion", "known_alpha", "known_intrinsics")
 
 
 @dataclass(frozen=True)
@@ -150,7 +150,10 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
         ``"full"``: ``p = (f, alpha, cu, cv, kappa1, kappa2, omega, t)`` (12);
         ``"known_distortion"``: ``c, k1, k2`` known, ``p = (f, alpha, omega, t)`` (8),
         the limit of the paper's stage-2 LM; ``"known_alpha"``: ``alpha`` known too,
-        ``p = (f, omega, t)`` (7).
+        ``p = (f, omega, t)`` (7); ``"known_intrinsics"``: the camera calibrated beforehand, only its board
+        pose unknown, ``p = (omega, t)`` (6) -- the camera side of a single-pose calibration with
+        ``known_camera`` (the projector's bound is unchanged: its ``(f_p, v0p)`` and pose are the board
+        homography's 8 degrees of freedom whatever the camera knows; only ``R, T`` gain).
     radius_scale : float
         ``s`` of the conditioning scale ``kappa1 = k1 s^2``, ``kappa2 = k2 s^4`` (pixels).
     rel_step, cond_limit, jacobian
@@ -207,13 +210,20 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
         def fun(p):
             return observe(p[0], p[1], np.zeros(2), kap1, kap2, p[2:5], p[5:8])
         raw_scale = np.ones(8)
-    else:
+    elif model == "known_alpha":
         names = ["f_c", "wx", "wy", "wz", "tx", "ty", "tz"]
         p0 = np.r_[f0, 0.0, 0.0, 0.0, t]
 
         def fun(p):
             return observe(p[0], alpha0, np.zeros(2), kap1, kap2, p[1:4], p[4:7])
         raw_scale = np.ones(7)
+    else:
+        names = ["wx", "wy", "wz", "tx", "ty", "tz"]
+        p0 = np.r_[0.0, 0.0, 0.0, t]
+
+        def fun(p):
+            return observe(f0 + 0 * p[0], alpha0, np.zeros(2) + 0 * p[0], kap1, kap2, p[0:3], p[3:6])
+        raw_scale = np.ones(6)
 
     cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
                              jacobian=jacobian)

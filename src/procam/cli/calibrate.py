@@ -76,7 +76,11 @@ def calibrate_cmd(
                                                "--camera-only one image."),
     out: Path = typer.Option(..., "-o", "--out", help="Calibration file (.json, or .yml for OpenCV YAML)."),
     method: Method = typer.Option(None, "--method", help="Default: single for one pose, multi for several."),
-    camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from one photo of the board."),
+    camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from photos of the board: one "
+                                     "(the single-pose method) or several (Zhang, with checks)."),
+    camera_file: Path = typer.Option(None, "--camera", help="The camera's intrinsics from an earlier calibration "
+                                     "(procam JSON, OpenCV or kamino410 YAML/XML): fixed; one pose then calibrates "
+                                     "the projector and R, T."),
     yaml: Path = typer.Option(None, "--yaml", help="Also write OpenCV FileStorage YAML (cam_K, cam_kc, ...)."),
     png: Path = typer.Option(None, "--png", help="Residual plot."),
     report: Path = typer.Option(None, "--report", help="Also write the HTML report (one self-contained file)."),
@@ -118,17 +122,24 @@ def calibrate_cmd(
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
-        if len(poses) != 1:
-            fail(f"--camera-only takes one image, got {len(poses)}")
-        view = pipeline.camera_only_view(poses[0], brd, options=opts)
-        calib = _sp.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name, camera=camera)
-        calib = calib.replace(views=(view,))
+        if camera_file is not None:
+            fail("--camera gives the camera's intrinsics; --camera-only estimates them: use one of the two")
+        views = [pipeline.camera_only_view(p, brd, options=opts) for p in poses]
+        if len(views) == 1:
+            view = views[0]
+            calib = _sp.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name,
+                                              camera=camera)
+            calib = calib.replace(views=(view,))
+        else:
+            calib = _mp.calibrate_camera(views, dist=value(cam_dist))
     else:
         method = value(method) or ("single" if len(poses) == 1 else "multi")
         if method == "single" and len(poses) != 1:
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
         if method == "multi" and len(poses) < 2:
             fail("--method multi needs at least two pose folders (three or more recommended)")
+        if method == "multi" and camera_file is not None:
+            fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
                                                 step=step)
@@ -137,7 +148,12 @@ def calibrate_cmd(
             for w in v.diagnostics.get("warnings", []):
                 warn(w)
         if method == "single":
-            calib = _sp.calibrate(views[0], camera=camera)
+            known = None
+            if camera_file is not None:
+                from ..export import load_camera_intrinsics
+
+                known = load_camera_intrinsics(camera_file, views[0].cam_size)
+            calib = _sp.calibrate(views[0], camera=camera, known_camera=known)
         else:
             calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
     print_summary(calib)

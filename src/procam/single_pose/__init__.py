@@ -32,12 +32,13 @@ from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..misfit import misfit
 from ..residuals import pnp, rms, stereo_pose
-from ._robust import RobustOptions, check_corners, clean, robust_sigma
+from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report, robust_sigma
 from .advice import AdviceOptions, Prediction, advice, judge, predict
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
 
-__all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "extrinsics", "advice",
+__all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "known_camera_pose",
+           "extrinsics", "advice",
            "CameraOptions", "ProjectorOptions", "RobustOptions", "AdviceOptions", "CameraSolution",
            "ProjectorSolution", "COD_MODES", "REFINE_MODES", "robust_sigma"]
 
@@ -121,6 +122,68 @@ def _with_noise(pred: Prediction | None, sigma, device, o: AdviceOptions) -> Pre
     return Prediction(pred.angles_deg, pred.rel_std_f * float(sigma) / pred.sigma_px, pred.f_nominal, float(sigma))
 
 
+def known_camera_pose(obj_pts, cam_pts, device: Device, *, robust: RobustOptions = RobustOptions(),
+                      name: str = "view") -> CameraSolution:
+    """The board's pose in a camera whose intrinsics are known: PnP on the undistorted corners, refined on
+    the distorted ones, with outlier rejection; the covariance covers the pose only (the intrinsics are
+    given, their rows and columns are zero).
+
+    Returns a :class:`CameraSolution` whose ``params`` keep the 12-vector layout (intrinsics and the
+    division terms as given or zero; for an OpenCV-model camera the division terms are zero and
+    ``distortion`` is the OpenCV one).
+    """
+    from scipy.optimize import least_squares
+
+    obj, pts, finite = clean(obj_pts, cam_pts, f"pose {name!r}")
+    check_corners(obj, finite, robust.min_points, name, "camera corners", "check the board detection")
+    K = np.asarray(device.K, float)
+
+    def predict(q, M):
+        return device.distortion.distort(models.project(K, models.rvec_to_matrix(q[:3]), q[3:], M), K)
+
+    def fit(used):
+        M, m = obj[used], pts[used]
+        with np.errstate(all="ignore"):
+            und = device.distortion.undistort(m, K)
+        ok = np.isfinite(und).all(1)
+        try:
+            R0, t0, _ = pnp(M[ok], und[ok], K)
+        except CalibrationError:
+            raise CalibrationError(f"pose {name!r}: no board pose in front of the given camera; are these its "
+                                   "intrinsics?") from None
+        q0 = np.concatenate([models.matrix_to_rvec(R0), t0])
+        sol = least_squares(lambda q: (predict(q, M) - m).ravel(), q0, method="lm", x_scale="jac",
+                            xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        q = sol.x
+        res = predict(q, M) - m
+        J = unc.jacobian(lambda v: (predict(v, M) - m).ravel(), q, typical=np.array([0.01, 0.01, 0.01, 1, 1, 1.0]))
+        sigma = unc.sigma_from_residuals(res.ravel(), 6)
+        cq = unc.covariance(J, sigma)
+        R, t = models.rvec_to_matrix(q[:3]), q[3:]
+        params = np.concatenate([[K[0, 0], K[1, 1] / K[0, 0], K[0, 2], K[1, 2], 0.0, 0.0], q])
+        if device.distortion.model == "division":
+            params[4:6] = [device.distortion.k1 * models.KAPPA_SCALE ** 2, device.distortion.k2 * models.KAPPA_SCALE ** 4]
+        cov = np.zeros((12, 12))
+        cov[6:, 6:] = cq
+        residuals = np.full((len(obj), 2), np.nan)
+        residuals[used] = -res
+        sa = unc.std(unc.propagate(cq, lambda v: models.board_angles_deg(models.rvec_to_matrix(v[:3]), v[3:]), q,
+                                   typical=1.0))
+        std = {"f_c": 0.0, "alpha_c": 0.0, "fy_c": 0.0, "u0c": 0.0, "v0c": 0.0, "k1": 0.0, "k2": 0.0,
+               "angles_deg": sa, "t": unc.std(cq)[3:]}
+        return CameraSolution(K=K, distortion=device.distortion, R=R, t=t, rms_px=rms(res), residuals=residuals,
+                              std=std, angles_deg=models.board_angles_deg(R, t), cost=float(sol.cost),
+                              params=params, covariance=cov, mask=used, image_size=tuple(device.image_size),
+                              info={"sigma_px": sigma, "refine": "pose only (intrinsics given)"},
+                              principal_point_source="given")
+
+    def predict_all(sol):
+        return predict(np.concatenate([models.matrix_to_rvec(sol.R), sol.t]), obj)
+
+    sol, used, thr, notes = fit_robust(fit, predict_all, pts, obj, finite, robust)
+    return rejection_report(sol, predict_all, pts, finite, used, thr, notes, name, "camera", robust)
+
+
 def _misfit(obj, sol, floor_px: float):
     """The misfit test (:mod:`procam.misfit`) of a device solution's residuals on the corners it used."""
     res = np.where(sol.mask[:, None], sol.residuals, np.nan)
@@ -150,7 +213,8 @@ def _rejected_list(sol) -> list:
 
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
-              advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False) -> Calibration:
+              advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
+              known_camera: Device | None = None) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
 
     Parameters
@@ -162,6 +226,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     robust : :class:`RobustOptions` -- minimum corners and outlier rejection, for both devices.
     advice_options : :class:`AdviceOptions` -- the verdict's thresholds.
     cam_size : (W, H) of the camera (default ``view.cam_size``).
+    known_camera : the camera's intrinsics (:class:`~procam.calibration.Device`, any distortion model), e.g. from
+        a camera-only calibration of many photos (:func:`procam.export.load_camera_intrinsics` reads procam's,
+        OpenCV's and kamino410's files): the camera is then fixed and the pose calibrates only its board pose,
+        the projector and ``R, T`` (``camera`` options are not used).
     strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of
         returning it with its verdict and a warning.
 
@@ -202,17 +270,28 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                                       advice_options.projector_noise_px, u0=projector.u0)}
     # NaN for corners invalid in either device, so that both fits use the same corners and the
     # rejected corners' indices are the view's
+    if known_camera is not None:
+        if cam_size is not None and tuple(known_camera.image_size) != tuple(cam_size):
+            raise CalibrationError(f"pose {name!r}: the given camera intrinsics are for {known_camera.image_size[0]}x"
+                                   f"{known_camera.image_size[1]} images, this pose's are {cam_size[0]}x{cam_size[1]}")
+        predicted["camera"] = None
     with _degenerate_if_unsolved(name, predicted, advice_options):
-        cam = calibrate_camera(obj_all, only_valid(view.cam_pts), cam_size, camera, robust=robust, name=name)
+        if known_camera is not None:
+            cam = known_camera_pose(obj_all, only_valid(view.cam_pts), known_camera, robust=robust, name=name)
+        else:
+            cam = calibrate_camera(obj_all, only_valid(view.cam_pts), cam_size, camera, robust=robust, name=name)
         proj = calibrate_projector(obj_all, only_valid(view.proj_pts), proj_size, projector, robust=robust,
                                    name=name)
     R, T = extrinsics(cam, proj)
     std = _std_dict(cam, proj)
     predicted = {k: _with_noise(v, d.info.get("sigma_px"), k, advice_options)
                  for (k, v), d in zip(predicted.items(), (cam, proj))}
-    adv = advice(cam.angles_deg, proj.angles_deg, std, values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]},
-                 camera_size=cam.image_size, projector_size=proj.image_size, predicted=predicted,
-                 options=advice_options)
+    adv = advice(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
+                 values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, camera_size=cam.image_size,
+                 projector_size=proj.image_size, predicted=predicted, options=advice_options)
+    if known_camera is not None:
+        adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
+                         "message": "camera: intrinsics given, not estimated from this pose"}
     warnings = list(cam.warnings) + list(proj.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)
     fits = {"camera": _misfit(obj_all, cam, 0.1), "projector": _misfit(obj_all, proj, 0.2)}
@@ -232,9 +311,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
             "rejected_corners": {"camera": _rejected_list(cam), "projector": _rejected_list(proj)},
             "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px},
             "misfit": {k: _misfit_dict(v) for k, v in fits.items()}}
-    return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion),
+    return Calibration(camera=known_camera if known_camera is not None else
+                       Device(cam.K, tuple(cam.image_size), cam.distortion),
                        projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
-                       method="single-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
+                       method="single-pose" if known_camera is None else "single-pose, camera given", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
                        poses=(pose,), views=(view,), warnings=tuple(warnings),
                        info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
                              "cod_score": None if cam.cod is None else cam.cod.score,
