@@ -4,9 +4,11 @@ The modules, from the captures up (each imports only those above it in this list
 
     errors        ProcamError and its subclasses (one-line messages), procam's warning classes
     _files        image reads, natural sort, atomic writes, JSON helpers (the bottom floor)
+    _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)
     capture       the capture-folder format: read + validate a pose folder, write a sequence
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
+    plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
     board         Board (inner corners, square size), object points, chessboard corner detection
     correspond    camera corners -> projector corners by local homographies
     view          View: one pose's board, camera and projector points
@@ -18,14 +20,21 @@ The modules, from the captures up (each imports only those above it in this list
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
     residuals     RMS, PnP, stereo pose, per-pose residuals
+    misfit        model error versus noise: a smooth field in a fit's residuals across the board
     single_pose   the seed method (camera, projector, extrinsics, advice)
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
     summary       a calibration as rows of text
     io            calibration and correspondence files (JSON, OpenCV YAML)
+    triangulate   camera pixel + projector column/row -> 3-D point (the geometry of a scan)
+    verify        a calibration measured in millimetres: board scale, planarity, leave-one-out spread
+    reconstruct   a decoded capture -> point cloud (PLY)
+    export        a calibration for the next tool (OpenCV, kamino410 XML, OpenGL, undistortion maps)
+    check         one captured pose judged before calibration (verdict + overlay)
     simulate      synthetic procam captures with ground truth (the test oracle)
     paper         the paper's simulation study and real-data experiment
     plots         matplotlib figures (matplotlib imported only when a figure is drawn)
+    acquire       the devices: projector window, cameras, a checked capture session
     report        a calibration as one self-contained HTML page (verdict, parameters, figures, verification)
     cli           the ``procam`` command line (thin: parse, call the API, print)
 
@@ -49,7 +58,8 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
-               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report")
+               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report",
+               "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check", "acquire")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",
