@@ -28,3 +28,8 @@ class CalibrationError(ProcamError):
 
 class CalibrationFileError(ProcamError):
     """A calibration file cannot be read or written."""
+
+
+class OutputError(ProcamError):
+    """An output cannot be written where asked (a folder holding files procam did not write, a read-only
+    or full disk, a file that would overwrite an input ...)."""

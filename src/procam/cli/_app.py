@@ -8,8 +8,10 @@ Commands import everything heavy (scipy, matplotlib, the solvers, the simulator)
 from __future__ import annotations
 
 import enum
+import errno
 import functools
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -18,13 +20,15 @@ from typing import Annotated, Optional
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.text import Text
 from typer.core import TyperGroup
 
 from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
 from .. import patterns as _patterns
-from ..errors import ProcamError
+from .. import _files
+from ..errors import OutputError, ProcamError
 
 
 class _OneLineErrors(TyperGroup):
@@ -77,21 +81,57 @@ def say(message: str):
     console.print(escape(str(message)), highlight=False)
 
 
+#: What to do about an OS error, by errno.
+_OS_HINTS = {errno.ENOSPC: "the disk is full; free some space or write elsewhere",
+             errno.EDQUOT: "the disk quota is exhausted; free some space or write elsewhere",
+             errno.EROFS: "the file system is read-only; write elsewhere",
+             errno.EACCES: "permission denied; check the path and its permissions",
+             errno.EPERM: "not permitted; check the path and its permissions",
+             errno.ENOENT: "no such file or folder; check the path",
+             errno.ENOTDIR: "a part of the path is not a folder; check the path",
+             errno.EISDIR: "is a folder; give a file name",
+             errno.ELOOP: "too many levels of symbolic links (a link loop); check the path",
+             errno.ENAMETOOLONG: "the name is too long; use a shorter path",
+             errno.EMFILE: "too many open files; close other programs and retry"}
+
+
+def os_error_message(e: OSError) -> str:
+    """One line for an OS error: the user's path, what happened and what to do."""
+    hint = _OS_HINTS.get(e.errno, f"{e.strerror or e}; check the path and its permissions")
+    return f"{e.filename}: {hint}" if e.filename else hint
+
+
+def plain(text) -> Text:
+    """``text`` as rich Text: printed as is, never read as markup (file names like ``cap[red]``, table cells)."""
+    return Text(str(text))
+
+
 def user_errors(fn):
-    """Decorator for commands: turn :class:`ProcamError` (and OS errors) into one-line errors, exit code 2."""
+    """Decorator for commands: turn :class:`ProcamError` (and OS errors, memory exhaustion) into one-line errors,
+    exit code 2; anything else into one line that asks for a report, exit code 1 (``PROCAM_DEBUG=1`` shows the
+    traceback)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
+        except typer.Exit:
+            raise
         except ProcamError as e:
             fail(str(e))
         except OSError as e:  # unwritable output folder, disk full, permission denied ...
-            where = e.filename or "file"
-            fail(f"{where}: {e.strerror or e}; check the path and its permissions")
+            fail(os_error_message(e))
+        except MemoryError:
+            fail("not enough memory for this job; use smaller images, sizes or grids, or free memory")
         except KeyboardInterrupt:
             err_console.print("interrupted")
             raise typer.Exit(130)
+        except Exception as e:  # a bug: still one line, but say so
+            if os.environ.get("PROCAM_DEBUG"):
+                raise
+            first = (str(e).strip().splitlines() or [""])[-1][:300]
+            fail(f"internal error ({type(e).__name__}: {first}); please report it with the command line "
+                 "(PROCAM_DEBUG=1 shows the traceback)", code=1)
 
     return wrapper
 
@@ -190,8 +230,58 @@ EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homo
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 
-def output_path(path, option: str, suffixes: tuple[str, ...]):
-    """Check an output path before any work is done: a known suffix and a folder that can be created."""
+def number(value, option: str, *, lo: float | None = None, hi: float | None = None, lo_open: bool = False,
+           unit: str = "", what: str = "a number"):
+    """``value`` of ``option`` if it is finite and within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), else a
+    one-line error that says the range.  None (an option not given) stays None."""
+    if value is None:
+        return None
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and lo is not None:
+        ok = value > lo if lo_open else value >= lo
+    if ok and hi is not None:
+        ok = value <= hi
+    if not ok:
+        rng = []
+        if lo is not None:
+            rng.append(f"{'>' if lo_open else '>='} {lo:g}")
+        if hi is not None:
+            rng.append(f"<= {hi:g}")
+        fail(f"{option} must be {what}{' ' + ' and '.join(rng) if rng else ''}{unit}, got {value}")
+    return value
+
+
+def check_memory(need_bytes: float, what: str, hint: str) -> None:
+    """Refuse a job whose memory estimate ``need_bytes`` exceeds the memory available (one line)."""
+    avail = _files.available_memory()
+    if avail is not None and need_bytes > 0.8 * avail:
+        fail(f"{what} needs about {_files.fmt_bytes(need_bytes)} of memory, more than the "
+             f"{_files.fmt_bytes(avail)} available; {hint}")
+
+
+def _capture_folder(folder: Path, inputs) -> bool:
+    """Does ``folder`` hold a capture sequence (a pose folder given to this command, or a sequence folder)?"""
+    try:
+        folder = folder.resolve()
+    except OSError:
+        return False
+    for p in inputs:
+        try:
+            if Path(p).resolve() == folder:
+                return True
+        except OSError:
+            continue
+    man = _files.read_manifest(folder)
+    if man is not None:
+        return any(r in ("frame", "captured") for r in man["files"].values())
+    return (folder / "patterns.json").is_file() or (folder / "capture.json").is_file()
+
+
+def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
+    """Check an output file before any work is done (one-line errors): a known suffix; a folder that can be
+    created and written; not a file that is an input of the command (``inputs``: files and pose folders),
+    not a file procam did not write in a capture folder, not an image added to a capture folder that
+    has no manifest (it would be read as a frame of the sequence)."""
     if path is None:
         return None
     path = Path(path)
@@ -203,7 +293,51 @@ def output_path(path, option: str, suffixes: tuple[str, ...]):
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         fail(f"{option} {path}: cannot create the folder {path.parent} ({e.strerror or e})")
+    try:
+        _files.check_writable_dir(path.parent, f"{option} {path}")
+    except OutputError as e:
+        fail(str(e))
+    if path.is_symlink() and not path.exists():
+        fail(f"{option} {path}: is a broken or looping symbolic link; give another name")
+    if path.exists():
+        if not path.is_file():
+            fail(f"{option} {path}: exists and is not a regular file; give another name")
+        if not os.access(path, os.W_OK):
+            fail(f"{option} {path}: the file is read-only; give another name or make it writable")
+        for p in inputs:
+            try:
+                same = Path(p).exists() and path.samefile(p)
+            except OSError:
+                same = False
+            if same:
+                fail(f"{option} {path}: is also an input of this command; give another name")
+    folder = path.parent
+    if _capture_folder(folder, inputs):
+        own = _files.replaceable(folder)
+        man = _files.read_manifest(folder)
+        roles = man["files"] if man is not None else {}
+        if path.exists() and (path.name not in own or roles.get(path.name) not in (None, "output")):
+            fail(f"{option} {path}: would overwrite a file of the capture in {folder}; write it elsewhere")
+        if path.suffix.lower() in _files.IMAGE_EXTS and man is None:
+            fail(f"{option} {path}: {folder} holds a capture, and an image written there would be read as a frame "
+                 "of its sequence; write it elsewhere")
     return path
+
+
+def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
+    """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
+    ``force`` any folder, where nothing procam did not write is overwritten or deleted
+    (:func:`procam._files.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
+    the writer, so an interrupted run leaves none)."""
+    try:
+        return _files.prepare_output_dir(path, writer, force=force, option=option, create=create)
+    except OutputError as e:
+        fail(str(e))
+
+
+ForceOpt = Annotated[bool, typer.Option(
+    "--force", help="Write into a folder that holds other files (procam still never overwrites or deletes a file "
+                    "it did not write).")]
 
 
 def _print_version(flag: bool):

@@ -12,8 +12,8 @@ from .. import single_pose as _sp
 from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
                    EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app,
-                   choice, console, fail, optional_size, output_path, parse_board, pose_options, say, user_errors,
-                   value, warn)
+                   choice, console, fail, optional_size, output_path, parse_board, plain, pose_options, say,
+                   user_errors, value, warn)
 
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_MODELS)
@@ -22,12 +22,12 @@ Method = choice("Method", ("single", "multi"))
 
 def summary_table(calib) -> Table:
     """Rich table: parameters ± std, RMS per device (:func:`procam.summary.parameter_rows`)."""
-    t = Table(title=f"procam calibration ({calib.method}); {PLUS_MINUS}", show_lines=False)
+    t = Table(title=plain(f"procam calibration ({calib.method}); {PLUS_MINUS}"), show_lines=False)
     t.add_column("parameter")
     t.add_column("camera", justify="right")
     t.add_column("projector", justify="right")
     for r in parameter_rows(calib):
-        t.add_row(*r)
+        t.add_row(*map(plain, r))
     return t
 
 
@@ -40,7 +40,7 @@ def pose_table(calib) -> Table | None:
     for c in ("pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "verdict"):
         t.add_column(c)
     for r in rows:
-        t.add_row(*r)
+        t.add_row(*map(plain, r))
     return t
 
 
@@ -93,9 +93,12 @@ def calibrate_cmd(
                         refine_window=refine, window=window, estimator=estimator)
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
-    output_path(out, "-o", (".json", ".yml", ".yaml"))
-    output_path(yaml, "--yaml", (".yml", ".yaml"))
-    output_path(png, "--png", FIGURE_SUFFIXES)
+    output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
+    output_path(yaml, "--yaml", (".yml", ".yaml"), inputs=poses)
+    output_path(png, "--png", FIGURE_SUFFIXES, inputs=poses)
+    outs = [p.resolve() for p in (out, yaml, png) if p is not None]
+    if len(set(outs)) < len(outs):
+        fail("-o, --yaml and --png must be different files")
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")

@@ -9,7 +9,7 @@ from rich.table import Table
 
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, fail,
-                   optional_size, output_path, parse_board, pose_options, say, user_errors, value)
+                   optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -19,7 +19,7 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
               "T_j = (X, Y, Z)"):
         t.add_column(c, justify="right" if c not in ("pose",) else "left")
     for p in ev.poses:
-        t.add_row(Path(p.name).name or p.name, str(p.n_points), f"{p.cam_rms:.3f}", f"{p.proj_rms:.3f}",
+        t.add_row(plain(Path(p.name).name or p.name), str(p.n_points), f"{p.cam_rms:.3f}", f"{p.proj_rms:.3f}",
                   f"{p.stereo_rms:.3f}", ", ".join(f"{a:.1f}" for a in p.cam_angles),
                   ", ".join(f"{a:.1f}" for a in p.proj_angles), ", ".join(f"{x:.2f}" for x in p.T))
     s = Table(title="summary")
@@ -67,7 +67,7 @@ def evaluate_cmd(
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine, window=window, estimator=estimator)
-    output_path(out, "-o", (".json",))
+    output_path(out, "-o", (".json",), inputs=(calibration, *poses))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot be evaluated against projector points; "
