@@ -277,6 +277,14 @@ def _capture_folder(folder: Path, inputs) -> bool:
     return (folder / "patterns.json").is_file() or (folder / "capture.json").is_file()
 
 
+def assumed_size(calib, key: str) -> str:
+    """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
+    its size was assumed from the principal point; '' otherwise."""
+    if key in (calib.info or {}).get("image_size_assumed", ()):
+        return f" (the file has no {key}, so 2 (u0, v0) was assumed; add {key}: [width, height] to it)"
+    return ""
+
+
 def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     """Check an output file before any work is done (one-line errors): a known suffix; a folder that can be
     created and written; not a file that is an input of the command (``inputs``: files and pose folders),

@@ -9,7 +9,7 @@ from rich.table import Table
 
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, fail,
-                   optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value)
+                   assumed_size, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -80,7 +80,8 @@ def evaluate_cmd(
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
-                 f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")
+                 f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
+                 + (assumed_size(calib, "cam_size") or "; use captures of the same camera"))
     ev = evaluate(calib, views)
     t, s = evaluation_tables(ev)
     console.print(t)

@@ -11,7 +11,7 @@ import typer
 from rich.table import Table
 
 from .. import board as _board
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_size,
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, console, fail, optional_size, output_path, parse_size,
                    plain, say, user_errors, value, warn)
 
 
@@ -62,10 +62,12 @@ def reconstruct_cmd(
     H, W = cap.stack.shape[1:]
     if (W, H) != tuple(calib.camera.image_size):
         fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
-             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the calibrated camera")
+             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
+             + (assumed_size(calib, "cam_size") or "; use captures of the calibrated camera"))
     if (ps.width, ps.height) != tuple(calib.projector.image_size):
         fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
-             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}; check --projector")
+             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
+             + (assumed_size(calib, "proj_size") or "; check --projector"))
     maps = decode.decode(cap.stack, ps)
     colour = _files.read_image(cap.files[ps.white], gray=False)
     cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
