@@ -89,8 +89,11 @@ def calibrate_cmd(
     from .. import io, pipeline
 
     brd = parse_board(board, square)
+    multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
+    # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, window=window, estimator=estimator)
+                        refine_window=refine, window=window, estimator=estimator,
+                        min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10)
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)

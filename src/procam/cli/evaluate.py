@@ -66,7 +66,7 @@ def evaluate_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, window=window, estimator=estimator)
+                        refine_window=refine, window=window, estimator=estimator, min_corners=6)
     output_path(out, "-o", (".json",), inputs=(calibration, *poses))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
