@@ -81,6 +81,79 @@ def _not_a_file(p: Path) -> str:
     return "no such file"
 
 
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_with_text(data: bytes, key: str, text: str) -> bytes:
+    """A PNG with a ``tEXt`` chunk ``key = text`` after its header chunk."""
+    body = b"tEXt" + key.encode("latin-1") + b"\x00" + text.encode("latin-1")
+    chunk = (len(body) - 4).to_bytes(4, "big") + body + (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big")
+    end = 8 + 12 + int.from_bytes(data[8:12], "big")  # signature + IHDR
+    return data[:end] + chunk + data[end:]
+
+
+def _png_texts(data: bytes) -> dict:
+    """The ``tEXt`` chunks of a PNG's first 64 KiB: ``{key: text}``."""
+    out, pos = {}, 8
+    while pos + 12 <= len(data):
+        n = int.from_bytes(data[pos:pos + 4], "big")
+        kind = data[pos + 4:pos + 8]
+        if kind == b"tEXt":
+            key, _, val = data[pos + 8:pos + 8 + n].partition(b"\x00")
+            out[key.decode("latin-1")] = val.decode("latin-1")
+        if kind in (b"IDAT", b"IEND"):
+            break
+        pos += 12 + n
+    return out
+
+
+def procam_wrote(path) -> bool:
+    """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
+
+    Yes when its folder's manifest lists it (not as a camera frame), or by its content: procam's JSON
+    (``"format": "procam-..."``), a calibration FileStorage file (``cam_K``/``cam_int`` ...), procam's
+    ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG marked ``procam`` (every figure and
+    image procam writes is), or an empty file.
+    """
+    path = Path(path)
+    man = read_manifest(path.parent)
+    if man is not None and man["files"].get(path.name) in ("output", "frame", "sidecar"):
+        return True
+    try:
+        with open(path, "rb") as f:
+            head = f.read(1 << 16)
+    except OSError:
+        return False
+    if not head:
+        return True
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        try:
+            doc = json.loads(path.read_text())
+        except (OSError, ValueError, UnicodeDecodeError):
+            return False
+        return isinstance(doc, dict) and str(doc.get("format", "")).startswith("procam")
+    if suffix in (".yml", ".yaml", ".xml"):
+        return (head.startswith(b"%YAML") or b"<opencv_storage>" in head) and any(
+            k in head for k in (b"cam_K", b"proj_K", b"cam_int", b"proj_int"))
+    if suffix == ".npz":
+        import zipfile
+
+        try:
+            with zipfile.ZipFile(path) as z:
+                names = set(z.namelist())
+        except (OSError, zipfile.BadZipFile):
+            return False
+        return {"col.npy", "valid_col.npy"} <= names or {"map_x.npy", "map_y.npy"} <= names
+    if suffix == ".ply":
+        return b"\ncomment procam" in head[:4096]
+    if suffix == ".png":
+        return head[:8] == _PNG_SIGNATURE and _png_texts(head).get("Software") == "procam"
+    if suffix in (".pdf", ".svg", ".ps", ".eps"):
+        return b"procam" in head
+    return False
+
+
 def check_image_bytes(path, data: bytes) -> None:
     """Raise :class:`CaptureError` naming ``path`` when a PNG or JPEG is truncated or damaged.
 
@@ -89,7 +162,7 @@ def check_image_bytes(path, data: bytes) -> None:
     """
     head = data[:8]
     what = None
-    if head == b"\x89PNG\r\n\x1a\n":
+    if head == _PNG_SIGNATURE:
         pos, n = 8, len(data)
         mv = memoryview(data)
         last = b""
@@ -310,7 +383,10 @@ def write_image(path, img: np.ndarray, record: bool = True) -> Path:
         ok, buf = cv2.imencode(path.suffix, img)
         if not ok:
             raise CaptureError(f"{path}: could not encode image")
-        Path(tmp).write_bytes(buf.tobytes())
+        data = buf.tobytes()
+        if data[:8] == _PNG_SIGNATURE:
+            data = _png_with_text(data, "Software", "procam")
+        Path(tmp).write_bytes(data)
     return path
 
 def full_scale_of(stack: np.ndarray) -> float:

@@ -81,19 +81,25 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None) -> patter
         raise CaptureError(f"{folder}: {e}") from None
 
 
-def describe_frame(k: int, ps: patterns.PatternSet) -> str:
-    """``'#12 (column bit 3)'``-style label of sequence frame ``k``."""
+def frame_role(k: int, ps: patterns.PatternSet) -> str:
+    """What sequence frame ``k`` shows: ``'white'``, ``'black'``, ``'column bit 3'``, ``'row bit 0 inverse'``
+    (bit numbers count from the least significant, 0)."""
     k = int(k)
     if k == ps.white:
-        return f"#{k} (white)"
+        return "white"
     if k == ps.black:
-        return f"#{k} (black)"
+        return "black"
     for axis, name in (("col", "column"), ("row", "row")):
         pairs = ps.pair_indices(axis)
         for j, (a, b) in enumerate(pairs):
             if k in (a, b):
-                return f"#{k} ({name} bit {len(pairs) - 1 - j}{' inverse' if k == b else ''})"
-    return f"#{k}"
+                return f"{name} bit {len(pairs) - 1 - j}{' inverse' if k == b else ''}"
+    return "not in the sequence"
+
+
+def describe_frame(k: int, ps: patterns.PatternSet) -> str:
+    """``'#12 (column bit 3)'``-style label of sequence frame ``k``."""
+    return f"#{int(k)} ({frame_role(k, ps)})"
 
 
 def _names(files, idx) -> str:
@@ -317,10 +323,10 @@ def diagnose(stack: np.ndarray, ps: patterns.PatternSet, folder, files, sub: np.
     for suspects, (a, i) in found:
         if len(suspects) == 1:
             k = suspects[0]
-            parts.append(f"{Path(files[k]).name} ({describe_frame(k, ps)[1:]})")
+            parts.append(f"{Path(files[k]).name} (frame #{k}, {frame_role(k, ps)})")
         else:
-            parts.append(f"{Path(files[a]).name} and/or {Path(files[i]).name} ({describe_frame(a, ps)[1:]} and "
-                         "its inverse)")
+            parts.append(f"{Path(files[a]).name} and/or {Path(files[i]).name} (frames #{a} and #{i}, "
+                         f"{frame_role(a, ps) + ' and its inverse' if a != ps.white else 'white and black'})")
     raise CaptureError(
         f"{folder}: {'; '.join(parts)} {'does' if len(parts) == 1 and ' and/or ' not in parts[0] else 'do'} not "
         "belong to this capture: a pattern and its inverse add up to the same image in every other pair, but "
@@ -421,6 +427,27 @@ def _explain_count(folder: Path, files: list, ps: patterns.PatternSet) -> str:
             "move it out of the pose folder")
 
 
+def _listed(folder) -> list[str] | None:
+    """The frame names the folder's manifest (or patterns.json) lists, or None."""
+    man = _files.read_manifest(folder)
+    if man is not None:
+        frames = [n for n, r in man["files"].items() if r in ("frame", "captured")]
+        if frames:
+            return frames
+    meta = _files.read_sidecar_quiet(folder, "patterns.json")
+    if isinstance(meta, dict) and isinstance(meta.get("files"), list) and meta["files"]:
+        return [str(f) for f in meta["files"]]
+    return None
+
+
+def _missing_listed(folder, files) -> list[str]:
+    """Listed frames that are not in the folder, when the others are (a frame deleted or renamed)."""
+    listed = _listed(folder) or []
+    have = {Path(f).name for f in files}
+    gone = [n for n in listed if n not in have]
+    return sorted(gone, key=_files.natural_key) if gone and len(gone) < len(listed) else []
+
+
 def sequence_files(folder, images) -> tuple[list[Path], tuple]:
     """The frames of the sequence among ``images`` (the folder's image files), and warnings.
 
@@ -431,16 +458,10 @@ def sequence_files(folder, images) -> tuple[list[Path], tuple]:
     folder = Path(folder)
     by_name = {Path(p).name: Path(p) for p in images}
     man = _files.read_manifest(folder)
-    listed = None
     if man is not None:
         own = {n for n, r in man["files"].items() if r in ("output", "sidecar")}
         images = [p for p in images if Path(p).name not in own]
-        frames = [n for n, r in man["files"].items() if r in ("frame", "captured")]
-        listed = frames or None
-    if listed is None:
-        meta = _files.read_sidecar_quiet(folder, "patterns.json")
-        if isinstance(meta, dict) and isinstance(meta.get("files"), list) and meta["files"]:
-            listed = [str(f) for f in meta["files"]]
+    listed = _listed(folder)
     if listed and all(n in by_name for n in listed):
         keep = set(listed)
         extra = [Path(p).name for p in images if Path(p).name not in keep]
@@ -481,7 +502,13 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     ps = resolve_pattern_set(folder, projector, order, step)
     files, notes = sequence_files(folder, images)
     if len(files) != ps.count:
-        why = _explain_count(folder, files, ps)
+        gone = _missing_listed(folder, files)
+        why = ""
+        if gone and len(files) + len(gone) == ps.count:
+            why = (f" — {', '.join(gone[:4])}{' ...' if len(gone) > 4 else ''}, listed in the folder's "
+                   f"{'manifest' if _files.read_manifest(folder) else 'patterns.json'}, "
+                   f"{'is' if len(gone) == 1 else 'are'} missing: re-capture the pose, or restore the file")
+        why = why or _explain_count(folder, files, ps)
         raise CaptureError(f"{folder}: expected {ps.count} images for a {ps.width}x{ps.height} projector"
                            + (f" with step {ps.step}" if ps.step > 1 else "") + " "
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
@@ -548,6 +575,25 @@ def remove_stale(out_dir, keep, prefix: str = "") -> list[Path]:
     return _files.remove_listed(out, stale)
 
 
+def sequence_names(ps: patterns.PatternSet, prefix: str = "") -> list[str]:
+    """The image names :func:`write_sequence` gives a sequence: ``{prefix}00.png`` ... (zero-padded)."""
+    digits = max(2, len(str(ps.count - 1)))
+    return [f"{prefix}{i:0{digits}d}.png" for i in range(ps.count)]
+
+
+def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, writer: str = "patterns",
+                       force: bool = False, extra=None, option: str | None = None) -> tuple[list[str], list[str]]:
+    """Check, before any work and without writing anything, that :func:`write_sequence` may write ``ps`` into
+    ``out_dir`` (:func:`procam._files.prepare_output_dir` without creating it, and no file procam did not write
+    would be overwritten).  Returns (image names, side-file names); raises
+    :class:`~procam.errors.OutputError`."""
+    _files.prepare_output_dir(out_dir, writer, force=force, option=option, create=False)
+    names = sequence_names(ps, prefix)
+    sidecars = ["patterns.json", *(extra or {})]
+    _files.check_overwrite(out_dir, names + sidecars, option)
+    return names, sidecars
+
+
 def write_sequence(out_dir, stack, ps: patterns.PatternSet, prefix: str = "", *, writer: str = "patterns",
                    force: bool = False, extra_files: dict | None = None) -> list[Path]:
     """Write ``stack`` as zero-padded PNGs plus ``patterns.json`` into ``out_dir``.
@@ -575,11 +621,8 @@ def write_sequence(out_dir, stack, ps: patterns.PatternSet, prefix: str = "", *,
     -------
     The image paths.  Raises :class:`~procam.errors.OutputError` (one line) when the folder is refused.
     """
+    names, sidecars = check_sequence_dir(out_dir, ps, prefix, writer=writer, force=force, extra=extra_files)
     out = _files.prepare_output_dir(out_dir, writer, force=force)
-    digits = max(2, len(str(ps.count - 1)))
-    names = [f"{prefix}{i:0{digits}d}.png" for i in range(ps.count)]
-    sidecars = ["patterns.json", *(extra_files or {})]
-    _files.check_overwrite(out, names + sidecars)
     _files.record_files(out, {**{n: "frame" for n in names}, **{n: "sidecar" for n in sidecars}}, writer)
     paths = []
     for name, img in zip(names, stack):

@@ -312,6 +312,9 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
             fail(f"{option} {path}: exists and is not a regular file; give another name")
         if not os.access(path, os.W_OK):
             fail(f"{option} {path}: the file is read-only; give another name or make it writable")
+        if not _files.procam_wrote(path):
+            fail(f"{option} {path}: the file exists and procam did not write it; give another name, or move it "
+                 "away first (procam never overwrites a file it did not write)")
         for p in inputs:
             try:
                 same = Path(p).exists() and path.samefile(p)

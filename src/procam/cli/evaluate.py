@@ -87,6 +87,7 @@ def evaluate_cmd(
     console.print(t)
     console.print(s)
     if out is not None:
-        d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict()}
+        d = {"format": "procam-evaluation", "version": 1, "calibration": str(calibration), "method": calib.method,
+             **ev.to_dict()}
         _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
         say(f"wrote {out}")

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, Order, app, fail, output_dir, parse_size, say, user_errors, value
+from ..errors import OutputError
+from ._app import ForceOpt, Order, app, fail, parse_size, say, user_errors, value
 
 #: The largest projector ``procam patterns`` writes a sequence for (pixels): 16K x 8K.
 MAX_PIXELS = 16384 * 8640
@@ -36,7 +37,10 @@ def patterns_cmd(
         ps = pat.pattern_set(w, h, order, step)
     except ValueError as e:
         fail(f"--step {step}: {e}; use a smaller --step")
-    output_dir(out, "-o", "patterns", force)
+    try:
+        capture.check_sequence_dir(out, ps, "pattern_", writer="patterns", force=force, option="-o")
+    except OutputError as e:
+        fail(str(e))
     paths = capture.write_sequence(out, pat.frames(ps), ps, prefix="pattern_", writer="patterns", force=force)
     say(f"wrote {len(paths)} images ({ps.col_bits} column bits, {ps.row_bits} row bits, "
         f"order {order}; white = #{ps.white}, black = #{ps.black}) and patterns.json to {out}")

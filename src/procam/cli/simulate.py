@@ -8,7 +8,8 @@ from pathlib import Path
 import typer
 
 from ..patterns import ORDERS
-from ._app import ForceOpt, app, console, fail, is_tty, number, output_dir, say, user_errors, warn
+from ..errors import OutputError
+from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
@@ -66,9 +67,14 @@ def simulate_cmd(
     number(noise, "--noise", lo=0, hi=255, unit=" DN (8-bit grey levels)", what="a read noise")
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
     angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
-    output_dir(out_dir, "OUT_DIR", "simulate", force)
+    from .. import capture, patterns
 
     scene = sim.preset(preset)
+    try:
+        capture.check_sequence_dir(out_dir, patterns.pattern_set(*scene.proj_size, order), writer="simulate",
+                                   force=force, extra=("truth.json",), option="OUT_DIR")
+    except OutputError as e:
+        fail(str(e))
     if pose is not None or distance is not None or frame != "camera":
         scene = sim.with_board_pose(scene, angles, distance=distance, frame=frame)
     changes = {"bits": bits}

@@ -61,8 +61,12 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
         raise ProcamError(f"{path}: {what}; give a file name ending in one of "
                           f"{', '.join('.' + k for k in sorted(supported))}")
     try:
+        # procam's mark (so a later run knows it may overwrite the file) and no dates: the same figure, the same bytes
+        meta = {"png": {"Software": "procam"}, "pdf": {"Creator": "procam", "CreationDate": None},
+                "svg": {"Creator": "procam", "Date": None}, "ps": {"Creator": "procam"},
+                "eps": {"Creator": "procam"}}.get(fmt)
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=fmt)
+            fig.savefig(tmp, dpi=dpi, format=fmt, **({"metadata": meta} if meta else {}))
     finally:
         _close(fig)
     return path
