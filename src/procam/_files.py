@@ -579,15 +579,15 @@ def prepare_output_dir(folder, writer: str, *, force: bool = False, option: str 
     else:
         other = bool(listed) and writer != legacy
         captured = False
+    if captured:
+        raise OutputError(f"{label}: the folder holds a camera capture; give a new or empty folder (procam never "
+                          "writes into a capture)")
     if visible and not force:
         if foreign:
             raise OutputError(
                 f"{label}: the folder holds {len(foreign)} file(s) procam did not write ({_listing(foreign)}); give "
                 "a new or empty folder, or add --force to write next to them (procam never overwrites or deletes "
                 "files it did not write)")
-        if captured:
-            raise OutputError(f"{label}: the folder holds a camera capture; give a new or empty folder (a capture "
-                              "is never overwritten)")
         if other:
             what = man.get("writer") if man is not None else legacy
             raise OutputError(f"{label}: the folder holds the output of 'procam {what}'; give a new or empty folder, "

@@ -180,6 +180,22 @@ def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
         return
     diagnose(stack, ps, folder, files, sub)
     brightest, darkest = int(np.argmax(p5)), int(np.argmin(p95))
+    if brightest == ps.white and darkest == ps.black:
+        # the white and black frames are where they belong, but other frames leave their range
+        w, b = sub[ps.white], sub[ps.black]
+        c = w - b
+        lit = c > 0.25 * np.percentile(c, 99)
+        if lit.sum() >= 10:
+            out = np.array([np.mean(sub[k][lit] - w[lit] > 0.25 * c[lit]) + np.mean(b[lit] - sub[k][lit] > 0.25 * c[lit])
+                            for k in range(len(sub))])
+            worst = [int(k) for k in np.argsort(-out)[:3] if out[k] > 0.02]
+            if worst:
+                names = ", ".join(f"{Path(files[k]).name} (#{k}, {frame_role(k, ps)}, {out[k]:.0%})" for k in worst)
+                raise CaptureError(
+                    f"{folder}: the white and black frames are where order '{ps.order}' puts them, but {names} "
+                    "{} brighter than the white frame or darker than the black one on part of the lit pixels: "
+                    "a frame from another pose or capture, or the exposure or the light changed during the capture "
+                    "— replace the frame or re-capture".replace("{}", "is" if len(worst) == 1 else "are"))
     other = [o for o in patterns.ORDERS if o != ps.order][0]
     ps2 = patterns.pattern_set(ps.width, ps.height, other, ps.step)
     if brightest == ps2.white and darkest == ps2.black:
@@ -273,7 +289,7 @@ def foreign_frames(sub: np.ndarray, ps: patterns.PatternSet, min_error: float = 
     for j, (a, i) in enumerate(pairs):
         m = lit & (np.abs(sub[a] - sub[i]) > 0.5 * span)
         if m.sum() >= 100:
-            err[j] = float(np.median(np.abs(sub[a][m] + sub[i][m] - sums[m]) / span[m]))
+            err[j] = float(np.percentile(np.abs(sub[a][m] + sub[i][m] - sums[m]) / span[m], 90))
     if np.isfinite(err).sum() < 3:
         return []
     med = float(np.nanmedian(err))

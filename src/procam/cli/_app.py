@@ -242,11 +242,14 @@ def number(value, option: str, *, lo: float | None = None, hi: float | None = No
     if ok and hi is not None:
         ok = value <= hi
     if not ok:
+        def g(x):
+            return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"
+
         rng = []
         if lo is not None:
-            rng.append(f"{'>' if lo_open else '>='} {lo:g}")
+            rng.append(f"{'>' if lo_open else '>='} {g(lo)}")
         if hi is not None:
-            rng.append(f"<= {hi:g}")
+            rng.append(f"<= {g(hi)}")
         fail(f"{option} must be {what}{' ' + ' and '.join(rng) if rng else ''}{unit}, got {value}")
     return value
 

@@ -44,6 +44,9 @@ def export_cmd(
             fail("--format opengl needs --near and --far (clipping distances in the calibration's units, e.g. mm)")
         if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far <= 1e12):
             fail(f"--near and --far must be finite with 0 < near < far <= 1e12, got {near} and {far}")
+        if far / near > 1e7:
+            fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
+                 "so raise --near")
         if world not in ("camera", "projector"):
             fail(f"--world must be camera or projector, got {world!r}")
     elif fmt == "kamino410":

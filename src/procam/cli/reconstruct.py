@@ -43,8 +43,8 @@ def reconstruct_cmd(
     output_path(residuals, "--residuals", (".png",), inputs=(calibration, pose_dir))
     if use not in ("both", "col", "row"):
         fail(f"--use must be both, col or row, got {use!r}")
-    if not (math.isfinite(max_residual) and max_residual > 0):
-        fail(f"--max-residual must be a positive number of projector pixels, got {max_residual}")
+    if not (math.isfinite(max_residual) and 0 < max_residual <= 10000):
+        fail(f"--max-residual must be a positive number of projector pixels (at most 10000), got {max_residual}")
     if residuals is not None and board is None:
         fail("--residuals needs --board (the plane is fitted to the board's points)")
     lo, hi = _board.CORNERS_PER_SIDE
