@@ -65,7 +65,10 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
         meta = {"png": {"Software": "procam"}, "pdf": {"Creator": "procam", "CreationDate": None},
                 "svg": {"Creator": "procam", "Date": None}, "ps": {"Creator": "procam"},
                 "eps": {"Creator": "procam"}}.get(fmt)
-        with atomic_path(path) as tmp:
+        import matplotlib
+
+        # SVG element ids come from a random salt unless one is given
+        with atomic_path(path) as tmp, matplotlib.rc_context({"svg.hashsalt": "procam"}):
             fig.savefig(tmp, dpi=dpi, format=fmt, **({"metadata": meta} if meta else {}))
     finally:
         _close(fig)
