@@ -277,7 +277,10 @@ _TEMP = re.compile(r"^\..+\.tmp(\d+)(\.[^.]*)?$")
 def temp_path(path) -> Path:
     """The hidden temporary name :func:`atomic_path` writes ``path`` under: ``.STEM.tmpPID.SUFFIX``."""
     path = Path(path)
-    return path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
+    stem = path.stem
+    if len(path.name) > 200:  # a name near the file system's limit: keep the temporary name within it
+        stem = f"{stem[:100]}~{zlib.crc32(path.name.encode()):08x}"
+    return path.with_name(f".{stem}.tmp{os.getpid()}{path.suffix[:20]}")
 
 
 def _pid_alive(pid: int) -> bool:
@@ -463,8 +466,13 @@ def read_manifest(folder) -> dict | None:
         return None
     if not (isinstance(doc, dict) and doc.get("format") == "procam-manifest" and isinstance(doc.get("files"), dict)):
         return None
-    doc["files"] = {str(k): str(v) for k, v in doc["files"].items()}
+    # plain names only: a manifest never points outside its folder
+    doc["files"] = {str(k): str(v) for k, v in doc["files"].items() if _plain_name(str(k))}
     return doc
+
+
+def _plain_name(name: str) -> bool:
+    return bool(name) and name not in (".", "..") and "/" not in name and "\\" not in name and "\x00" not in name
 
 
 def _write_manifest(folder, doc: dict) -> None:
@@ -508,7 +516,7 @@ def _legacy_files(folder: Path) -> set[str]:
         return set()
     if (folder / "capture.json").exists():
         return set()
-    return {str(f) for f in meta["files"]} | {"patterns.json", "truth.json"}
+    return {str(f) for f in meta["files"] if _plain_name(str(f))} | {"patterns.json", "truth.json"}
 
 
 def read_sidecar_quiet(folder, name: str):

@@ -452,7 +452,8 @@ def _listed(folder) -> list[str] | None:
             return frames
     meta = _files.read_sidecar_quiet(folder, "patterns.json")
     if isinstance(meta, dict) and isinstance(meta.get("files"), list) and meta["files"]:
-        return [str(f) for f in meta["files"]]
+        names = [str(f) for f in meta["files"]]
+        return names if all(Path(n).name == n for n in names) else None
     return None
 
 

@@ -280,6 +280,19 @@ def _capture_folder(folder: Path, inputs) -> bool:
     return (folder / "patterns.json").is_file() or (folder / "capture.json").is_file()
 
 
+def distinct_poses(poses) -> None:
+    """Refuse a pose folder given twice (it would count as two poses of the board)."""
+    seen = {}
+    for p in poses:
+        try:
+            key = Path(p).resolve()
+        except OSError:
+            key = Path(p)
+        if key in seen:
+            fail(f"{p}: this pose folder is given twice (also as {seen[key]}); give each pose once")
+        seen[key] = p
+
+
 def assumed_size(calib, key: str) -> str:
     """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
     its size was assumed from the principal point; '' otherwise."""

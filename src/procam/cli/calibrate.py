@@ -12,7 +12,7 @@ from .. import single_pose as _sp
 from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
                    EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app,
-                   choice, console, fail, optional_size, output_path, parse_board, plain, pose_options, say,
+                   choice, console, distinct_poses, fail, optional_size, output_path, parse_board, plain, pose_options, say,
                    user_errors, value, warn)
 
 Cod = choice("Cod", _sp.COD_MODES)
@@ -89,6 +89,7 @@ def calibrate_cmd(
     from .. import io, pipeline
 
     brd = parse_board(board, square)
+    distinct_poses(poses)
     multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,

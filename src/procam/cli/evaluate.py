@@ -8,7 +8,7 @@ import typer
 from rich.table import Table
 
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, fail,
+                   OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console, distinct_poses, fail,
                    assumed_size, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value)
 
 
@@ -65,6 +65,7 @@ def evaluate_cmd(
     from ..evaluate import evaluate
 
     brd = parse_board(board, square)
+    distinct_poses(poses)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine, window=window, estimator=estimator, min_corners=6)
     output_path(out, "-o", (".json",), inputs=(calibration, *poses))

@@ -11,7 +11,7 @@ from rich.table import Table
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    ForceOpt, OrderOpt, ProjectorOpt, RefineOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt, app, console,
-                   err_console, fail, optional_size, output_dir, parse_board, plain, pose_options, say, user_errors,
+                   distinct_poses, err_console, fail, optional_size, output_dir, parse_board, plain, pose_options, say, user_errors,
                    value)
 
 #: Most pose sets the experiment calibrates (every subset of at least --min-set poses).
@@ -70,6 +70,7 @@ def experiment_cmd(
     from .. import pipeline
 
     brd = parse_board(board, square)
+    distinct_poses(poses)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine_window, window=window, estimator=estimator)
     if min_set < 2:
