@@ -21,7 +21,7 @@ import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
 from procam import _files, capture, io, patterns, simulate
-from procam.errors import CalibrationError, CaptureError, OutputError
+from procam.errors import CalibrationError, OutputError
 
 BOARD = ["--board", "10x6", "--square", "24"]
 
@@ -633,7 +633,7 @@ def test_small_board_calibrates_from_several_poses(tmp_path):
     for k, a in enumerate(POSE_ANGLES):
         render_pose(tmp_path / f"b{k}", a, seed=k, board_cols=3, board_rows=3, square=60.0)
         folders.append(tmp_path / f"b{k}")
-    rc, out, err = run_cli(["calibrate", *folders, "--board", "3x3", "--square", "60", "-o", tmp_path / "c.json"])
+    rc, _, err = run_cli(["calibrate", *folders, "--board", "3x3", "--square", "60", "-o", tmp_path / "c.json"])
     assert rc == 0, err
     assert "9 of 9 corners" in out and io.load_calibration(tmp_path / "c.json").method == "multi-pose"
 
@@ -675,20 +675,20 @@ def test_simulate_margin_warning_has_no_sentinel(tmp_path):
 def test_version():
     import procam
 
-    rc, out, err = run_cli(["--version"])
+    rc, out, _ = run_cli(["--version"])
     assert rc == 0 and out.strip() == f"procam {procam.__version__}"
 
 
 @pytest.mark.parametrize("cod", ["auto", "paper", "image-center"])
 def test_every_cod_choice(cod, poses, tmp_path):
-    rc, out, err = run_cli(["calibrate", poses[0], *BOARD, "--cod", cod, "-o", tmp_path / "c.json"])
+    rc, _, err = run_cli(["calibrate", poses[0], *BOARD, "--cod", cod, "-o", tmp_path / "c.json"])
     assert rc in (0, 3), err  # 3: a degenerate verdict (the lead's --force); never a traceback
     assert "Traceback" not in err
 
 
 @pytest.mark.parametrize("model", ["none", "k1", "k1k2", "k1k2p1p2", "k1k2p1p2k3", "rational"])
 def test_every_distortion_model(model, poses, tmp_path):
-    rc, out, err = run_cli(["calibrate", *poses, *BOARD, "--cam-dist", model, "--proj-dist", model, "--no-refine",
+    rc, _, err = run_cli(["calibrate", *poses, *BOARD, "--cam-dist", model, "--proj-dist", model, "--no-refine",
                             "-o", tmp_path / "c.json"])
     assert rc == 0, err
 
@@ -699,15 +699,15 @@ def test_every_pose_option_choice(opt, poses, tmp_path):
 
     allowed = {"--decode": decode.METHODS, "--detector": board.DETECTORS, "--estimator": correspond.ESTIMATORS}[opt]
     for v in allowed:
-        rc, out, err = run_cli(["correspond", poses[0], *BOARD, opt, v, "-o", tmp_path / "c.json"])
+        rc, _, err = run_cli(["correspond", poses[0], *BOARD, opt, v, "-o", tmp_path / "c.json"])
         assert rc == 0, (v, err)
 
 
 @pytest.mark.parametrize("order", ["opencv", "moreno"])
 def test_every_order_choice(order, tmp_path):
-    rc, out, err = run_cli(["patterns", "-p", "64x48", "--order", order, "-o", tmp_path / "p"])
+    rc, _, err = run_cli(["patterns", "-p", "64x48", "--order", order, "-o", tmp_path / "p"])
     assert rc == 0, err
-    rc, out, err = run_cli(["decode", tmp_path / "p", "--order", order])
+    rc, _, err = run_cli(["decode", tmp_path / "p", "--order", order])
     assert rc == 0, err
 
 
@@ -745,7 +745,7 @@ def test_random_numbers_never_give_a_traceback(tmp_path, calib_file):
     @given(k=st.integers(0, len(templates) - 1), a=number, b=number, c=number)
     def check(k, a, b, c):
         args = [x.format(a, b, c) if isinstance(x, str) else x for x in templates[k]]
-        rc, out, err = run_cli(args)
+        rc, _, err = run_cli(args)
         lines = [line for line in err.splitlines() if line.strip()]
         assert rc == 2 and len(lines) == 1 and "Traceback" not in err, (args, rc, err)
 

@@ -184,9 +184,8 @@ def check_image_bytes(path, data: bytes) -> None:
                 break
         if what is None and last != b"IEND":
             what = "is truncated (no end marker: the file was not written completely)"
-    elif head[:2] == b"\xff\xd8":
-        if b"\xff\xd9" not in data[-4096:]:
-            what = "is truncated (no JPEG end marker: the file was not written completely)"
+    elif head[:2] == b"\xff\xd8" and b"\xff\xd9" not in data[-4096:]:
+        what = "is truncated (no JPEG end marker: the file was not written completely)"
     if what is not None:
         raise CaptureError(f"{path}: {what}; re-save or re-capture it, or remove it from the folder")
 
@@ -367,13 +366,13 @@ def write_npz(path, compress: bool = True, **arrays) -> Path:
     import zipfile
 
     path = Path(path)
-    with atomic_path(path) as tmp:
-        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED) as zf:
-            for name, a in arrays.items():
-                info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                info.compress_type = zf.compression
-                with zf.open(info, "w", force_zip64=True) as f:
-                    np.lib.format.write_array(f, np.asanyarray(a), allow_pickle=False)
+    mode = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", mode) as zf:
+        for name, a in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = mode
+            with zf.open(info, "w", force_zip64=True) as f:
+                np.lib.format.write_array(f, np.asanyarray(a), allow_pickle=False)
     return path
 
 

@@ -15,7 +15,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-__all__ = ["single_threaded_blas", "deterministic", "deterministic_call"]
+__all__ = ["deterministic", "deterministic_call", "single_threaded_blas"]
 
 
 @contextmanager

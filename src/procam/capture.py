@@ -485,8 +485,8 @@ def sequence_files(folder, images) -> tuple[list[Path], tuple]:
         files = sorted((by_name[n] for n in keep), key=lambda p: _files.natural_key(p.name))
         warn = ()
         if extra:
-            warn = (f"{folder}: ignored {', '.join(extra[:4])}{' ...' if len(extra) > 4 else ''}: not among the "
-                    f"{len(files)} frames the folder's {'manifest' if man is not None else 'patterns.json'} lists",)
+            warn = ((f"{folder}: ignored {', '.join(extra[:4])}{' ...' if len(extra) > 4 else ''}: not among the "
+                     f"{len(files)} frames the folder's {'manifest' if man is not None else 'patterns.json'} lists"),)
         return files, warn
     return list(images), ()
 

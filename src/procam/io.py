@@ -301,7 +301,7 @@ def _check_rms(path, field: str, v) -> float:
     return float(v)
 
 
-def validate_calibration(calib, path) -> "Calibration":
+def validate_calibration(calib, path) -> Calibration:
     """Check every field of a loaded :class:`~procam.calibration.Calibration`: shapes, finiteness, positive
     focal lengths, plausible magnitudes, a rotation ``R``, a non-zero ``T``, known distortion models.
 
@@ -389,7 +389,7 @@ def _load_yaml(path):
             if m is not None:
                 return _check_size(path, k, m)
             assumed.append(k)
-            return (max(1, int(round(2 * K[0, 2]))), max(1, int(round(2 * K[1, 2]))))
+            return (max(1, round(2 * K[0, 2])), max(1, round(2 * K[1, 2])))
 
         def dist(k):
             m = mat(k)

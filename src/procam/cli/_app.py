@@ -23,11 +23,11 @@ from rich.markup import escape
 from rich.text import Text
 from typer.core import TyperGroup
 
+from .. import _files
 from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
 from .. import patterns as _patterns
-from .. import _files
 from ..errors import OutputError, ProcamError
 
 

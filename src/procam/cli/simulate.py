@@ -7,8 +7,8 @@ from pathlib import Path
 
 import typer
 
-from ..patterns import ORDERS
 from ..errors import OutputError
+from ..patterns import ORDERS
 from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
