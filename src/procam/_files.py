@@ -634,26 +634,32 @@ def remove_listed(folder, names) -> list[Path]:
     return gone
 
 
-def check_writable_dir(folder, label: str | None = None, need_bytes: int = 1 << 20) -> None:
-    """Raise :class:`OutputError` when ``folder`` (an existing folder) cannot take a new file: read-only,
-    no permission, or less than ``need_bytes`` free."""
+def why_not_writable(folder, need_bytes: int = 1 << 20) -> str | None:
+    """Why ``folder`` (an existing folder) cannot take a new file -- read-only, no permission, less than
+    ``need_bytes`` free -- or None when it can (a probe file is created and removed)."""
     import shutil
     import tempfile
 
-    label = label or str(folder)
     try:
         fd, probe = tempfile.mkstemp(prefix=".procam-probe-", dir=folder)
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
-        why = {errno.EROFS: "the file system is read-only", errno.EACCES: "no permission to write there",
-               errno.EPERM: "no permission to write there", errno.ENOSPC: "the disk is full",
-               errno.EDQUOT: "the disk quota is exhausted"}.get(e.errno, e.strerror or str(e))
-        raise OutputError(f"{label}: cannot write into {folder} ({why}); choose another place") from None
+        return {errno.EROFS: "the file system is read-only", errno.EACCES: "no permission to write there",
+                errno.EPERM: "no permission to write there", errno.ENOSPC: "the disk is full",
+                errno.EDQUOT: "the disk quota is exhausted"}.get(e.errno, e.strerror or str(e))
     try:
         free = shutil.disk_usage(folder).free
     except OSError:
-        return
+        return None
     if free < need_bytes:
-        raise OutputError(f"{label}: only {fmt_bytes(free)} free on the disk of {folder} (about "
-                          f"{fmt_bytes(need_bytes)} needed); free some space or choose another place")
+        return f"only {fmt_bytes(free)} free on the disk, about {fmt_bytes(need_bytes)} needed"
+    return None
+
+
+def check_writable_dir(folder, label: str | None = None, need_bytes: int = 1 << 20) -> None:
+    """Raise :class:`OutputError` when ``folder`` (an existing folder) cannot take a new file
+    (:func:`why_not_writable`)."""
+    why = why_not_writable(folder, need_bytes)
+    if why is not None:
+        raise OutputError(f"{label or folder}: cannot write into {folder} ({why}); choose another place")

@@ -254,14 +254,6 @@ def number(value, option: str, *, lo: float | None = None, hi: float | None = No
     return value
 
 
-def check_memory(need_bytes: float, what: str, hint: str) -> None:
-    """Refuse a job whose memory estimate ``need_bytes`` exceeds the memory available (one line)."""
-    avail = _files.available_memory()
-    if avail is not None and need_bytes > 0.8 * avail:
-        fail(f"{what} needs about {_files.fmt_bytes(need_bytes)} of memory, more than the "
-             f"{_files.fmt_bytes(avail)} available; {hint}")
-
-
 def _capture_folder(folder: Path, inputs) -> bool:
     """Does ``folder`` hold a capture sequence (a pose folder given to this command, or a sequence folder)?"""
     try:
@@ -313,14 +305,16 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
     if path.is_dir():
         fail(f"{option} {path}: is a folder; give a file name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        fail(f"{option} {path}: cannot create the folder {path.parent} ({e.strerror or e})")
-    try:
-        _files.check_writable_dir(path.parent, f"{option} {path}")
-    except OutputError as e:
-        fail(str(e))
+    # the folder is created when the file is written (an early failure leaves no empty folder behind)
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        fail(f"{option} {path}: cannot create the folder {path.parent} ({parent} is not a folder)")
+    why = _files.why_not_writable(parent)
+    if why is not None:
+        where = f"write into {parent}" if parent == path.parent else f"create the folder {path.parent}"
+        fail(f"{option} {path}: cannot {where} ({why}); choose another place")
     if path.is_symlink() and not path.exists():
         fail(f"{option} {path}: is a broken or looping symbolic link; give another name")
     if path.exists():

@@ -89,7 +89,6 @@ def calibrate_cmd(
     from .. import io, pipeline
 
     brd = parse_board(board, square)
-    distinct_poses(poses)
     multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
@@ -117,6 +116,7 @@ def calibrate_cmd(
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
         if method == "multi" and len(poses) < 2:
             fail("--method multi needs at least two pose folders (three or more recommended)")
+        distinct_poses(poses)
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
                                                 step=step)
