@@ -756,3 +756,20 @@ def test_random_numbers_never_give_a_traceback(tmp_path, calib_file):
     before = snapshot(mine, notes)
     check()
     assert snapshot(mine, notes) == before and not leftovers(tmp_path)
+
+
+@pytest.mark.parametrize("cmd", ["experiment", "simulate", "study"])
+def test_ctrl_c_prints_one_line_and_leaves_no_output_folder(cmd, poses, tmp_path, monkeypatch):
+    from procam.paper import experiment, study
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    module, attr = {"experiment": (experiment, "run"), "simulate": (simulate, "render"),
+                    "study": (study, "run_study")}[cmd]
+    monkeypatch.setattr(module, attr, interrupt)
+    out = tmp_path / "out"
+    args = {"experiment": ["experiment", *poses, *BOARD, "-o", out], "simulate": ["simulate", out],
+            "study": ["study", "camera", "-o", out, "--grid", "0", "--trials", "1"]}[cmd]
+    bad(args, "interrupted", code=130)
+    assert not out.exists() and not leftovers(tmp_path)
