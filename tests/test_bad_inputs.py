@@ -637,7 +637,7 @@ def test_small_board_calibrates_from_several_poses(tmp_path):
     for k, a in enumerate(POSE_ANGLES):
         render_pose(tmp_path / f"b{k}", a, seed=k, board_cols=3, board_rows=3, square=60.0)
         folders.append(tmp_path / f"b{k}")
-    rc, _, err = run_cli(["calibrate", *folders, "--board", "3x3", "--square", "60", "-o", tmp_path / "c.json"])
+    rc, out, err = run_cli(["calibrate", *folders, "--board", "3x3", "--square", "60", "-o", tmp_path / "c.json"])
     assert rc == 0, err
     assert "9 of 9 corners" in out and io.load_calibration(tmp_path / "c.json").method == "multi-pose"
 
