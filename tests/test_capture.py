@@ -7,7 +7,7 @@ import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
 from procam import _files, capture, patterns
-from procam.errors import CaptureError
+from procam.errors import CaptureError, OutputError
 
 W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel
 
@@ -196,7 +196,9 @@ def test_write_sequence_removes_stale_frames_of_a_longer_sequence(tmp_path):
     (tmp_path / "notes.png").write_bytes(b"")
     (tmp_path / "pattern_a.png").write_bytes(b"")
     small = patterns.pattern_set(37, 19)
-    paths = capture.write_sequence(tmp_path, patterns.generate(37, 19), small, prefix="pattern_")
+    with pytest.raises(OutputError, match="2 file.s. procam did not write .notes.png, pattern_a.png.*--force"):
+        capture.write_sequence(tmp_path, patterns.generate(37, 19), small, prefix="pattern_")
+    paths = capture.write_sequence(tmp_path, patterns.generate(37, 19), small, prefix="pattern_", force=True)
     left = sorted(p.name for p in tmp_path.glob("pattern_*.png"))
     assert big.count > small.count and left == sorted([p.name for p in paths] + ["pattern_a.png"])
     assert (tmp_path / "notes.png").exists()

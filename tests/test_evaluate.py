@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from procam import evaluate, models, simulate
+from procam import evaluate, simulate
 from procam.calibration import Calibration, Device, Distortion
 from procam.errors import CalibrationError
 from procam.view import View

@@ -294,7 +294,7 @@ def test_cli_export(tmp_path):
     assert ex.load_kamino410(tmp_path / "k.xml").camera.image_size == (640, 400)
     code, out, err = run_cli(["export", calib_path, "--format", "maps", "-o", tmp_path / "maps", "--rectify"])
     assert code == 0, err
-    names = sorted(p.name for p in (tmp_path / "maps").iterdir())
+    names = sorted(p.name for p in (tmp_path / "maps").iterdir() if not p.name.startswith("."))
     assert names == ["camera_rectify.npz", "camera_undistort.npz", "projector_predistort.npz",
                      "projector_rectify.npz"]
     m = np.load(tmp_path / "maps" / "camera_undistort.npz")

@@ -325,17 +325,31 @@ def test_write_capture_rejects_wrong_stack(tmp_path):
 
 
 def test_write_capture_removes_stale_frames(tmp_path):
+    """Frames of an earlier, longer simulated sequence are removed; files procam did not write never are."""
     from procam import patterns
+    from procam.errors import OutputError
 
-    ps = patterns.pattern_set(37, 19)
-    for name in ("24.png", "99.png", "5.png", "00.png"):
-        (tmp_path / name).write_bytes(b"stale")
-    (tmp_path / "photo.png").write_bytes(b"keep")
-    stack = np.zeros((ps.count, 4, 6), np.uint8)
-    paths = sim.write_capture(tmp_path, stack, {"projector": {"size": [37, 19]}, "x": np.nan})
-    assert sorted(p.name for p in tmp_path.glob("*.png")) == sorted([p.name for p in paths] + ["photo.png"])
-    assert (tmp_path / "00.png").read_bytes() != b"stale"
+    big, ps = patterns.pattern_set(640, 480), patterns.pattern_set(37, 19)
+    sim.write_capture(tmp_path, np.zeros((big.count, 4, 6), np.uint8), {"projector": {"size": [640, 480]}})
+    paths = sim.write_capture(tmp_path, np.zeros((ps.count, 4, 6), np.uint8), {"projector": {"size": [37, 19]},
+                                                                             "x": np.nan})
+    assert big.count > ps.count and sorted(p.name for p in tmp_path.glob("*.png")) == sorted(p.name for p in paths)
     assert json.loads((tmp_path / "truth.json").read_text())["x"] is None
+    (tmp_path / "photo.png").write_bytes(b"keep")
+    with pytest.raises(OutputError, match="photo.png"):
+        sim.write_capture(tmp_path, np.zeros((big.count, 4, 6), np.uint8), {"projector": {"size": [640, 480]}})
+    sim.write_capture(tmp_path, np.zeros((ps.count, 4, 6), np.uint8), {"projector": {"size": [37, 19]}}, force=True)
+    assert (tmp_path / "photo.png").read_bytes() == b"keep"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    for name in ("24.png", "99.png", "5.png", "00.png"):
+        (mine / name).write_bytes(b"user's")
+    for force in (False, True):
+        with pytest.raises(OutputError):
+            sim.write_capture(mine, np.zeros((ps.count, 4, 6), np.uint8), {"projector": {"size": [37, 19]}},
+                              force=force)
+    assert sorted(p.name for p in mine.iterdir()) == ["00.png", "24.png", "5.png", "99.png"]
+    assert all(p.read_bytes() == b"user's" for p in mine.iterdir())
 
 
 def test_cli_simulate(tmp_path, monkeypatch):

@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 
 from procam import board, crlb, models, simulate, single_pose as sp
-from procam.errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, ProcamWarning,
-                           WeakPoseWarning)
+from procam.errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, ProcamWarning)
 from procam.view import View
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"

@@ -13,6 +13,7 @@ from conftest import run_cli
 
 from procam import evaluate, io, multi_pose, pipeline, simulate, single_pose
 from procam.board import Board
+from procam.calibration import Distortion
 from procam.errors import CalibrationError, DegeneratePoseWarning, ProcamWarning, WeakPoseWarning
 from procam.view import View
 
@@ -123,6 +124,10 @@ def test_cli_the_same_folder_twice(fake_folders, tmp_path):
     f = fake_folders("p1", _view("paper", (15, -35, 0), seed=1))
     g = fake_folders("p2", _view("paper", (-15, 20, 5), seed=2))
     code, _, stderr, out = _calibrate([f, g, f], tmp_path)
+    assert code == 2 and len(stderr.strip().splitlines()) == 1 and "given twice" in stderr and not out.exists()
+    # the same pose under another folder name: caught by its corners
+    h = fake_folders("p1-copy", _view("paper", (15, -35, 0), seed=1))
+    code, _, stderr, out = _calibrate([f, g, h], tmp_path)
     assert code == 2 and len(stderr.strip().splitlines()) == 1 and "same pose" in stderr and not out.exists()
 
 
@@ -153,10 +158,12 @@ def test_an_unknown_distortion_model_is_refused(tmp_path):
     d = json.loads(path.read_text())
     d["camera"]["distortion"] = {"model": "fisheye", "coeffs": [0.1, 0.0, 0.0, 0.0]}
     path.write_text(json.dumps(d))
-    with pytest.raises(Exception, match="unknown distortion model 'fisheye'"):
+    with pytest.raises(Exception, match="distortion.model must be none, division or opencv, got 'fisheye'"):
         io.load_calibration(path)
+    with pytest.raises(ValueError, match="unknown distortion model 'fisheye'"):
+        Distortion.from_dict(d["camera"]["distortion"])
     code, _, err = run_cli(["evaluate", path, tmp_path, "--board", "10x6", "--square", "24"])
-    assert code == 2 and "unknown distortion model 'fisheye'" in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and "got 'fisheye'" in err and len(err.strip().splitlines()) == 1
 
 
 def test_multi_pose_distortion_terms_the_poses_cannot_determine():

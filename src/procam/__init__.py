@@ -3,7 +3,9 @@
 The modules, from the captures up (each imports only those above it in this list)::
 
     errors        ProcamError and its subclasses (one-line messages), procam's warning classes
-    _files        image reads, natural sort, atomic writes, JSON helpers (the bottom floor)
+    _files        image reads, natural sort, atomic writes, JSON helpers, the manifest of procam's files
+                  (the bottom floor)
+    _threads      one OpenCV / BLAS thread where results must not depend on threads
     _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)
     capture       the capture-folder format: read + validate a pose folder, write a sequence

@@ -39,6 +39,11 @@ class CalibrationFileError(ProcamError):
     """A calibration file cannot be read or written."""
 
 
+class OutputError(ProcamError):
+    """An output cannot be written where asked (a folder holding files procam did not write, a read-only
+    or full disk, a file that would overwrite an input ...)."""
+
+
 class ProcamWarning(UserWarning):
     """Base class of procam's warnings: the result exists, read why it may not be what you think."""
 

@@ -355,13 +355,12 @@ def stereo_rectify(calib: Calibration, *, scale: float = 1.0, max_size: int = 81
 
 
 def save_maps(path, map_x, map_y, **meta) -> Path:
-    """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically."""
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, map_x=np.asarray(map_x, np.float32), map_y=np.asarray(map_y, np.float32),
-                                **{k: np.asarray(v) for k, v in meta.items()})
-    return path
+    """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically (the same
+    tables give the same bytes)."""
+    from ._files import write_npz
+
+    return write_npz(path, map_x=np.asarray(map_x, np.float32), map_y=np.asarray(map_y, np.float32),
+                     **{k: np.asarray(v) for k, v in meta.items()})
 
 
 # --------------------------------------------------------------------------------------------------

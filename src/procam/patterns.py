@@ -148,6 +148,27 @@ def bit_planes(n: int, bits: int, offset: int) -> np.ndarray:
     return ((g[None, :] >> shifts[:, None]) & 1).astype(bool)
 
 
+def frames(ps: PatternSet, white: int = 255, black: int = 0, dtype=np.uint8):
+    """The sequence of ``ps`` one (height, width) image at a time, in order (the same images as
+    :func:`generate`, without holding them all in memory)."""
+    cols = bit_planes(ps.code_width, ps.col_bits, ps.col_offset)[:, np.arange(ps.width) // ps.step]
+    rows = bit_planes(ps.code_height, ps.row_bits, ps.row_offset)[:, np.arange(ps.height) // ps.step]
+    role = {ps.white: ("white", 0, False), ps.black: ("black", 0, False)}
+    for j, (a, b) in enumerate(ps.pair_indices("col")):
+        role[int(a)], role[int(b)] = ("col", j, False), ("col", j, True)
+    for j, (a, b) in enumerate(ps.pair_indices("row")):
+        role[int(a)], role[int(b)] = ("row", j, False), ("row", j, True)
+    for k in range(ps.count):
+        kind, j, inverse = role[k]
+        if kind in ("white", "black"):
+            yield np.full((ps.height, ps.width), white if kind == "white" else black, dtype)
+            continue
+        bits = cols[j] if kind == "col" else rows[j]
+        line = np.where(bits != inverse, white, black).astype(dtype)
+        yield np.ascontiguousarray(np.broadcast_to(line[None, :] if kind == "col" else line[:, None],
+                                                   (ps.height, ps.width)))
+
+
 def generate(width: int, height: int, order: str = "opencv", white: int = 255,
              black: int = 0, dtype=np.uint8, step: int = 1) -> np.ndarray:
     """The full sequence as an array ``(count, height, width)`` of ``dtype``.

@@ -20,7 +20,7 @@ from . import correspond as _corr
 from . import decode as _decode
 from . import plausibility as _plausible
 from .board import Board
-from .errors import BoardNotFoundError, CorrespondenceError
+from .errors import BoardNotFoundError, CorrespondenceError, ProcamError
 from .patterns import PatternSet
 from .view import View
 
@@ -54,6 +54,20 @@ class PoseOptions:
             raise ValueError(f"refine window must be from 0 to 100 px, got {self.refine_window!r}")
         if self.refine not in _board.REFINERS:
             raise ValueError(f"refine must be one of {', '.join(_board.REFINERS)}, got {self.refine!r}")
+
+
+def as_board(board) -> Board:
+    """``board`` as a :class:`~procam.board.Board`: a Board, or a ``(cols, rows, square)`` tuple.
+
+    Raises :class:`~procam.errors.ProcamError` (one line) for anything else, e.g. ``(cols, rows)`` without
+    the square size (the length unit of every output), or counts the Board refuses.
+    """
+    if isinstance(board, Board):
+        return board
+    if isinstance(board, (tuple, list)) and len(board) == 3:
+        return Board(*board)
+    raise ProcamError(f"board must be a procam.Board(cols, rows, square) of inner corners and the square size "
+                      f"(or a (cols, rows, square) tuple), got {board!r}")
 
 
 def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto", refine_window=None, name="pose",
@@ -101,6 +115,7 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     :class:`~procam.errors.CaptureError` when the decoded capture is not a plausible picture of the projector
     (:mod:`procam.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
     """
+    board = as_board(board)
     d = options.decode
     maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
                           contrast_threshold=d.contrast_threshold)
@@ -115,6 +130,11 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
                 {**diag, "warnings": warnings}, board)
     n_ok = int(view.valid.sum())
+    if board.n_corners < options.min_corners:
+        raise CorrespondenceError(
+            f"{name}: the board has only {board.n_corners} inner corners ({board.cols}x{board.rows}), fewer than the "
+            f"{options.min_corners} a pose needs here (single-pose calibration); use a larger board, or calibrate "
+            "from several poses (procam calibrate POSE1 POSE2 ... needs 4 corners per pose)")
     if n_ok < options.min_corners:
         raise CorrespondenceError(
             f"{name}: only {n_ok} of {board.n_corners} corners have projector coordinates (need "
@@ -131,6 +151,7 @@ def view_from_folder(folder, board: Board, projector=None, order=None, *, option
     (:func:`procam.capture.load_capture`). The capture's exposure warnings are in
     ``view.diagnostics["warnings"]``.
     """
+    board = as_board(board)
     cap = _capture.load_capture(folder, projector, order, step=step)
     return view_from_stack(cap.stack, cap.pattern_set, board, name=str(Path(folder)), options=options,
                            warnings=cap.warnings, files=cap.files)
@@ -141,6 +162,7 @@ def views_from_folders(folders: Sequence, board: Board, projector=None, order=No
                        progress: Callable[[int, int, str], None] | None = None) -> list[View]:
     """One View per pose folder (:func:`view_from_folder`), in order; ``progress(done, total, folder)``
     after each."""
+    board = as_board(board)
     views = []
     for k, folder in enumerate(folders):
         view, _ = view_from_folder(folder, board, projector, order, options=options, step=step)
@@ -155,6 +177,7 @@ def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOpt
 
     Raises :class:`BoardNotFoundError` naming the file when the board is not found.
     """
+    board = as_board(board)
     img = _files.read_image(image_path)
     c, hint = _board.find_corners([img], board.pattern_size, detector=options.detector,
                                   refine_window=options.refine_window, refine=options.refine)

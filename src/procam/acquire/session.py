@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import __version__, patterns
 from ..errors import ProcamError
-from .._files import to_jsonable, write_image, write_text
+from .._files import record_files, to_jsonable, write_image, write_text
 from . import checks
 from .cameras import to_gray
 
@@ -284,6 +284,10 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
         for name, text in (extra_files or {}).items():
             write_text(tmp / name, text)
         write_text(tmp / "capture.json", json.dumps(to_jsonable(record), indent=1))
+        # the manifest: these frames are a camera's data, which no procam writer replaces or deletes
+        record_files(tmp, {**{f.name: "captured" for f in files_},
+                           **{n: "sidecar" for n in ("patterns.json", "capture.json", *(extra_files or {}))}},
+                     writer="capture")
         if out.exists():
             if any(out.iterdir()):
                 raise ProcamError(f"{out}: something was written into it during the capture; the capture is "

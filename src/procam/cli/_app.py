@@ -8,8 +8,10 @@ Commands import everything heavy (scipy, matplotlib, the solvers, the simulator)
 from __future__ import annotations
 
 import enum
+import errno
 import functools
 import math
+import os
 import re
 import sys
 import warnings
@@ -19,13 +21,15 @@ from typing import Annotated, Optional
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.text import Text
 from typer.core import TyperGroup
 
+from .. import _files
 from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
 from .. import patterns as _patterns
-from ..errors import ProcamError, ProcamWarning
+from ..errors import OutputError, ProcamError, ProcamWarning
 
 
 class _OneLineErrors(TyperGroup):
@@ -79,8 +83,35 @@ def say(message: str):
     console.print(escape(str(message)), highlight=False)
 
 
+#: What to do about an OS error, by errno.
+_OS_HINTS = {errno.ENOSPC: "the disk is full; free some space or write elsewhere",
+             errno.EDQUOT: "the disk quota is exhausted; free some space or write elsewhere",
+             errno.EROFS: "the file system is read-only; write elsewhere",
+             errno.EACCES: "permission denied; check the path and its permissions",
+             errno.EPERM: "not permitted; check the path and its permissions",
+             errno.ENOENT: "no such file or folder; check the path",
+             errno.ENOTDIR: "a part of the path is not a folder; check the path",
+             errno.EISDIR: "is a folder; give a file name",
+             errno.ELOOP: "too many levels of symbolic links (a link loop); check the path",
+             errno.ENAMETOOLONG: "the name is too long; use a shorter path",
+             errno.EMFILE: "too many open files; close other programs and retry"}
+
+
+def os_error_message(e: OSError) -> str:
+    """One line for an OS error: the user's path, what happened and what to do."""
+    hint = _OS_HINTS.get(e.errno, f"{e.strerror or e}; check the path and its permissions")
+    return f"{e.filename}: {hint}" if e.filename else hint
+
+
+def plain(text) -> Text:
+    """``text`` as rich Text: printed as is, never read as markup (file names like ``cap[red]``, table cells)."""
+    return Text(str(text))
+
+
 def user_errors(fn):
-    """Decorator for commands: turn :class:`ProcamError` (and OS errors) into one-line errors, exit code 2."""
+    """Decorator for commands: turn :class:`ProcamError` (and OS errors, memory exhaustion) into one-line errors,
+    exit code 2; anything else into one line that asks for a report, exit code 1 (``PROCAM_DEBUG=1`` shows the
+    traceback)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -88,14 +119,23 @@ def user_errors(fn):
             with warnings.catch_warnings():  # results carry their warnings; commands print them themselves
                 warnings.simplefilter("ignore", ProcamWarning)
                 return fn(*args, **kwargs)
+        except typer.Exit:
+            raise
         except ProcamError as e:
             fail(str(e))
         except OSError as e:  # unwritable output folder, disk full, permission denied ...
-            where = e.filename or "file"
-            fail(f"{where}: {e.strerror or e}; check the path and its permissions")
+            fail(os_error_message(e))
+        except MemoryError:
+            fail("not enough memory for this job; use smaller images, sizes or grids, or free memory")
         except KeyboardInterrupt:
             err_console.print("interrupted")
             raise typer.Exit(130)
+        except Exception as e:  # a bug: still one line, but say so
+            if os.environ.get("PROCAM_DEBUG"):
+                raise
+            first = (str(e).strip().splitlines() or [""])[-1][:300]
+            fail(f"internal error ({type(e).__name__}: {first}); please report it with the command line "
+                 "(PROCAM_DEBUG=1 shows the traceback)", code=1)
 
     return wrapper
 
@@ -200,8 +240,74 @@ EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homo
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 
-def output_path(path, option: str, suffixes: tuple[str, ...]):
-    """Check an output path before any work is done: a known suffix and a folder that can be created."""
+def number(value, option: str, *, lo: float | None = None, hi: float | None = None, lo_open: bool = False,
+           unit: str = "", what: str = "a number"):
+    """``value`` of ``option`` if it is finite and within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), else a
+    one-line error that says the range.  None (an option not given) stays None."""
+    if value is None:
+        return None
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and lo is not None:
+        ok = value > lo if lo_open else value >= lo
+    if ok and hi is not None:
+        ok = value <= hi
+    if not ok:
+        def g(x):
+            return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"
+
+        rng = []
+        if lo is not None:
+            rng.append(f"{'>' if lo_open else '>='} {g(lo)}")
+        if hi is not None:
+            rng.append(f"<= {g(hi)}")
+        fail(f"{option} must be {what}{' ' + ' and '.join(rng) if rng else ''}{unit}, got {value}")
+    return value
+
+
+def _capture_folder(folder: Path, inputs) -> bool:
+    """Does ``folder`` hold a capture sequence (a pose folder given to this command, or a sequence folder)?"""
+    try:
+        folder = folder.resolve()
+    except OSError:
+        return False
+    for p in inputs:
+        try:
+            if Path(p).resolve() == folder:
+                return True
+        except OSError:
+            continue
+    man = _files.read_manifest(folder)
+    if man is not None:
+        return any(r in ("frame", "captured") for r in man["files"].values())
+    return (folder / "patterns.json").is_file() or (folder / "capture.json").is_file()
+
+
+def distinct_poses(poses) -> None:
+    """Refuse a pose folder given twice (it would count as two poses of the board)."""
+    seen = {}
+    for p in poses:
+        try:
+            key = Path(p).resolve()
+        except OSError:
+            key = Path(p)
+        if key in seen:
+            fail(f"{p}: this pose folder is given twice (also as {seen[key]}); give each pose once")
+        seen[key] = p
+
+
+def assumed_size(calib, key: str) -> str:
+    """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
+    its size was assumed from the principal point; '' otherwise."""
+    if key in (calib.info or {}).get("image_size_assumed", ()):
+        return f" (the file has no {key}, so 2 (u0, v0) was assumed; add {key}: [width, height] to it)"
+    return ""
+
+
+def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
+    """Check an output file before any work is done (one-line errors): a known suffix; a folder that can be
+    created and written; not a file that is an input of the command (``inputs``: files and pose folders),
+    not a file procam did not write in a capture folder, not an image added to a capture folder that
+    has no manifest (it would be read as a frame of the sequence)."""
     if path is None:
         return None
     path = Path(path)
@@ -209,11 +315,60 @@ def output_path(path, option: str, suffixes: tuple[str, ...]):
         fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
     if path.is_dir():
         fail(f"{option} {path}: is a folder; give a file name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        fail(f"{option} {path}: cannot create the folder {path.parent} ({e.strerror or e})")
+    # the folder is created when the file is written (an early failure leaves no empty folder behind)
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        fail(f"{option} {path}: cannot create the folder {path.parent} ({parent} is not a folder)")
+    why = _files.why_not_writable(parent)
+    if why is not None:
+        where = f"write into {parent}" if parent == path.parent else f"create the folder {path.parent}"
+        fail(f"{option} {path}: cannot {where} ({why}); choose another place")
+    if path.is_symlink() and not path.exists():
+        fail(f"{option} {path}: is a broken or looping symbolic link; give another name")
+    if path.exists():
+        if not path.is_file():
+            fail(f"{option} {path}: exists and is not a regular file; give another name")
+        if not os.access(path, os.W_OK):
+            fail(f"{option} {path}: the file is read-only; give another name or make it writable")
+        if not _files.procam_wrote(path):
+            fail(f"{option} {path}: the file exists and procam did not write it; give another name, or move it "
+                 "away first (procam never overwrites a file it did not write)")
+        for p in inputs:
+            try:
+                same = Path(p).exists() and path.samefile(p)
+            except OSError:
+                same = False
+            if same:
+                fail(f"{option} {path}: is also an input of this command; give another name")
+    folder = path.parent
+    if _capture_folder(folder, inputs):
+        own = _files.replaceable(folder)
+        man = _files.read_manifest(folder)
+        roles = man["files"] if man is not None else {}
+        if path.exists() and (path.name not in own or roles.get(path.name) not in (None, "output")):
+            fail(f"{option} {path}: would overwrite a file of the capture in {folder}; write it elsewhere")
+        if path.suffix.lower() in _files.IMAGE_EXTS and man is None:
+            fail(f"{option} {path}: {folder} holds a capture, and an image written there would be read as a frame "
+                 "of its sequence; write it elsewhere")
     return path
+
+
+def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
+    """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
+    ``force`` any folder, where nothing procam did not write is overwritten or deleted
+    (:func:`procam._files.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
+    the writer, so an interrupted run leaves none)."""
+    try:
+        return _files.prepare_output_dir(path, writer, force=force, option=option, create=create)
+    except OutputError as e:
+        fail(str(e))
+
+
+ForceOpt = Annotated[bool, typer.Option(
+    "--force", help="Write into a folder that holds other files (procam still never overwrites or deletes a file "
+                    "it did not write).")]
 
 
 def _print_version(flag: bool):

@@ -12,7 +12,8 @@ from .. import single_pose as _sp
 from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
                    EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, choice, console, fail, optional_size, output_path, parse_board, pose_options, say,
+                   WindowOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
+                   plain, pose_options, say,
                    user_errors, value, warn)
 
 Cod = choice("Cod", _sp.COD_MODES)
@@ -22,12 +23,12 @@ Method = choice("Method", ("single", "multi"))
 
 def summary_table(calib) -> Table:
     """Rich table: parameters ± std, RMS per device (:func:`procam.summary.parameter_rows`)."""
-    t = Table(title=f"procam calibration ({calib.method}); {PLUS_MINUS}", show_lines=False)
+    t = Table(title=plain(f"procam calibration ({calib.method}); {PLUS_MINUS}"), show_lines=False)
     t.add_column("parameter")
     t.add_column("camera", justify="right")
     t.add_column("projector", justify="right")
     for r in parameter_rows(calib):
-        t.add_row(*r)
+        t.add_row(*map(plain, r))
     return t
 
 
@@ -40,7 +41,7 @@ def pose_table(calib) -> Table | None:
     for c in ("pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "verdict"):
         t.add_column(c)
     for r in rows:
-        t.add_row(*r)
+        t.add_row(*map(plain, r))
     return t
 
 
@@ -111,14 +112,20 @@ def calibrate_cmd(
     from .. import io, pipeline
 
     brd = parse_board(board, square)
+    multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
+    # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator,
+                        min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10)
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
-    output_path(out, "-o", (".json", ".yml", ".yaml"))
-    output_path(yaml, "--yaml", (".yml", ".yaml"))
-    output_path(png, "--png", FIGURE_SUFFIXES)
-    output_path(report, "--report", (".html", ".htm"))
+    output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
+    output_path(yaml, "--yaml", (".yml", ".yaml"), inputs=poses)
+    output_path(png, "--png", FIGURE_SUFFIXES, inputs=poses)
+    output_path(report, "--report", (".html", ".htm"), inputs=poses)
+    outs = [p.resolve() for p in (out, yaml, png, report) if p is not None]
+    if len(set(outs)) < len(outs):
+        fail("-o, --yaml, --png and --report must be different files")
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
@@ -140,6 +147,7 @@ def calibrate_cmd(
             fail("--method multi needs at least two pose folders (three or more recommended)")
         if method == "multi" and camera_file is not None:
             fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
+        distinct_poses(poses)
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
                                                 step=step)

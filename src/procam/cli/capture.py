@@ -15,7 +15,7 @@ from rich.markup import escape
 
 from ..errors import ProcamError
 
-from ._app import Order, app, console, err_console, fail, is_tty, parse_board, parse_size, user_errors, value
+from ._app import Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors, value
 
 #: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
 VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
@@ -44,19 +44,19 @@ def _list_devices(camera: str | None) -> None:
         except ProcamError:
             default = None
         for d in displays:
-            console.print(f"  {d.label()}" + ("   <- default projector" if d.index == default else ""), highlight=False)
+            console.print(plain(f"  {d.label()}" + ("   <- default projector" if d.index == default else "")))
     except ProcamError as e:
-        console.print(f"  none: {e}", highlight=False)
+        console.print(plain(f"  none: {e}"))
     console.print("[bold]cameras[/bold] (--camera)")
     found = cams.list_opencv_cameras()
     for c in found:
-        console.print(f"  {c['spec']:<12} {c['device']:<14} {c['name']}", highlight=False)
+        console.print(plain(f"  {c['spec']:<12} {c['device']:<14} {c['name']}"))
     if not found:
         console.print("  no OpenCV (UVC/V4L2) camera found", highlight=False)
     if camera and camera.lower().startswith("genicam:"):
         _, arg = cams.parse_camera_spec(camera)
         for c in cams.list_genicam_cameras(arg.partition("#")[0]):
-            console.print(f"  {c['spec']}  {c['vendor']} {c['model']} serial {c['serial_number']}", highlight=False)
+            console.print(plain(f"  {c['spec']}  {c['vendor']} {c['model']} serial {c['serial_number']}"))
     else:
         console.print("  GenICam cameras: add --camera genicam:PRODUCER.cti to list a producer's cameras", highlight=False)
     console.print("  folder:PATH (files saved by the camera's own software), virtual (the simulator)", highlight=False)
@@ -121,8 +121,7 @@ def capture_cmd(
     _number(exposure, "--exposure", 0, 60000, lo_open=True, unit=" ms")
     _number(gain, "--gain", 0, 1000)
     _number(timeout, "--timeout", 0, 3600, lo_open=True, unit=" s")
-    if seed < 0:
-        fail(f"--seed must be >= 0, got {seed}")
+    number(seed, "--seed", lo=0, hi=2**32 - 1 - 99, what="a seed")
     order = value(order)
     if not 1 <= step <= 64:
         fail(f"--step must be between 1 and 64, got {step}")
@@ -154,7 +153,7 @@ def capture_cmd(
                 size = choose_display(list_displays(), display).size
             proj = ProjectorWindow(size, display)
         stack.enter_context(proj)
-        console.print(f"projector: {_describe_projector(proj)}", highlight=False)
+        console.print(plain(f"projector: {_describe_projector(proj)}"))
 
         scenes = {}
         shared_cam = None
@@ -231,8 +230,8 @@ def capture_cmd(
 def _report_pose(result) -> None:
     """Report a captured pose's files."""
     t = result.record["timings"]
-    console.print(escape(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
-                         f"({result.retries} re-grabs, {t['total_s']:.1f} s)"), highlight=False)
+    console.print(plain(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
+                        f"({result.retries} re-grabs, {t['total_s']:.1f} s)"))
 
 
 def _describe_projector(proj) -> str:
@@ -247,10 +246,10 @@ def _describe_projector(proj) -> str:
 def _print_camera(cam) -> None:
     d = cam.describe()
     size = d.get("size")
-    console.print(f"camera: {cam.name} ({d.get('api', d['backend'])}" + (f", {size[0]}x{size[1]}" if size else "") + ")",
-                  highlight=False)
+    console.print(plain(f"camera: {cam.name} ({d.get('api', d['backend'])}" + (f", {size[0]}x{size[1]}" if size else "")
+                        + ")"))
     for note in d.get("notes", []):
-        console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
+        console.print(f"[yellow]note:[/yellow] {escape(str(note))}", highlight=False)
 
 
 class _spinner:
@@ -299,14 +298,14 @@ class _Reporter:
                                   f"({d['white_saturated']:.1%} saturated), black {d['dark_level']:.0%}, "
                                   f"contrast {d['contrast']:.0%}", highlight=False)
                     for line in d.get("advice", []):
-                        console.print(f"[yellow]advice:[/yellow] {line}", highlight=False)
+                        console.print(f"[yellow]advice:[/yellow] {escape(str(line))}", highlight=False)
                 if i not in self.tasks:
                     self.tasks[i] = self.bar.add_task(f"pose {i + 1}", total=e.total)
             elif e.kind == "frame":
                 if i in self.tasks:
                     self.bar.update(self.tasks[i], completed=e.index + 1)
             elif e.kind == "retry":
-                console.print(f"[yellow]re-grab:[/yellow] {e.message}", highlight=False)
+                console.print(f"[yellow]re-grab:[/yellow] {escape(e.message)}", highlight=False)
             elif e.kind == "postflight" and e.message:
-                console.print(f"[yellow]post-flight:[/yellow] {e.message}", highlight=False)
+                console.print(f"[yellow]post-flight:[/yellow] {escape(e.message)}", highlight=False)
         return cb

@@ -43,8 +43,8 @@ def correspond_cmd(
     brd = parse_board(board, square)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine, refine=refiner, window=window, estimator=estimator)
-    output_path(out, "-o", (".json",))
-    output_path(png, "--png", FIGURE_SUFFIXES)
+    output_path(out, "-o", (".json",), inputs=(pose_dir,))
+    output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
     cap = capture.load_capture(pose_dir, optional_size(projector), value(order), step=step)
     for w in cap.warnings:
         warn(w)

@@ -33,8 +33,8 @@ def decode_cmd(
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast).decode
     if out is not None and out.suffix != ".npz":
         out = out.with_suffix(".npz")
-    output_path(out, "-o", (".npz",))
-    output_path(png, "--png", FIGURE_SUFFIXES)
+    output_path(out, "-o", (".npz",), inputs=(pose_dir,))
+    output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
     cap = capture.load_capture(pose_dir, size, value(order), step=step)
     for w in cap.warnings:
         warn(w)
@@ -51,13 +51,10 @@ def decode_cmd(
             if not text.startswith("decoded"):
                 say(f"  {axis}: {n} px {text}")
     if out is not None:
-        with _files.atomic_path(out) as tmp:
-            with open(tmp, "wb") as f:
-                np.savez_compressed(f, col=res.col, row=res.row, valid_col=res.valid_col,
-                                    valid_row=res.valid_row, reason_col=res.reason_col,
-                                    reason_row=res.reason_row, confidence=res.confidence,
-                                    dropped_col=res.dropped_col, dropped_row=res.dropped_row,
-                                    projector_size=np.array([ps.width, ps.height]), order=np.array(ps.order))
+        _files.write_npz(out, col=res.col, row=res.row, valid_col=res.valid_col, valid_row=res.valid_row,
+                         reason_col=res.reason_col, reason_row=res.reason_row, confidence=res.confidence,
+                         dropped_col=res.dropped_col, dropped_row=res.dropped_row,
+                         projector_size=np.array([ps.width, ps.height]), order=np.array(ps.order))
         say(f"wrote {out}")
     if png is not None:
         from ..plots import save_figure

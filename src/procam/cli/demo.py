@@ -11,7 +11,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ._app import app, console, fail, user_errors
+from ._app import ForceOpt, app, console, fail, number, output_dir, say, user_errors
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
@@ -27,6 +27,7 @@ def demo_cmd(
     preset: str = typer.Option("ideal", "--preset", help="Simulated rig: ideal (the method's assumptions hold) "
                                                          "or paper (the seed paper's rig, u0p != W/2)."),
     seed: int = typer.Option(0, "--seed", help="Noise seed."),
+    force: ForceOpt = False,
 ):
     """Render a procam capture at a recommended pose, calibrate it from that one pose, compare with the truth."""
     # the simulator, the solvers and matplotlib load only when the demo runs, not with every command
@@ -41,6 +42,8 @@ def demo_cmd(
 
     if preset not in simulate.PRESETS:
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
+    number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
+    output_dir(out_dir, "OUT_DIR", "demo", force)
     scene = simulate.with_board_pose(simulate.preset(preset), simulate.RECOMMENDED_POSE)
     cap_dir = out_dir / "capture"
     t0 = time.perf_counter()
@@ -52,9 +55,10 @@ def demo_cmd(
             prog.update(task, completed=done, total=total)
 
         stack, truth = simulate.render(scene, seed=seed, progress=cb)
-    simulate.write_capture(cap_dir, stack, truth)
-    console.print(f"rendered {len(stack)} images {stack.shape[2]}x{stack.shape[1]} in "
-                  f"{time.perf_counter() - t0:.1f} s -> {cap_dir}")
+    output_dir(out_dir, "OUT_DIR", "demo", force, create=True)
+    simulate.write_capture(cap_dir, stack, truth, force=force)
+    say(f"rendered {len(stack)} images {stack.shape[2]}x{stack.shape[1]} in {time.perf_counter() - t0:.1f} s -> "
+        f"{cap_dir}")
     ps = patterns.pattern_set(*truth["projector"]["size"])
     t0 = time.perf_counter()
     brd = Board(truth["board"]["cols"], truth["board"]["rows"], truth["board"]["square"])
@@ -104,4 +108,4 @@ def demo_cmd(
     summary = {"preset": preset, "seed": seed, "pose_deg": list(simulate.RECOMMENDED_POSE),
                "camera_f": [cam["f"], float(K[0, 0])], "projector_f": [proj["f"], float(Kp[0, 0])]}
     _files.write_text(out_dir / "demo_summary.json", json.dumps(summary, indent=1))
-    console.print(f"wrote {out_dir}/capture, calib.json, calib.yml, decode.png, corners.png")
+    say(f"wrote {out_dir}/capture, calib.json, calib.yml, decode.png, corners.png")

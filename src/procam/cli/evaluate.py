@@ -9,7 +9,8 @@ from rich.table import Table
 
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
-                   app, console, fail, optional_size, output_path, parse_board, pose_options, say, user_errors, value)
+                   app, assumed_size, console, distinct_poses, fail, optional_size, output_path, parse_board, plain,
+                   pose_options, say, user_errors, value)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -19,7 +20,7 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
               "T_j = (X, Y, Z)"):
         t.add_column(c, justify="right" if c not in ("pose",) else "left")
     for p in ev.poses:
-        t.add_row(Path(p.name).name or p.name, str(p.n_points), f"{p.cam_rms:.3f}", f"{p.proj_rms:.3f}",
+        t.add_row(plain(Path(p.name).name or p.name), str(p.n_points), f"{p.cam_rms:.3f}", f"{p.proj_rms:.3f}",
                   f"{p.stereo_rms:.3f}", ", ".join(f"{a:.1f}" for a in p.cam_angles),
                   ", ".join(f"{a:.1f}" for a in p.proj_angles), ", ".join(f"{x:.2f}" for x in p.T))
     s = Table(title="summary")
@@ -66,9 +67,10 @@ def evaluate_cmd(
     from ..evaluate import check_baseline, evaluate
 
     brd = parse_board(board, square)
+    distinct_poses(poses)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
-    output_path(out, "-o", (".json",))
+                        refine_window=refine, refine=refiner, window=window, estimator=estimator, min_corners=6)
+    output_path(out, "-o", (".json",), inputs=(calibration, *poses))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot be evaluated against projector points; "
@@ -81,7 +83,8 @@ def evaluate_cmd(
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
-                 f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")
+                 f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
+                 + (assumed_size(calib, "cam_size") or "; use captures of the same camera"))
     ev = evaluate(calib, views)
     check_baseline(ev)
     t, s = evaluation_tables(ev)
@@ -95,6 +98,7 @@ def evaluate_cmd(
     check = check_calibration(calib, views)
     print_check(check)
     if out is not None:
-        d = {"calibration": str(calibration), "method": calib.method, **ev.to_dict(), "verification": check.to_dict()}
+        d = {"format": "procam-evaluation", "version": 1, "calibration": str(calibration), "method": calib.method,
+             **ev.to_dict(), "verification": check.to_dict()}
         _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
         say(f"wrote {out}")

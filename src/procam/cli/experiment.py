@@ -10,8 +10,12 @@ from rich.table import Table
 
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
-                   app, console, err_console, fail, optional_size, parse_board, pose_options, user_errors, value)
+                   ForceOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
+                   WindowOpt, app, console, distinct_poses, err_console, fail, optional_size, output_dir, parse_board,
+                   plain, pose_options, say, user_errors, value)
+
+#: Most pose sets the experiment calibrates (every subset of at least --min-set poses).
+MAX_SETS = 2000
 
 
 def summary_tables(result) -> list[Table]:
@@ -20,7 +24,7 @@ def summary_tables(result) -> list[Table]:
     for c in ("", "cam", "proj", "stereo", "σ_X", "σ_Y", "σ_Z", "σ_T", "σ_|T|"):
         t.add_column(c, justify="left" if c == "" else "right", overflow="fold")
     for r in result.summary:
-        t.add_row(r["row"], *(fmt_number(r[k], 3) for k in ("cam_rms", "proj_rms", "stereo_rms")),
+        t.add_row(plain(r["row"]), *(fmt_number(r[k], 3) for k in ("cam_rms", "proj_rms", "stereo_rms")),
                   *(fmt_number(r[k], 2) for k in ("sigma_X", "sigma_Y", "sigma_Z", "sigma_T", "sigma_abs_T")))
     s = Table(title="single-pose calibration of every pose (errors: mean over all poses)")
     for c in ("set", "f_c", "Δf_c", "ψc+νc", "cam", "f_p", "Δf_p", "|νp|", "proj", "σ_T", "verdict"):
@@ -59,6 +63,7 @@ def experiment_cmd(
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
     estimator: EstimatorOpt = Estimator.ransac,
+    force: ForceOpt = False,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
@@ -68,12 +73,20 @@ def experiment_cmd(
     from .. import pipeline
 
     brd = parse_board(board, square)
+    distinct_poses(poses)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine_window, refine=refiner, window=window, estimator=estimator)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
         fail(f"the experiment needs at least {min_set} pose folders (--min-set), got {len(poses)}")
+    import math
+
+    n_sets = sum(math.comb(len(poses), k) for k in range(min_set, len(poses) + 1))
+    if n_sets > MAX_SETS:
+        fail(f"{len(poses)} poses with --min-set {min_set} make {n_sets} pose sets to calibrate (at most {MAX_SETS}); "
+             "raise --min-set or give fewer poses")
+    output_dir(out, "-o", "experiment", force)
     for name, d in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
         if d not in DIST_CHOICES:
             fail(f"{name} must be one of {', '.join(DIST_CHOICES)}, got {d!r}")
@@ -81,10 +94,9 @@ def experiment_cmd(
     if html_report is not None:
         from ._app import output_path
 
-        output_path(html_report, "--report", (".html", ".htm"))
-    n_sets = len(experiment.pose_sets(len(poses), min_set))
+        output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
+                  TextColumn("{task.fields[label]}", markup=False), console=err_console, transient=True) as bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")
         views = pipeline.views_from_folders(
             poses, brd, size, value(order), options=opts, step=step,
@@ -93,13 +105,14 @@ def experiment_cmd(
         result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=refine,
                                 cam_dist=cam_dist, proj_dist=proj_dist,
                                 progress=lambda d, t, label: bar.update(t_cal, completed=d, total=t, label=label))
+        output_dir(out, "-o", "experiment", force, create=True)
         paths = report.write_report(result, out)
     for t in summary_tables(result):
         console.print(t)
     for f in result.failures:
-        console.print(f"[yellow]failed:[/yellow] {f['what']}: {f['message']}", highlight=False)
-    console.print(f"reference (lowest σ_T) = set {result.reference['set']} {result.reference['poses']}; "
-                  f"wrote {len(paths)} files to {out} (report.md, CSV tables, PNG figures)")
+        console.print(plain(f"failed: {f['what']}: {f['message']}"))
+    say(f"reference (lowest σ_T) = set {result.reference['set']} {result.reference['poses']}; "
+        f"wrote {len(paths)} files to {out} (report.md, CSV tables, PNG figures)")
     if html_report is not None:  # Set A (all poses) with the experiment's multi-pose options
         from .. import multi_pose
         from .report import write_calibration_report

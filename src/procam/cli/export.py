@@ -11,7 +11,7 @@ import numpy as np
 import typer
 
 from .. import _files, io
-from ._app import app, console, fail, output_path, user_errors
+from ._app import ForceOpt, app, fail, number, output_dir, output_path, say, user_errors
 
 FORMATS = ("opengl", "maps", "kamino410")
 
@@ -31,6 +31,7 @@ def export_cmd(
     rectify: bool = typer.Option(False, "--rectify", help="maps: also the stereo rectification maps of both devices."),
     scale: float = typer.Option(1.0, "--scale", help="maps --rectify: rectified focal length in units of the "
                                                      "camera's."),
+    force: ForceOpt = False,
 ):
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
     from .. import export as ex
@@ -38,20 +39,23 @@ def export_cmd(
     if fmt not in FORMATS:
         fail(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if fmt == "opengl":
-        output_path(out, "-o", (".json",))
+        output_path(out, "-o", (".json",), inputs=(calibration,))
         if near is None or far is None:
             fail("--format opengl needs --near and --far (clipping distances in the calibration's units, e.g. mm)")
-        if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far):
-            fail(f"--near and --far must be finite with 0 < near < far, got {near} and {far}")
+        if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far <= 1e12):
+            fail(f"--near and --far must be finite with 0 < near < far <= 1e12, got {near} and {far}")
+        if far / near > 1e7:
+            fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
+                 "so raise --near")
         if world not in ("camera", "projector"):
             fail(f"--world must be camera or projector, got {world!r}")
     elif fmt == "kamino410":
-        output_path(out, "-o", (".xml", ".yml", ".yaml"))
+        output_path(out, "-o", (".xml", ".yml", ".yaml"), inputs=(calibration,))
     else:
         if out.exists() and not out.is_dir():
             fail(f"-o {out}: --format maps writes several files; give a folder")
-        if not (math.isfinite(scale) and 0.1 <= scale <= 10):
-            fail(f"--scale must be between 0.1 and 10, got {scale}")
+        number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
+        output_dir(out, "-o", "export", force)
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
@@ -59,15 +63,14 @@ def export_cmd(
         doc = ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
         doc["calibration"] = str(calibration)
         _files.write_text(out, json.dumps(_files.to_jsonable(doc), indent=1))
-        console.print(f"wrote {out}")
+        say(f"wrote {out}")
     elif fmt == "kamino410":
         ex.save_kamino410(calib, out)
-        console.print(f"wrote {out}")
+        say(f"wrote {out}")
         if calib.camera.distortion.model == "division":
-            console.print("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit",
-                          highlight=False)
+            say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
     else:
-        out.mkdir(parents=True, exist_ok=True)
+        output_dir(out, "-o", "export", force, create=True)
         written = []
         cam, proj = calib.camera, calib.projector
         mx, my = ex.undistort_maps(cam)
@@ -83,4 +86,4 @@ def export_cmd(
                 written.append(ex.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
                                             size=np.array(rect["size" + k])))
         for p in written:
-            console.print(f"wrote {p}")
+            say(f"wrote {p}")

@@ -10,8 +10,9 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_size,
-                   user_errors, value)
+from .. import board as _board
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, console, fail, optional_size, output_path, parse_size,
+                   plain, say, user_errors, value, warn)
 
 
 @app.command("reconstruct")
@@ -38,15 +39,16 @@ def reconstruct_cmd(
     from .. import _files, capture, decode, io, pipeline
     from .. import reconstruct as rc
 
-    output_path(out, "-o", (".ply",))
-    output_path(residuals, "--residuals", (".png",))
+    output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))
+    output_path(residuals, "--residuals", (".png",), inputs=(calibration, pose_dir))
     if use not in ("both", "col", "row"):
         fail(f"--use must be both, col or row, got {use!r}")
-    if not (math.isfinite(max_residual) and max_residual > 0):
-        fail(f"--max-residual must be a positive number of projector pixels, got {max_residual}")
+    if not (math.isfinite(max_residual) and 0 < max_residual <= 10000):
+        fail(f"--max-residual must be a positive number of projector pixels (at most 10000), got {max_residual}")
     if residuals is not None and board is None:
         fail("--residuals needs --board (the plane is fitted to the board's points)")
-    pattern = parse_size(board, "--board") if board is not None else None
+    lo, hi = _board.CORNERS_PER_SIDE
+    pattern = parse_size(board, "--board", lo=lo, hi=hi) if board is not None else None
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot triangulate; give a procam calibration")
@@ -55,15 +57,17 @@ def reconstruct_cmd(
         size = tuple(calib.projector.image_size)
     cap = capture.load_capture(pose_dir, size, value(order), step=step)
     for w in cap.warnings:
-        console.print(f"[yellow]warning:[/yellow] {w}", highlight=False)
+        warn(w)
     ps = cap.pattern_set
     H, W = cap.stack.shape[1:]
     if (W, H) != tuple(calib.camera.image_size):
         fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
-             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the calibrated camera")
+             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
+             + (assumed_size(calib, "cam_size") or "; use captures of the calibrated camera"))
     if (ps.width, ps.height) != tuple(calib.projector.image_size):
         fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
-             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}; check --projector")
+             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
+             + (assumed_size(calib, "proj_size") or "; check --projector"))
     maps = decode.decode(cap.stack, ps)
     colour = _files.read_image(cap.files[ps.white], gray=False)
     cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
@@ -73,7 +77,7 @@ def reconstruct_cmd(
     rc.write_ply(out, cloud.points, cloud.colours,
                  comments=["procam reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
                            "frame: camera (x right, y down, z forward), units of the calibration's T"])
-    t = Table(title=f"{Path(pose_dir).name}: point cloud")
+    t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))
     t.add_column("quantity")
     t.add_column("value", justify="right")
     t.add_row("points", f"{len(cloud)}")
@@ -94,6 +98,6 @@ def reconstruct_cmd(
             res = rc.residual_map(cloud.subset(on_board), plane)
             _files.write_image(residuals, rc.residual_image(res))
     console.print(t)
-    console.print(f"wrote {out}")
+    say(f"wrote {out}")
     if residuals is not None:
-        console.print(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")
+        say(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")

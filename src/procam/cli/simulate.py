@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
 
+from ..errors import OutputError
 from ..patterns import ORDERS
-from ._app import app, console, fail, is_tty, user_errors
+from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
+
+#: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
+MAX_SEED = 2**32 - 1
 
 
 def _parse_pose(text: str) -> tuple[float, float, float]:
@@ -18,10 +23,14 @@ def _parse_pose(text: str) -> tuple[float, float, float]:
         vals = []
     if len(vals) not in (2, 3):
         fail(f"--pose must be PSI,NU[,PHI] in degrees (e.g. 15,12,0), got {text!r}")
+    if not all(math.isfinite(v) for v in vals):
+        fail(f"--pose angles must be finite numbers of degrees, got {text!r}")
     if len(vals) == 2:
         vals.append(0.0)
     if any(abs(v) >= 80 for v in vals[:2]):
         fail(f"--pose angles psi and nu must be within +-80 degrees, got {text!r}")
+    if abs(vals[2]) > 360:
+        fail(f"--pose angle phi must be within +-360 degrees, got {text!r}")
     return vals[0], vals[1], vals[2]
 
 
@@ -41,6 +50,7 @@ def simulate_cmd(
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
     order: str = typer.Option("opencv", "--order", help="Sequence order: opencv (default) or moreno."),
+    force: ForceOpt = False,
 ):
     """Render a synthetic Gray-code capture of a chessboard, with its ground truth (truth.json)."""
     from .. import simulate as sim
@@ -53,13 +63,18 @@ def simulate_cmd(
         fail(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
     if frame not in ("camera", "projector"):
         fail(f"--frame must be camera or projector, got {frame!r}")
-    if distance is not None and not (50 <= distance <= 20000):
-        fail(f"--distance must be between 50 and 20000 mm, got {distance}")
-    if noise is not None and noise < 0:
-        fail(f"--noise must be >= 0 DN, got {noise}")
-    angles = _parse_pose(pose) if pose else sim.RECOMMENDED_POSE
+    number(distance, "--distance", lo=50, hi=20000, unit=" mm", what="a board depth")
+    number(noise, "--noise", lo=0, hi=255, unit=" DN (8-bit grey levels)", what="a read noise")
+    number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
+    angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
+    from .. import capture, patterns
 
     scene = sim.preset(preset)
+    try:
+        capture.check_sequence_dir(out_dir, patterns.pattern_set(*scene.proj_size, order), writer="simulate",
+                                   force=force, extra=("truth.json",), option="OUT_DIR")
+    except OutputError as e:
+        fail(str(e))
     if pose is not None or distance is not None or frame != "camera":
         scene = sim.with_board_pose(scene, angles, distance=distance, frame=frame)
     changes = {"bits": bits}
@@ -82,16 +97,18 @@ def simulate_cmd(
 
         stack, truth = sim.render(scene, order=order, seed=seed, progress=progress)
         bar.update(task, description="writing")
-        paths = sim.write_capture(out_dir, stack, truth, order=order)
+        paths = sim.write_capture(out_dir, stack, truth, order=order, force=force)
 
     pc, pp = truth["pose"]["camera"], truth["pose"]["projector"]
-    console.print(f"wrote {len(paths)} images ({stack.shape[2]}x{stack.shape[1]}, {bits}-bit, order {order}), "
-                  f"truth.json and patterns.json to {out_dir}")
-    console.print(f"preset {preset}; board (psi, nu, phi) camera ({pc['angles_deg'][0]:.2f}, "
-                  f"{pc['angles_deg'][1]:.2f}, {pc['angles_deg'][2]:.2f}) deg, projector ({pp['angles_deg'][0]:.2f}, "
-                  f"{pp['angles_deg'][1]:.2f}, {pp['angles_deg'][2]:.2f}) deg; centre "
-                  f"({pc['t'][0]:.1f}, {pc['t'][1]:.1f}, {pc['t'][2]:.1f}) mm in the camera frame", highlight=False)
-    if margin < 0:
-        console.print(f"[yellow]warning:[/yellow] part of the board (with its margin) is outside the camera or "
-                      f"projector image ({margin:.0f} px); some corners may be missing — try a larger --distance "
-                      "or smaller angles", highlight=False)
+    say(f"wrote {len(paths)} images ({stack.shape[2]}x{stack.shape[1]}, {bits}-bit, order {order}), "
+        f"truth.json and patterns.json to {out_dir}")
+    say(f"preset {preset}; board (psi, nu, phi) camera ({pc['angles_deg'][0]:.2f}, "
+        f"{pc['angles_deg'][1]:.2f}, {pc['angles_deg'][2]:.2f}) deg, projector ({pp['angles_deg'][0]:.2f}, "
+        f"{pp['angles_deg'][1]:.2f}, {pp['angles_deg'][2]:.2f}) deg; centre "
+        f"({pc['t'][0]:.1f}, {pc['t'][1]:.1f}, {pc['t'][2]:.1f}) mm in the camera frame")
+    if margin <= -1e8:
+        warn("the board is not in view of both devices at this pose (outside an image or behind a device); "
+             "the capture shows no usable board — try a larger --distance or smaller angles")
+    elif margin < 0:
+        warn(f"part of the board (with its margin) is outside the camera or projector image (by {-margin:.0f} px); "
+             "some corners may be missing — try a larger --distance or smaller angles")

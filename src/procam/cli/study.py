@@ -14,7 +14,10 @@ from rich.table import Table
 from .. import _files
 from .._fmt import fmt_number
 from ..errors import ProcamError
-from ._app import app, console, err_console, user_errors
+from ._app import ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors
+
+#: Most cell-trials (cells x (trials + 1)) a study may run: about a day of one core at ~1 ms per trial.
+MAX_WORK = 10**8
 
 
 @app.command("study")
@@ -37,6 +40,7 @@ def study(
     dask: Optional[str] = typer.Option(None, help="Run on a Dask cluster: scheduler address, or 'local' for a LocalCluster of --jobs workers."),
     seed: int = typer.Option(0, help="Base seed (each cell and trial derives its own)."),
     figures: bool = typer.Option(True, "--figures/--no-figures", help="Write the PNG figures."),
+    force: ForceOpt = False,
 ):
     """Sweep the board's rotation (ψ, ν) relative to a device: median |Δf| per cell and the Cramér–Rao bound.
 
@@ -47,13 +51,27 @@ def study(
     device = device.lower()
     if device not in ("camera", "projector"):
         raise ProcamError(f"device must be camera or projector, got {device!r}")
+    number(trials, "--trials", lo=0, hi=10**6, what="a number of trials")
+    number(noise, "--noise", lo=0, hi=100, unit=" px", what="a corner noise")
+    number(distance, "--distance", lo=50, hi=20000, unit=" mm", what="a board depth")
+    number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
+    if not (jobs == -1 or 1 <= jobs <= 1024):
+        fail(f"-j/--jobs must be -1 (all cores) or from 1 to 1024 worker processes, got {jobs}")
     psi = parse_grid(psi_grid or grid)
     nu = parse_grid(nu_grid or grid)
     cfg = StudyConfig(device=device, psi=psi, nu=nu, trials=trials, noise=noise, model_error=model_error,
                       distance=distance, slices=slices,
                       slice_angles=None if slice_grid is None else parse_grid(slice_grid), seed=seed,
                       render=render)
-    output.mkdir(parents=True, exist_ok=True)
+    from ..paper.study import study_cells
+
+    n_cells = len(cfg.psi) * len(cfg.nu)
+    if n_cells <= MAX_WORK:
+        n_cells = len(study_cells(cfg))
+    if n_cells * (cfg.trials + 1) > MAX_WORK:
+        fail(f"the study would run {n_cells} cells x {cfg.trials + 1} calibrations (more than {MAX_WORK:.0e}, days "
+             "of computing); use a coarser --grid or fewer --trials")
+    output_dir(output, "-o", "study", force)
 
     client = None
     backend = None
@@ -69,9 +87,7 @@ def study(
         else:
             client = Client(dask)
         backend = "dask"
-        err_console.print(f"dask: {client}")
-
-    from ..paper.study import study_cells
+        err_console.print(plain(f"dask: {client}"))
 
     total = len(study_cells(cfg))
     try:
@@ -84,9 +100,13 @@ def study(
         if client is not None:
             client.close()
 
+    output_dir(output, "-o", "study", force, create=True)
     stem = f"study_{device}_{model_error}"
     csv_path = result.to_csv(output / f"{stem}.csv")
-    summary = {"config": result.config_dict(), "summary": result.summary(), "csv": csv_path.name}
+    # no wall times in the files: the same study writes the same bytes
+    timing = ("seconds", "cells_per_second")
+    summary = {"config": result.config_dict(), "summary": {k: v for k, v in result.summary().items() if k not in timing},
+               "csv": csv_path.name}
     paths = []
     if figures:
         from ..plots.study import save_study_figures
@@ -102,7 +122,7 @@ def study(
         from ..paper.study import slice_specs
 
         for label, axis, fixed, val in slice_specs(cfg):
-            t = Table(title=f"{device}: slice {label} (|Δf| in px)", show_lines=False)
+            t = Table(title=plain(f"{device}: slice {label} (|Δf| in px)"), show_lines=False)
             t.add_column(axis, justify="right")
             for name in ("median |Δf|", "noise-free |Δf|", "√CRLB", "std/√CRLB"):
                 t.add_column(name, justify="right")
@@ -110,4 +130,4 @@ def study(
                 t.add_row(f"{r[axis]:g}", *(fmt_number(r[k], spec=".3g")
                                             for k in ("median_abs_df", "abs_df_noise_free", "bound_f", "ratio_std")))
             console.print(t)
-    console.print(f"wrote {csv_path}" + (f" and {len(paths)} figures" if paths else "") + f" to {output}")
+    say(f"wrote {csv_path}" + (f" and {len(paths)} figures" if paths else "") + f" to {output}")

@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import models
 from .. import uncertainty as unc
+from .._threads import deterministic_call
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, WeakPoseWarning
 from ..residuals import rms
@@ -36,7 +37,54 @@ from .refine import StereoRefinement, refine_stereo
 
 __all__ = ["calibrate", "calibrate_camera", "calibrate_models", "check_distinct", "undetermined_distortion", "calibrate_device",
            "AUTO_MODELS", "DIST_CHOICES", "refine_stereo", "zhang_intrinsics", "DIST_MODELS", "DeviceCalibration",
-           "StereoRefinement"]
+           "StereoRefinement", "MIN_CORNERS_PER_POSE", "check_counts"]
+
+#: Fewest corners a pose needs in a multi-pose calibration: four give its board homography (the Zhang
+#: start); how many poses are needed then depends on the distortion models (:func:`check_counts`).
+MIN_CORNERS_PER_POSE = 4
+
+#: OpenCV's names of the distortion coefficients, in its order.
+_COEFF_NAMES = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+
+
+def check_counts(obj_list, cam_dist: str = "k1k2p1p2k3", proj_dist: str = "k1k2p1p2k3", names=None) -> None:
+    """Raise :class:`CalibrationError` when poses with these usable board points ``obj_list`` ((N_j, 3) each)
+    cannot determine a multi-pose calibration with these distortion models.
+
+    Each pose needs :data:`MIN_CORNERS_PER_POSE` corners, not all on one line of the board (its homography).
+    Each device's fit has 6 unknowns per pose, 4 intrinsics and the model's distortion terms; each corner
+    gives 2 equations, and there must be more equations than unknowns (else the fit passes exactly through
+    the noise).  The message says how many equations and unknowns there are, which distortion terms need
+    them, and what model would do.
+    """
+    counts = [len(o) for o in obj_list]
+    names = list(names) if names is not None else [f"pose {k + 1}" for k in range(len(counts))]
+    for n, c, o in zip(names, counts, obj_list):
+        if c < MIN_CORNERS_PER_POSE:
+            raise CalibrationError(f"pose {n!r}: only {c} corners have both camera and projector points; a "
+                                   f"multi-pose calibration needs {MIN_CORNERS_PER_POSE} per pose (its board "
+                                   "homography); re-capture or drop this pose")
+        xy = np.asarray(o, float)[:, :2]
+        sv = np.linalg.svd(xy - xy.mean(axis=0), compute_uv=False)
+        if sv[1] <= 1e-6 * max(sv[0], 1e-300):
+            raise CalibrationError(f"pose {n!r}: its {c} usable corners lie on one line of the board; a multi-pose "
+                                   "calibration needs corners spread over at least 2 rows and 2 columns per pose; "
+                                   "re-capture or drop this pose")
+    eq = 2 * sum(counts)
+    for option, dist in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
+        free = _check_dist(dist)[2]
+        unknowns = 6 * len(counts) + 4 + len(free)
+        if eq > unknowns:
+            continue
+        terms = ", ".join(_COEFF_NAMES[i] for i in free)
+        fits = [m for m, (_, f) in DIST_MODELS.items() if eq > 6 * len(counts) + 4 + len(f)]
+        simpler = (f"or a model with fewer terms ({option} {fits[-1]})" if fits else "")
+        raise CalibrationError(
+            f"{len(counts)} poses with {sum(counts)} usable corners give {eq} equations per device, not more than "
+            f"the {unknowns} unknowns of a fit with the {dist} model (6 per pose, 4 intrinsics"
+            + (f", {len(free)} distortion terms {terms}" if free else "") + "): so few points cannot determine "
+            + ("the distortion" if free else "the intrinsics") + "; use more poses or a larger board"
+            + (f", {simpler}" if simpler else ""))
 
 
 def _rms(arrs) -> float:
@@ -69,6 +117,7 @@ AUTO_MODELS = ("k1k2p1p2k3", "k1k2p1p2", "k1k2", "k1", "none")
 DIST_CHOICES = ("auto", *DIST_MODELS)
 
 
+@deterministic_call
 def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True,
               **options) -> Calibration:
     """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined), with the distortion
@@ -86,8 +135,12 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
             raise CalibrationError(f"unknown distortion model {d!r} for {name}; choose one of {', '.join(DIST_CHOICES)}")
     models_ = {"camera": cam_dist, "projector": proj_dist}
     auto = {k: v == "auto" for k, v in models_.items()}
-    models_ = {k: (AUTO_MODELS[0] if v == "auto" else v) for k, v in models_.items()}
-    steps = []
+    # "auto" starts at the richest model the corner count can determine at all (check_counts)
+    counts = [int(np.asarray(v.valid).sum()) for v in views]
+    first = next((m for m in AUTO_MODELS if 2 * sum(counts) > 6 * len(counts) + 4 + len(_check_dist(m)[2])),
+                 AUTO_MODELS[-1])
+    steps = [] if first == AUTO_MODELS[0] else [f"{first} (fewer terms than {AUTO_MODELS[0]}: {sum(counts)} corners)"]
+    models_ = {k: (first if v == "auto" else v) for k, v in models_.items()}
     while True:
         with _warnings.catch_warnings():
             _warnings.simplefilter("ignore", WeakPoseWarning)
@@ -111,7 +164,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
 def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, cam_dist: str = "k1k2p1p2k3",
                      proj_dist: str = "k1k2p1p2k3", refine: bool = True, loss: str = "soft_l1",
                      loss_scale: float = 1.0, balance: bool = True, init: str = "auto", fix_aspect_ratio: bool = False,
-                     iterations: int = 100, stereo_iterations: int = 150, min_corners: int = 6) -> Calibration:
+                     iterations: int = 100, stereo_iterations: int = 150,
+                     min_corners: int = MIN_CORNERS_PER_POSE) -> Calibration:
     """Multi-pose procam calibration with given distortion models (Zhang / Moreno–Taubin, optionally jointly
     refined).
 
@@ -129,7 +183,11 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
         usually noisier).  ``False`` weights both equally, as ``stereoCalibrate`` does.
     init, fix_aspect_ratio, iterations : passed to :func:`calibrate_device`.
     stereo_iterations : iteration cap of ``stereoCalibrate`` (Moreno & Taubin: 150).
-    min_corners : poses with fewer valid corners are an error.
+    min_corners : poses with fewer valid corners are an error (at least :data:`MIN_CORNERS_PER_POSE`); the
+        total must also determine the distortion models (:func:`check_counts`).
+
+    OpenCV and BLAS run on one thread inside (:func:`procam._threads.deterministic`): the same views give
+    the same bytes.
 
     Returns
     -------
@@ -161,14 +219,16 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
     objs, cams, projs, names = [], [], [], []
     for k, v in enumerate(views):
         m = v.valid
-        if m.sum() < min_corners:
+        if m.sum() < max(min_corners, MIN_CORNERS_PER_POSE):
             raise CalibrationError(f"pose {v.name!r}: only {int(m.sum())} corners have both camera and "
-                                   f"projector points (need {min_corners}); re-capture or drop this pose")
+                                   f"projector points (need {max(min_corners, MIN_CORNERS_PER_POSE)}); re-capture or "
+                                   "drop this pose")
         objs.append(v.obj_pts[m])
         cams.append(v.cam_pts[m])
         projs.append(v.proj_pts[m])
         names.append(v.name if v.name else f"pose{k + 1}")
 
+    check_counts(objs, cam_dist, proj_dist, names)
     cal_c = calibrate_device(objs, cams, cam_size, cam_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
                              iterations=iterations)
     cal_p = calibrate_device(objs, projs, proj_size, proj_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
@@ -265,10 +325,6 @@ def check_distinct(views: Sequence[View], min_px: float = 1.0) -> None:
                 raise CalibrationError(f"poses {a.name!r} and {b.name!r} are the same pose (their board corners lie "
                                        f"within {min_px:g} px of each other): give every pose once -- a pose given "
                                        "twice counts twice and skews the calibration")
-
-
-#: OpenCV's coefficient names, in its order.
-_COEFF_NAMES = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
 
 
 def undetermined_distortion(K, coeffs, std, image_size, model: str, device: str, option: str, points,

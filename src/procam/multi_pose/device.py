@@ -199,8 +199,9 @@ def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *
     if len(obj_list) < 2:
         raise CalibrationError(f"multi-pose calibration needs at least 2 poses, got {len(obj_list)}")
     for k, o in enumerate(obj_list):
-        if len(o) < 6:
-            raise CalibrationError(f"pose #{k + 1} has only {len(o)} usable corners; at least 6 are needed")
+        if len(o) < 4:
+            raise CalibrationError(f"pose #{k + 1} has only {len(o)} usable corners; at least 4 (its board "
+                                   "homography) are needed")
     image_size = (int(image_size[0]), int(image_size[1]))
     crit = _criteria(iterations)
     tries: dict[str, tuple] = {}
@@ -229,7 +230,11 @@ def calibrate_device(obj_list, img_list, image_size, dist: str = "k1k2p1p2k3", *
         raise CalibrationError("multi-pose device calibration failed for every start ("
                                + "; ".join(f"{k}: {v}" for k, v in errors.items())
                                + "); check that the poses are varied (tilted, not all parallel)")
-    best = min(good, key=lambda k: good[k][0])
+    # the lower RMS wins; a tie (within 1e-9 relative: both starts reach one minimum) goes to OpenCV's start
+    best = "opencv" if "opencv" in good else next(iter(good))
+    for k, v in good.items():
+        if v[0] < good[best][0] * (1.0 - 1e-9):
+            best = k
     rms, K, d, rv, tv = good[best]
     coeffs = np.zeros(ncoef)
     d = np.asarray(d, float).ravel()

@@ -13,84 +13,12 @@ from __future__ import annotations
 
 import contextlib
 import math
-from contextlib import contextmanager
 from typing import Callable, Sequence
 
-import numpy as np
-
+from .._threads import _openblas_handles, single_threaded_blas  # noqa: F401  (re-exported)
 from ..errors import ProcamError
 
 __all__ = ["single_threaded_blas", "run_chunks"]
-
-
-@contextmanager
-def single_threaded_blas():
-    """Limit BLAS to one thread inside the block (best effort; restores the previous setting).
-
-    Every linear-algebra call of a cell is tiny (matrices of ~120 × 9), so multi-threaded BLAS
-    only costs: on a loaded 2-core machine a calibration took 0.12 s with OpenBLAS's default
-    threads against 0.02 s with one.  Uses ``threadpoolctl`` when installed, otherwise the
-    ``*_set_num_threads`` entry points of the OpenBLAS copies bundled with numpy and scipy.
-    Parallel workers need nothing: joblib's loky workers already get ``cpu_count // n_jobs``
-    BLAS threads.
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        threadpool_limits = None
-    if threadpool_limits is not None:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-        return
-    handles = _openblas_handles()
-    old = []
-    for get, set_ in handles:
-        try:
-            old.append((set_, int(get())))
-            set_(1)
-        except Exception:  # pragma: no cover - exotic builds
-            pass
-    try:
-        yield
-    finally:
-        for set_, n in old:
-            try:
-                set_(n)
-            except Exception:  # pragma: no cover
-                pass
-
-
-_BLAS_HANDLES = None
-
-
-def _openblas_handles():
-    """``(get_num_threads, set_num_threads)`` ctypes pairs of the loaded OpenBLAS libraries."""
-    global _BLAS_HANDLES
-    if _BLAS_HANDLES is not None:
-        return _BLAS_HANDLES
-    import ctypes
-    import glob
-    import os
-
-    import scipy
-
-    found = []
-    dirs = {os.path.join(os.path.dirname(os.path.dirname(m.__file__)), f"{m.__name__}.libs") for m in (np, scipy)}
-    for d in sorted(dirs):
-        for path in sorted(glob.glob(os.path.join(d, "*openblas*.so*"))):
-            try:
-                lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_LOCAL)
-            except OSError:
-                continue
-            for suffix in ("scipy_openblas_{}64_", "scipy_openblas_{}_64_", "scipy_openblas_{}", "openblas_{}"):
-                g, st = (getattr(lib, suffix.format(x), None) for x in ("get_num_threads", "set_num_threads"))
-                if g is not None and st is not None:
-                    g.restype = ctypes.c_int
-                    st.argtypes = [ctypes.c_int]
-                    found.append((g, st))
-                    break
-    _BLAS_HANDLES = found
-    return found
 
 
 def _chunks(items: list, size: int) -> list[list]:

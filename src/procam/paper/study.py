@@ -61,10 +61,15 @@ SLICES = {
     "projector": (("nu", "psi", 10.0), ("psi", "nu", 3.5), ("psi", "nu", -3.5)),
 }
 
-#: CSV columns, in order (one row per cell).
+#: CSV columns, in order (one row per cell).  A row's wall time ("seconds") is not written, so the same study
+#: writes the same bytes.
 COLUMNS = ("device", "model_error", "psi", "nu", "in_grid", "slices", "trials", "noise", "n_ok",
            "f_true", "f_median", "median_abs_df", "mean_df", "std_f", "df_noise_free",
-           "abs_df_noise_free", "bound_f", "bound_f_per_px", "ratio_median", "ratio_std", "seconds")
+           "abs_df_noise_free", "bound_f", "bound_f_per_px", "ratio_median", "ratio_std")
+
+
+#: Most angles a grid axis may have (a 1000 x 1000 heat map is already a million cells).
+MAX_GRID = 1000
 
 
 def parse_grid(text: str) -> np.ndarray:
@@ -78,18 +83,23 @@ def parse_grid(text: str) -> np.ndarray:
     try:
         if ":" in text:
             parts = [float(p) for p in text.split(":")]
-            if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
+            if len(parts) != 3 or not all(math.isfinite(v) for v in parts) or parts[2] <= 0 or parts[1] < parts[0]:
                 raise ValueError
             start, stop, step = parts
-            n = int(math.floor((stop - start) / step + 1e-9)) + 1
-            vals = start + step * np.arange(n)
+            n = (stop - start) / step + 1e-9
+            if n >= MAX_GRID:
+                raise ProcamError(f"grid {text!r} has {n:.3g} angles; at most {MAX_GRID} per axis (use a larger "
+                                  "STEP)")
+            vals = start + step * np.arange(int(math.floor(n)) + 1)
         else:
             vals = np.array([float(p) for p in text.split(",") if p.strip()])
-            if vals.size == 0:
+            if vals.size == 0 or not np.all(np.isfinite(vals)):
                 raise ValueError
+            if vals.size > MAX_GRID:
+                raise ProcamError(f"grid has {vals.size} angles; at most {MAX_GRID} per axis")
     except ValueError:
-        raise ProcamError(f"grid must be START:STOP:STEP (e.g. -45:45:5) or a comma list of degrees, "
-                          f"got {text!r}") from None
+        raise ProcamError(f"grid must be START:STOP:STEP (e.g. -45:45:5) or a comma list of finite angles in "
+                          f"degrees, got {text!r}") from None
     vals = np.unique(np.round(vals, 9))
     if np.any(np.abs(vals) >= 89.0):
         raise ProcamError(f"grid angles must lie within (-89, 89) degrees, got {text!r}")
@@ -149,8 +159,14 @@ class StudyConfig:
         if self.slice_angles is not None:
             s(self, "slice_angles", tuple(float(a) for a in np.atleast_1d(self.slice_angles)))
         s(self, "pp_offset", (float(self.pp_offset[0]), float(self.pp_offset[1])))
-        if self.noise is not None and self.noise < 0:
-            raise ProcamError(f"noise must be >= 0 px, got {self.noise}")
+        if self.noise is not None and not (math.isfinite(self.noise) and self.noise >= 0):
+            raise ProcamError(f"noise must be a finite number >= 0 px, got {self.noise}")
+        if not (math.isfinite(self.distance) and self.distance > 0):
+            raise ProcamError(f"distance must be a finite positive depth in mm, got {self.distance}")
+        for name in ("psi", "nu", "slice_angles"):
+            v = getattr(self, name)
+            if v is not None and not (len(v) and all(math.isfinite(a) and abs(a) < 89.0 for a in v)):
+                raise ProcamError(f"{name} angles must be finite and within (-89, 89) degrees, got {v}")
 
     @property
     def sigma(self) -> float:

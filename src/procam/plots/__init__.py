@@ -61,8 +61,15 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
         raise ProcamError(f"{path}: {what}; give a file name ending in one of "
                           f"{', '.join('.' + k for k in sorted(supported))}")
     try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=fmt)
+        # procam's mark (so a later run knows it may overwrite the file) and no dates: the same figure, the same bytes
+        meta = {"png": {"Software": "procam"}, "pdf": {"Creator": "procam", "CreationDate": None},
+                "svg": {"Creator": "procam", "Date": None}, "ps": {"Creator": "procam"},
+                "eps": {"Creator": "procam"}}.get(fmt)
+        import matplotlib
+
+        # SVG element ids come from a random salt unless one is given
+        with atomic_path(path) as tmp, matplotlib.rc_context({"svg.hashsalt": "procam"}):
+            fig.savefig(tmp, dpi=dpi, format=fmt, **({"metadata": meta} if meta else {}))
     finally:
         _close(fig)
     return path

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import capture as _capture
 from .. import patterns as _patterns
-from .._files import to_jsonable, write_text
+from .._files import to_jsonable
 from .lens import undistort
 from .scene import Scene, board_extent, truth
 
@@ -392,15 +392,16 @@ def render(scene: Scene, order: str = "opencv", seed: int = 0,
 # output
 # --------------------------------------------------------------------------------------------
 
-def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv") -> list[Path]:
+def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv", *, force: bool = False) -> list[Path]:
     """Write a rendered capture in procam's default capture-folder layout.
 
-    Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``)
-    and ``patterns.json`` (:meth:`procam.patterns.PatternSet.to_dict` plus ``"files"``).  Every file
-    is written under a hidden temporary name and renamed (:func:`procam.capture.write_sequence`), so an
-    interrupted run leaves no half-written image that a loader would pick up.  Numbered PNGs
-    (``NN.png``) left in ``out_dir`` by an earlier run with a longer sequence are deleted, so they
-    are not read as part of this one.
+    Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``),
+    ``patterns.json`` (:meth:`procam.patterns.PatternSet.to_dict` plus ``"files"``) and the manifest
+    ``.procam-manifest.json``.  Every file is written under a hidden temporary name and renamed
+    (:func:`procam.capture.write_sequence`), so an interrupted run leaves no half-written image that a
+    loader would pick up.  ``out_dir`` must be new, empty or an earlier simulator output; ``force`` writes
+    into another folder, but never over (or deletes) a file procam did not write.  Numbered PNGs of an
+    earlier, longer simulated sequence are deleted, so they are not read as part of this one.
 
     Parameters
     ----------
@@ -408,13 +409,13 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
     stack : (K, H, W) uint8 or uint16 images from :func:`render`.
     truth : the truth dict from :func:`render` (its projector size names the pattern set).
     order : the sequence order the stack was rendered in.
+    force : write into a folder that holds other files.
 
     Returns
     -------
-    list of the image paths, in sequence order.
+    list of the image paths, in sequence order.  Raises :class:`procam.errors.OutputError` when the
+    folder is refused.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     wp, hp = truth["projector"]["size"]
     ps = _patterns.pattern_set(int(wp), int(hp), order)
     stack = np.asarray(stack)
@@ -422,6 +423,5 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
         raise ValueError(f"stack must be ({ps.count}, H, W) for a {wp}x{hp} projector, got {stack.shape}")
     if stack.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
-    paths = _capture.write_sequence(out, stack, ps)
-    write_text(out / "truth.json", json.dumps(to_jsonable(truth), indent=1))
-    return paths
+    return _capture.write_sequence(out_dir, stack, ps, writer="simulate", force=force,
+                                   extra_files={"truth.json": json.dumps(to_jsonable(truth), indent=1)})

@@ -1,0 +1,136 @@
+"""Same inputs -> the same bytes, for every command: two runs, and OpenBLAS with one thread against two.
+
+Outputs are compared file by file (hidden manifests included).  A capture's ``capture.json`` records the
+time of every frame, so it is the one file left out (its frames and patterns.json are compared).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import run_cli
+from test_bad_inputs import POSE_ANGLES, render_pose
+
+from procam import io
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+BOARD = ["--board", "10x6", "--square", "24"]
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory):
+    """Three small rendered poses and their true calibration."""
+    from sim_small import small_scene, truth_calibration
+
+    root = tmp_path_factory.mktemp("rig")
+    poses = []
+    for k, a in enumerate(POSE_ANGLES):
+        render_pose(root / f"pose{k + 1}", a, seed=k)
+        poses.append(root / f"pose{k + 1}")
+    calib = io.save_calibration(truth_calibration(small_scene()), root / "truth.json")
+    return poses, calib
+
+
+def commands(poses, calib, out: Path) -> list[list]:
+    """Every command with every output it can write, into ``out``."""
+    p1 = poses[0]
+    return [
+        ["patterns", "-p", "64x48", "-o", out / "patterns"],
+        ["decode", p1, "-o", out / "maps.npz", "--png", out / "decode.png"],
+        ["correspond", p1, *BOARD, "-o", out / "corr.json", "--png", out / "corr.png"],
+        ["calibrate", p1, *BOARD, "-o", out / "single.json", "--yaml", out / "single.yml", "--png", out / "single.png"],
+        ["calibrate", *poses, *BOARD, "-o", out / "multi.json", "--yaml", out / "multi.yml", "--png", out / "multi.svg"],
+        ["evaluate", calib, *poses, *BOARD, "-o", out / "eval.json"],
+        ["reconstruct", calib, p1, "-o", out / "cloud.ply", "--board", "10x6", "--residuals", out / "plane.png"],
+        ["export", calib, "--format", "opengl", "-o", out / "gl.json", "--near", "10", "--far", "5000"],
+        ["export", calib, "--format", "kamino410", "-o", out / "kamino.xml"],
+        ["export", calib, "--format", "maps", "-o", out / "maps", "--rectify"],
+        ["study", "projector", "-o", out / "study", "--grid", "0,15", "--trials", "2", "--slice-grid", "15",
+         "--model-error", "none"],
+        ["experiment", *poses, *BOARD, "-o", out / "experiment"],
+    ]
+
+
+def tree(folder: Path, skip=("capture.json",)) -> dict:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name not in skip}
+
+
+def assert_same(a: Path, b: Path):
+    ta, tb = tree(a), tree(b)
+    assert sorted(ta) == sorted(tb)
+    differ = [k for k in ta if ta[k] != tb[k]]
+    assert not differ, f"not byte-identical: {differ}"
+
+
+def test_multi_pose_calibration_twice_gives_the_same_bytes(rig, tmp_path):
+    """OpenCV's threads used to change the last digits (and the winning start) from run to run."""
+    poses, _ = rig
+    for run in ("a", "b"):
+        rc, _, err = run_cli(["calibrate", *poses, *BOARD, "-o", tmp_path / f"{run}.json", "--yaml",
+                              tmp_path / f"{run}.yml"])
+        assert rc == 0, err
+    for suffix in (".json", ".yml"):
+        assert (tmp_path / f"a{suffix}").read_bytes() == (tmp_path / f"b{suffix}").read_bytes()
+
+
+@pytest.mark.slow
+def test_every_command_twice_gives_the_same_bytes(rig, tmp_path):
+    poses, calib = rig
+    for run in ("a", "b"):
+        out = tmp_path / run
+        out.mkdir()
+        for args in commands(poses, calib, out):
+            rc, _, err = run_cli(args)
+            assert rc == 0, (args, err)
+    assert len(tree(tmp_path / "a")) > 40
+    assert_same(tmp_path / "a", tmp_path / "b")
+    doc = json.loads((tmp_path / "a" / "multi.json").read_text())
+    assert doc["info"]["frozen"]["cam_init"] in ("opencv", "zhang")
+
+
+_RUNNER = """
+import json, sys
+from procam.cli import main
+for args in json.loads(sys.argv[1]):
+    try:
+        main(args)
+    except SystemExit as e:
+        if e.code:
+            sys.exit(f"{args}: exit {e.code}")
+"""
+
+
+@pytest.mark.slow
+def test_blas_threads_do_not_change_the_bytes(rig, tmp_path):
+    """The numeric commands in fresh interpreters with OPENBLAS_NUM_THREADS=1 and =2 (and OpenCV's default
+    threads): the same bytes."""
+    poses, calib = rig
+    for n in ("1", "2"):
+        out = tmp_path / f"blas{n}"
+        out.mkdir()
+        args = [[str(a) for a in c] for c in commands(poses, calib, out) if c[0] != "patterns"]
+        env = dict(os.environ, OPENBLAS_NUM_THREADS=n, OMP_NUM_THREADS=n, MPLBACKEND="Agg",
+                   PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+        res = subprocess.run([sys.executable, "-c", _RUNNER, json.dumps(args)], env=env, capture_output=True,
+                             text=True, timeout=900, check=False)
+        assert res.returncode == 0, res.stderr[-2000:]
+    assert_same(tmp_path / "blas1", tmp_path / "blas2")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("cmd", ["simulate", "demo", "capture"])
+def test_rendering_commands_twice(cmd, tmp_path):
+    out = tmp_path / "out"  # one path for both runs: the demo's calibration names its capture folder
+    args = {"simulate": ["simulate", out, "--seed", "5"], "demo": ["demo", out],
+            "capture": ["capture", out, "--virtual", "--projector", "64x48"]}[cmd]
+    for run in ("a", "b"):
+        rc, _, err = run_cli(args)
+        assert rc == 0, err
+        out.rename(tmp_path / run)
+    assert_same(tmp_path / "a", tmp_path / "b")
