@@ -18,6 +18,7 @@ The modules, from the captures up (each imports only those above it in this list
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
     residuals     RMS, PnP, stereo pose, per-pose residuals
+    background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
     single_pose   the seed method (camera, projector, extrinsics, advice)
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
@@ -47,7 +48,8 @@ import importlib
 __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
-               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
+               "single_pose",
                "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots")
 
 #: Public names re-exported here: name -> module.

@@ -21,7 +21,7 @@ from . import decode as _decode
 from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError
 from .patterns import PatternSet
-from .view import View
+from .view import Background, View
 
 
 @dataclass(frozen=True)
@@ -35,6 +35,8 @@ class PoseOptions:
     refine_window : ``cornerSubPix`` half-window in camera pixels (0 = none).
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
+    background : keep the decoded points off the board (:func:`procam.correspond.background_points`) in
+        ``view.background``, for the single-pose background check (:mod:`procam.background`).
     """
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
@@ -42,6 +44,7 @@ class PoseOptions:
     refine_window: int = 11
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
+    background: bool = True
 
     def __post_init__(self):
         if self.detector not in _board.DETECTORS:
@@ -93,8 +96,9 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
         cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name)
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     H, W = stack.shape[1:]
+    background = Background(*_corr.background_points(maps, cam_pts)) if options.background else None
     view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
-                {**diag, "warnings": list(warnings)}, board)
+                {**diag, "warnings": list(warnings)}, board, background)
     n_ok = int(view.valid.sum())
     if n_ok < options.min_corners:
         raise CorrespondenceError(

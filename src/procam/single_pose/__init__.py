@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import background as _background
 from .. import models
 from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
@@ -98,7 +99,7 @@ def _rejected_list(sol) -> list:
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
               advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
-              on_failure: str = "raise") -> Calibration:
+              on_failure: str = "raise", background: _background.BackgroundOptions | None = None) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
 
     Parameters
@@ -114,6 +115,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     on_failure : ``"raise"`` (default: raise :class:`CalibrationError` when an estimated focal length is
         impossible, see :func:`advice`) or ``"warn"`` (return it, flagged ``failed`` in the advice, with a
         warning).
+    background : :class:`procam.background.BackgroundOptions` (default: mode ``auto``) -- used only when
+        ``view.background`` holds decoded points off the board: the check of the projector's assumptions
+        against them (a ``model error`` warning) and, by its mode, the joint refinement
+        (:func:`procam.background.apply`). Without ``view.background`` the result is the paper's method alone.
 
     Returns
     -------
@@ -168,13 +173,19 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
             "n_used": {"camera": int(cin.sum()), "projector": int(pin.sum())},
             "rejected_corners": {"camera": _rejected_list(cam), "projector": _rejected_list(proj)},
             "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px}}
-    return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion),
-                       projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
-                       method="single-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
-                       poses=(pose,), views=(view,), warnings=tuple(warnings),
-                       info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
-                             "cod_score": None if cam.cod is None else cam.cod.score,
-                             "refine": cam.info["refine"]})
+    cal = Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion),
+                      projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
+                      method="single-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
+                      poses=(pose,), views=(view,), warnings=tuple(warnings),
+                      info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
+                            "cod_score": None if cam.cod is None else cam.cod.score,
+                            "refine": cam.info["refine"]})
+    # the background behind the board (procam.background): the check, and the refinement, of the projector's
+    # assumptions -- only when the view carries decoded background points
+    bg = getattr(view, "background", None)
+    if bg is not None:
+        cal = _background.apply(cal, bg.cam_pts, bg.proj_pts, background or _background.BackgroundOptions())
+    return cal
 
 
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
