@@ -302,16 +302,19 @@ def parallax(calibration, cam_pts, proj_pts, R_board=None, t_board=None) -> np.n
     return np.linalg.norm(models.apply_homography(H, und) - proj, axis=1)
 
 
-def _local_noise(cam, d) -> float:
-    """Robust noise scale of ``d`` that ignores a smooth field: each value minus the mean of its 4 nearest
-    neighbours (a plane through them cancels), MAD-scaled for that difference's variance (1 + 1/4)."""
+def _local_noise(cam, d):
+    """Robust noise scale of ``d`` that ignores a smooth field and outliers: each value minus the median of
+    its 8 nearest neighbours (camera image), MAD-scaled for that difference's variance (about 1.2 sigma^2).
+
+    Returns (scale, the differences (M,)).
+    """
     from scipy.spatial import cKDTree
 
-    if len(d) < 10:
-        return float("nan")
-    _, idx = cKDTree(cam).query(cam, k=5)
-    e = d - d[idx[:, 1:]].mean(axis=1)
-    return float(1.4826 * np.median(np.abs(e - np.median(e))) / np.sqrt(1.25))
+    if len(d) < 20:
+        return float("nan"), np.zeros(len(d))
+    _, idx = cKDTree(cam).query(cam, k=9)
+    e = d - np.median(d[idx[:, 1:]], axis=1)
+    return float(1.4826 * np.median(np.abs(e - np.median(e))) / np.sqrt(1.2)), e
 
 
 def _mad(r) -> float:
@@ -370,18 +373,36 @@ class _Joint:
         self.cam, self.proj = cam, proj
         self.keep = np.ones(len(cam), bool)
         self.sigma_n = float(sigma_n)
+        self.cauchy = None
+        self.nfev = 0
+        self.groups = None      # (M,) int 0..G-1: groups 1.. get their own u0p (the last G-1 parameters)
         self.dist_model = calibration.camera.distortion.model
 
     # packing
-    def x0(self):
-        return np.r_[self.pc0[self.free_c], self.q0[self.free_q]]
+    def x0(self, pc=None, q=None):
+        """The free vector at the single-pose solution, or at the full parameters ``pc, q`` of another fit
+        (parameters fixed here keep their fixed values)."""
+        pc = self.pc0 if pc is None else pc
+        q = self.q0 if q is None else np.where(self.free_q, q, self.q0)
+        x = np.r_[pc[self.free_c], q[self.free_q]]
+        return x if self.groups is None else np.r_[x, np.full(self.groups.max(), q[1])]
+
+    def solve_best(self, starts):
+        """:meth:`solve` from each start; the solution with the lowest cost."""
+        best = None
+        for x0 in starts:
+            x = self.solve(x0)
+            c = self.cost(x)
+            if best is None or c < best[1]:
+                best = (x, c)
+        return best[0]
 
     def full(self, x):
         pc = self.pc0.astype(np.result_type(x, float)).copy()
         nc = int(self.free_c.sum())
         pc[self.free_c] = x[:nc]
         q = self.q0.astype(np.result_type(x, float)).copy()
-        q[self.free_q] = x[nc:]
+        q[self.free_q] = x[nc:nc + int(self.free_q.sum())]
         return pc, q
 
     def pack_full(self, pc, q):
@@ -410,16 +431,43 @@ class _Joint:
         cam, proj = self.cam[self.keep], self.proj[self.keep]
         und = cam if self.dist_model == "none" else models.undistort_division(cam, c, k1, k2)
         r_bg = _epipolar(Kc, und, Kp, R, T, proj) / self.sigma_n
+        if self.groups is not None:
+            g = self.groups[self.keep]
+            extra = x[int(self.free_c.sum()) + int(self.free_q.sum()):]
+            for k, u0 in enumerate(extra, start=1):
+                Kg = models.intrinsic_matrix(q[0], u0, q[2], q[3])
+                r_bg = np.where(g == k, _epipolar(Kc, und, Kg, R, T, proj) / self.sigma_n, r_bg)
+        if self.cauchy is not None:
+            # Cauchy loss on the background only (the prior and the corners stay quadratic):
+            # residual sign(r) sqrt(2 rho(r)), rho(r) = c^2/2 log(1 + (r/c)^2)
+            c = self.cauchy
+            r_bg = np.sign(r_bg) * c * np.sqrt(np.log1p((r_bg / c) ** 2))
         r = np.concatenate([r_prior, [self.alpha_w * (q[3] - 1.0)], r_corner, r_bg])
         return np.where(np.isfinite(r), r, 1e6)
 
-    def solve(self, x0, loss="linear"):
+    def solve(self, x0, robust: bool = False):
+        """Least squares from ``x0``; ``robust``: graduated Cauchy loss on the background (scale from the
+        initial residuals' 75th percentile down to 3 noise sigmas), then the result."""
         from scipy.optimize import least_squares
 
-        with np.errstate(all="ignore"):
-            res = least_squares(self.residuals, x0, loss=loss, f_scale=3.0, x_scale="jac", method="trf",
-                                xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
-        return res.x
+        def run(x):
+            with np.errstate(all="ignore"):
+                res = least_squares(self.residuals, x, x_scale="jac", method="trf", xtol=1e-12, ftol=1e-12,
+                                    gtol=1e-12, max_nfev=500)
+            self.nfev += res.nfev
+            return res.x
+
+        if not robust:
+            self.cauchy = None
+            return run(x0)
+        r0 = np.abs(self.distances(*self.full(x0), self.cam[self.keep], self.proj[self.keep])) / self.sigma_n
+        c0 = max(3.0, float(np.percentile(r0[np.isfinite(r0)], 75))) if np.isfinite(r0).any() else 3.0
+        x = x0
+        for c in np.geomspace(c0, 3.0, max(1, int(np.ceil(np.log(c0 / 3.0) / np.log(4.0)))) + 1):
+            self.cauchy = float(c)
+            x = run(x)
+        self.cauchy = None
+        return x
 
     def cost(self, x) -> float:
         r = self.residuals(x)
@@ -575,23 +623,36 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
                          "too flat", **base)
     # 1. a robust fit of the freest model with the local noise, 2. the noise from its residuals, outliers
     # out, 3. every nested model on the same points with the same noise
-    sigma0 = max(_local_noise(cam, d0), options.noise_floor_px)
+    sigma0, local = _local_noise(cam, d0)
+    sigma0 = max(sigma0, options.noise_floor_px) if np.isfinite(sigma0) else max(_mad(d0), options.noise_floor_px)
     nested = [options.free[:k] for k in range(len(options.free) + 1)]
     top = _Joint(calibration, cs, ps, cam, proj, nested[-1], sigma0, options.alpha_prior_std)
-    x_top = top.solve(top.x0(), loss="cauchy")
+    # a model error is a smooth field: points that disagree with their neighbours are decoding errors
+    top.keep = np.abs(local) <= options.outlier_k * sigma0
+    x_top = top.solve(top.x0(), robust=True)
     r = top.distances(*top.full(x_top), cam, proj)
     sigma_n = max(_mad(r), options.noise_floor_px)
     keep = np.abs(r - np.median(r)) <= options.outlier_k * sigma_n
+    if keep.sum() > 20:     # the MAD of a sample with outliers overstates the inliers' noise: once more on them
+        sigma_n = max(_mad(r[keep]), options.noise_floor_px)
+        keep = np.abs(r - np.median(r[keep])) <= options.outlier_k * sigma_n
     base.update(n_used=int(keep.sum()), inlier_fraction=float(keep.mean()), noise_px=sigma_n)
     if (keep & off).sum() < options.min_points:
         return _no_check(f"only {int((keep & off).sum())} background points off the board's plane agree with any "
                          f"epipolar geometry within {options.outlier_k:g} x the noise ({sigma_n:.2f} px); the "
                          "decoded background is unreliable", **base)
+    # a background that does not follow ONE epipolar geometry (interreflections, a reflective or moving
+    # surface) must not raise an alarm: u0p fitted separately on two halves of the points must agree
+    warm = top.full(x_top)
+    split = _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm)
+    if split:
+        return _no_check(split, **base)
     fits = {}
     for free in nested:
         joint = _Joint(calibration, cs, ps, cam, proj, free, sigma_n, options.alpha_prior_std)
         joint.keep = keep
-        fits[_model_name(free)] = joint.fit_result(joint.solve(joint.x0()), _model_name(free))
+        x = joint.solve_best([joint.x0(), joint.x0(*warm)])
+        fits[_model_name(free)] = joint.fit_result(x, _model_name(free))
     first = fits[_model_name(nested[1])]
     W = calibration.projector.image_size[0]
     name0 = nested[1][0]
@@ -622,6 +683,32 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
            f"uncertainty (median distance {base['size_px']:.2f} px, noise {sigma_n:.2f} px; likelihood ratio "
            f"{stat:.1f} <= {thr:.0f}); the projector assumption {words} is consistent with them ({where})")
     return BackgroundCheck(status="consistent", message=msg, selected="assumed", **base)
+
+
+def _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm) -> str:
+    """A reason when u0p differs between the quadrants of the background (split at the medians along the
+    principal directions of the points in the camera image) beyond ``false_alarm`` (likelihood ratio of one
+    u0p per quadrant against one for all, 3 degrees of freedom); "" otherwise."""
+    from scipy.stats import chi2
+
+    pts = cam[keep]
+    _, _, Vt = np.linalg.svd(pts - pts.mean(0), full_matrices=False)
+    s = cam @ Vt.T
+    groups = (s[:, 0] > np.median(s[keep, 0])).astype(int) + 2 * (s[:, 1] > np.median(s[keep, 1]))
+    base = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
+    base.keep = keep
+    x1 = base.solve(base.x0(*warm))
+    four = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
+    four.keep, four.groups = keep, groups
+    x4 = four.solve(np.r_[x1, np.full(3, x1[int(four.free_c.sum()) + 1])])
+    stat = base.cost(x1) - four.cost(x4)
+    thr = float(chi2.isf(options.false_alarm, 3))
+    if stat > thr:
+        u0 = [four.full(x4)[1][1], *x4[-3:]]
+        return (f"the background's quadrants disagree (u0p = {', '.join(f'{u:.1f}' for u in u0)} px from each, "
+                f"likelihood ratio {stat:.0f} > {thr:.0f}): it does not follow one epipolar geometry (interreflections, "
+                "a reflective or moving surface?)")
+    return ""
 
 
 def _model_name(free) -> str:
