@@ -17,9 +17,9 @@ nothing; this module compares two fits of the same data instead:
 * **assumed**: the paper's projector model (``u0p``, ``alpha_p`` fixed), with the background;
 * **free**: ``u0p`` (and optionally ``alpha_p``) estimated from the background;
 
-both jointly over the camera (its single-pose solution as a Gaussian prior: its estimate and
-covariance), the projector's ``f_p, v0p`` and board pose, on the projector's board corners (pixels) and
-the background points' distances to their epipolar lines (projector pixels). Twice the cost difference
+both jointly over the camera (the parameters its single-pose fit estimates, on its board corners, with
+its principal-point prior if it used one), the projector's ``f_p, v0p`` and board pose, on the projector's
+board corners (pixels) and the background points' distances to their epipolar lines (projector pixels). Twice the cost difference
 is the likelihood-ratio statistic of the assumption: chi-square with one degree of freedom per freed
 parameter when the assumption holds, so a threshold at a false-alarm probability (default 1e-4) is the
 **model-error** test (:func:`epipolar_check`). The free fit is the refinement (:func:`refine_projector`):
@@ -128,7 +128,7 @@ class BackgroundOptions:
 
 @dataclass(frozen=True)
 class BackgroundFit:
-    """One joint fit of the camera (prior), the projector's board corners and the background.
+    """One joint fit of the camera's and the projector's board corners and the background.
 
     Attributes
     ----------
@@ -141,7 +141,8 @@ class BackgroundFit:
         ``(f_p, u0p, v0p, alpha_p, rvec (3), t (3))`` (board -> projector pose).
     covariance : (22, 22); rows/columns of fixed parameters are 0.
     std : dict name -> 1 sigma (``f_c ... v0c`` of the camera, ``f_p, u0p, v0p, alpha_p``; 0 when fixed).
-    cost : sum of the squared whitened residuals (prior, corners / sigma_p, background / sigma_n).
+    cost : sum of the squared whitened residuals (camera corners / sigma_c, its principal-point prior if any,
+        the alpha_p prior, projector corners / sigma_p, background / sigma_n).
     n_background : background points in the fit; ``sigma_n`` their noise (px) used for the weights.
     """
 
@@ -339,22 +340,36 @@ def _single_pose_parts(calibration):
     C = np.asarray(cs.covariance, float)
     if not np.all(np.isfinite(C)):
         return None, "the camera's single-pose estimate is degenerate (infinite uncertainty)"
+    W, H = calibration.projector.image_size
+    f = float(ps.params[0])
+    if not (0.2 * np.hypot(W, H) <= f <= 5.0 * np.hypot(W, H)) or not np.all(np.isfinite(ps.covariance)):
+        return None, (f"the projector's single-pose estimate failed (f_p = {f:.0f} px), so there is no start for the "
+                      "joint fit; use a pose turned about the projector's vertical axis")
     return (cs, ps), ""
 
 
 class _Joint:
-    """Joint least squares: camera prior + projector board corners + background epipolar distances."""
+    """Joint least squares: the camera's board corners (and its principal-point prior, if it had one), the
+    projector's board corners and the background's epipolar distances, all in noise sigmas."""
 
     def __init__(self, calibration, cs, ps, cam, proj, free, sigma_n, alpha_std=0.0):
         self.cal = calibration
         self.cs, self.ps = cs, ps
         C = np.asarray(cs.covariance, float)
         self.pc0 = np.asarray(cs.params, float).copy()
-        self.free_c = np.diag(C) > 0
-        P = np.linalg.pinv(C[np.ix_(self.free_c, self.free_c)], hermitian=True)
-        w, V = np.linalg.eigh(0.5 * (P + P.T))
-        self.Lt = (V * np.sqrt(np.clip(w, 0, None))).T          # Lt.T @ Lt = P
+        self.free_c = np.diag(C) > 0            # the camera parameters its own fit estimated
         view = calibration.views[0]
+        # the camera's corners (its likelihood, exactly as its single-pose fit) and its principal-point prior
+        cmask = np.asarray(cs.mask, bool) if cs.mask is not None else view.valid
+        cmask = cmask & np.isfinite(view.cam_pts).all(1) & np.isfinite(view.obj_pts).all(1)
+        self.obj_c = np.asarray(view.obj_pts, float)[cmask]
+        self.cam_c = np.asarray(view.cam_pts, float)[cmask]
+        self.sigma_c = max(float(cs.info.get("sigma_px", np.nan)), 0.01) \
+            if np.isfinite(cs.info.get("sigma_px", np.nan)) else 0.1
+        self.pp_prior = None
+        if cs.principal_point_source == "image-center" and cs.info.get("pp_prior_std"):
+            W, H = cs.image_size
+            self.pp_prior = (np.array([(W - 1) / 2.0, (H - 1) / 2.0]), float(cs.info["pp_prior_std"]))
         mask = np.asarray(ps.mask, bool) if ps.mask is not None else view.valid
         mask &= np.isfinite(view.proj_pts).all(1) & np.isfinite(view.obj_pts).all(1)
         self.obj = np.asarray(view.obj_pts, float)[mask]
@@ -426,7 +441,9 @@ class _Joint:
     def residuals(self, x):
         pc, q = self.full(x)
         Kc, (c, k1, k2), _, _, Kp, Rp, tp, R, T = self.devices(pc, q)
-        r_prior = self.Lt @ (pc[self.free_c] - self.pc0[self.free_c])
+        r_cam = ((models.camera_predict(pc, self.obj_c) - self.cam_c) / self.sigma_c).ravel()
+        if self.pp_prior is not None:
+            r_cam = np.concatenate([r_cam, (pc[2:4] - self.pp_prior[0]) / self.pp_prior[1]])
         r_corner = ((models.project(Kp, Rp, tp, self.obj) - self.corners) / self.sigma_p).ravel()
         cam, proj = self.cam[self.keep], self.proj[self.keep]
         und = cam if self.dist_model == "none" else models.undistort_division(cam, c, k1, k2)
@@ -442,7 +459,7 @@ class _Joint:
             # residual sign(r) sqrt(2 rho(r)), rho(r) = c^2/2 log(1 + (r/c)^2)
             c = self.cauchy
             r_bg = np.sign(r_bg) * c * np.sqrt(np.log1p((r_bg / c) ** 2))
-        r = np.concatenate([r_prior, [self.alpha_w * (q[3] - 1.0)], r_corner, r_bg])
+        r = np.concatenate([r_cam, [self.alpha_w * (q[3] - 1.0)], r_corner, r_bg])
         return np.where(np.isfinite(r), r, 1e6)
 
     def solve(self, x0, robust: bool = False):
@@ -453,7 +470,7 @@ class _Joint:
         def run(x):
             with np.errstate(all="ignore"):
                 res = least_squares(self.residuals, x, x_scale="jac", method="trf", xtol=1e-12, ftol=1e-12,
-                                    gtol=1e-12, max_nfev=500)
+                                    gtol=1e-12, max_nfev=200)
             self.nfev += res.nfev
             return res.x
 
@@ -734,8 +751,8 @@ def refine_projector(calibration, cam_pts, proj_pts, *, free=("u0p",), options: 
     """Lift the single-pose projector assumptions with the background: the joint fit with ``free`` freed.
 
     ``f_p, v0p``, the parameters ``free`` (``u0p``, and ``alpha_p`` with care: it needs a background that pins
-    it), the projector's board pose and the camera (its single-pose solution as a prior) from the
-    projector's board corners and the background's epipolar distances (module docstring), robustly.
+    it), the projector's board pose and the camera from both devices' board corners and the background's
+    epipolar distances (module docstring), robustly.
 
     Returns
     -------
