@@ -55,9 +55,10 @@ __all__ = ["BackgroundOptions", "BackgroundCheck", "BackgroundFit", "background_
            "parallax", "epipolar_check", "refine_projector", "apply", "MODES", "FREEABLE"]
 
 #: What :func:`apply` does: ``off`` (nothing), ``check`` (warn on a model error; numbers unchanged),
-#: ``auto`` (the check, then the better model with the background: the paper's assumptions when they are
-#: consistent with it, the assumptions lifted when they are not), ``free`` (always lift them when the
-#: background is informative).
+#: ``free`` (the default: the warning, and the assumptions lifted with the background whenever it is
+#: informative), ``auto`` (the warning; the assumptions kept, with the background, when the check finds them
+#: consistent, lifted when it does not -- more precise when they hold, but a weak background then keeps a
+#: wrong assumption with a too small +-; see ``benchmarks/background.py``).
 MODES = ("off", "check", "auto", "free")
 #: Projector parameters the background can free.
 FREEABLE = ("u0p", "alpha_p")
@@ -73,7 +74,7 @@ class BackgroundOptions:
 
     Attributes
     ----------
-    mode : one of :data:`MODES` (default ``auto``).
+    mode : one of :data:`MODES` (default ``free``).
     free : the projector parameters the background may free, in the order they are freed (nested models:
         assumed, ``u0p``, ``u0p+alpha_p``); default ``("u0p",)`` (``alpha_p`` then has the prior
         ``alpha_prior_std``). The check tests the assumed model against the freest one; a further parameter
@@ -94,7 +95,7 @@ class BackgroundOptions:
         ``f_p`` includes that assumption; 0 fixes it at 1.
     """
 
-    mode: str = "auto"
+    mode: str = "free"
     free: tuple = ("u0p",)
     false_alarm: float = 1e-4
     min_points: int = 200
@@ -612,8 +613,6 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     calibration is not a single-pose one, the background has fewer than ``min_points`` points off the
     board's plane, or it does not pin ``u0p`` (too small or too flat).
     """
-    from scipy.stats import chi2
-
     cam, proj = _points(cam_pts, proj_pts)
     n = len(cam)
     parts, why = _single_pose_parts(calibration)
@@ -658,18 +657,21 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
         return _no_check(f"only {int((keep & off).sum())} background points off the board's plane agree with any "
                          f"epipolar geometry within {options.outlier_k:g} x the noise ({sigma_n:.2f} px); the "
                          "decoded background is unreliable", **base)
-    # a background that does not follow ONE epipolar geometry (interreflections, a reflective or moving
-    # surface) must not raise an alarm: u0p fitted separately on two halves of the points must agree
     warm = top.full(x_top)
-    split = _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm)
-    if split:
-        return _no_check(split, **base)
-    fits = {}
+    fits, solved = {}, {}
     for free in nested:
         joint = _Joint(calibration, cs, ps, cam, proj, free, sigma_n, options.alpha_prior_std)
         joint.keep = keep
-        x = joint.solve_best([joint.x0(), joint.x0(*warm)])
+        # the assumed model from the single-pose solution too: an unconverged fit would inflate the statistic
+        x = joint.solve_best([joint.x0(), joint.x0(*warm)] if not free else [joint.x0(*warm)])
+        solved[free] = (joint, x)
         fits[_model_name(free)] = joint.fit_result(x, _model_name(free))
+    # a background that does not follow ONE epipolar geometry (interreflections, a reflective or moving
+    # surface) must not raise an alarm: u0p fitted separately on the quadrants of the points must agree
+    split = _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm,
+                                    solved.get(("u0p",)))
+    if split:
+        return _no_check(split, **base)
     first = fits[_model_name(nested[1])]
     W = calibration.projector.image_size[0]
     name0 = nested[1][0]
@@ -685,7 +687,7 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     held = fits["assumed"]
     dof = len(nested[-1])
     stat = max(held.cost - last.cost, 0.0)
-    thr = float(chi2.isf(options.false_alarm, dof))
+    thr = _chi2_isf(options.false_alarm, dof)
     base.update(statistic=stat, threshold=thr, dof=dof)
     where = ", ".join(f"{k} = {est[k]:.{0 if k == 'u0p' else 4}f} +- {est_std[k]:.{0 if k == 'u0p' else 4}f}"
                       + (" px" if k == "u0p" else "") for k in est)
@@ -702,24 +704,25 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     return BackgroundCheck(status="consistent", message=msg, selected="assumed", **base)
 
 
-def _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm) -> str:
+def _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm, one=None) -> str:
     """A reason when u0p differs between the quadrants of the background (split at the medians along the
     principal directions of the points in the camera image) beyond ``false_alarm`` (likelihood ratio of one
-    u0p per quadrant against one for all, 3 degrees of freedom); "" otherwise."""
-    from scipy.stats import chi2
-
+    u0p per quadrant against one for all, 3 degrees of freedom); "" otherwise. ``one``: the solved
+    (joint, x) with one u0p, if at hand."""
     pts = cam[keep]
     _, _, Vt = np.linalg.svd(pts - pts.mean(0), full_matrices=False)
     s = cam @ Vt.T
     groups = (s[:, 0] > np.median(s[keep, 0])).astype(int) + 2 * (s[:, 1] > np.median(s[keep, 1]))
-    base = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
-    base.keep = keep
-    x1 = base.solve(base.x0(*warm))
+    if one is None:
+        base = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
+        base.keep = keep
+        one = (base, base.solve(base.x0(*warm)))
+    base, x1 = one
     four = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
     four.keep, four.groups = keep, groups
     x4 = four.solve(np.r_[x1, np.full(3, x1[int(four.free_c.sum()) + 1])])
     stat = base.cost(x1) - four.cost(x4)
-    thr = float(chi2.isf(options.false_alarm, 3))
+    thr = _chi2_isf(options.false_alarm, 3)
     if stat > thr:
         u0 = [four.full(x4)[1][1], *x4[-3:]]
         return (f"the background's quadrants disagree (u0p = {', '.join(f'{u:.1f}' for u in u0)} px from each, "
@@ -732,12 +735,17 @@ def _model_name(free) -> str:
     return "+".join(free) if free else "assumed"
 
 
+def _chi2_isf(p: float, dof: int) -> float:
+    """The chi-square quantile exceeded with probability ``p`` (``dof`` degrees of freedom)."""
+    from scipy.special import chdtri
+
+    return float(chdtri(dof, p))
+
+
 def _select(fits, nested, options) -> str:
     """Forward selection among the freed models: free the next parameter while its likelihood ratio (1 degree
     of freedom) passes the threshold; at least the first freed model."""
-    from scipy.stats import chi2
-
-    thr1 = float(chi2.isf(options.false_alarm, 1))
+    thr1 = _chi2_isf(options.false_alarm, 1)
     chosen = _model_name(nested[1])
     for a, b in zip(nested[1:], nested[2:]):
         if fits[_model_name(a)].cost - fits[_model_name(b)].cost > thr1:

@@ -170,12 +170,11 @@ def background_points(maps: DecodeResult, board_cam_pts: np.ndarray, *, margin: 
     d = np.linalg.norm(c[:, None, :] - c[None, :, :], axis=2)
     np.fill_diagonal(d, np.inf)
     square = float(np.percentile(d.min(axis=1), 90))
-    board = np.zeros((H, W), np.uint8)
-    cv2.fillConvexPoly(board, np.round(cv2.convexHull(c.astype(np.float32))).astype(np.int32), 1)
-    r = int(np.ceil(margin * square))
-    if r > 0:
-        board = cv2.dilate(board, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
-    ok = maps.valid_col & maps.valid_row & (board == 0)
+    outside = np.ones((H, W), np.uint8)
+    cv2.fillConvexPoly(outside, np.round(cv2.convexHull(c.astype(np.float32))).astype(np.int32), 0)
+    # distance (px) of every pixel outside the hull to the hull
+    dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    ok = maps.valid_col & maps.valid_row & (dist > margin * square)
     if max_dropped is not None:
         for dropped in (maps.dropped_col, maps.dropped_row):
             if dropped is not None:

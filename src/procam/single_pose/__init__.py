@@ -115,7 +115,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     on_failure : ``"raise"`` (default: raise :class:`CalibrationError` when an estimated focal length is
         impossible, see :func:`advice`) or ``"warn"`` (return it, flagged ``failed`` in the advice, with a
         warning).
-    background : :class:`procam.background.BackgroundOptions` (default: mode ``auto``) -- used only when
+    background : :class:`procam.background.BackgroundOptions` (default: mode ``free``) -- used only when
         ``view.background`` holds decoded points off the board: the check of the projector's assumptions
         against them (a ``model error`` warning) and, by its mode, the joint refinement
         (:func:`procam.background.apply`). Without ``view.background`` the result is the paper's method alone.
