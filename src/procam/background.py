@@ -14,24 +14,38 @@ parallax. The single-pose camera is itself uncertain (its ``f_c`` is often known
 from one pose), and that uncertainty moves the epipole too, so the size of the disagreement alone says
 nothing; this module compares two fits of the same data instead:
 
-* **assumed**: the paper's projector model (``u0p``, ``alpha_p`` fixed), with the background;
+* **assumed**: the paper's projector model (``u0p`` fixed, ``alpha_p`` 1), with the background;
 * **free**: ``u0p`` (and optionally ``alpha_p``) estimated from the background;
 
 both jointly over the camera (the parameters its single-pose fit estimates, on its board corners, with
 its principal-point prior if it used one), the projector's ``f_p, v0p`` and board pose, on the projector's
-board corners (pixels) and the background points' distances to their epipolar lines (projector pixels). Twice the cost difference
-is the likelihood-ratio statistic of the assumption: chi-square with one degree of freedom per freed
-parameter when the assumption holds, so a threshold at a false-alarm probability (default 1e-4) is the
-**model-error** test (:func:`epipolar_check`). The free fit is the refinement (:func:`refine_projector`):
-``f_p, u0p, v0p`` (and ``alpha_p``) from ONE pose, with a covariance that includes the camera's
-uncertainty; when the assumption holds, the assumed fit with the background is the better estimate
-(it also pins the camera's focal length, the single pose's weakest parameter).
+board corners (pixels) and the background points' distances to their epipolar lines (projector pixels).
+Twice the cost difference is the likelihood-ratio statistic of the assumption: chi-square with one
+degree of freedom per freed parameter when the assumption holds, so a threshold at a false-alarm
+probability (default 1e-4) is the **model-error** test (:func:`epipolar_check`). The free fit is the
+refinement (:func:`refine_projector`): ``f_p, u0p, v0p`` (and ``alpha_p``) from ONE pose, with a
+covariance that includes the camera's uncertainty. Where the background pins ``u0p`` only loosely, the
+test cannot tell a wrong ``u0p`` from the camera's own uncertainty; the free fit's ``+-`` then says so,
+which is why lifting the assumptions is the default (:data:`MODES`). Either fit with the background also
+pins the camera's focal length, the single pose's weakest parameter.
 
-Robustness: the background is arbitrary (partly unlit, shadowed, with interreflections that decode
-wrong). The noise is measured, not assumed (robust scale of the residuals: median absolute deviation),
-a first fit uses a Cauchy loss, points beyond ``outlier_k`` noise sigmas are then left out of both final
-fits, and with too few points off the board's plane, or a background that does not pin ``u0p``
-(nearly coplanar with the board), there is **no check** (with the reason), never a false alarm.
+While ``alpha_p`` is not freed it is ``1 +- 0.003`` (a prior) rather than exactly 1, so that the ``+-``
+of ``f_p`` covers square-ish projector pixels (the paper's simulated projector has 1.002).
+
+Robustness (the background is arbitrary: partly unlit, shadowed, with interreflections that decode
+wrong):
+
+* the noise is measured, not assumed: first from each point's difference to the median of its
+  neighbours (a model error is a smooth field, decoding errors are not), then as the robust scale
+  (median absolute deviation) of the inliers' residuals;
+* points that disagree with their neighbours are left out, a first fit uses a graduated Cauchy loss on
+  the background (the corners stay quadratic), and points beyond ``outlier_k`` noise sigmas are left
+  out of the final fits;
+* a background that does not follow one epipolar geometry (``u0p`` fitted per quadrant of the points
+  disagrees: a reflective or moving surface, interreflections that decode consistently wrong) is no
+  check;
+* too few points off the board's plane, or a background that does not pin ``u0p`` (too small, nearly
+  coplanar with the board): no check, with the reason, never a false alarm.
 
 The points come from the decoded maps (:func:`procam.correspond.background_points`, re-exported here);
 :mod:`procam.pipeline` keeps them in ``View.background`` and :func:`procam.single_pose.calibrate` applies
@@ -371,8 +385,8 @@ class _Joint:
         if cs.principal_point_source == "image-center" and cs.info.get("pp_prior_std"):
             W, H = cs.image_size
             self.pp_prior = (np.array([(W - 1) / 2.0, (H - 1) / 2.0]), float(cs.info["pp_prior_std"]))
-        mask = np.asarray(ps.mask, bool) if ps.mask is not None else view.valid
-        mask &= np.isfinite(view.proj_pts).all(1) & np.isfinite(view.obj_pts).all(1)
+        mask = np.array(ps.mask if ps.mask is not None else view.valid, bool)
+        mask = mask & np.isfinite(view.proj_pts).all(1) & np.isfinite(view.obj_pts).all(1)
         self.obj = np.asarray(view.obj_pts, float)[mask]
         self.corners = np.asarray(view.proj_pts, float)[mask]
         self.sigma_p = float(ps.info.get("sigma_px", np.nan))
@@ -420,9 +434,6 @@ class _Joint:
         q = self.q0.astype(np.result_type(x, float)).copy()
         q[self.free_q] = x[nc:nc + int(self.free_q.sum())]
         return pc, q
-
-    def pack_full(self, pc, q):
-        return np.r_[pc, q]
 
     @staticmethod
     def devices(pc, q):
