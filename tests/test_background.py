@@ -199,6 +199,20 @@ def test_refined_projector_against_the_truth(paper_standins, pose):
     assert fit.calibration.std["u0p"] == pytest.approx(fit.std["u0p"])
 
 
+def test_alpha_p_freed_with_care(paper_standins):
+    """alpha_p (truth 1.002) is freed only when it improves the fit significantly; its estimate is honest."""
+    scene, view, cal = paper_standins[(-20, -10, 0)]
+    c = _check(view, cal, free=("u0p", "alpha_p"))
+    assert c.model_error and set(c.fits) == {"assumed", "u0p", "u0p+alpha_p"}
+    assert c.selected in ("u0p", "u0p+alpha_p") and c.dof == 2
+    a, s = c.estimate["alpha_p"], c.estimate_std["alpha_p"]
+    assert abs(a - 1.002) < 4 * s and s < 0.01
+    fit = c.fits["u0p+alpha_p"]
+    K = fit.calibration.projector.K
+    assert abs(K[0, 0] - scene.K_proj[0, 0]) < 4 * fit.std["f_p"] + 5
+    assert fit.calibration.std["alpha_p"] == pytest.approx(s)
+
+
 # ------------------------------------------------------------------------------------------------
 # no check, never a false alarm
 # ------------------------------------------------------------------------------------------------

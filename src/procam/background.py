@@ -707,7 +707,8 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
                f"geometry by {base['size_px']:.1f} px (median distance to the epipolar lines, projector pixels; "
                f"decoding noise {sigma_n:.2f} px), beyond what the calibration's uncertainty allows (likelihood "
                f"ratio {stat:.0f} > {thr:.0f}); the projector assumption {words} is probably wrong (the background "
-               f"puts {where}), so f_p, v0p and R, T are biased beyond their +-")
+               f"puts {where}), so the single-pose f_p = {calibration.projector.K[0, 0]:.1f} +- "
+               f"{calibration.std.get('f_p', float('nan')):.1f} px, v0p and R, T are biased beyond their +-")
         return BackgroundCheck(status="model error", message=msg, selected=_select(fits, nested, options), **base)
     msg = (f"background check: {int(keep.sum())} points agree with the calibration's epipolar geometry within its "
            f"uncertainty (median distance {base['size_px']:.2f} px, noise {sigma_n:.2f} px; likelihood ratio "
