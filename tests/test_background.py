@@ -163,7 +163,7 @@ def test_epipolar_distances_vanish_for_the_true_calibration():
 
 @pytest.mark.parametrize("pose", PAPER_POSES)
 def test_check_fires_on_the_paper_rig(paper_standins, pose):
-    scene, view, cal = paper_standins[pose]
+    _, view, cal = paper_standins[pose]
     c = _check(view, cal)
     assert c.status == "model error" and c.model_error, c.message
     assert c.statistic > 2 * c.threshold
@@ -176,7 +176,7 @@ def test_check_fires_on_the_paper_rig(paper_standins, pose):
 
 @pytest.mark.parametrize("pose", IDEAL_POSES)
 def test_check_is_silent_on_the_ideal_rig(ideal_standins, pose):
-    scene, view, cal = ideal_standins[pose]
+    _, view, cal = ideal_standins[pose]
     c = _check(view, cal)
     assert c.status == "consistent" and not c.model_error, c.message
     assert c.statistic < 0.5 * c.threshold
@@ -218,7 +218,7 @@ def test_alpha_p_freed_with_care(paper_standins):
 # ------------------------------------------------------------------------------------------------
 
 def test_flat_or_empty_background_is_no_check_and_keeps_the_paper_result(paper_standins):
-    scene, view, cal = paper_standins[PAPER_POSES[0]]
+    _, view, cal = paper_standins[PAPER_POSES[0]]
     cam = view.background.cam_pts
     # the same pixels, but on the board's plane (e.g. a table flush with the board): no parallax
     H = bg._plane_homography(cal.camera.K, cal.info["camera"].R, cal.info["camera"].t, cal.projector.K, cal.R, cal.T)
@@ -257,7 +257,7 @@ def _corruptions(cam, proj, rng):
 
 @pytest.mark.parametrize("pose", IDEAL_POSES[:2])
 def test_no_false_alarm_with_interreflections_or_half_the_background_unlit(ideal_standins, pose):
-    scene, view, cal = ideal_standins[pose]
+    _, view, cal = ideal_standins[pose]
     rng = np.random.default_rng(7)
     for what, cam, proj in _corruptions(view.background.cam_pts, view.background.proj_pts, rng):
         c = _check(view, cal, cam, proj)
@@ -265,7 +265,7 @@ def test_no_false_alarm_with_interreflections_or_half_the_background_unlit(ideal
 
 
 def test_corrupted_background_still_reveals_the_paper_rig(paper_standins):
-    scene, view, cal = paper_standins[(-20, -10, 0)]
+    _, view, cal = paper_standins[(-20, -10, 0)]
     rng = np.random.default_rng(8)
     for what, cam, proj in _corruptions(view.background.cam_pts, view.background.proj_pts, rng):
         c = _check(view, cal, cam, proj)
@@ -275,7 +275,7 @@ def test_corrupted_background_still_reveals_the_paper_rig(paper_standins):
 
 def test_a_background_that_follows_no_single_geometry_is_no_check(ideal_standins):
     """A coherent shift of part of the background (a reflective surface, say) is not a model error."""
-    scene, view, cal = ideal_standins[IDEAL_POSES[0]]
+    _, view, cal = ideal_standins[IDEAL_POSES[0]]
     cam, proj = view.background.cam_pts, view.background.proj_pts.copy()
     left = cam[:, 0] < np.percentile(cam[:, 0], 40)
     proj[left] += [0.0, 4.0]
@@ -329,7 +329,7 @@ def test_options_are_checked(kw):
 
 
 def test_no_check_for_a_calibration_that_is_not_single_pose(paper_standins):
-    scene, view, cal = paper_standins[PAPER_POSES[0]]
+    _, view, cal = paper_standins[PAPER_POSES[0]]
     c = _check(view, cal.replace(info={}))
     assert c.status == "no check" and "single-pose" in c.reason
 

@@ -55,6 +55,7 @@ The points come from the decoded maps (:func:`procam.correspond.background_point
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 
@@ -65,8 +66,8 @@ from .correspond import background_points
 from .errors import CalibrationError
 from .residuals import pnp, rms, stereo_pose
 
-__all__ = ["BackgroundOptions", "BackgroundCheck", "BackgroundFit", "background_points", "epipolar_distances",
-           "parallax", "epipolar_check", "refine_projector", "apply", "MODES", "FREEABLE"]
+__all__ = ["FREEABLE", "MODES", "BackgroundCheck", "BackgroundFit", "BackgroundOptions", "apply", "background_points",
+           "epipolar_check", "epipolar_distances", "parallax", "refine_projector"]
 
 #: What :func:`apply` does: ``off`` (nothing), ``check`` (warn on a model error; numbers unchanged),
 #: ``free`` (the default: the warning, and the assumptions lifted with the background whenever it is
@@ -642,8 +643,8 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     with np.errstate(all="ignore"):
         par = parallax(calibration, cam, proj)
     off = np.isfinite(par) & (par >= options.min_parallax_px)
-    base = dict(n_points=n, n_off_plane=int(off.sum()), size_px=float(np.median(np.abs(d0))),
-                p90_px=float(np.percentile(np.abs(d0), 90)), parallax_px=float(np.median(par)), assumed=assumed)
+    base = {"n_points": n, "n_off_plane": int(off.sum()), "size_px": float(np.median(np.abs(d0))),
+            "p90_px": float(np.percentile(np.abs(d0), 90)), "parallax_px": float(np.median(par)), "assumed": assumed}
     if off.sum() < options.min_points:
         return _no_check(f"only {int(off.sum())} of {n} background points are {options.min_parallax_px:g} px or "
                          f"more off the board's plane (need {options.min_points}); the background is too small or "
@@ -759,7 +760,7 @@ def _select(fits, nested, options) -> str:
     of freedom) passes the threshold; at least the first freed model."""
     thr1 = _chi2_isf(options.false_alarm, 1)
     chosen = _model_name(nested[1])
-    for a, b in zip(nested[1:], nested[2:]):
+    for a, b in pairwise(nested[1:]):
         if fits[_model_name(a)].cost - fits[_model_name(b)].cost > thr1:
             chosen = _model_name(b)
         else:
