@@ -23,6 +23,7 @@ The modules, from the captures up (each imports only those above it in this list
     calibration   Calibration, Device, Distortion (results)
     residuals     RMS, PnP, stereo pose, per-pose residuals
     misfit        model error versus noise: a smooth field in a fit's residuals across the board
+    background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
     single_pose   the seed method (camera, projector, extrinsics, advice)
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
@@ -59,8 +60,8 @@ import importlib
 __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
-               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
-               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
+               "single_pose", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report",
                "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check", "acquire")
 
 #: Public names re-exported here: name -> module.

@@ -131,3 +131,62 @@ def reason_summary(reason: np.ndarray) -> str:
     counts = np.bincount(np.asarray(reason, int), minlength=len(CORNER_REASONS))
     parts = [f"{c} {CORNER_REASONS[k]}" for k, c in enumerate(counts) if k and c]
     return ", ".join(parts) if parts else "none failed"
+
+
+def background_points(maps: DecodeResult, board_cam_pts: np.ndarray, *, margin: float = 2.0,
+                      max_points: int = 3000, max_dropped: int | None = None):
+    """Decoded pixels off the board (wall, table behind it) and their projector coordinates.
+
+    Only pixels decoded in **both** column and row are kept: a column alone fixes no epipolar
+    constraint (a camera pixel's epipolar line crosses every projector column once), so it says
+    nothing about the camera-projector geometry.
+
+    Parameters
+    ----------
+    maps : :class:`~procam.decode.DecodeResult` of the pose.
+    board_cam_pts : (N, 2) camera corners of the board (distorted pixels; NaN rows ignored).
+    margin : how far beyond the convex hull of the corners the board is assumed to extend, in
+        squares (the square size is the 90th percentile of the corners' nearest-neighbour distances in
+        pixels); the default 2 covers the outer squares and a white border of up to one square.
+    max_points : the kept pixels are subsampled on a regular grid (the same step in x and y) to at
+        most about this many.
+    max_dropped : keep only pixels with at most this many uncertain finest bits in each axis
+        (``maps.dropped_col`` / ``dropped_row``); None keeps all decoded pixels.
+
+    Returns
+    -------
+    cam_pts : (M, 2) float64 camera pixel centres (x, y), distorted.
+    proj_pts : (M, 2) float64 decoded projector (column, row) there.
+    Both are empty (0, 2) when there are no corners or nothing outside the board is decoded.
+    """
+    import cv2
+
+    H, W = maps.col.shape
+    c = np.asarray(board_cam_pts, float).reshape(-1, 2)
+    c = c[np.isfinite(c).all(1)]
+    empty = np.zeros((0, 2))
+    if len(c) < 3 or not (np.isfinite(margin) and margin >= 0) or int(max_points) < 1:
+        return empty, empty.copy()
+    d = np.linalg.norm(c[:, None, :] - c[None, :, :], axis=2)
+    np.fill_diagonal(d, np.inf)
+    square = float(np.percentile(d.min(axis=1), 90))
+    outside = np.ones((H, W), np.uint8)
+    cv2.fillConvexPoly(outside, np.round(cv2.convexHull(c.astype(np.float32))).astype(np.int32), 0)
+    # distance (px) of every pixel outside the hull to the hull
+    dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    ok = maps.valid_col & maps.valid_row & (dist > margin * square)
+    if max_dropped is not None:
+        for dropped in (maps.dropped_col, maps.dropped_row):
+            if dropped is not None:
+                ok &= dropped <= max_dropped
+    n = int(ok.sum())
+    if n == 0:
+        return empty, empty.copy()
+    step = max(1, int(np.ceil(np.sqrt(n / int(max_points)))))
+    grid = np.zeros_like(ok)
+    grid[step // 2::step, step // 2::step] = True
+    ok &= grid
+    yy, xx = np.nonzero(ok)
+    cam = np.column_stack([xx, yy]).astype(np.float64)
+    proj = np.column_stack([maps.col[ok], maps.row[ok]]).astype(np.float64)
+    return cam, proj

@@ -22,7 +22,7 @@ from . import plausibility as _plausible
 from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError, ProcamError
 from .patterns import PatternSet
-from .view import View
+from .view import Background, View
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,8 @@ class PoseOptions:
     refine : corner refinement, one of :data:`procam.board.REFINERS`.
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
+    background : keep the decoded points off the board (:func:`procam.correspond.background_points`) in
+        ``view.background``, for the single-pose background check (:mod:`procam.background`).
     """
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
@@ -46,6 +48,7 @@ class PoseOptions:
     refine: str = "fit"
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
+    background: bool = True
 
     def __post_init__(self):
         if self.detector not in _board.DETECTORS:
@@ -127,8 +130,9 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     _plausible.check_swapped_bits(maps, name, files)
     _plausible.check_orientation(cam_pts, proj, board.cols, board.rows, name, maps, files)
     H, W = stack.shape[1:]
+    background = Background(*_corr.background_points(maps, cam_pts)) if options.background else None
     view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
-                {**diag, "warnings": warnings}, board)
+                {**diag, "warnings": warnings}, board, background)
     n_ok = int(view.valid.sum())
     if board.n_corners < options.min_corners:
         raise CorrespondenceError(

@@ -1,4 +1,5 @@
-"""The correspondences of one pose: board, camera and projector points."""
+"""The correspondences of one pose: board, camera and projector points (and, optionally, the decoded
+points of the background behind the board)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,36 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .board import Board
+
+
+@dataclass(frozen=True)
+class Background:
+    """Decoded points of what is behind and around the board (wall, table), off the board's plane.
+
+    They are not used to fit the board; :mod:`procam.background` checks (and refines) the calibration's
+    camera-projector epipolar geometry with them.
+
+    Attributes
+    ----------
+    cam_pts : (M, 2) float64 distorted camera pixels (x, y) (pixel centres).
+    proj_pts : (M, 2) float64 projector pixels (x, y) decoded there (column and row).
+    """
+
+    cam_pts: np.ndarray
+    proj_pts: np.ndarray
+
+    def __post_init__(self):
+        cam = np.asarray(self.cam_pts, dtype=np.float64).reshape(-1, 2)
+        proj = np.asarray(self.proj_pts, dtype=np.float64).reshape(-1, 2)
+        if len(cam) != len(proj):
+            raise ValueError(f"background camera/projector point counts differ: {len(cam)}, {len(proj)}")
+        for arr in (cam, proj):
+            arr.setflags(write=False)
+        object.__setattr__(self, "cam_pts", cam)
+        object.__setattr__(self, "proj_pts", proj)
+
+    def __len__(self) -> int:
+        return len(self.cam_pts)
 
 
 @dataclass(frozen=True)
@@ -27,6 +58,8 @@ class View:
     diagnostics : dict
         Per-corner diagnostics (arrays of length N) and free-form notes.
     board : :class:`procam.board.Board` the points were made for, or None when unknown.
+    background : :class:`Background` or None -- decoded points off the board (filled by
+        :mod:`procam.pipeline` from the decoded maps; None when unknown, e.g. a view read from a file).
     """
 
     obj_pts: np.ndarray
@@ -37,6 +70,7 @@ class View:
     proj_size: tuple[int, int] | None = None
     diagnostics: dict = field(default_factory=dict, compare=False)
     board: Board | None = None
+    background: Background | None = field(default=None, compare=False)
 
     def __post_init__(self):
         obj = np.asarray(self.obj_pts, dtype=np.float64)
@@ -65,4 +99,4 @@ class View:
         diag = {k: (np.asarray(v)[mask] if isinstance(v, np.ndarray) and len(v) == len(mask) else v)
                 for k, v in self.diagnostics.items()}
         return View(self.obj_pts[mask], self.cam_pts[mask], self.proj_pts[mask], self.name,
-                    self.cam_size, self.proj_size, diag, self.board)
+                    self.cam_size, self.proj_size, diag, self.board, self.background)

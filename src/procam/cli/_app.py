@@ -196,7 +196,7 @@ def parse_board(text: str, square: float) -> _board.Board:
 
 def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
                  refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
-                 min_corners: int = 10):
+                 min_corners: int = 10, background: bool = True):
     """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
     from .. import pipeline
 
@@ -210,7 +210,8 @@ def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 
     dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
     corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "ransac")
     return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
-                                refine=value(refine) or "fit", corners=corners, min_corners=min_corners)
+                                refine=value(refine) or "fit", corners=corners, min_corners=min_corners,
+                                background=background)
 
 
 # Options shared by the commands that read capture folders (one definition, one help text each).

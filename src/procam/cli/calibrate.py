@@ -19,6 +19,7 @@ from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeO
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
+BackgroundMode = choice("BackgroundMode", _sp.BACKGROUND_MODES)
 
 
 def summary_table(calib) -> Table:
@@ -88,6 +89,10 @@ def calibrate_cmd(
     cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
                                                     "when reliable, else the image centre as a prior), paper "
                                                     "(always the centre of distortion) or image-center."),
+    background: BackgroundMode = typer.Option(
+        BackgroundMode.free, "--background", help="Single-pose: the decoded points behind the board. free: lift the "
+        "paper's u0p = W/2 with them where they determine it; auto: only when they refute it; check: only say so; "
+        "off: ignore them (the paper's method)."),
     cam_dist: DistModel = typer.Option(DistModel.auto, "--cam-dist", help="Multi-pose camera distortion model (auto: "
                                        "the richest OpenCV model whose terms the poses determine)."),
     proj_dist: DistModel = typer.Option(DistModel.auto, "--proj-dist", help="Multi-pose projector distortion model."),
@@ -116,7 +121,8 @@ def calibrate_cmd(
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
                         refine_window=refine, refine=refiner, window=window, estimator=estimator,
-                        min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10)
+                        min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
+                        background=not multi and value(background) != "off")
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
@@ -161,7 +167,10 @@ def calibrate_cmd(
                 from ..export import load_camera_intrinsics
 
                 known = load_camera_intrinsics(camera_file, views[0].cam_size)
-            calib = _sp.calibrate(views[0], camera=camera, known_camera=known)
+            from ..background import BackgroundOptions
+
+            calib = _sp.calibrate(views[0], camera=camera, known_camera=known,
+                                  background=BackgroundOptions(mode=value(background)))
         else:
             calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
     print_summary(calib)

@@ -26,6 +26,7 @@ import warnings as _warnings
 
 import numpy as np
 
+from .. import background as _background
 from .. import models
 from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
@@ -40,7 +41,10 @@ from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
 __all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "known_camera_pose",
            "extrinsics", "advice",
            "CameraOptions", "ProjectorOptions", "RobustOptions", "AdviceOptions", "CameraSolution",
-           "ProjectorSolution", "COD_MODES", "REFINE_MODES", "robust_sigma"]
+           "ProjectorSolution", "COD_MODES", "REFINE_MODES", "BACKGROUND_MODES", "robust_sigma"]
+
+#: The background modes of :func:`calibrate` (:data:`procam.background.MODES`).
+BACKGROUND_MODES = _background.MODES
 
 
 def _pnp_rms(obj, pts, K) -> float:
@@ -214,7 +218,8 @@ def _rejected_list(sol) -> list:
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
               advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
-              known_camera: Device | None = None) -> Calibration:
+              known_camera: Device | None = None, background: _background.BackgroundOptions | None = None
+              ) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
 
     Parameters
@@ -232,6 +237,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         the projector and ``R, T`` (``camera`` options are not used).
     strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of
         returning it with its verdict and a warning.
+    background : :class:`procam.background.BackgroundOptions` (default: mode ``free``) -- used only when
+        ``view.background`` holds decoded points off the board: the check of the projector's assumptions
+        (u0p = W/2, alpha_p = 1) against them and, by its mode, the joint refinement that lifts them
+        (:func:`procam.background.apply`). Without ``view.background`` the result is the paper's method alone.
 
     Returns
     -------
@@ -311,14 +320,21 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
             "rejected_corners": {"camera": _rejected_list(cam), "projector": _rejected_list(proj)},
             "outlier_threshold_px": {"camera": cam.outlier_threshold_px, "projector": proj.outlier_threshold_px},
             "misfit": {k: _misfit_dict(v) for k, v in fits.items()}}
-    return Calibration(camera=known_camera if known_camera is not None else
-                       Device(cam.K, tuple(cam.image_size), cam.distortion),
-                       projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
-                       method="single-pose" if known_camera is None else "single-pose, camera given", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
-                       poses=(pose,), views=(view,), warnings=tuple(warnings),
-                       info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
-                             "cod_score": None if cam.cod is None else cam.cod.score,
-                             "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
+    cal = Calibration(camera=known_camera if known_camera is not None else
+                      Device(cam.K, tuple(cam.image_size), cam.distortion),
+                      projector=Device(proj.K, tuple(proj.image_size), Distortion()), R=R, T=T,
+                      method="single-pose" if known_camera is None else "single-pose, camera given",
+                      cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo, std=std,
+                      poses=(pose,), views=(view,), warnings=tuple(warnings),
+                      info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
+                            "cod_score": None if cam.cod is None else cam.cod.score,
+                            "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
+    # the background behind the board (procam.background): the check, and the refinement, of the projector's
+    # assumptions -- only when the view carries decoded background points
+    bg = getattr(view, "background", None)
+    if bg is not None:
+        cal = _background.apply(cal, bg.cam_pts, bg.proj_pts, background or _background.BackgroundOptions())
+    return cal
 
 
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
