@@ -19,6 +19,7 @@ The modules, from the captures up (each imports only those above it in this list
     calibration   Calibration, Device, Distortion (results)
     residuals     RMS, PnP, stereo pose, per-pose residuals
     single_pose   the seed method (camera, projector, extrinsics, advice)
+    advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
     summary       a calibration as rows of text
@@ -48,7 +49,7 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
-               "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots")
+               "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",
