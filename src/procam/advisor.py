@@ -21,7 +21,7 @@ Per camera frame (:meth:`Advisor.update`):
    (:func:`procam.crlb.projector_bound`: ``u0p`` and ``alpha_p`` held, corner noise ``sigma_projector``);
    the printed board's footprint in the projector image tells whether it is all in the projector's light;
 5. the advice (:class:`Action` s): move into view / closer / into the light first, then which way to turn
-   and tilt the board and roughly how far (:meth:`Advisor.search_move`), then "good -- hold still" until the
+   and tilt the board and roughly how far (:meth:`Advisor.search_move`), then "good — hold still" until the
    corners have been still for ``still_s``: the state ``ready``.
 
 The score of a pose is the largest of its terms, each ``<= 1`` when satisfied: ``std(f_c) / f_c / target``
@@ -225,7 +225,7 @@ class Advice:
     Attributes
     ----------
     frame : index of the frame (0, 1, ... per :class:`Advisor`); ``time_s`` its time stamp (s).
-    state : ``"no-board"``, ``"adjust"``, ``"good"`` (good -- hold still) or ``"ready"`` (good and still).
+    state : ``"no-board"``, ``"adjust"``, ``"good"`` (good — hold still) or ``"ready"`` (good and still).
     message : the headline shown to the user.
     actions : :class:`Action` s, most urgent first.
     notes : other lines worth showing (the projector side unknown, which intrinsics ...).
@@ -271,6 +271,11 @@ class Advice:
     intrinsics: str = ""
     image_size: tuple = (0, 0)
     timings_ms: dict = field(default_factory=dict)
+
+    @property
+    def found(self) -> bool:
+        """The board was found in the frame."""
+        return self.corners is not None
 
     @property
     def good(self) -> bool:
@@ -720,7 +725,7 @@ class Advisor:
         f_c = float(dev.K[0, 0])
         ang_c = tuple(float(a) for a in models.board_angles_deg(R_c, t_c))
         assumes_c = (f"corner noise {o.sigma_camera:g} px; f, alpha, k1, k2 and the pose fitted; "
-                     + ("principal point assumed at the image centre +- "
+                     + ("principal point assumed at the image centre ± "
                         f"{o.pp_prior_fraction * max(W, H):.0f} px (the corners do not pin it)" if prior
                         else "principal point = centre of distortion, from the corners"))
         cam_state = DeviceState(ang_c, f_c, std_c, std_c / f_c, float(np.linalg.norm(t_c)), None, assumes_c)
@@ -778,11 +783,11 @@ class Advisor:
         else:
             state = "ready" if still else "good"
             if phase == "first":
-                text = ("good for a first capture -- hold still" + (" (steady)" if still else "")
+                text = ("good for a first capture — hold still" + (" (steady)" if still else "")
                         + ": it measures the projector side (R, T)")
                 actions.append(Action("capture", text))
             else:
-                text = "good -- hold still" + (" (steady)" if still else "")
+                text = "good — hold still" + (" (steady)" if still else "")
                 actions.append(Action("hold", text))
             message = text
         t_end = time.perf_counter()
@@ -810,9 +815,9 @@ class Advisor:
         o, a = self.options, self.options.advice
         name = max(terms, key=terms.get)
         if name == "f_c":
-            return f"f_c +- {100 * cam.rel_std_f:.2g} % (target {o.target_pct:g} %)"
+            return f"f_c ± {100 * cam.rel_std_f:.2g} % (target {o.target_pct:g} %)"
         if name == "f_p":
-            return f"f_p +- {100 * proj.rel_std_f:.2g} % (target {o.projector_target:g} %)"
+            return f"f_p ± {100 * proj.rel_std_f:.2g} % (target {o.projector_target:g} %)"
         if name == "camera rule":
             psi, nu = abs(cam.angles_deg[0]), abs(cam.angles_deg[1])
             return (f"camera: |psi_c| = {psi:.0f}, |nu_c| = {nu:.0f} deg (the rule: sum > {a.camera_rule_deg:g}, "
