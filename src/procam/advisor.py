@@ -595,7 +595,7 @@ class Advisor:
         a = models.board_angles_deg(R_c, t_c)
         return abs(a[0]) <= self.options.max_angle_deg and abs(a[1]) <= self.options.max_angle_deg
 
-    def search_move(self, R_c, t_c, prior=None, rounds: int = 2):
+    def search_move(self, R_c, t_c, prior=True, rounds: int = 2):
         """The move (turn_deg, tilt_deg) towards a good pose from (R_c, t_c), and the score it reaches.
 
         Per round: probe a turn and a tilt of ``probe_deg`` each way; the candidate directions are the four
@@ -603,7 +603,10 @@ class Advisor:
         each direction, poses every ``2 probe_deg`` up to ``max_move_deg`` are scored (walking on across the
         degenerate lines ``psi = 0``, ``nu = 0`` where the score peaks) until one scores ``<= aim``; the
         shortest such move wins (then tried ``probe_deg`` shorter), else the best pose seen, from where a
-        second round starts.  Camera angles beyond ``max_angle_deg`` are never proposed.
+        second round starts.  Camera angles beyond ``max_angle_deg`` are never proposed.  The camera's bound
+        is taken with the solver's principal-point prior throughout (``prior=True``: one bound per pose, smooth
+        across the poses where the corners stop pinning the principal point; at most a few % below the
+        data-only bound where they do); the pose reached is judged exactly when it is seen.
 
         Returns ``(turn, tilt, score_after, reached)`` (``reached``: score <= 1); ``(0, 0, score, ...)`` when
         nothing probed lowers the score.
@@ -695,8 +698,8 @@ class Advisor:
 
         # stillness: the largest corner motion over the last still_s seconds
         self._history.append((t, corners))
-        while self._history and t - self._history[0][0] > o.still_s + 1e-9:
-            self._history.popleft()
+        while len(self._history) >= 2 and t - self._history[1][0] >= o.still_s - 1e-9:
+            self._history.popleft()  # keep the newest frame at least still_s old: the window is covered
         motion = max(float(np.max(np.linalg.norm(c - corners, axis=1))) for _, c in self._history)
         span = t - self._history[0][0]
         still = motion <= o.still_px and span >= o.still_s - 1e-9
@@ -770,7 +773,7 @@ class Advisor:
         good_pose = score <= 1.0
         if not good_pose:
             t0 = time.perf_counter()
-            acts, more = self._move_actions(R_c, t_c, prior, t, phase)
+            acts, more = self._move_actions(R_c, t_c, t, phase)
             actions.extend(acts)
             notes = notes + tuple(more)
             search_ms = 1000 * (time.perf_counter() - t0)
@@ -835,17 +838,17 @@ class Advisor:
         return Action("tilt", f"tilt the board ~{amount} deg about the horizontal axis, {_TILT_WORDS[sgn]}",
                       degrees=deg)
 
-    def _move_actions(self, R_c, t_c, prior, t, phase):
+    def _move_actions(self, R_c, t_c, t, phase):
         """Turn/tilt actions from the (throttled) move search, and notes."""
         o = self.options
         plan = self._plan
         for attempt in (0, 1):
             if attempt == 1 or plan is None or plan["phase"] != phase or not 0 <= t - plan["t"] < o.search_interval_s:
-                turn, tilt, after, reached = self.search_move(R_c, t_c, prior)
+                turn, tilt, after, reached = self.search_move(R_c, t_c)
                 if turn == 0.0 and tilt == 0.0:
                     self._plan = None
-                    return [], [f"no turn or tilt within {o.max_move_deg:g} deg lowers the predicted std here: "
-                                "move the board closer, or re-place it"]
+                    return [Action("closer", f"no turn or tilt within {o.max_move_deg:g} deg improves this pose: move "
+                                             "the board closer, or place it anew")], []
                 plan = self._plan = {"t": t, "R": _axis_rotation(turn, tilt) @ R_c, "after": after,
                                      "phase": phase, "reached": reached}
                 attempt = 1
@@ -860,7 +863,6 @@ class Advisor:
             acts = [self._action(name, math.copysign(max(abs(deg), 1.0), deg if deg else 1.0))]
         notes = []
         if not plan["reached"]:
-            notes.append(f"the target ({o.target_pct:g} % of f) is out of reach by turning and tilting alone here "
-                         f"(best ~{plan['after'] * o.target_pct:.2g} %): move the board closer, or accept a larger "
-                         "uncertainty")
+            notes.append(f"turning and tilting alone do not make this pose good (the best within {o.max_move_deg:g} "
+                         f"deg scores {plan['after']:.2g}, good is <= 1): after the move, bring the board closer")
         return acts, notes
