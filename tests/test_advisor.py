@@ -270,13 +270,15 @@ def test_the_loop_captures_by_itself_when_ready(scene, earlier):
 
 @pytest.mark.slow
 def test_predicted_stds_match_monte_carlo_single_pose_calibrations(scene, earlier):
-    """At poses across the grid, the advisor's std of f_c and f_p (from one rendered frame and the earlier
-    capture's calibration) is within 20 % of the spread of 150 single-pose calibrations of that pose from
-    corners with the assumed noise (0.1 px camera, 0.2 px projector)."""
+    """At poses across the grid (away from degenerate angles), the advisor's std of f_c and f_p (from one rendered
+    frame and the earlier capture's calibration) is within 20 % of the spread of 150 single-pose calibrations of
+    that pose from corners with the assumed noise (0.1 px camera, 0.2 px projector)."""
     adv = advisor(earlier)
-    for angles in ((15.0, 25.0), (-15.0, 30.0), (20.0, -20.0), (-20.0, -25.0), (0.0, 30.0)):
+    for angles in ((15.0, 25.0), (-15.0, 30.0), (20.0, -20.0), (-20.0, -25.0), (10.0, 30.0)):
         cam, s = at_pose(scene, (*angles, 0.0))
         a = adv.update(cam.grab().image, 0.0)
+        # poses where the bound means something (near a degenerate angle the estimate is not Gaussian)
+        assert a.camera.rel_std_f < 0.03 and a.projector.rel_std_f < 0.03, angles
         fc, fp = [], []
         for k in range(150):
             obj, c, p = simulate.correspondences(s, 0.1, 0.2, seed=1000 + k)

@@ -210,6 +210,7 @@ class PreviewWindow:
         self.position = position
         self.title = title
         self._pg = self._window = self._surface = self._fonts = None
+        self._owns_display = False
 
     def __enter__(self):
         return self.open()
@@ -222,6 +223,7 @@ class PreviewWindow:
         if self._window is not None:
             return self
         pg = _pygame()
+        self._owns_display = not pg.display.get_init()  # the projector window may have started SDL's video
         try:
             pg.display.init()
             kw = {} if self.position is None else {"position": tuple(int(v) for v in self.position)}
@@ -240,7 +242,8 @@ class PreviewWindow:
                 self._window.destroy()
             finally:
                 self._window = self._surface = None
-                self._pg.display.quit()
+                if self._owns_display:
+                    self._pg.display.quit()
 
     def show(self, image: np.ndarray, advice) -> None:
         """Draw ``image`` with ``advice`` and flip."""
