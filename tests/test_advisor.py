@@ -18,7 +18,7 @@ from procam.calibration import Device, Distortion
 from procam.errors import ProcamError
 
 BOARD = Board(10, 6, 24.0)
-NOW = AdvisorOptions(search_interval_s=0.0)  # the move search on every frame (deterministic for tests)
+NOW = AdvisorOptions(search_interval_s=0.0)  # the move search may run again on any frame (times are synthetic)
 
 
 @pytest.fixture(scope="module")

@@ -95,8 +95,10 @@ class AdvisorOptions:
         the image border.
     max_angle_deg : no move is proposed that tilts or turns the board beyond this in the camera frame.
     probe_deg, max_move_deg : the move search's step and longest move (degrees).
-    search_interval_s : the move search (about 15 bound evaluations) runs at most this often; in between,
-        the remaining move to the pose it proposed is updated every frame. 0 = every frame.
+    search_interval_s, search_refresh_s : the move search (10-50 bound evaluations) runs again when the board
+        went the other way or was moved (checked at most every ``search_interval_s``), when it reached the
+        proposed pose and that is not good, and every ``search_refresh_s``; in between, the remaining move to
+        the proposed pose is updated every frame.
     paper_rule : a good pose must also pass the paper's rule as :func:`procam.single_pose.advice` judges it
         (camera ``|psi_c| + |nu_c| > 10``, each ``>= 4`` deg; projector ``|nu_p| > 13`` deg; thresholds from
         ``advice``): the bounds cover the noise only, the rule keeps away from poses where a model error
@@ -121,6 +123,7 @@ class AdvisorOptions:
     probe_deg: float = 5.0
     max_move_deg: float = 40.0
     search_interval_s: float = 0.25
+    search_refresh_s: float = 2.0
     paper_rule: bool = True
     advice: AdviceOptions = AdviceOptions()
     pp_prior_fraction: float = 0.025
@@ -154,6 +157,7 @@ class AdvisorOptions:
         check("probe_deg", 0.5, 30)
         check("max_move_deg", 1, 90)
         check("search_interval_s", 0, 60)
+        check("search_refresh_s", 0, 3600)
         check("pp_prior_fraction", 0, 1, open_lo=True)
 
     @property
@@ -838,26 +842,41 @@ class Advisor:
         return Action("tilt", f"tilt the board ~{amount} deg about the horizontal axis, {_TILT_WORDS[sgn]}",
                       degrees=deg)
 
+    def _stale(self, plan, R_c, t_c, t, phase) -> bool:
+        """Does the move search have to run again?  Not while the user follows the proposed move (the remaining
+        move to its pose is updated every frame): only without a plan, in another phase, after
+        ``search_refresh_s``, or -- at most every ``search_interval_s`` -- when the board went the other way
+        (the remaining move grew by 5 deg) or was moved by more than 15 % of its distance."""
+        o = self.options
+        if plan is None or plan["phase"] != phase or not 0 <= t - plan["t"] < o.search_refresh_s:
+            return True
+        if t - plan["t"] < o.search_interval_s:
+            return False
+        remaining = math.hypot(*move_between(R_c, plan["R"]))
+        moved = np.linalg.norm(np.asarray(t_c) - plan["t_c"]) > 0.15 * np.linalg.norm(plan["t_c"])
+        return remaining > plan["size"] + 5.0 or moved
+
     def _move_actions(self, R_c, t_c, t, phase):
-        """Turn/tilt actions from the (throttled) move search, and notes."""
+        """Turn/tilt actions from the move search (:meth:`_stale` says when it runs), and notes."""
         o = self.options
         plan = self._plan
         for attempt in (0, 1):
-            if attempt == 1 or plan is None or plan["phase"] != phase or not 0 <= t - plan["t"] < o.search_interval_s:
+            if attempt == 1 or self._stale(plan, R_c, t_c, t, phase):
                 turn, tilt, after, reached = self.search_move(R_c, t_c)
                 if turn == 0.0 and tilt == 0.0:
                     self._plan = None
                     return [Action("closer", f"no turn or tilt within {o.max_move_deg:g} deg improves this pose: move "
                                              "the board closer, or place it anew")], []
-                plan = self._plan = {"t": t, "R": _axis_rotation(turn, tilt) @ R_c, "after": after,
-                                     "phase": phase, "reached": reached}
+                plan = self._plan = {"t": t, "R": _axis_rotation(turn, tilt) @ R_c, "t_c": np.array(t_c, float),
+                                     "size": math.hypot(turn, tilt), "after": after, "phase": phase,
+                                     "reached": reached}
                 attempt = 1
             turn, tilt = move_between(R_c, plan["R"])
             acts = [self._action(name, deg) for name, deg in sorted((("turn", turn), ("tilt", tilt)),
                                                                    key=lambda v: -abs(v[1])) if abs(deg) >= 1.5]
             if acts or attempt == 1:
                 break
-            # at the planned pose already, yet not good: plan again from here
+            # at the proposed pose already, yet not good: search again from here
         if not acts:
             name, deg = ("turn", turn) if abs(turn) >= abs(tilt) else ("tilt", tilt)
             acts = [self._action(name, math.copysign(max(abs(deg), 1.0), deg if deg else 1.0))]
