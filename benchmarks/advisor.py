@@ -9,13 +9,17 @@
 2. ``angles``: nu_p (and psi_p) of the advisor, from an earlier capture's single-pose calibration (a
    rendered capture at the recommended pose), against the truth, over the paper's grid of board poses in the
    projector frame (psi_p, nu_p in -45..45 deg, ``--step``); poses the rig cannot show whole are skipped.
-3. ``stds``: the advisor's predicted std of f_c and f_p at poses of that grid (``--mc-step``) against the
+3. ``session``: scripted sessions on the virtual procam from poses with nu_p ~ 0 (and one with psi_c ~ 0): the
+   script turns and tilts the simulated board as each JSON advice says until the advice is good, holds it
+   still until ready, then the pose is rendered in full, decoded and calibrated (single-pose): steps, and
+   |f - truth| against the std the advisor predicted.
+4. ``stds``: the advisor's predicted std of f_c and f_p at poses of that grid (``--mc-step``) against the
    spread of ``--trials`` single-pose calibrations of the same pose from corners with the assumed noise
    (0.1 px camera, 0.2 px projector; ``procam.simulate.correspondences`` + ``single_pose.calibrate_camera`` /
    ``calibrate_projector``), where the bound is below 5 % of f (near a degenerate angle the estimate is not
    Gaussian and the bound says only "large").
 
-    python benchmarks/advisor.py                       # all three parts, 15-degree grids, 100 trials
+    python benchmarks/advisor.py                       # all four parts, 15-degree grids, 100 trials
     python benchmarks/advisor.py --part speed
     python benchmarks/advisor.py --part angles --step 5
 """
@@ -175,6 +179,49 @@ def angles(step: float) -> None:
     print(f"largest nu_p error {worst[0]:+.3f} deg at psi_p, nu_p = {worst[1]}\n")
 
 
+def session() -> None:
+    import json
+
+    s = simulate.preset("ideal")
+    calib = _earlier_calibration(s)
+    print("## session: follow the JSON advice from a degenerate pose (earlier capture's calibration known)")
+    print("| start (psi_p, nu_p) | start advice | steps to good | frames to ready | final psi_c, nu_c, nu_p | "
+          "f_c error / predicted std | f_p error / predicted std |")
+    print("|---|---|---|---|---|---|---|")
+    for start in ((12.0, 0.5), (-10.0, 1.0), (20.0, -0.5), (0.0, 0.0), (25.0, 2.0)):
+        sc = simulate.with_board_pose(s, (*start, 0.0), frame="projector")
+        cam = VirtualLiveCamera(sc, seed=7)
+        adv = Advisor(BOARD, s.cam_size, AdvisorOptions())
+        adv.set_calibration(calib, "pose01")
+        t, first, steps = 0.0, None, None
+        for k in range(8):
+            d = json.loads(adv.update(cam.grab().image, t).to_json())
+            t += 1 / 15
+            first = first or d["message"]
+            if d["state"] in ("good", "ready"):
+                steps = k
+                break
+            turn = sum(a["degrees"] for a in d["actions"] if a["kind"] == "turn")
+            tilt = sum(a["degrees"] for a in d["actions"] if a["kind"] == "tilt")
+            cam.move(turn, tilt)
+        if steps is None:
+            print(f"| {start} | {first} | not within 8 | - | - | - | - |")
+            continue
+        for n in range(1, 30):
+            a = adv.update(cam.grab().image, t)
+            t += 1 / 15
+            if a.ready:
+                break
+        fs = cam.scene
+        stack, _ = simulate.render(fs, seed=11)
+        c = single_pose.calibrate(pipeline.view_from_stack(stack, patterns.pattern_set(*fs.proj_size), BOARD)[0])
+        ec, ep = c.camera.K[0, 0] - fs.K_cam[0, 0], c.projector.K[0, 0] - fs.K_proj[0, 0]
+        print(f"| {start} | {first} | {steps} | {n} | {a.camera.angles_deg[0]:.1f}, {a.camera.angles_deg[1]:.1f}, "
+              f"{a.projector.angles_deg[1]:.1f} | {ec:+.2f} / {a.camera.std_f:.2f} px ({abs(ec) / a.camera.std_f:.2f}) | "
+              f"{ep:+.2f} / {a.projector.std_f:.2f} px ({abs(ep) / a.projector.std_f:.2f}) |")
+    print()
+
+
 def stds(step: float, trials: int) -> None:
     s = simulate.preset("ideal")
     calib = _earlier_calibration(s)
@@ -226,7 +273,7 @@ def stds(step: float, trials: int) -> None:
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("speed", "angles", "stds", "all"), default="all")
+    ap.add_argument("--part", choices=("speed", "angles", "session", "stds", "all"), default="all")
     ap.add_argument("--step", type=float, default=15.0, help="angles: grid step (deg)")
     ap.add_argument("--mc-step", type=float, default=15.0, help="stds: grid step (deg)")
     ap.add_argument("--trials", type=int, default=100, help="stds: Monte-Carlo trials per pose")
@@ -237,6 +284,8 @@ def main():
         speed()
     if args.part in ("angles", "all"):
         angles(args.step)
+    if args.part in ("session", "all"):
+        session()
     if args.part in ("stds", "all"):
         stds(args.mc_step, args.trials)
 
