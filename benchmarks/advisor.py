@@ -19,7 +19,7 @@
    ``calibrate_projector``), where the bound is below 5 % of f (near a degenerate angle the estimate is not
    Gaussian and the bound says only "large").
 
-    python benchmarks/advisor.py                       # all four parts, 15-degree grids, 100 trials
+    python benchmarks/advisor.py                       # all four parts, 15-degree grids, 100 trials (~30 min)
     python benchmarks/advisor.py --part speed
     python benchmarks/advisor.py --part angles --step 5
 """
@@ -131,10 +131,10 @@ def _earlier_calibration(s):
     return single_pose.calibrate(view)
 
 
-def _grid_poses(s, step):
+def _grid_poses(s, step, limit=45.0):
     """(angles, scene) over the grid in the projector frame; poses the rig cannot show whole are skipped."""
     out, skipped = [], 0
-    grid = np.arange(-45.0, 45.0 + 1e-9, step)
+    grid = np.arange(-limit, limit + 1e-9, step)
     for psi in grid:
         for nu in grid:
             sc = simulate.with_board_pose(s, (psi, nu, 0.0), frame="projector")
@@ -168,7 +168,7 @@ def angles(step: float) -> None:
         dnu.append(dn)
         dpsi.append(dp)
         if abs(dn) > abs(worst[0]):
-            worst = (dn, (psi, nu))
+            worst = (dn, (float(psi), float(nu)))
     dnu, dpsi = np.abs(dnu), np.abs(dpsi)
     print(f"grid psi_p, nu_p in -45..45 step {step:g} deg: {len(poses)} poses shown whole ({skipped} skipped: the rig "
           f"cannot show them whole), board found in {len(dnu)} ({lost} not found)")
@@ -217,20 +217,22 @@ def session() -> None:
         c = single_pose.calibrate(pipeline.view_from_stack(stack, patterns.pattern_set(*fs.proj_size), BOARD)[0])
         ec, ep = c.camera.K[0, 0] - fs.K_cam[0, 0], c.projector.K[0, 0] - fs.K_proj[0, 0]
         print(f"| {start} | {first} | {steps} | {n} | {a.camera.angles_deg[0]:.1f}, {a.camera.angles_deg[1]:.1f}, "
-              f"{a.projector.angles_deg[1]:.1f} | {ec:+.2f} / {a.camera.std_f:.2f} px ({abs(ec) / a.camera.std_f:.2f}) | "
+              f"{a.projector.angles_deg[1]:.1f} | {ec:+.2f} / {a.camera.std_f:.2f} px "
+              f"({abs(ec) / a.camera.std_f:.2f}) | "
               f"{ep:+.2f} / {a.projector.std_f:.2f} px ({abs(ep) / a.projector.std_f:.2f}) |")
     print()
 
 
-def stds(step: float, trials: int) -> None:
+def stds(step: float, trials: int, limit: float) -> None:
     s = simulate.preset("ideal")
     calib = _earlier_calibration(s)
-    poses, _ = _grid_poses(s, step)
+    poses, _ = _grid_poses(s, step, limit)
     adv = Advisor(BOARD, s.cam_size, AdvisorOptions(search_interval_s=60.0, search_refresh_s=3600.0))
     adv.set_calibration(calib, "pose01")
     cam = VirtualLiveCamera(s, seed=3)
     print(f"## stds: predicted std (advisor, one frame) vs Monte Carlo of {trials} single-pose calibrations "
-          "(noise 0.1 px camera, 0.2 px projector), where the bound < 5 % of f")
+          f"(noise 0.1 px camera, 0.2 px projector), psi_p, nu_p in -{limit:g}..{limit:g} step {step:g} deg, where "
+          "the bound < 5 % of f")
     print("| psi_p | nu_p | psi_c | nu_c | f_c: predicted | MC | ratio | f_p: predicted | MC | ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     ratios = {"f_c": [], "f_p": []}
@@ -276,6 +278,7 @@ def main():
     ap.add_argument("--part", choices=("speed", "angles", "session", "stds", "all"), default="all")
     ap.add_argument("--step", type=float, default=15.0, help="angles: grid step (deg)")
     ap.add_argument("--mc-step", type=float, default=15.0, help="stds: grid step (deg)")
+    ap.add_argument("--mc-max", type=float, default=30.0, help="stds: largest |angle| of the grid (deg)")
     ap.add_argument("--trials", type=int, default=100, help="stds: Monte-Carlo trials per pose")
     args = ap.parse_args()
     print(header("procam advise: the live pose advisor's speed and accuracy (virtual procam, ideal rig)"))
@@ -287,7 +290,7 @@ def main():
     if args.part in ("session", "all"):
         session()
     if args.part in ("stds", "all"):
-        stds(args.mc_step, args.trials)
+        stds(args.mc_step, args.trials, args.mc_max)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,6 @@ light at the board's pose; an earlier capture's single-pose calibration gives th
 preview window (off-screen and under Xvfb) and the CLI (procam advise, procam capture --advise)."""
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -14,7 +13,6 @@ from procam import crlb, models, patterns, pipeline, simulate, single_pose
 from procam.acquire.live import VirtualLiveCamera, advise
 from procam.advisor import (Advisor, AdvisorOptions, apply_move, detect_board, guessed_camera, move_between)
 from procam.board import Board, detect_corners
-from procam.calibration import Device, Distortion
 from procam.errors import ProcamError
 
 BOARD = Board(10, 6, 24.0)
@@ -328,7 +326,7 @@ def test_preview_draws_the_overlay_off_screen(scene, earlier):
     assert PreviewWindow((1920, 1080)).size == (1280, 720)
 
 
-def test_preview_window_under_xvfb(scene, earlier, xvfb):
+def test_preview_window_under_xvfb(scene, earlier, xvfb):  # noqa: F811 (the imported fixture)
     """The real window: a screen grab shows the frame with the overlay exactly as the off-screen drawing."""
     from procam.acquire.preview import PreviewWindow
 

@@ -483,7 +483,6 @@ class Advisor:
         #: the printed squares' outer corners (board frame), clockwise in the image from the top-left
         self.outer = np.array([[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]])
         self._camera: Device | None = None
-        self._camera_note = ""
         self.set_camera(camera, camera_source)
         self.projector = projector
         self._frame = 0
@@ -728,13 +727,15 @@ class Advisor:
         edge_px = min(edges.values())
 
         # bounds at this pose
-        std_c, sd_c, prior = self._camera_bound(R_c, t_c)
+        std_c, _, prior = self._camera_bound(R_c, t_c)
         f_c = float(dev.K[0, 0])
         ang_c = tuple(float(a) for a in models.board_angles_deg(R_c, t_c))
+        dist_note = _distortion_for_bound(dev)[3]
         assumes_c = (f"corner noise {o.sigma_camera:g} px; f, alpha, k1, k2 and the pose fitted; "
                      + ("principal point assumed at the image centre ± "
                         f"{o.pp_prior_fraction * max(W, H):.0f} px (the corners do not pin it)" if prior
-                        else "principal point = centre of distortion, from the corners"))
+                        else "principal point = centre of distortion, from the corners")
+                     + (f"; {dist_note}" if dist_note else ""))
         cam_state = DeviceState(ang_c, f_c, std_c, std_c / f_c, float(np.linalg.norm(t_c)), None, assumes_c)
         proj_state, outside, ang_p = None, None, None
         if self.projector is not None:

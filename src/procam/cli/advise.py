@@ -170,7 +170,8 @@ class LiveAdvice:
         verdicts = [adv[k]["message"] for k in ("camera", "projector")
                     if isinstance(adv.get(k), dict) and (adv[k]["weak"] or adv[k]["degenerate"])]
         say(f"quick calibration of {Path(folder).name}: f_c = {calib.camera.K[0, 0]:.1f} ± {100 * rel[0]:.2g} %, "
-            f"f_p = {calib.projector.K[0, 0]:.1f} ± {100 * rel[1]:.2g} %" + (f" ({'; '.join(verdicts)})" if verdicts else ""))
+            f"f_p = {calib.projector.K[0, 0]:.1f} ± {100 * rel[1]:.2g} %"
+            + (f" ({'; '.join(verdicts)})" if verdicts else ""))
         if adv.get("failed"):
             warn(f"{folder}: the quick calibration failed (an impossible focal length); the advice keeps what it knew")
             return calib

@@ -251,7 +251,7 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
     """The advising session of ``--advise`` (None without it), every option checked before a device opens."""
     if not advise:
         for flag, given in (("--auto", auto), ("--json", json_lines), ("--calibration", calibration is not None),
-                            ("--max-frames", max_frames is not None)):
+                            ("--square", square is not None), ("--max-frames", max_frames is not None)):
             if given:
                 fail(f"{flag} belongs to --advise; add --advise")
         return None
