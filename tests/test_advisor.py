@@ -391,6 +391,14 @@ def test_cli_advise_checks_its_options(cli, args, phrase):
     assert code == 2 and phrase in err and len(err.strip().splitlines()) == 1, err
 
 
+def test_cli_advise_without_a_desktop_says_use_json(cli, monkeypatch):
+    pytest.importorskip("pygame", reason="pygame-ce is not installed (pip install 'procam[capture]')")
+    for var in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(var, raising=False)
+    code, out, err = cli(["advise", "--board", "10x6", "--square", "24", "--camera", "virtual", "--max-frames", "1"])
+    assert code == 2 and "cannot open the preview window" in err and "use --json" in err and out == ""
+
+
 def test_cli_capture_advise_options(cli, tmp_path):
     code, _, err = cli(["capture", tmp_path / "p", "--virtual", "--auto"])
     assert code == 2 and "--auto belongs to --advise" in err

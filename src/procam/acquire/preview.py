@@ -99,6 +99,9 @@ def advice_lines(advice) -> list[tuple[str, str]]:
         lines.append(("text", "projector: unknown — capture one pose (even a weak one) to measure R, T"))
     if a.limiting:
         lines.append(("small", f"limited by {a.limiting}; target {a.target_pct:g} % of f"))
+    for note in a.notes:
+        if note != a.intrinsics and not note.startswith("projector side"):
+            lines.append(("small", note))
     lines.append(("small", a.intrinsics))
     return lines
 
@@ -226,10 +229,15 @@ class PreviewWindow:
         self._owns_display = not pg.display.get_init()  # the projector window may have started SDL's video
         try:
             pg.display.init()
+            driver = pg.display.get_driver()
+            if driver in ("offscreen", "dummy") and os.environ.get("SDL_VIDEODRIVER") != driver:
+                raise pg.error(f"no desktop session (SDL found only its '{driver}' video driver)")
             kw = {} if self.position is None else {"position": tuple(int(v) for v in self.position)}
             win = pg.Window(self.title, size=self.size, **kw)
             surface = win.get_surface()
         except Exception as e:  # pygame.error: no video device, no X server ...
+            if self._owns_display:
+                pg.display.quit()
             raise ProcamError(f"cannot open the preview window ({e}); run procam in a desktop session, or use "
                               "--json (advice as JSON lines, no window)") from None
         self._pg, self._window, self._surface = pg, win, surface
