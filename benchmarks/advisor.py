@@ -236,7 +236,7 @@ def stds(step: float, trials: int, limit: float) -> None:
     print("| psi_p | nu_p | psi_c | nu_c | f_c: predicted | MC | ratio | f_p: predicted | MC | ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     ratios = {"f_c": [], "f_p": []}
-    for (psi, nu), sc in poses:
+    for i, ((psi, nu), sc) in enumerate(poses):
         cam.set_scene(sc)
         a = adv.update(cam.grab().image, 0.0)
         if a.projector is None:
@@ -247,7 +247,7 @@ def stds(step: float, trials: int, limit: float) -> None:
             continue
         fc, fp = [], []
         for k in range(trials):
-            obj, c, p = simulate.correspondences(sc, 0.1, 0.2, seed=10_000 + k)
+            obj, c, p = simulate.correspondences(sc, 0.1, 0.2, seed=10_000 + 1000 * i + k)  # new draws per pose
             if use_c:
                 try:
                     fc.append(single_pose.calibrate_camera(obj, c, sc.cam_size).K[0, 0])
