@@ -163,7 +163,12 @@ def draw_advice(surface, image: np.ndarray, advice, fonts: _Fonts | None = None)
                 end = mid[side]
                 _arrow(pg, surface, centre, end, ARROW)
                 label = fonts.text.render(f"{act.kind} ~{abs(act.degrees):.0f} deg: {side} edge away", True, ARROW)
-                surface.blit(label, (end[0] - label.get_width() / 2, end[1] + (8 if side != "top" else -30)))
+                x = min(max(0.0, end[0] - label.get_width() / 2), sw - label.get_width())
+                y = end[1] + (10 if side != "top" else -label.get_height() - 10)
+                box = pg.Surface((label.get_width() + 8, label.get_height() + 4), pg.SRCALPHA)
+                box.fill(PANEL)
+                surface.blit(box, (x - 4, y - 2))
+                surface.blit(label, (x, y))
             elif act.kind == "move" and act.direction:
                 step = 0.25 * min(sw, sh)
                 v = {"left": (-1, 0), "right": (1, 0), "up": (0, -1), "down": (0, 1)}[act.direction]
