@@ -25,6 +25,7 @@ The modules, from the captures up (each imports only those above it in this list
     misfit        model error versus noise: a smooth field in a fit's residuals across the board
     background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
     single_pose   the seed method (camera, projector, extrinsics, advice)
+    advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
     summary       a calibration as rows of text
@@ -61,8 +62,8 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
-               "single_pose", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report",
-               "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check", "acquire")
+               "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
+               "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check", "acquire")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

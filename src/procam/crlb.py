@@ -92,7 +92,7 @@ def _perturb(R, w):
     return models.rvec_to_matrix(w) @ R
 
 
-def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", prior_precision=None):
     """Generic CRLB: covariance lower bound of the parameters of ``model`` at ``p0``.
 
     Parameters
@@ -110,6 +110,9 @@ def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="
         problem is declared degenerate.
     jacobian : {"complex", "central"}
         How :func:`procam.uncertainty.jacobian` differentiates ``model``.
+    prior_precision : (P,), optional
+        Information of a Gaussian prior per (scaled) parameter, ``1 / prior_std^2`` (0 = none): the bound
+        becomes the Bayesian one, ``(J^T J / sigma^2 + P)^-1``.
 
     Returns
     -------
@@ -120,11 +123,11 @@ def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="
         ``sigma_min / sigma_max`` of the normalised Jacobian (0 when non-finite).
     """
     J = unc.jacobian(model, np.asarray(p0, float), method=jacobian, rel_step=rel_step)
-    return unc.covariance(J, sigma, rcond=cond_limit), unc.condition(J)
+    return unc.covariance(J, sigma, prior_precision=prior_precision, rcond=cond_limit), unc.condition(J)
 
 
 def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full", *,
-                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", pp_prior_std=None):
     """CRLB of a single-pose camera calibration with the division model.
 
     Observations are the 2N **distorted** corners
@@ -158,6 +161,10 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
         ``s`` of the conditioning scale ``kappa1 = k1 s^2``, ``kappa2 = k2 s^4`` (pixels).
     rel_step, cond_limit, jacobian
         See :func:`fisher_bound`.
+    pp_prior_std : float, optional
+        ``"full"`` model only: a Gaussian prior of this std (px) on the principal point / COD, as the
+        single-pose solver assumes it (image centre, ``CameraOptions.pp_prior_std``) when the corners do not
+        pin it. The bound is then the Bayesian one (finite even without distortion).
 
     Returns
     -------
@@ -225,8 +232,16 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
             return observe(f0 + 0 * p[0], alpha0, np.zeros(2) + 0 * p[0], kap1, kap2, p[0:3], p[3:6])
         raw_scale = np.ones(6)
 
+    prior = None
+    if pp_prior_std is not None:
+        if model != "full":
+            raise ValueError(f"pp_prior_std applies to the 'full' model only, got model {model!r}")
+        if not (np.isfinite(pp_prior_std) and pp_prior_std > 0):
+            raise ValueError(f"pp_prior_std must be a positive number of pixels, got {pp_prior_std}")
+        prior = np.zeros(len(p0))
+        prior[2:4] = 1.0 / float(pp_prior_std) ** 2
     cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
-                             jacobian=jacobian)
+                             jacobian=jacobian, prior_precision=prior)
     cov = cov * np.outer(raw_scale, raw_scale)
     return _pack(cov, names, cond, model, ["f_c", "alpha_c", "u0c", "v0c", "k1", "k2"])
 

@@ -14,6 +14,13 @@ Modules (each with one job):
 ``session``
     The capture loop (:func:`~procam.acquire.session.capture_pose`): writes a pose folder that
     ``procam decode``/``calibrate`` read as is, plus ``capture.json``.
+``live``
+    Live advice while the board is placed: the advising loop (:func:`~procam.acquire.live.advise`, over
+    :class:`procam.advisor.Advisor`) and :class:`~procam.acquire.live.VirtualLiveCamera` (the simulator's
+    view of the board under the projector's white light, at a pose a test or script moves).
+``preview``
+    The advisor's preview window on the operator's screen (:class:`~procam.acquire.preview.PreviewWindow`,
+    pygame-ce) and the overlay drawing (:func:`~procam.acquire.preview.draw_advice`).
 
 The capture-folder *format* (reading and validating a pose folder) stays in :mod:`procam.capture`.
 Nothing here imports pygame, screeninfo, harvesters or the simulator until it is used.

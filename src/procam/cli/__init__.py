@@ -10,7 +10,7 @@ from __future__ import annotations
 from ._app import app, console, err_console  # noqa: F401
 
 # Sub-commands register themselves on import, in the order `procam --help` lists them.
-from . import (capture, check, patterns, decode, simulate, correspond, calibrate, evaluate, report, reconstruct,  # noqa: F401,E402
+from . import (advise, capture, check, patterns, decode, simulate, correspond, calibrate, evaluate, report, reconstruct,  # noqa: F401,E402
                export, experiment, study, demo)
 
 

@@ -82,8 +82,9 @@ def capture_cmd(
     gain: Optional[float] = typer.Option(None, "--gain", help="Camera gain in the camera's unit (GenICam: dB)."),
     camera_size: Optional[str] = typer.Option(None, "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV)."),
     retries: int = typer.Option(3, "--retries", help="Re-grabs allowed per frame before the capture stops."),
-    square: Optional[float] = typer.Option(None, "--square", help="Square size (for the instant verdict's lengths; "
-                                           "default 1: lengths in squares)."),
+    square: Optional[float] = typer.Option(None, "--square", help="Square size, the unit of lengths (the instant "
+                                           "verdict; --advise: of --calibration, whose own board is the default); "
+                                           "default 1: lengths in squares."),
     board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
                                         "and judges the exposure on it (default: on the projector's light)."),
     order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
@@ -95,6 +96,19 @@ def capture_cmd(
     virtual: bool = typer.Option(False, "--virtual", help="Demo without devices: a virtual projector and the "
                                  "simulator as the camera (writes truth.json too)."),
     seed: int = typer.Option(0, "--seed", help="--virtual: noise seed of the rendered frames."),
+    advise: bool = typer.Option(False, "--advise", help="Before each pose, a preview with live advice on the board's "
+                                "pose (needs --board); Space/Enter starts the capture. Each captured pose is "
+                                "calibrated at once: its R, T give the projector side of the next pose's advice."),
+    auto: bool = typer.Option(False, "--auto", help="--advise: start the capture by itself when the pose is good "
+                              "and the board still."),
+    json_lines: bool = typer.Option(False, "--json", help="--advise: the advice as JSON lines on stdout instead of "
+                                    "the preview window (Enter on the terminal, or --auto, starts the capture)."),
+    calibration: Optional[Path] = typer.Option(None, "--calibration", help="--advise: a calibration of this camera "
+                                               "to start from (intrinsics; with R, T the projector side)."),
+    target: float = typer.Option(1.0, "--target", help="--advise: a pose is good when the predicted std of f_c "
+                                 "and f_p are at most this % of f."),
+    max_frames: Optional[int] = typer.Option(None, "--max-frames", help="--advise: capture after N frames of advice "
+                                             "at the latest (default: no limit; 30 with --virtual)."),
 ):
     """Show the pattern sequence full screen on the projector, grab and check one camera frame per pattern,
     and write a pose folder that decode/calibrate read as is (images, patterns.json, capture.json)."""
@@ -127,6 +141,7 @@ def capture_cmd(
         fail(f"--step must be between 1 and 64, got {step}")
     board_size = parse_size(board, "--board") if board else None
     brd = parse_board(board, 1.0 if square is None else square) if board else None
+    live = _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual)
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
     kind, _ = cams.parse_camera_spec("virtual" if virtual else camera)
@@ -157,6 +172,7 @@ def capture_cmd(
 
         scenes = {}
         shared_cam = None
+        virtual_cams = {}
 
         def scene_for(i):
             if i not in scenes:
@@ -167,13 +183,16 @@ def capture_cmd(
 
         def camera_for(i):
             nonlocal shared_cam
+            if kind == "virtual" and i in virtual_cams:
+                return virtual_cams[i]
             if kind == "virtual":
                 from .. import simulate
 
                 cam = cams.VirtualCamera(proj, scene_for(i), order=order, seed=seed + i, gain=1.0 if gain is None else gain)
                 with _spinner(f"rendering the simulator's view of pose {i + 1}"):
                     cam.stack, _ = simulate.render(cam.scene, order=order, seed=seed + i)
-                return stack.enter_context(cam)
+                virtual_cams[i] = stack.enter_context(cam)
+                return virtual_cams[i]
             if shared_cam is None:
                 shared_cam = stack.enter_context(cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain,
                                                                   timeout_s=timeout))
@@ -196,7 +215,16 @@ def capture_cmd(
             if kind == "folder":
                 console.print("take one shot per pattern with the camera's software; procam waits for each new file",
                               highlight=False)
-            if poses > 1 and not virtual:
+            if live is not None:
+                import numpy as np
+
+                from ..acquire.projector import CaptureAborted
+
+                proj.show(np.full((size[1], size[0]), 255, np.uint8))  # light the board while it is placed
+                res = live.run(camera_for(i), f"pose {i + 1}/{poses}")
+                if res.reason == "quit":
+                    raise CaptureAborted("capture stopped: Esc was pressed in the preview window, or it was closed")
+            elif poses > 1 and not virtual:
                 import numpy as np
 
                 proj.show(np.full((size[1], size[0]), 255, np.uint8))  # light the board while it is placed
@@ -215,16 +243,56 @@ def capture_cmd(
                 except ProcamError as e:
                     console.print(f"[yellow]check:[/yellow] {escape(str(e))}", highlight=False)
 
+        def after(i, result):
+            after_pose(i, result)
+            if live is not None:
+                live.learn(result.folder)
+
+        if live is not None:
+            stack.callback(live.close)
         reporter = stack.enter_context(_Reporter())
         if poses == 1:
             before_pose(0)
             result = session.capture_pose(out_dir, proj, camera_for(0), options, progress=reporter.pose(0),
                                           extra_files=extra_files(0))
-            after_pose(0, result)
+            after(0, result)
         else:
             session.capture_poses(out_dir, poses, proj, camera_for, options, before_pose=before_pose,
-                                  after_pose=after_pose, progress=lambda i, e: reporter.pose(i)(e),
+                                  after_pose=after, progress=lambda i, e: reporter.pose(i)(e),
                                   extra_files_for=extra_files)
+
+
+def _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual):
+    """The advising session of ``--advise`` (None without it), every option checked before a device opens."""
+    if not advise:
+        for flag, given in (("--auto", auto), ("--json", json_lines), ("--calibration", calibration is not None),
+                            ("--max-frames", max_frames is not None)):
+            if given:
+                fail(f"{flag} belongs to --advise; add --advise")
+        return None
+    from .advise import LiveAdvice, advisor_options, load_calibration_for
+    from ._app import parse_board
+
+    if not board:
+        fail("--advise needs --board COLSxROWS (the advisor finds and measures the board)")
+    if max_frames is not None and not 1 <= max_frames <= 10_000_000:
+        fail(f"--max-frames must be >= 1, got {max_frames}")
+    options = advisor_options(target, 0.5, 1.0)
+    calib = None
+    if calibration is not None and square is None:
+        from ..io import load_calibration
+
+        boards = [v.board for v in load_calibration(calibration).views if getattr(v, "board", None) is not None]
+        if not boards:
+            fail(f"--calibration {calibration}: it does not say its board's square size; give --square (T is in "
+                 "that unit)")
+        square = boards[0].square
+    b = parse_board(board, 1.0 if square is None else square)
+    source = ""
+    if calibration is not None:
+        calib, source = load_calibration_for(calibration, b)
+    return LiveAdvice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
+                      max_frames=max_frames if max_frames is not None else (30 if virtual else None))
 
 
 def _report_pose(result) -> None:
