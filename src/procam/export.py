@@ -27,6 +27,11 @@ from .errors import CalibrationError, CalibrationFileError
 from ._files import atomic_path
 
 #: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
+#: The formats ``procam export --format`` writes.
+FORMATS = ("opengl", "maps", "kamino410")
+#: The world frames of the OpenGL export (``world=``).
+WORLDS = ("camera", "projector")
+
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 
 #: OpenCV camera frame -> Unity's left-handed frame (x right, y up, z forward).

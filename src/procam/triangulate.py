@@ -25,6 +25,9 @@ import numpy as np
 
 from .errors import CalibrationError
 
+#: Which projector coordinates a dense triangulation uses (``use=``).
+USES = ("both", "col", "row")
+
 
 def _require_stereo(calib):
     if calib.projector is None or calib.R is None or calib.T is None:
@@ -217,8 +220,8 @@ def triangulate_dense(calib, col, row, valid_col=None, valid_row=None, *, use: s
         0 when only one coordinate was used (nothing to compare with).
         Points not in front of both devices are left out.
     """
-    if use not in ("both", "col", "row"):
-        raise ValueError(f"use must be both, col or row, got {use!r}")
+    if use not in USES:
+        raise ValueError(f"use must be one of {', '.join(USES)}, got {use!r}")
     R, T = _require_stereo(calib)
     col = np.asarray(col)
     row = np.asarray(row)

@@ -11,21 +11,34 @@ import numpy as np
 import typer
 
 from .. import _files, io
-from ._app import ForceOpt, app, fail, number, output_dir, output_path, say, user_errors
+from .. import export as _ex
+from ._app import (
+    ForceOpt,
+    app,
+    choice,
+    fail,
+    number,
+    output_dir,
+    output_path,
+    say,
+    user_errors,
+    value,
+)
 
-FORMATS = ("opengl", "maps", "kamino410")
+Format = choice("Format", _ex.FORMATS)
+World = choice("World", _ex.WORLDS)
 
 
 @app.command("export")
 @user_errors
 def export_cmd(
     calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML)."),
-    fmt: str = typer.Option(..., "--format", help="opengl (JSON with projection/view matrices), maps (remap "
+    fmt: Format = typer.Option(..., "--format", help="opengl (JSON with projection/view matrices), maps (remap "
                                                  "tables, .npz, into a folder) or kamino410 (their XML)."),
     out: Path = typer.Option(..., "-o", "--out", help="Output file (opengl: .json; kamino410: .xml) or folder (maps)."),
     near: Optional[float] = typer.Option(None, "--near", help="opengl: near clipping distance, calibration units."),
     far: Optional[float] = typer.Option(None, "--far", help="opengl: far clipping distance, calibration units."),
-    world: str = typer.Option("camera", "--world", help="opengl: world frame, camera or projector."),
+    world: World = typer.Option(World.camera, "--world", help="opengl: world frame, camera or projector."),
     y_down: bool = typer.Option(False, "--y-down", help="opengl: NDC y down (Vulkan) instead of up (OpenGL, Unity)."),
     zero_to_one: bool = typer.Option(False, "--zero-to-one", help="opengl: NDC depth 0..1 instead of -1..1."),
     rectify: bool = typer.Option(False, "--rectify", help="maps: also the stereo rectification maps of both devices."),
@@ -34,10 +47,9 @@ def export_cmd(
     force: ForceOpt = False,
 ):
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
-    from .. import export as ex
 
-    if fmt not in FORMATS:
-        fail(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+
+    fmt, world = value(fmt), value(world)
     if fmt == "opengl":
         output_path(out, "-o", (".json",), inputs=(calibration,))
         if near is None or far is None:
@@ -47,8 +59,6 @@ def export_cmd(
         if far / near > 1e7:
             fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
                  "so raise --near")
-        if world not in ("camera", "projector"):
-            fail(f"--world must be camera or projector, got {world!r}")
     elif fmt == "kamino410":
         output_path(out, "-o", (".xml", ".yml", ".yaml"), inputs=(calibration,))
     else:
@@ -60,12 +70,12 @@ def export_cmd(
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
     if fmt == "opengl":
-        doc = ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
+        doc = _ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
         doc["calibration"] = str(calibration)
         _files.write_text(out, json.dumps(_files.to_jsonable(doc), indent=1))
         say(f"wrote {out}")
     elif fmt == "kamino410":
-        ex.save_kamino410(calib, out)
+        _ex.save_kamino410(calib, out)
         say(f"wrote {out}")
         if calib.camera.distortion.model == "division":
             say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
@@ -73,17 +83,17 @@ def export_cmd(
         output_dir(out, "-o", "export", force, create=True)
         written = []
         cam, proj = calib.camera, calib.projector
-        mx, my = ex.undistort_maps(cam)
-        written.append(ex.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
+        mx, my = _ex.undistort_maps(cam)
+        written.append(_ex.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
                                     size=np.array(cam.image_size)))
-        mx, my = ex.predistort_maps(proj)
-        written.append(ex.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
+        mx, my = _ex.predistort_maps(proj)
+        written.append(_ex.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
                                     size=np.array(proj.image_size)))
         if rectify:
-            rect = ex.stereo_rectify(calib, scale=scale)
+            rect = _ex.stereo_rectify(calib, scale=scale)
             for name, dev, k in (("camera", cam, "1"), ("projector", proj, "2")):
-                mx, my = ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
-                written.append(ex.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
+                mx, my = _ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
+                written.append(_ex.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
                                             size=np.array(rect["size" + k])))
         for p in written:
             say(f"wrote {p}")

@@ -11,8 +11,27 @@ import typer
 from rich.table import Table
 
 from .. import board as _board
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, console, fail, optional_size, output_path, parse_size,
-                   plain, say, user_errors, value, warn)
+from .. import triangulate as _tri
+from ._app import (
+    OrderOpt,
+    ProjectorOpt,
+    StepOpt,
+    app,
+    assumed_size,
+    choice,
+    console,
+    fail,
+    optional_size,
+    output_path,
+    parse_size,
+    plain,
+    say,
+    user_errors,
+    value,
+    warn,
+)
+
+Use = choice("Use", _tri.USES)
 
 
 @app.command("reconstruct")
@@ -27,7 +46,7 @@ def reconstruct_cmd(
                                                             "and report how flat the reconstruction is."),
     residuals: Path = typer.Option(None, "--residuals", help="PNG of the board's distances to its plane "
                                                              "(needs --board)."),
-    use: str = typer.Option("both", "--use", help="Projector coordinates: both (column and row where decoded), "
+    use: Use = typer.Option(Use.both, "--use", help="Projector coordinates: both (column and row where decoded), "
                                                   "col or row."),
     max_residual: float = typer.Option(2.0, "--max-residual", help="Drop points whose projector column and row "
                                                                    "disagree by more than this many projector px."),
@@ -41,8 +60,7 @@ def reconstruct_cmd(
 
     output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))
     output_path(residuals, "--residuals", (".png",), inputs=(calibration, pose_dir))
-    if use not in ("both", "col", "row"):
-        fail(f"--use must be both, col or row, got {use!r}")
+    use = value(use)
     if not (math.isfinite(max_residual) and 0 < max_residual <= 10000):
         fail(f"--max-residual must be a positive number of projector pixels (at most 10000), got {max_residual}")
     if residuals is not None and board is None:
