@@ -1,6 +1,7 @@
 """The CLI end to end on a rendered capture, including its error messages."""
 
 import json
+import warnings
 import sys
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import pytest
 from conftest import run_cli
 
 from procam import io
+from procam.errors import ProcamWarning
 
 
 def test_calibrate_single_pose_end_to_end(ideal_capture, tmp_path):
@@ -148,3 +150,23 @@ def test_bad_patterns_json(ideal_capture, tmp_path):
     (copy / "patterns.json").write_text('{"height": 1080}')
     code, _, err = run_cli(["decode", copy])
     assert code == 2 and "patterns.json: no valid width/height" in err
+
+
+def test_readme_python_example_runs(paper_capture, tmp_path, monkeypatch):
+    """The README's Python API block, run as written on a rendered pose folder named pose1."""
+    import re
+    import shutil
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    code = re.search(r"## Python API\s+```python\n(.*?)```", readme, re.S).group(1)
+    folder, _, truth, scene = paper_capture
+    shutil.copytree(folder, tmp_path / "pose1")
+    monkeypatch.chdir(tmp_path)
+    ns = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        exec(compile(code, "README.md", "exec"), ns)
+    calib = ns["calib"]
+    assert calib.verdict in ("good", "weak")
+    assert abs(calib.projector.K[0, 0] - scene.K_proj[0, 0]) < 5 * calib.std["f_p"] + 10
+    assert (tmp_path / "calib.json").is_file() and (tmp_path / "calib.yml").is_file()
