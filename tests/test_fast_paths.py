@@ -1,0 +1,111 @@
+"""The fast paths of issue 12 give the answers of the straightforward code they replace.
+
+Each test holds the straightforward version (or calls the library's) and compares: the histogram scores of
+the swapped-bit check against sorting, ...
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from procam import decode, patterns, plausibility
+
+
+# --------------------------------------------------------------------------------------------
+# plausibility: smoothness scores from histograms == from sorting
+# --------------------------------------------------------------------------------------------
+
+def _scores_by_sorting(v, axis):
+    """The swapped-bit check's scores as first written (np.median, np.mean on the float differences)."""
+    d = np.diff(v, axis=axis)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0, 0
+    ad = np.abs(d)
+    slope = float(np.median(ad))
+    rough = float(np.mean(np.minimum(np.abs(ad - slope), 8.0 + 4.0 * slope)))
+    breaks = int(np.count_nonzero(np.abs(d - np.median(d)) > 2.5 + 1.5 * slope))
+    return rough, breaks
+
+
+def _swap_scores_by_sorting(maps, sample=4):
+    ps = maps.pattern_set
+    out = {}
+    for axis, vals, dropped, nbits, offset, cam_axis in (
+            ("col", maps.col, maps.dropped_col, ps.col_bits, ps.col_offset, 1),
+            ("row", maps.row, maps.dropped_row, ps.row_bits, ps.row_offset, 0)):
+        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
+        ok = np.isfinite(v) & ((dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0)
+        if ok.sum() < 2000:
+            out[axis] = None
+            continue
+        v = np.where(ok, v, np.nan)
+        code = np.rint((np.nan_to_num(v) - (ps.step - 1) / 2.0) / ps.step).astype(np.int64) + offset
+        flipped = []
+        for b in range(nbits - 1):
+            v2 = np.where(ok, ((code ^ ((1 << (b + 1)) - 1)) - offset) * ps.step + (ps.step - 1) / 2.0, np.nan)
+            flipped.append(_scores_by_sorting(v2, cam_axis))
+        out[axis] = {"n": int(ok.sum()), "scores": _scores_by_sorting(v, cam_axis), "flipped": flipped}
+    return out
+
+
+def _assert_same_scores(maps):
+    fast, slow = plausibility.swap_scores(maps), _swap_scores_by_sorting(maps)
+    assert fast.keys() == slow.keys()
+    for axis in fast:
+        if slow[axis] is None:
+            assert fast[axis] is None
+            continue
+        assert fast[axis]["n"] == slow[axis]["n"]
+        for (r1, b1), (r2, b2) in zip([fast[axis]["scores"]] + fast[axis]["flipped"],
+                                      [slow[axis]["scores"]] + slow[axis]["flipped"]):
+            assert b1 == b2
+            assert r1 == pytest.approx(r2, rel=1e-6, abs=1e-9)  # the maps are float32: so was the mean
+
+
+def _synthetic_maps(w, h, step, seed, swap=None, lo_frac=0.0):
+    """Decoded maps of a projector seen through a smooth warp, with some pixels invalid or coarse."""
+    rng = np.random.default_rng(seed)
+    ps = patterns.pattern_set(w, h, step=step)
+    H, W = 240, 320
+    yy, xx = np.mgrid[:H, :W].astype(float)
+    col = (xx * (w / W) * (1 + 0.1 * np.sin(yy / 50)) + rng.normal(0, 0.6, (H, W))) // 1
+    row = (yy * (h / H) * (1 + 0.05 * np.cos(xx / 70)) + rng.normal(0, 0.6, (H, W))) // 1
+    maps = {}
+    for name, v, size, nbits, off in (("col", col, w, ps.col_bits, ps.col_offset),
+                                      ("row", row, h, ps.row_bits, ps.row_offset)):
+        code = np.clip(v, 0, size - 1).astype(np.int64) // step + off
+        if swap is not None and swap[0] == name:
+            code ^= (1 << (swap[1] + 1)) - 1
+        px_lo = np.maximum((code - off) * step, 0)
+        px_hi = np.minimum((code - off) * step + step - 1, size - 1)  # the edge block is clipped
+        val = ((px_lo + px_hi) / 2.0).astype(np.float32)
+        bad = rng.random((H, W)) < 0.1 + lo_frac
+        val[bad] = np.nan
+        dropped = np.where(rng.random((H, W)) < 0.05, 2, 0).astype(np.uint8)
+        maps[name], maps["d" + name] = val, dropped
+    z = np.zeros((H, W), np.uint8)
+    return decode.DecodeResult(maps["col"], maps["row"], np.isfinite(maps["col"]), np.isfinite(maps["row"]), z, z,
+                               np.zeros((H, W), np.float32), None, None, ps, maps["dcol"], maps["drow"])
+
+
+@pytest.mark.parametrize("step", [1, 2, 3, 8])
+@pytest.mark.parametrize("swap", [None, ("col", 0), ("col", 3), ("row", 5)])
+def test_swap_scores_equal_sorting_on_synthetic_maps(step, swap):
+    _assert_same_scores(_synthetic_maps(1024 // (step if step > 2 else 1), 768, step, seed=step, swap=swap))
+
+
+def test_swap_scores_equal_sorting_when_too_few_pixels_decode():
+    _assert_same_scores(_synthetic_maps(1024, 768, 1, seed=5, lo_frac=0.89))
+
+
+@pytest.mark.parametrize("pair", [None, 0, 6, 14, 24, 34])
+def test_swap_scores_equal_sorting_on_a_render(paper_capture, pair):
+    _, stack, _, _ = paper_capture
+    ps = patterns.pattern_set(1920, 1080)
+    st = stack
+    if pair is not None:
+        st = stack.copy()
+        st[[pair, pair + 1]] = st[[pair + 1, pair]]
+    _assert_same_scores(decode.decode(st, ps))
