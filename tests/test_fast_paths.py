@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from procam import decode, patterns, plausibility
+from procam import correspond, decode, patterns, plausibility
 
 
 # --------------------------------------------------------------------------------------------
@@ -109,3 +109,97 @@ def test_swap_scores_equal_sorting_on_a_render(paper_capture, pair):
         st = stack.copy()
         st[[pair, pair + 1]] = st[[pair + 1, pair]]
     _assert_same_scores(decode.decode(st, ps))
+
+
+# --------------------------------------------------------------------------------------------
+# local homographies: the trimmed least-squares fit of all corners at once against RANSAC
+# --------------------------------------------------------------------------------------------
+
+def _window_sets(n, outliers, seed, half=30, noise=0.3):
+    """``n`` windows of ``2 half`` px: true homographies, their (quantised, noisy) images, a fraction
+    ``outliers`` of points replaced by gross errors (as a wrongly decoded high bit gives)."""
+    rng = np.random.default_rng(seed)
+    d = np.arange(-half, half, dtype=float)
+    gx, gy = np.meshgrid(d, d)
+    src = np.column_stack([gx.ravel(), gy.ravel()])
+    Hs, dst, mask = [], [], []
+    for _ in range(n):
+        H = np.array([[0.7 + 0.2 * rng.random(), 0.1 * rng.normal(), 500 * rng.random()],
+                      [0.1 * rng.normal(), 0.7 + 0.2 * rng.random(), 400 * rng.random()],
+                      [2e-4 * rng.normal(), 2e-4 * rng.normal(), 1.0]])
+        p = np.column_stack([src, np.ones(len(src))]) @ H.T
+        p = np.round(p[:, :2] / p[:, 2:] + rng.normal(0, noise, (len(src), 2)))  # decoded codes are integers
+        bad = rng.random(len(src)) < outliers
+        p[bad] += rng.choice([-1, 1], (int(bad.sum()), 2)) * rng.uniform(5, 300, (int(bad.sum()), 2))
+        Hs.append(H)
+        dst.append(p)
+        mask.append(rng.random(len(src)) < 0.9)
+    return src, np.array(Hs), np.array(dst), np.array(mask)
+
+
+def _image_of(H, pt):
+    q = H @ np.array([pt[0], pt[1], 1.0])
+    return q[:2] / q[2]
+
+
+@pytest.mark.parametrize("outliers", [0.0, 0.05, 0.15])
+def test_trimmed_fit_is_as_accurate_as_ransac_with_outliers(outliers):
+    import cv2
+
+    src, Hs, dst, mask = _window_sets(40, outliers, seed=int(outliers * 100))
+    do = np.array([d[m].mean(0) for d, m in zip(dst, mask)])
+    Hm, inl, settled, rms = correspond.fit_homographies(src, dst - do[:, None], mask, 3.0)
+    assert settled.all()
+    centre = np.array([0.3, -0.2])  # a corner between pixels
+    err_t, err_r = [], []
+    for i in range(len(Hs)):
+        truth = _image_of(Hs[i], centre)
+        err_t.append(np.linalg.norm(_image_of(Hm[i], centre) + do[i] - truth))
+        Hr, m = cv2.findHomography(src[mask[i]], dst[i][mask[i]], cv2.RANSAC, 3.0)
+        err_r.append(np.linalg.norm(_image_of(Hr, centre) - truth))
+        # the points kept are RANSAC's inliers, give or take a few on the threshold
+        assert np.count_nonzero(inl[i][mask[i]] != m.ravel().astype(bool)) <= 0.01 * mask[i].sum()
+    assert np.sqrt(np.mean(np.square(err_t))) <= 1.05 * np.sqrt(np.mean(np.square(err_r))) + 1e-3
+    assert max(err_t) < 0.1
+    assert np.all(rms < 1.0)
+
+
+def test_trimmed_fit_leaves_a_window_on_two_planes_to_ransac():
+    src, Hs, dst, mask = _window_sets(2, 0.0, seed=7)
+    mixed = dst[0].copy()
+    other = src[:, 0] > 8  # the right part of the window sees another plane (the wall behind the board)
+    mixed[other] = dst[1][other]
+    _, inl, settled, _ = correspond.fit_homographies(src, mixed[None], mask[:1], 3.0)
+    assert not settled[0]
+
+
+def test_trimmed_projector_corners_agree_with_ransac_on_a_render(paper_capture):
+    _, stack, truth, _ = paper_capture
+    maps = decode.decode(stack, patterns.pattern_set(1920, 1080))
+    cam = np.array(truth["corners"]["camera_distorted"])
+    exact = np.array(truth["corners"]["projector"])
+    out = {}
+    for est in ("trimmed", "ransac"):
+        p, diag = correspond.projector_corners(cam, maps, correspond.CornerOptions(estimator=est))
+        assert (diag["reason"] == 0).all()
+        out[est] = (p, diag)
+    rms = {e: np.sqrt(np.mean(np.sum((p - exact) ** 2, 1))) for e, (p, _) in out.items()}
+    assert rms["trimmed"] <= 1.02 * rms["ransac"]
+    assert np.max(np.abs(out["trimmed"][0] - out["ransac"][0])) < 0.02
+    assert np.array_equal(out["trimmed"][1]["pixels"], out["ransac"][1]["pixels"])
+    np.testing.assert_allclose(out["trimmed"][1]["residual_px"], out["ransac"][1]["residual_px"], rtol=0.05)
+
+
+def test_trimmed_projector_corners_near_the_border_and_unlit(paper_capture):
+    """Windows cut by the image border, corners in unlit parts and NaN corners get the same reasons as with
+    RANSAC."""
+    _, stack, truth, _ = paper_capture
+    maps = decode.decode(stack, patterns.pattern_set(1920, 1080))
+    H, W = maps.col.shape
+    cam = np.array([[5.0, 5.0], [W - 20.3, 300.2], [W / 2, H - 12.7], [np.nan, 3.0], [1.0, H / 2],
+                    *np.array(truth["corners"]["camera_distorted"])[:5]])
+    res = {e: correspond.projector_corners(cam, maps, correspond.CornerOptions(estimator=e))
+           for e in ("trimmed", "ransac")}
+    np.testing.assert_array_equal(res["trimmed"][1]["reason"], res["ransac"][1]["reason"])
+    ok = res["ransac"][1]["reason"] == 0
+    assert np.max(np.abs(res["trimmed"][0][ok] - res["ransac"][0][ok])) < 0.05

@@ -99,7 +99,7 @@ def calibrate_cmd(
     refine: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     import contextlib

@@ -58,7 +58,7 @@ def experiment_cmd(
     refine_window: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
