@@ -203,3 +203,18 @@ def test_trimmed_projector_corners_near_the_border_and_unlit(paper_capture):
     np.testing.assert_array_equal(res["trimmed"][1]["reason"], res["ransac"][1]["reason"])
     ok = res["ransac"][1]["reason"] == 0
     assert np.max(np.abs(res["trimmed"][0][ok] - res["ransac"][0][ok])) < 0.05
+
+
+# --------------------------------------------------------------------------------------------
+# decode: integer thresholds compare like the float ones
+# --------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int16, np.int32])
+@pytest.mark.parametrize("t", [0.0, 0.5, 3.0, 7.3, 10.0, 25.5, 254.9, 255.0, 1e9, -3.5])
+def test_integer_thresholds_compare_like_floats(dtype, t):
+    info = np.iinfo(dtype)
+    x = np.random.default_rng(1).integers(max(info.min, -1000), min(info.max, 70000), 5000, endpoint=True,
+                                          dtype=np.int64).astype(dtype)
+    ti = decode._int_threshold(t, dtype)
+    np.testing.assert_array_equal(x >= ti, x >= t)
+    np.testing.assert_array_equal(x < ti, x < t)

@@ -215,9 +215,13 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
         "direct": np.empty((H, W), np.float32) if robust else None,
         "global": np.empty((H, W), np.float32) if robust else None,
     }
-    params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1, tshadow=shadow_threshold * scale,
-                  tcontrast=contrast_threshold * scale, tdirect=direct_threshold * scale, b=float(black_fraction),
-                  wide=np.int16 if stack.dtype == np.uint8 else np.int32, max_dropped=int(max_dropped_bits))
+    wide = np.int16 if stack.dtype == np.uint8 else np.int32
+    params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1,
+                  tshadow=_int_threshold(shadow_threshold * scale, wide),
+                  tcontrast=contrast_threshold * scale, tcontrast_int=_int_threshold(contrast_threshold * scale,
+                                                                                    stack.dtype),
+                  tdirect=direct_threshold * scale, b=float(black_fraction), wide=wide,
+                  max_dropped=int(max_dropped_bits))
     bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
     if threads is None:
         threads = 1
@@ -233,7 +237,18 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
                         out["direct"], out["global"], ps, out["dcol"], out["drow"], codes_col, codes_row)
 
 
-def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide, max_dropped):
+def _int_threshold(t: float, dtype):
+    """``t`` as a scalar of the integer ``dtype`` that compares the same with its values (``x >= ceil(t)`` is
+    ``x >= t`` for integers): comparing an integer array with a float makes a float64 copy of it."""
+    import math
+
+    info = np.iinfo(dtype)
+    ti = math.ceil(t)
+    return np.dtype(dtype).type(ti) if info.min <= ti <= info.max else t
+
+
+def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tcontrast_int, tdirect, b, wide,
+                 max_dropped):
     """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`); returns the band's
     histograms of decoded codes (column, row) in projector pixels, out-of-range codes included."""
     import cv2
@@ -295,7 +310,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             bit = p > q
             ad = cv2.absdiff(p, q)
             amin = ad if amin is None else np.minimum(amin, ad, out=amin)
-            np.greater_equal(ad, tcontrast, out=certain)
+            np.greater_equal(ad, tcontrast_int, out=certain)
             if robust and hard.size and bitno >= hf_bit:
                 ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
                 # Moreno's rule, with a noise margin (at its boundary, all global light on one side, it has none)
@@ -319,10 +334,11 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         minabs = amin if minabs is None else np.minimum(minabs, amin)
         # Keep the leading certain bits: the code is then known to a block of 2^dropped codes (a Gray-code
         # prefix fixes the binary prefix); the value is the centre of the block's projector pixels.
-        dropped = (nbits - used.astype(np.int32))
+        dropped = np.uint8(nbits) - used
+        d32 = dropped.astype(np.int32)
         code = code.astype(np.int32)
-        lo = (code >> dropped) << dropped
-        hi = lo + (1 << dropped) - 1
+        lo = (code >> d32) << d32
+        hi = lo + (1 << d32) - 1
         lo -= offset
         hi -= offset
         r = np.zeros(span.shape, np.uint8)
@@ -341,7 +357,7 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         val = (px_lo + px_hi).astype(np.float32) * np.float32(0.5)
         val[r != OK] = np.nan
         out[key][sl] = val
-        out[dkey][sl] = np.where(r == OK, dropped, 0).astype(np.uint8)
+        out[dkey][sl] = np.where(r == OK, dropped, np.uint8(0))
     spanf = span.astype(np.float32)
     with np.errstate(divide="ignore", invalid="ignore"):
         conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
