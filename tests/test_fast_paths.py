@@ -218,3 +218,85 @@ def test_integer_thresholds_compare_like_floats(dtype, t):
     ti = decode._int_threshold(t, dtype)
     np.testing.assert_array_equal(x >= ti, x >= t)
     np.testing.assert_array_equal(x < ti, x < t)
+
+
+# --------------------------------------------------------------------------------------------
+# streaming: poses read ahead in background threads give what load_capture reads itself
+# --------------------------------------------------------------------------------------------
+
+def _small_poses(tmp_path, n=3):
+    from conftest import camera_view_of_patterns, write_stack
+
+    folders = []
+    for k in range(n):
+        folder = tmp_path / f"pose{k}"
+        write_stack(folder, camera_view_of_patterns(64, 48, seed=k))
+        folders.append(folder)
+    return folders
+
+
+def test_prefetched_captures_equal_load_capture(tmp_path):
+    from procam import capture, stream
+
+    folders = _small_poses(tmp_path)
+    ps = (64, 48)
+    with stream.Prefetcher(folders, ahead=1) as pf:
+        fast = [capture.load_capture(f, ps, reader=pf.read) for f in folders]
+    for f, cap in zip(folders, fast):
+        ref = capture.load_capture(f, ps)
+        assert np.array_equal(cap.stack, ref.stack) and cap.stack.dtype == ref.stack.dtype
+        assert cap.files == ref.files and cap.warnings == ref.warnings
+
+
+def test_prefetcher_reads_other_files_itself_and_out_of_order(tmp_path):
+    from procam import _files, stream
+
+    folders = _small_poses(tmp_path)
+    files = [_files.list_images(f) for f in folders]
+    with stream.Prefetcher(folders, ahead=2) as pf:
+        np.testing.assert_array_equal(pf.read(files[2]), _files.read_images(files[2]))  # read ahead
+        np.testing.assert_array_equal(pf.read(files[0][:5]), _files.read_images(files[0][:5]))  # not a folder's
+        np.testing.assert_array_equal(pf.read(files[1]), _files.read_images(files[1]))
+
+
+@pytest.mark.parametrize("damage", ["corrupt", "size", "depth"])
+def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
+    import cv2
+
+    from procam import _files, stream
+    from procam.errors import CaptureError
+
+    folders = _small_poses(tmp_path, 2)
+    victim = _files.list_images(folders[1])[7]
+    if damage == "corrupt":
+        victim.write_bytes(b"not a png")
+    elif damage == "size":
+        cv2.imwrite(str(victim), np.zeros((40, 64), np.uint8))
+    else:
+        cv2.imwrite(str(victim), np.zeros((48, 64), np.uint16))
+    with pytest.raises(CaptureError) as ref:
+        _files.read_images(_files.list_images(folders[1]))
+    with stream.Prefetcher(folders) as pf:
+        pf.read(_files.list_images(folders[0]))
+        with pytest.raises(CaptureError) as got:
+            pf.read(_files.list_images(folders[1]))
+    assert str(got.value) == str(ref.value)
+
+
+def test_views_from_folders_streams_the_same_views(paper_capture, tmp_path):
+    """Two poses through views_from_folders (read ahead) give the views view_from_folder gives."""
+    import shutil
+
+    from procam import pipeline
+    from procam.board import Board
+
+    folder = paper_capture[0]
+    second = tmp_path / "again"
+    shutil.copytree(folder, second)
+    brd = Board(10, 6, 24.0)
+    views = pipeline.views_from_folders([folder, second], brd)
+    for f, v in zip([folder, second], views):
+        ref, _ = pipeline.view_from_folder(f, brd)
+        np.testing.assert_array_equal(v.cam_pts, ref.cam_pts)
+        np.testing.assert_array_equal(v.proj_pts, ref.proj_pts)
+        assert v.name == ref.name and v.diagnostics["warnings"] == ref.diagnostics["warnings"]

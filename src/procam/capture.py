@@ -187,7 +187,7 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
                     "capture order")
 
 
-def load_capture(folder, projector=None, order=None, check: bool = True, step=None) -> Capture:
+def load_capture(folder, projector=None, order=None, check: bool = True, step=None, reader=None) -> Capture:
     """Read and validate a pose folder.
 
     Parameters
@@ -197,6 +197,8 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
     step : projector pixels per code (None: patterns.json's, else 1).
+    reader : ``reader(files) -> stack``, default :func:`procam._files.read_images` (e.g.
+        :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
     folder = Path(folder)
     files = _files.list_images(folder)
@@ -207,7 +209,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + _count_hint(len(files), ps))
-    stack = _files.read_images(files)
+    stack = (reader or _files.read_images)(files)
     warnings = ()
     if check:
         sub = _sample(stack)  # one pixel sample serves every check

@@ -124,14 +124,14 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
 
 
 def view_from_folder(folder, board: Board, projector=None, order=None, *, options: PoseOptions = PoseOptions(),
-                     step=None):
+                     step=None, reader=None):
     """Load, validate and process one pose folder; returns (View, DecodeResult).
 
     ``projector`` (width, height), ``order`` and ``step`` default to the folder's ``patterns.json``
-    (:func:`procam.capture.load_capture`). The capture's exposure warnings are in
-    ``view.diagnostics["warnings"]``.
+    (:func:`procam.capture.load_capture`, which also takes the ``reader``). The capture's exposure warnings are
+    in ``view.diagnostics["warnings"]``.
     """
-    cap = _capture.load_capture(folder, projector, order, step=step)
+    cap = _capture.load_capture(folder, projector, order, step=step, reader=reader)
     return view_from_stack(cap.stack, cap.pattern_set, board, name=str(Path(folder)), options=options,
                            warnings=cap.warnings, files=cap.files)
 
@@ -140,13 +140,20 @@ def views_from_folders(folders: Sequence, board: Board, projector=None, order=No
                        options: PoseOptions = PoseOptions(), step=None,
                        progress: Callable[[int, int, str], None] | None = None) -> list[View]:
     """One View per pose folder (:func:`view_from_folder`), in order; ``progress(done, total, folder)``
-    after each."""
+    after each.
+
+    The next pose's images are read in background threads while this one is processed
+    (:class:`procam.stream.Prefetcher`); only the Views are kept.
+    """
+    from .stream import Prefetcher
+
     views = []
-    for k, folder in enumerate(folders):
-        view, _ = view_from_folder(folder, board, projector, order, options=options, step=step)
-        views.append(view)
-        if progress is not None:
-            progress(k + 1, len(folders), str(folder))
+    with Prefetcher(folders) as pf:
+        for k, folder in enumerate(folders):
+            view, _ = view_from_folder(folder, board, projector, order, options=options, step=step, reader=pf.read)
+            views.append(view)
+            if progress is not None:
+                progress(k + 1, len(folders), str(folder))
     return views
 
 
