@@ -13,6 +13,7 @@ folder or file and says what to do:
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from dataclasses import dataclass
@@ -102,8 +103,14 @@ def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
     flat = stack.reshape(len(stack), -1)
     if flat.shape[1] <= n:
         return flat.astype(np.float32)
-    idx = np.sort(np.random.default_rng(0).choice(flat.shape[1], n, replace=False))
-    return flat[:, idx].astype(np.float32)
+    return np.take(flat, _sample_index(flat.shape[1], n), axis=1).astype(np.float32)
+
+
+@functools.lru_cache(maxsize=8)
+def _sample_index(size: int, n: int) -> np.ndarray:
+    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
+    idx.flags.writeable = False
+    return idx
 
 
 def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

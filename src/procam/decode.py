@@ -68,10 +68,12 @@ class DecodeResult:
     valid_col, valid_row : bool
     reason_col, reason_row : uint8
         Codes of :data:`REASONS` (0 = decoded).
-    confidence : float32
-        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1].
+    confidence : float32 or None
+        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1] (None when
+        decoded with ``extras=False``).
     direct, global_ : float32 or None
-        The robust classifier's direct and global light estimates (DN at the input scale).
+        The robust classifier's direct and global light estimates (DN at the input scale; None for the simple
+        classifier or ``extras=False``).
     pattern_set : the decoded sequence's :class:`PatternSet`.
     dropped_col, dropped_row : uint8
         Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
@@ -159,7 +161,7 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
            full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 64,
-           threads: int | None = None) -> DecodeResult:
+           threads: int | None = None, extras: bool = True) -> DecodeResult:
     """Decode a Gray-code image stack.
 
     Parameters
@@ -190,6 +192,9 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     band, threads : int
         Rows processed at a time and worker threads (speed only; default 1 thread: on 2 cores a second
         thread gained nothing measurable, see benchmarks/decode.py).
+    extras : bool
+        Compute ``confidence``, ``direct`` and ``global_`` (else they are None: a quarter of the time when only
+        the projector coordinates are needed, as for the corners).
 
     Returns
     -------
@@ -210,10 +215,10 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     out = {
         "col": np.empty((H, W), np.float32), "row": np.empty((H, W), np.float32),
         "rcol": np.empty((H, W), np.uint8), "rrow": np.empty((H, W), np.uint8),
-        "conf": np.empty((H, W), np.float32),
+        "conf": np.empty((H, W), np.float32) if extras else None,
         "dcol": np.empty((H, W), np.uint8), "drow": np.empty((H, W), np.uint8),
-        "direct": np.empty((H, W), np.float32) if robust else None,
-        "global": np.empty((H, W), np.float32) if robust else None,
+        "direct": np.empty((H, W), np.float32) if robust and extras else None,
+        "global": np.empty((H, W), np.float32) if robust and extras else None,
     }
     wide = np.int16 if stack.dtype == np.uint8 else np.int32
     params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1,
@@ -280,8 +285,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             neg = lg <= 0
             ld[neg] = lp[neg]
             lg[neg] = 0.0
-        out["direct"][sl] = ld
-        out["global"][sl] = lg
+        if out["direct"] is not None:
+            out["direct"][sl] = ld
+            out["global"][sl] = lg
         weak = ld < tdirect
         # pixels where direct light does not dominate: Moreno's rule decides their low-frequency bits
         hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
@@ -309,7 +315,8 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             q = blk[i]
             bit = p > q
             ad = cv2.absdiff(p, q)
-            amin = ad if amin is None else np.minimum(amin, ad, out=amin)
+            if out["conf"] is not None:
+                amin = ad if amin is None else np.minimum(amin, ad, out=amin)
             np.greater_equal(ad, tcontrast_int, out=certain)
             if robust and hard.size and bitno >= hf_bit:
                 ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
@@ -331,7 +338,8 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             prev ^= bit  # Gray -> binary: b_i = b_(i+1) xor g_i
             code <<= 1
             code |= prev
-        minabs = amin if minabs is None else np.minimum(minabs, amin)
+        if amin is not None:
+            minabs = amin if minabs is None else np.minimum(minabs, amin)
         # Keep the leading certain bits: the code is then known to a block of 2^dropped codes (a Gray-code
         # prefix fixes the binary prefix); the value is the centre of the block's projector pixels.
         dropped = np.uint8(nbits) - used
@@ -358,8 +366,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         val[r != OK] = np.nan
         out[key][sl] = val
         out[dkey][sl] = np.where(r == OK, dropped, np.uint8(0))
-    spanf = span.astype(np.float32)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
-    out["conf"][sl] = np.clip(conf, 0.0, 1.0)
+    if out["conf"] is not None:
+        spanf = span.astype(np.float32)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
+        out["conf"][sl] = np.clip(conf, 0.0, 1.0)
     return hists
