@@ -300,3 +300,34 @@ def test_views_from_folders_streams_the_same_views(paper_capture, tmp_path):
         np.testing.assert_array_equal(v.cam_pts, ref.cam_pts)
         np.testing.assert_array_equal(v.proj_pts, ref.proj_pts)
         assert v.name == ref.name and v.diagnostics["warnings"] == ref.diagnostics["warnings"]
+
+
+# --------------------------------------------------------------------------------------------
+# procam experiment: progress when stderr is a pipe
+# --------------------------------------------------------------------------------------------
+
+def test_experiment_prints_one_plain_line_per_step_when_piped(tmp_path, monkeypatch):
+    """Not a terminal (CliRunner's stderr, a pipe, a log): every finished step is a line on stderr."""
+    from procam import pipeline, simulate
+    from procam.view import View
+    from conftest import run_cli
+
+    base = simulate.preset("paper")
+    views = {}
+    for k, a in enumerate([(15, -35, 0), (-15, 20, 5), (10, 25, -5)]):
+        sc = simulate.with_board_pose(base, a, distance=650.0)
+        obj, cam, proj = simulate.correspondences(sc, 0.1, 0.2, k)
+        (tmp_path / f"pose{k + 1}").mkdir()
+        views[f"pose{k + 1}"] = View(obj, cam, proj, f"pose{k + 1}", sc.cam_size, sc.proj_size)
+
+    def fake(folder, board, projector=None, order=None, **kw):
+        return views[folder.name if hasattr(folder, "name") else str(folder).rsplit("/", 1)[-1]], None
+
+    monkeypatch.setattr(pipeline, "view_from_folder", fake)
+    code, _, err = run_cli(["experiment", *[tmp_path / n for n in views], "-o", tmp_path / "out", "--board", "10x6",
+                            "--square", "24", "--projector", "1920x1080"])
+    assert code == 0, err
+    lines = err.splitlines()
+    assert [ln for ln in lines if ln.startswith("decoding")] == [f"decoding {k}/3: pose{k}" for k in (1, 2, 3)]
+    calib = [ln for ln in lines if ln.startswith("calibrating")]
+    assert len(calib) >= 4 and calib[-1].startswith("calibrating 4/4")

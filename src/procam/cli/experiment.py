@@ -11,7 +11,8 @@ from rich.table import Table
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
-                   app, console, err_console, fail, optional_size, parse_board, pose_options, user_errors, value)
+                   app, console, err_console, fail, is_tty, optional_size, parse_board, pose_options, user_errors,
+                   value)
 
 
 def summary_tables(result) -> list[Table]:
@@ -31,6 +32,31 @@ def summary_tables(result) -> list[Table]:
                   fmt_number(r["f_p"], 1), fmt_number(r["abs_df_p"], 1), fmt_number(abs(r["nu_p_ref"]), 1),
                   fmt_number(r["proj_err"], 2), fmt_number(e["sigma_T"], 2), r.get("verdict", ""))
     return [t, s]
+
+
+class _LineProgress:
+    """Progress for a pipe or a log (stderr not a terminal): one plain line per finished step, on stderr, with the
+    two methods of :class:`rich.progress.Progress` the experiment uses."""
+
+    def __init__(self):
+        self._tasks = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def add_task(self, description, total=None, label=""):
+        self._tasks.append([description, total])
+        return len(self._tasks) - 1
+
+    def update(self, task, completed, total=None, label=""):
+        desc = self._tasks[task]
+        if total is not None:
+            desc[1] = total
+        err_console.print(f"{desc[0]} {completed}/{desc[1]}" + (f": {label}" if label else ""), markup=False,
+                          highlight=False)
 
 
 @app.command("experiment")
@@ -83,8 +109,10 @@ def experiment_cmd(
 
         output_path(html_report, "--report", (".html", ".htm"))
     n_sets = len(experiment.pose_sets(len(poses), min_set))
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("{task.fields[label]}"), console=err_console, transient=True) as bar:
+    bar = (Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    TextColumn("{task.fields[label]}"), console=err_console, transient=True)
+           if is_tty() else _LineProgress())
+    with bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")
         views = pipeline.views_from_folders(
             poses, brd, size, value(order), options=opts, step=step,
