@@ -331,3 +331,39 @@ def test_experiment_prints_one_plain_line_per_step_when_piped(tmp_path, monkeypa
     assert [ln for ln in lines if ln.startswith("decoding")] == [f"decoding {k}/3: pose{k}" for k in (1, 2, 3)]
     calib = [ln for ln in lines if ln.startswith("calibrating")]
     assert len(calib) >= 4 and calib[-1].startswith("calibrating 4/4")
+
+
+# --------------------------------------------------------------------------------------------
+# start-up: what procam --help and procam calibrate import
+# --------------------------------------------------------------------------------------------
+
+def test_help_and_calibrate_import_no_matplotlib_simulator_or_scipy_for_help(ideal_capture, tmp_path):
+    """`procam --help` imports neither matplotlib, the simulator nor scipy; `procam calibrate` without --png or
+    --report imports no matplotlib or simulator (fresh interpreters, through the console-script entry point)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import json, sys
+from procam.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+heavy = ("matplotlib", "procam.simulate", "procam.plots", "procam.paper", "scipy")
+print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    folder = ideal_capture[0]
+    runs = [(["--help"], []), (["calibrate", "--help"], []),
+            (["calibrate", str(folder), "--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json")],
+             ["scipy"])]
+    for args, allowed in runs:
+        res = subprocess.run([sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
+                             timeout=300)
+        report = json.loads(res.stderr.strip().splitlines()[-1])
+        assert report["code"] in (0, None) and set(report["loaded"]) <= set(allowed), (args, res.stderr[-2000:])
