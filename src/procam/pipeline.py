@@ -8,6 +8,7 @@ The glue the CLI, the benchmarks and the experiment share; each stage lives in i
 from __future__ import annotations
 
 import contextlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -105,11 +106,16 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     (:mod:`procam.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
     """
     d = options.decode
-    maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
-                          contrast_threshold=d.contrast_threshold, extras=keep_maps)
-    if cam_pts is None:
-        cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
-                             options.refine)
+    # the corners are found in a second thread while the stack is decoded (both mostly release the GIL): on two
+    # cores a pose takes the longer of the two instead of their sum
+    with ThreadPoolExecutor(1) as ex:
+        corners = None if cam_pts is not None else ex.submit(
+            find_board, stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
+            options.refine)
+        maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
+                              contrast_threshold=d.contrast_threshold, extras=keep_maps)
+        if corners is not None:
+            cam_pts = corners.result()
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     warnings = list(warnings) + _plausible.check_projector_size(maps, name, files)
     _plausible.check_swapped_bits(maps, name, files)
