@@ -6,6 +6,7 @@ The modules, from the captures up (each imports only those above it in this list
     _files        image reads, natural sort, atomic writes, JSON helpers (the bottom floor)
     patterns      Gray-code pattern sets and images (pure)
     capture       the capture-folder format: read + validate a pose folder, write a sequence
+    stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     board         Board (inner corners, square size), object points, chessboard corner detection
     correspond    camera corners -> projector corners by local homographies
@@ -47,7 +48,7 @@ import importlib
 
 __version__ = "0.1.0"
 
-_SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
+_SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "single_pose",
                "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots", "report")
 
