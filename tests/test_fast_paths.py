@@ -367,3 +367,15 @@ print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]
                              timeout=300)
         report = json.loads(res.stderr.strip().splitlines()[-1])
         assert report["code"] in (0, None) and set(report["loaded"]) <= set(allowed), (args, res.stderr[-2000:])
+
+
+def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):
+    """Memory stays bounded: with ahead=1 the pose in use and the next one, never more."""
+    from procam import _files, stream
+
+    folders = _small_poses(tmp_path, 4)
+    with stream.Prefetcher(folders, ahead=1) as pf:
+        assert pf._next == 1  # the first pose, from the start
+        for k, f in enumerate(folders):
+            pf.read(_files.list_images(f))
+            assert pf._next == min(len(folders), k + 2)
