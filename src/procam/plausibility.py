@@ -111,7 +111,7 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
 def _median_of_hist(h: np.ndarray, lo: int) -> float:
     """``np.median`` of the integers whose histogram is ``h`` (bin ``k`` counts the value ``lo + k``)."""
     c = np.cumsum(h)
-    n = int(round(c[-1]))
+    n = round(c[-1])
     a = int(np.searchsorted(c, (n - 1) // 2 + 0.5))  # the ((n-1)//2)-th and (n//2)-th smallest values
     b = int(np.searchsorted(c, n // 2 + 0.5))
     return (a + b + 2 * lo) / 2.0
@@ -136,7 +136,7 @@ def _hist_scores(d2: np.ndarray, weights: np.ndarray | None = None) -> tuple[flo
     hs = np.bincount(d2 - lo, weights)
     med = _median_of_hist(hs, lo) / 2.0
     ks = (np.arange(len(hs)) + lo) / 2.0
-    breaks = int(round(hs[np.abs(ks - med) > 2.5 + 1.5 * slope].sum()))
+    breaks = round(hs[np.abs(ks - med) > 2.5 + 1.5 * slope].sum())
     return rough, breaks
 
 
