@@ -9,6 +9,7 @@ The modules, from the captures up (each imports only those above it in this list
     _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)
     capture       the capture-folder format: read + validate a pose folder, write a sequence
+    stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
     board         Board (inner corners, square size), object points, chessboard corner detection
@@ -60,10 +61,11 @@ import importlib
 
 __version__ = "0.1.0"
 
-_SUBMODULES = ("errors", "patterns", "capture", "decode", "board", "correspond", "view", "pipeline", "models",
+_SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
                "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
-               "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check", "acquire")
+               "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check",
+               "acquire")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

@@ -571,8 +571,10 @@ def _levenberg_marquardt(P, X, Y, z, w, active, iterations, tol=1e-4):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        Jt = J[idx].transpose(0, 2, 1)
-        A = np.matmul(Jt, J[idx])
+        full = idx.size == len(P)  # every corner still moving: views instead of copies
+        Ji = J if full else J[idx]
+        Jt = Ji.transpose(0, 2, 1)
+        A = np.matmul(Jt, Ji)
         rhs = np.matmul(Jt, res[idx, :, None])[..., 0]
         diag = np.einsum("nii->ni", A)
         A = A + (lam[idx, None] * diag + 1e-12 * diag.max(1, keepdims=True) + 1e-300)[:, :, None] * eye
@@ -580,12 +582,17 @@ def _levenberg_marquardt(P, X, Y, z, w, active, iterations, tol=1e-4):
             step = np.linalg.solve(A, rhs[..., None])[..., 0]
             Pn = P[idx] + step
             Pn[:, 4] = np.abs(Pn[:, 4])
-            Mn, _, Jn = _xjunction(Pn, X[idx], Y[idx], True)
-            rn = (z[idx] - Mn) * sq[idx]
+            Mn, _, Jn = _xjunction(Pn, X if full else X[idx], Y if full else Y[idx], True)
+            rn = (z if full else z[idx]) - Mn
+            rn *= sq if full else sq[idx]
             cn = np.sum(rn * rn, 1)
         better = np.isfinite(cn) & (cn <= cost[idx])
         k = idx[better]
-        P[k], cost[k], res[k], J[k] = Pn[better], cn[better], rn[better], Jn[better] * sq[k, :, None]
+        if full and better.all():
+            Jn *= sq[..., None]
+            P, cost, res, J = Pn, cn, rn, Jn
+        else:
+            P[k], cost[k], res[k], J[k] = Pn[better], cn[better], rn[better], Jn[better] * sq[k, :, None]
         lam[idx] = np.where(better, lam[idx] * 0.2, lam[idx] * 10.0)
         done = (better & (np.abs(step[:, :2]).max(1) < tol)) | (lam[idx] > 1e6)
         active[idx[done]] = False

@@ -21,6 +21,7 @@ folder or file and says what to do:
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from dataclasses import dataclass
@@ -135,8 +136,14 @@ def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
     flat = stack.reshape(len(stack), -1)
     if flat.shape[1] <= n:
         return flat.astype(np.float32)
-    idx = np.sort(np.random.default_rng(0).choice(flat.shape[1], n, replace=False))
-    return flat[:, idx].astype(np.float32)
+    return np.take(flat, _sample_index(flat.shape[1], n), axis=1).astype(np.float32)
+
+
+@functools.lru_cache(maxsize=8)
+def _sample_index(size: int, n: int) -> np.ndarray:
+    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
+    idx.flags.writeable = False
+    return idx
 
 
 def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -503,7 +510,7 @@ def check_memory(folder, n_images: int, shape, itemsize: int) -> None:
                            "or free memory")
 
 
-def load_capture(folder, projector=None, order=None, check: bool = True, step=None) -> Capture:
+def load_capture(folder, projector=None, order=None, check: bool = True, step=None, reader=None) -> Capture:
     """Read and validate a pose folder.
 
     Parameters
@@ -513,6 +520,8 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
     step : projector pixels per code (None: patterns.json's, else 1).
+    reader : ``reader(files) -> stack``, default :func:`procam._files.read_images` (e.g.
+        :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
     folder = Path(folder)
     images = _files.list_images(folder)
@@ -533,7 +542,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
                            + (why or _count_hint(len(files), ps)))
     first = _files.read_image(files[0])
     check_memory(folder, len(files), first.shape, first.dtype.itemsize)
-    stack = _files.read_images(files)
+    stack = (reader or _files.read_images)(files)
     warnings = notes
     if check:
         sub = _sample(stack)  # one pixel sample serves every check

@@ -23,7 +23,7 @@ CORNER_REASONS = {
     4: "poor local homography fit (residual above max_residual)",
     5: "homography estimation failed",
 }
-ESTIMATORS = ("lsq", "ransac", "lmeds")
+ESTIMATORS = ("trimmed", "lsq", "ransac", "lmeds")
 
 
 @dataclass(frozen=True)
@@ -31,16 +31,19 @@ class CornerOptions:
     """Local-homography options (defaults measured in ``benchmarks/correspond.py``).
 
     window : int, camera pixels — side of the square window around each corner (Moreno: 60).
-    estimator : ``"lsq"`` | ``"ransac"`` | ``"lmeds"`` — how the homography is fitted
-        (``cv2.findHomography`` methods 0, RANSAC, LMEDS).
-    ransac_threshold : float, projector pixels — RANSAC inlier threshold (Moreno: 3).
+    estimator : ``"trimmed"`` | ``"lsq"`` | ``"ransac"`` | ``"lmeds"`` — how the homography is fitted:
+        ``"trimmed"`` (default) fits all corners at once by least squares, drops the points farther than
+        ``ransac_threshold`` from the fit and refits until the points stay the same (:func:`fit_homographies`;
+        a window where that does not settle on most of its points gets RANSAC); the others are
+        ``cv2.findHomography``'s methods 0, RANSAC and LMEDS, one call per corner.
+    ransac_threshold : float, projector pixels — inlier threshold of RANSAC and of the trimmed fit (Moreno: 3).
     min_valid_fraction : float — minimum fraction of the window's pixels with a decoded column
         and row (25 %, as the paper).
     max_residual : float, projector pixels — a corner whose fit RMS over the inliers exceeds it fails.
     """
 
     window: int = 60
-    estimator: str = "ransac"
+    estimator: str = "trimmed"
     ransac_threshold: float = 3.0
     min_valid_fraction: float = 0.25
     max_residual: float = 2.0
@@ -58,7 +61,8 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
     Parameters
     ----------
     cam_pts : (N, 2) float — camera corners (distorted pixels; NaN rows are skipped).
-    maps : :class:`~procam.decode.DecodeResult` of the same pose.
+    maps : :class:`~procam.decode.DecodeResult` of the same pose (only ``col``, ``row`` and ``valid`` in the
+        windows around the corners are read).
     options : :class:`CornerOptions`.
 
     Returns
@@ -68,8 +72,6 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
         (decoded pixels in the window), ``window_pixels`` (pixels of the window inside the image),
         ``inliers`` and ``residual_px`` (RMS of the fit over the inliers, projector pixels).
     """
-    import cv2
-
     cam_pts = np.asarray(cam_pts, float).reshape(-1, 2)
     n = len(cam_pts)
     H, W = maps.col.shape
@@ -82,7 +84,7 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
     inliers = np.zeros(n, np.int32)
     resid = np.full(n, np.nan)
     valid = maps.valid
-    method = {"lsq": 0, "ransac": cv2.RANSAC, "lmeds": cv2.LMEDS}[options.estimator]
+    fit = []  # corners that get a homography
     for k, (x, y) in enumerate(cam_pts):
         if not (np.isfinite(x) and np.isfinite(y)):
             reason[k] = 1
@@ -94,11 +96,46 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
         if wpix[k] < options.min_valid_fraction * full_area or not (0 <= x < W - 1 and 0 <= y < H - 1):
             reason[k] = 3
             continue
-        v = valid[y0:y1, x0:x1]
-        pixels[k] = int(v.sum())
+        pixels[k] = int(np.count_nonzero(valid[y0:y1, x0:x1]))
         if pixels[k] < max(8, options.min_valid_fraction * full_area):
             reason[k] = 2
             continue
+        fit.append(k)
+    ransac = fit
+    if options.estimator == "trimmed" and fit:
+        ransac = _trimmed_corners(np.array(fit), cam_pts, maps, half, options, proj, reason, inliers, resid)
+    if ransac:
+        _cv2_corners(ransac, cam_pts, maps, half, options, proj, reason, inliers, resid)
+    return proj, {"reason": reason, "pixels": pixels, "window_pixels": wpix, "inliers": inliers,
+                  "residual_px": resid}
+
+
+def _finish(k, Hm, src, dst, do, inl, options, proj, reason, inliers, resid):
+    """Diagnostics and projector corner of corner ``k`` from its homography ``Hm`` (centred coordinates)."""
+    inliers[k] = int(inl.sum())
+    ph = np.column_stack([src, np.ones(len(src))]) @ Hm.T
+    e = ph[inl, :2] / ph[inl, 2:3] - dst[inl]
+    resid[k] = float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if inl.any() else np.inf
+    if inliers[k] < 8 or resid[k] > options.max_residual:
+        reason[k] = 4
+        return
+    p = Hm @ np.array([0.0, 0.0, 1.0])
+    proj[k] = p[:2] / p[2] + do
+
+
+def _cv2_corners(ks, cam_pts, maps, half, options, proj, reason, inliers, resid):
+    """One ``cv2.findHomography`` per corner (estimators lsq, ransac, lmeds; the trimmed fit's fallback)."""
+    import cv2
+
+    H, W = maps.col.shape
+    valid = maps.valid
+    method = {"lsq": 0, "ransac": cv2.RANSAC, "lmeds": cv2.LMEDS, "trimmed": cv2.RANSAC}[options.estimator]
+    for k in ks:
+        x, y = cam_pts[k]
+        cx, cy = int(round(x)), int(round(y))
+        x0, x1 = max(0, cx - half), min(W, cx + half)
+        y0, y1 = max(0, cy - half), min(H, cy + half)
+        v = valid[y0:y1, x0:x1]
         yy, xx = np.nonzero(v)
         src = np.column_stack([xx + x0, yy + y0]).astype(np.float64)
         dst = np.column_stack([maps.col[y0:y1, x0:x1][v], maps.row[y0:y1, x0:x1][v]]).astype(np.float64)
@@ -112,18 +149,171 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
             reason[k] = 5
             continue
         inl = mask.ravel().astype(bool) if mask is not None else np.ones(len(src), bool)
-        inliers[k] = int(inl.sum())
-        ph = np.column_stack([src - so, np.ones(len(src))]) @ Hm.T
-        pred = ph[:, :2] / ph[:, 2:3]
-        e = pred[inl] - (dst[inl] - do)
-        resid[k] = float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if inl.any() else np.inf
-        if inliers[k] < 8 or resid[k] > options.max_residual:
-            reason[k] = 4
+        _finish(k, Hm, src - so, dst - do, do, inl, options, proj, reason, inliers, resid)
+
+
+def _trimmed_corners(ks, cam_pts, maps, half, options, proj, reason, inliers, resid) -> list:
+    """The trimmed fit of the corners ``ks`` (all at once); returns the corners it leaves to RANSAC."""
+    Hh, Ww = maps.col.shape
+    d = np.arange(-half, half)
+    gx, gy = np.meshgrid(d, d)
+    grid = np.column_stack([gx.ravel(), gy.ravel()]).astype(float)  # (M, 2) window pixels around (cx, cy)
+    c = np.rint(cam_pts[ks]).astype(np.intp)
+    X, Y = c[:, :1] + gx.ravel(), c[:, 1:] + gy.ravel()
+    inside = (X >= 0) & (X < Ww) & (Y >= 0) & (Y < Hh)
+    flat = np.where(inside, Y * Ww + X, 0)
+    ok = inside & maps.valid.ravel()[flat]
+    dst = np.empty(ok.shape + (2,))
+    dst[..., 0] = np.where(ok, maps.col.ravel()[flat], 0.0)
+    dst[..., 1] = np.where(ok, maps.row.ravel()[flat], 0.0)
+    do = dst.sum(1) / ok.sum(1)[:, None]  # centred on the mean, as the per-corner fit
+    dst -= do[:, None, :]
+    Hm, inl, settled, rms = fit_homographies(grid, dst, ok, options.ransac_threshold)
+    # the corner itself is at grid point (corner - (cx, cy))
+    p = Hm @ np.column_stack([cam_pts[ks] - c, np.ones(len(ks))])[..., None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = p[:, :2, 0] / p[:, 2:, 0] + do
+    n_in = inl.sum(1)
+    for i, k in enumerate(ks):
+        if not settled[i]:
             continue
-        p = Hm @ np.array([0.0, 0.0, 1.0])
-        proj[k] = p[:2] / p[2] + do
-    return proj, {"reason": reason, "pixels": pixels, "window_pixels": wpix, "inliers": inliers,
-                  "residual_px": resid}
+        inliers[k], resid[k] = n_in[i], rms[i]
+        if n_in[i] < 8 or not rms[i] <= options.max_residual or not np.all(np.isfinite(p[i])):
+            reason[k] = 4
+        else:
+            proj[k] = p[i]
+    return [int(k) for k in ks[~settled]]
+
+
+def fit_homographies(src: np.ndarray, dst: np.ndarray, mask: np.ndarray, threshold: float = 3.0, *,
+                     iterations: int = 12, min_inliers: float = 0.8):
+    """Robust homographies of many point sets seen at the same source points (windows of pixels), all at once:
+    least squares, trim, refit.
+
+    Each set is fitted by linear least squares (DLT, normalised coordinates; from the second fit on, the rows
+    are weighted by the previous fit's denominator, so the fit minimises the distances in ``dst``). A set is
+    done when the points within ``threshold`` of its fit are the points it was fitted to. Otherwise the points
+    within a threshold are kept and the set refitted; the threshold starts at 8 ``threshold`` and halves each
+    round down to ``threshold``, so gross outliers (a wrongly decoded high bit) go first and cannot pull the fit
+    that decides about the others.
+
+    Parameters
+    ----------
+    src : (M, 2) float — the source points, shared by all sets.
+    dst : (N, M, 2) float — where each set sees them.
+    mask : (N, M) bool — which points each set has.
+    threshold : float, units of ``dst`` — inlier distance.
+    iterations : most fits per set.
+    min_inliers : a set is ``settled`` when it is done and keeps at least this fraction of its points.
+
+    Returns
+    -------
+    H : (N, 3, 3) float64, ``dst ~ H @ [src, 1]``; NaN where the normal equations were singular.
+    inliers : (N, M) bool.
+    settled : (N,) bool.
+    rms : (N,) float — RMS distance of the inliers from the fit, units of ``dst``.
+    """
+    src = np.asarray(src, float)
+    dst = np.asarray(dst, float)
+    mask = np.asarray(mask, bool)
+    n, M = mask.shape
+    cnt = np.maximum(mask.sum(1), 1)
+    # normalised coordinates: the source's centroid at 0 and RMS radius sqrt(2) (shared); each set's targets
+    # likewise (Hartley)
+    cs = src.mean(0)
+    rs = max(float(np.sqrt(np.mean(np.sum((src - cs) ** 2, 1)) / 2.0)), 1e-12)
+    x, y = (src[:, 0] - cs[0]) / rs, (src[:, 1] - cs[1]) / rs
+    B = np.column_stack([np.ones(M), x, y, x * x, x * y, y * y])  # (M, 6) monomials of the source
+    mf = mask.astype(float)
+    u, v = np.where(mask, dst[..., 0], 0.0), np.where(mask, dst[..., 1], 0.0)
+    cd = np.column_stack([u.sum(1), v.sum(1)]) / cnt[:, None]
+    u -= cd[:, :1]
+    v -= cd[:, 1:]
+    u *= mf
+    v *= mf
+    rd = np.sqrt((np.einsum("nm,nm->n", u, u) + np.einsum("nm,nm->n", v, v)) / cnt / 2.0)
+    rd = np.where(rd > 0, rd, 1.0)
+    u /= rd[:, None]
+    v /= rd[:, None]
+    inl = mask.copy()
+    den = np.ones((n, M))
+    h = np.full((n, 8), np.nan)
+    thr2 = (threshold / rd) ** 2  # per set, normalised units
+    settled = np.zeros(n, bool)
+    rms = np.full(n, np.nan)
+    idx = np.arange(n)
+    W = np.empty((4, n, M))
+    for it in range(iterations):
+        sub = slice(None) if idx.size == n else idx
+        ui, vi, mi, ii = u[sub], v[sub], mask[sub], inl[sub]
+        Wi = W[:, :idx.size]
+        np.divide(ii, den[sub] ** 2, out=Wi[0])
+        np.multiply(Wi[0], ui, out=Wi[1])
+        np.multiply(Wi[0], vi, out=Wi[2])
+        np.multiply(Wi[1], ui, out=Wi[3])
+        Wi[3] += Wi[2] * vi
+        S = (Wi.reshape(-1, M) @ B).reshape(4, idx.size, 6).transpose(1, 0, 2)  # (n, 4, 6) weighted sums
+        hi = _solve_normal(S)
+        h[idx] = hi
+        a, b, c_, d_, e, f, g, hh = (hi[:, k:k + 1] for k in range(8))
+        dn = g * x + hh * y + 1.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r2 = ((a * x + b * y + c_) / dn - ui) ** 2 + ((d_ * x + e * y + f) / dn - vi) ** 2
+        front = mi & (dn > 0)
+        bad = ~np.all(np.isfinite(hi), axis=1)
+        # done: the points within the threshold are those fitted (the first, algebraic fit is always refitted)
+        done = (np.all((front & (r2 <= thr2[idx, None])) == ii, axis=1) & (it > 0)) | bad
+        settled[idx] = done & ~bad
+        with np.errstate(invalid="ignore"):
+            rms[idx] = np.sqrt(np.sum(np.where(ii, r2, 0.0), 1) / ii.sum(1)) * rd[idx]
+        t2 = thr2[idx, None] * max(1.0, 4.0 ** (3 - it))
+        inl[idx] = np.where(done[:, None], ii, front & (r2 <= t2))
+        den[idx] = np.where(dn > 0, dn, 1.0)
+        idx = idx[~done]
+        if idx.size == 0:
+            break
+    settled &= inl.sum(1) >= min_inliers * mask.sum(1)
+    # back to the original coordinates: H = Td^-1 Hn Ts
+    Hn = np.concatenate([h, np.ones((n, 1))], axis=1).reshape(n, 3, 3)
+    Ts = np.array([[1.0 / rs, 0.0, -cs[0] / rs], [0.0, 1.0 / rs, -cs[1] / rs], [0.0, 0.0, 1.0]])
+    Tdi = np.zeros((n, 3, 3))
+    Tdi[:, 0, 0] = Tdi[:, 1, 1] = rd
+    Tdi[:, 0, 2], Tdi[:, 1, 2], Tdi[:, 2, 2] = cd[:, 0], cd[:, 1], 1.0
+    return Tdi @ Hn @ Ts, inl, settled, rms
+
+
+def _solve_normal(S: np.ndarray) -> np.ndarray:
+    """The 8 DLT unknowns ``(a, b, c, d, e, f, g, h)`` of ``u = (a x + b y + c) / (g x + h y + 1)``,
+    ``v = (d x + e y + f) / (...)`` from the weighted sums ``S`` (n, 4, 6): rows ``w, w u, w v, w (u^2 + v^2)``,
+    columns the monomials ``1, x, y, x^2, xy, y^2``. NaN where the normal equations are singular."""
+    n = len(S)
+    s0, su, sv, sq = S[:, 0], S[:, 1], S[:, 2], S[:, 3]
+
+    def ppt(m):  # sum of w p p^T, p = (x, y, 1)
+        return np.stack([np.stack([m[:, 3], m[:, 4], m[:, 1]], -1), np.stack([m[:, 4], m[:, 5], m[:, 2]], -1),
+                         np.stack([m[:, 1], m[:, 2], m[:, 0]], -1)], 1)
+
+    A = np.zeros((n, 8, 8))
+    P = ppt(s0)
+    A[:, 0:3, 0:3] = P
+    A[:, 3:6, 3:6] = P
+    A[:, 0:3, 6:8] = -ppt(su)[:, :, 0:2]
+    A[:, 3:6, 6:8] = -ppt(sv)[:, :, 0:2]
+    A[:, 6:8, 0:3] = np.transpose(A[:, 0:3, 6:8], (0, 2, 1))
+    A[:, 6:8, 3:6] = np.transpose(A[:, 3:6, 6:8], (0, 2, 1))
+    A[:, 6:8, 6:8] = ppt(sq)[:, 0:2, 0:2]
+    rhs = np.concatenate([su[:, [1, 2, 0]], sv[:, [1, 2, 0]], -sq[:, [1, 2]]], axis=1)
+    out = np.full((n, 8), np.nan)
+    ok = np.all(np.isfinite(A), axis=(1, 2)) & np.all(np.isfinite(rhs), axis=1)
+    try:
+        out[ok] = np.linalg.solve(A[ok], rhs[ok][..., None])[..., 0]
+    except np.linalg.LinAlgError:  # one singular system: solve them one by one
+        for i in np.flatnonzero(ok):
+            try:
+                out[i] = np.linalg.solve(A[i], rhs[i])
+            except np.linalg.LinAlgError:
+                pass
+    return out
 
 
 def reason_summary(reason: np.ndarray) -> str:

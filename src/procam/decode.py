@@ -68,10 +68,12 @@ class DecodeResult:
     valid_col, valid_row : bool
     reason_col, reason_row : uint8
         Codes of :data:`REASONS` (0 = decoded).
-    confidence : float32
-        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1].
+    confidence : float32 or None
+        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1] (None when
+        decoded with ``extras=False``).
     direct, global_ : float32 or None
-        The robust classifier's direct and global light estimates (DN at the input scale).
+        The robust classifier's direct and global light estimates (DN at the input scale; None for the simple
+        classifier or ``extras=False``).
     pattern_set : the decoded sequence's :class:`PatternSet`.
     dropped_col, dropped_row : uint8
         Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
@@ -159,7 +161,7 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
            shadow_threshold: float = 10.0, contrast_threshold: float = 3.0,
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
            full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 64,
-           threads: int | None = None) -> DecodeResult:
+           threads: int | None = None, extras: bool = True) -> DecodeResult:
     """Decode a Gray-code image stack.
 
     Parameters
@@ -190,6 +192,9 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     band, threads : int
         Rows processed at a time and worker threads (speed only; default 1 thread: on 2 cores a second
         thread gained nothing measurable, see benchmarks/decode.py).
+    extras : bool
+        Compute ``confidence``, ``direct`` and ``global_`` (else they are None: a quarter of the time when only
+        the projector coordinates are needed, as for the corners).
 
     Returns
     -------
@@ -210,14 +215,18 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     out = {
         "col": np.empty((H, W), np.float32), "row": np.empty((H, W), np.float32),
         "rcol": np.empty((H, W), np.uint8), "rrow": np.empty((H, W), np.uint8),
-        "conf": np.empty((H, W), np.float32),
+        "conf": np.empty((H, W), np.float32) if extras else None,
         "dcol": np.empty((H, W), np.uint8), "drow": np.empty((H, W), np.uint8),
-        "direct": np.empty((H, W), np.float32) if robust else None,
-        "global": np.empty((H, W), np.float32) if robust else None,
+        "direct": np.empty((H, W), np.float32) if robust and extras else None,
+        "global": np.empty((H, W), np.float32) if robust and extras else None,
     }
-    params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1, tshadow=shadow_threshold * scale,
-                  tcontrast=contrast_threshold * scale, tdirect=direct_threshold * scale, b=float(black_fraction),
-                  wide=np.int16 if stack.dtype == np.uint8 else np.int32, max_dropped=int(max_dropped_bits))
+    wide = np.int16 if stack.dtype == np.uint8 else np.int32
+    params = dict(ps=ps, robust=robust, hf=_hf_pairs(ps), hf_bit=_hf_bits(ps)[0] + 1,
+                  tshadow=_int_threshold(shadow_threshold * scale, wide),
+                  tcontrast=contrast_threshold * scale, tcontrast_int=_int_threshold(contrast_threshold * scale,
+                                                                                    stack.dtype),
+                  tdirect=direct_threshold * scale, b=float(black_fraction), wide=wide,
+                  max_dropped=int(max_dropped_bits))
     bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
     if threads is None:
         threads = 1
@@ -233,7 +242,18 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
                         out["direct"], out["global"], ps, out["dcol"], out["drow"], codes_col, codes_row)
 
 
-def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tdirect, b, wide, max_dropped):
+def _int_threshold(t: float, dtype):
+    """``t`` as a scalar of the integer ``dtype`` that compares the same with its values (``x >= ceil(t)`` is
+    ``x >= t`` for integers): comparing an integer array with a float makes a float64 copy of it."""
+    import math
+
+    info = np.iinfo(dtype)
+    ti = math.ceil(t)
+    return np.dtype(dtype).type(ti) if info.min <= ti <= info.max else t
+
+
+def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, tcontrast_int, tdirect, b, wide,
+                 max_dropped):
     """Decode rows ``sl`` of ``stack`` into the arrays of ``out`` (see :func:`decode`); returns the band's
     histograms of decoded codes (column, row) in projector pixels, out-of-range codes included."""
     import cv2
@@ -265,8 +285,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             neg = lg <= 0
             ld[neg] = lp[neg]
             lg[neg] = 0.0
-        out["direct"][sl] = ld
-        out["global"][sl] = lg
+        if out["direct"] is not None:
+            out["direct"][sl] = ld
+            out["global"][sl] = lg
         weak = ld < tdirect
         # pixels where direct light does not dominate: Moreno's rule decides their low-frequency bits
         hard = np.flatnonzero(~(ld > lg) & ~weak & ~shadow)
@@ -294,8 +315,9 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             q = blk[i]
             bit = p > q
             ad = cv2.absdiff(p, q)
-            amin = ad if amin is None else np.minimum(amin, ad, out=amin)
-            np.greater_equal(ad, tcontrast, out=certain)
+            if out["conf"] is not None:
+                amin = ad if amin is None else np.minimum(amin, ad, out=amin)
+            np.greater_equal(ad, tcontrast_int, out=certain)
             if robust and hard.size and bitno >= hf_bit:
                 ph, qh = p.ravel()[hard] - bl_h, q.ravel()[hard] - bl_h
                 # Moreno's rule, with a noise margin (at its boundary, all global light on one side, it has none)
@@ -316,13 +338,15 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
             prev ^= bit  # Gray -> binary: b_i = b_(i+1) xor g_i
             code <<= 1
             code |= prev
-        minabs = amin if minabs is None else np.minimum(minabs, amin)
+        if amin is not None:
+            minabs = amin if minabs is None else np.minimum(minabs, amin)
         # Keep the leading certain bits: the code is then known to a block of 2^dropped codes (a Gray-code
         # prefix fixes the binary prefix); the value is the centre of the block's projector pixels.
-        dropped = (nbits - used.astype(np.int32))
+        dropped = np.uint8(nbits) - used
+        d32 = dropped.astype(np.int32)
         code = code.astype(np.int32)
-        lo = (code >> dropped) << dropped
-        hi = lo + (1 << dropped) - 1
+        lo = (code >> d32) << d32
+        hi = lo + (1 << d32) - 1
         lo -= offset
         hi -= offset
         r = np.zeros(span.shape, np.uint8)
@@ -341,9 +365,10 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         val = (px_lo + px_hi).astype(np.float32) * np.float32(0.5)
         val[r != OK] = np.nan
         out[key][sl] = val
-        out[dkey][sl] = np.where(r == OK, dropped, 0).astype(np.uint8)
-    spanf = span.astype(np.float32)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
-    out["conf"][sl] = np.clip(conf, 0.0, 1.0)
+        out[dkey][sl] = np.where(r == OK, dropped, np.uint8(0))
+    if out["conf"] is not None:
+        spanf = span.astype(np.float32)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            conf = np.where(span > 0, minabs / np.maximum(spanf, 1.0), 0.0)
+        out["conf"][sl] = np.clip(conf, 0.0, 1.0)
     return hists

@@ -7,6 +7,8 @@ The glue the CLI, the benchmarks and the experiment share; each stage lives in i
 
 from __future__ import annotations
 
+import contextlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -101,7 +103,7 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
 
 def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *, name: str = "pose",
                     options: PoseOptions = PoseOptions(), cam_pts: np.ndarray | None = None, warnings=(),
-                    files=None):
+                    files=None, keep_maps: bool = True):
     """Decode a stack and build the pose's View.
 
     Parameters
@@ -111,20 +113,27 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     cam_pts : optional (N, 2) camera corners to use instead of detecting them.
     warnings : notes about the capture, kept in ``view.diagnostics["warnings"]``.
     files : the stack's file names, to name frames in messages (optional).
+    keep_maps : return the decoded maps; False returns None instead and skips what only the maps' users need
+        (the confidence, direct and global light: :func:`procam.decode.decode`'s ``extras``).
 
     Returns
     -------
-    (View, DecodeResult).  Raises :class:`BoardNotFoundError`, :class:`CorrespondenceError`, or
+    (View, DecodeResult or None).  Raises :class:`BoardNotFoundError`, :class:`CorrespondenceError`, or
     :class:`~procam.errors.CaptureError` when the decoded capture is not a plausible picture of the projector
     (:mod:`procam.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
     """
     board = as_board(board)
     d = options.decode
-    maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
-                          contrast_threshold=d.contrast_threshold)
-    if cam_pts is None:
-        cam_pts = find_board(stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
-                             options.refine)
+    # the corners are found in a second thread while the stack is decoded (both mostly release the GIL): on two
+    # cores a pose takes the longer of the two instead of their sum
+    with ThreadPoolExecutor(1) as ex:
+        corners = None if cam_pts is not None else ex.submit(
+            find_board, stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
+            options.refine)
+        maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
+                              contrast_threshold=d.contrast_threshold, extras=keep_maps)
+        if corners is not None:
+            cam_pts = corners.result()
     proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
     warnings = list(warnings) + _plausible.check_projector_size(maps, name, files)
     _plausible.check_swapped_bits(maps, name, files)
@@ -144,35 +153,45 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
             f"{name}: only {n_ok} of {board.n_corners} corners have projector coordinates (need "
             f"{options.min_corners}); failed: {_corr.reason_summary(diag['reason'])} — check that the projector "
             "lights the whole board and that the decode picture (procam decode --png) shows it decoded")
-    return view, maps
+    return view, (maps if keep_maps else None)
 
 
 def view_from_folder(folder, board: Board, projector=None, order=None, *, options: PoseOptions = PoseOptions(),
-                     step=None):
-    """Load, validate and process one pose folder; returns (View, DecodeResult).
+                     step=None, reader=None, keep_maps: bool = True):
+    """Load, validate and process one pose folder; returns (View, DecodeResult or None: ``keep_maps`` as in
+    :func:`view_from_stack`).
 
     ``projector`` (width, height), ``order`` and ``step`` default to the folder's ``patterns.json``
-    (:func:`procam.capture.load_capture`). The capture's exposure warnings are in
-    ``view.diagnostics["warnings"]``.
+    (:func:`procam.capture.load_capture`, which also takes the ``reader``). The capture's exposure warnings are
+    in ``view.diagnostics["warnings"]``.
     """
     board = as_board(board)
-    cap = _capture.load_capture(folder, projector, order, step=step)
+    cap = _capture.load_capture(folder, projector, order, step=step, reader=reader)
     return view_from_stack(cap.stack, cap.pattern_set, board, name=str(Path(folder)), options=options,
-                           warnings=cap.warnings, files=cap.files)
+                           warnings=cap.warnings, files=cap.files, keep_maps=keep_maps)
 
 
 def views_from_folders(folders: Sequence, board: Board, projector=None, order=None, *,
                        options: PoseOptions = PoseOptions(), step=None,
-                       progress: Callable[[int, int, str], None] | None = None) -> list[View]:
+                       progress: Callable[[int, int, str], None] | None = None, prefetcher=None) -> list[View]:
     """One View per pose folder (:func:`view_from_folder`), in order; ``progress(done, total, folder)``
-    after each."""
+    after each.
+
+    The next pose's images are read in background threads while this one is processed: by ``prefetcher``
+    (a :class:`procam.stream.Prefetcher` of ``folders`` the caller started, and closes), else by one made here.
+    Only the Views are kept.
+    """
+    from .stream import Prefetcher
+
     board = as_board(board)
     views = []
-    for k, folder in enumerate(folders):
-        view, _ = view_from_folder(folder, board, projector, order, options=options, step=step)
-        views.append(view)
-        if progress is not None:
-            progress(k + 1, len(folders), str(folder))
+    with (Prefetcher(folders) if prefetcher is None else contextlib.nullcontext(prefetcher)) as pf:
+        for k, folder in enumerate(folders):
+            view, _ = view_from_folder(folder, board, projector, order, options=options, step=step, reader=pf.read,
+                                       keep_maps=False)
+            views.append(view)
+            if progress is not None:
+                progress(k + 1, len(folders), str(folder))
     return views
 
 

@@ -307,12 +307,24 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
     full = calibration if calibration is not None else multi_pose.calibrate(views, **multi_pose_options)
     in_raws = [_pose_raw(full, v, n, min_corners) for v, n in zip(views, names)]
     out_raws, failures, refits = [], [], []
-    for i, (v, n) in enumerate(zip(views, names)):
-        train = views[:i] + views[i + 1:]
+
+    def refit(i):
         try:
-            with warnings.catch_warnings():  # a refit's warnings are the full calibration's, minus a pose
-                warnings.simplefilter("ignore", ProcamWarning)
-                calib_i = multi_pose.calibrate(train, **multi_pose_options)
+            return multi_pose.calibrate(views[:i] + views[i + 1:], **multi_pose_options)
+        except ProcamError as e:
+            return e
+
+    # the refits are independent and mostly OpenCV (which releases the GIL): two at a time
+    from concurrent.futures import ThreadPoolExecutor
+
+    with warnings.catch_warnings():  # a refit's warnings are the full calibration's, minus a pose
+        warnings.simplefilter("ignore", ProcamWarning)
+        with ThreadPoolExecutor(2) as ex:
+            results = list(ex.map(refit, range(len(views))))
+    for v, n, calib_i in zip(views, names, results):
+        try:
+            if isinstance(calib_i, ProcamError):
+                raise calib_i
             refits.append(calib_i)
             out_raws.append(_pose_raw(calib_i, v, n, min_corners))
         except ProcamError as e:

@@ -208,7 +208,7 @@ def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 
     if not 6 <= window <= 1000:
         fail(f"--window must be from 6 to 1000 camera px, got {window}")
     dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
-    corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "ransac")
+    corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "trimmed")
     return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
                                 refine=value(refine) or "fit", corners=corners, min_corners=min_corners,
                                 background=background)

@@ -59,6 +59,14 @@ def spread_table(calib, refits) -> Table:
     return t
 
 
+def _import_solvers():
+    """Import what the corner fit and the calibration use (scipy.special, scipy.optimize, the verification)."""
+    import scipy.optimize  # noqa: F401
+    import scipy.special  # noqa: F401
+
+    from .. import verify  # noqa: F401
+
+
 def print_summary(calib):
     console.print(summary_table(calib))
     pt = pose_table(calib)
@@ -109,7 +117,7 @@ def calibrate_cmd(
     refine: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     import contextlib
@@ -154,9 +162,13 @@ def calibrate_cmd(
         if method == "multi" and camera_file is not None:
             fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
         distinct_poses(poses)
-        with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
+        from ..stream import Prefetcher
+
+        with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext(), \
+                Prefetcher(poses) as pf:
+            _import_solvers()  # while the first pose is read (0.3 s CPU that otherwise waits for the last pose)
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
-                                                step=step)
+                                                step=step, prefetcher=pf)
         for v in views:
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
             for w in v.diagnostics.get("warnings", []):

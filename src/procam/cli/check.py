@@ -42,7 +42,7 @@ def check_cmd(
     refine: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Is this pose good for single-pose calibration? Checks the capture, decodes it, finds the corners,
     calibrates it from this one pose and says: good, weak, degenerate or failed, and why (exit code 3 for

@@ -29,7 +29,7 @@ def correspond_cmd(
     refine: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Camera corners (white frame) and their projector coordinates by local homographies."""
     import dataclasses

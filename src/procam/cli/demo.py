@@ -44,7 +44,10 @@ def demo_cmd(
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
     number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
     output_dir(out_dir, "OUT_DIR", "demo", force)
-    scene = simulate.with_board_pose(simulate.preset(preset), simulate.RECOMMENDED_POSE)
+    # 2x2 supersamples instead of the preset's 3x3: half the rendering time, the same errors against the truth
+    # (seeds 0-2, 'ideal': corner RMS camera 0.0092-0.0097 px vs 0.0090-0.0096, projector 0.024-0.026 vs
+    # 0.023-0.025; the parameters' errors differ by less than from seed to seed)
+    scene = simulate.with_board_pose(simulate.preset(preset), simulate.RECOMMENDED_POSE).replace(supersample=2)
     cap_dir = out_dir / "capture"
     t0 = time.perf_counter()
     with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),

@@ -56,7 +56,7 @@ def evaluate_cmd(
     refine: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """Per pose: camera/projector RMS (PnP, intrinsics fixed), stereo RMS, the procam extrinsics from
     per-pose PnP; overall: the spread σ_T and σ_|T| of those extrinsics, the board angles in both device frames."""

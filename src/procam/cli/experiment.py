@@ -11,8 +11,8 @@ from rich.table import Table
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
                    ForceOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, console, distinct_poses, err_console, fail, optional_size, output_dir, parse_board,
-                   plain, pose_options, say, user_errors, value)
+                   WindowOpt, app, console, distinct_poses, err_console, fail, is_tty, optional_size, output_dir,
+                   parse_board, plain, pose_options, say, user_errors, value)
 
 #: Most pose sets the experiment calibrates (every subset of at least --min-set poses).
 MAX_SETS = 2000
@@ -35,6 +35,31 @@ def summary_tables(result) -> list[Table]:
                   fmt_number(r["f_p"], 1), fmt_number(r["abs_df_p"], 1), fmt_number(abs(r["nu_p_ref"]), 1),
                   fmt_number(r["proj_err"], 2), fmt_number(e["sigma_T"], 2), r.get("verdict", ""))
     return [t, s]
+
+
+class _LineProgress:
+    """Progress for a pipe or a log (stderr not a terminal): one plain line per finished step, on stderr, with the
+    two methods of :class:`rich.progress.Progress` the experiment uses."""
+
+    def __init__(self):
+        self._tasks = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def add_task(self, description, total=None, label=""):
+        self._tasks.append([description, total])
+        return len(self._tasks) - 1
+
+    def update(self, task, completed, total=None, label=""):
+        desc = self._tasks[task]
+        if total is not None:
+            desc[1] = total
+        err_console.print(f"{desc[0]} {completed}/{desc[1]}" + (f": {label}" if label else ""), markup=False,
+                          highlight=False)
 
 
 @app.command("experiment")
@@ -62,7 +87,7 @@ def experiment_cmd(
     refine_window: RefineOpt = None,
     refiner: RefinerOpt = Refiner.fit,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
     force: ForceOpt = False,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
@@ -95,8 +120,10 @@ def experiment_cmd(
         from ._app import output_path
 
         output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("{task.fields[label]}", markup=False), console=err_console, transient=True) as bar:
+    bar = (Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    TextColumn("{task.fields[label]}", markup=False), console=err_console, transient=True)
+           if is_tty() else _LineProgress())
+    with bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")
         views = pipeline.views_from_folders(
             poses, brd, size, value(order), options=opts, step=step,

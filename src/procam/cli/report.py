@@ -60,7 +60,7 @@ def report_cmd(
     detector: DetectorOpt = Detector.auto,
     refine: RefineOpt = 11,
     window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.ransac,
+    estimator: EstimatorOpt = Estimator.trimmed,
 ):
     """One HTML page a person reads top to bottom: the verdict, the parameters with their uncertainty and
     assumptions, coverage, residuals, the metric verification, the rig in 3-D and (multi-pose) leave-one-out."""

@@ -36,6 +36,12 @@ __all__ = ["Renderer", "render", "true_projector_maps", "write_capture"]
 # rendering: geometry once per scene
 # --------------------------------------------------------------------------------------------
 
+#: Rows of the supersampled grid per band of the geometry pass. A band's float64 temporaries are then over 4 MB,
+#: which NumPy asks the kernel to back with huge pages: bands of 16-64 rows page-faulted 4 times as often (up to
+#: 2 s of system time for a 1280x800 camera at 3x3 supersamples, measured in a fresh process). Nothing else
+#: depends on the band size.
+GEOMETRY_BAND = 288
+
 #: Samples per projector pixel of the 1-D stripe profiles looked up by ``cv2.remap``.
 PROFILE_UPSAMPLE = 8
 
@@ -174,20 +180,37 @@ def _sample_grid(n_pix: int, s: int) -> np.ndarray:
     return (np.arange(n_pix * s) + 0.5) / s - 0.5
 
 
-def _geometry(scene: Scene, s: int | None = None, band_rows: int = 240):
-    """Geometry on the supersampled grid (H*s, W*s), computed in row bands to bound memory."""
-    s = scene.supersample if s is None else int(s)
+def _geometry_bands(scene: Scene, s: int, work: Callable, band_rows: int = 288) -> None:
+    """Call ``work(r0, r1, g)`` for each band ``r0:r1`` of rows of the supersampled grid (H*s, W*s), ``g`` the
+    band's :func:`_geometry_band` (float64); ``band_rows`` see :data:`GEOMETRY_BAND`."""
     W, H = scene.cam_size
     xs, ys = _sample_grid(W, s), _sample_grid(H, s)
-    out = {k: np.empty((len(ys), len(xs)), dtype=np.float32) for k in ("xp", "yp", "coef", "amb")}
-    out.update({k: np.empty((len(ys), len(xs)), dtype=bool) for k in ("board", "lit")})
-    for r0 in range(0, len(ys), band_rows):
+
+    def band(r0):
         r1 = min(len(ys), r0 + band_rows)
         # one extra row on each side so footprint gradients are central everywhere
         e0, e1 = max(0, r0 - 1), min(len(ys), r1 + 1)
         g = _geometry_band(scene, ys[e0:e1], xs)
+        work(r0, r1, {k: v[r0 - e0: r0 - e0 + (r1 - r0)] for k, v in g.items()})
+
+    for r0 in range(0, len(ys), band_rows):
+        band(r0)
+
+
+def _geometry(scene: Scene, s: int | None = None, band_rows: int = GEOMETRY_BAND):
+    """Geometry on the supersampled grid (H*s, W*s): :func:`_geometry_band` in row bands, stored as float32
+    (``xp``, ``yp``, ``coef``, ``amb``) and bool (``board``, ``lit``)."""
+    s = scene.supersample if s is None else int(s)
+    W, H = scene.cam_size
+    shape = (H * s, W * s)
+    out = {k: np.empty(shape, dtype=np.float32) for k in ("xp", "yp", "coef", "amb")}
+    out.update({k: np.empty(shape, dtype=bool) for k in ("board", "lit")})
+
+    def work(r0, r1, g):
         for k, v in g.items():
-            out[k][r0:r1] = v[r0 - e0: r0 - e0 + (r1 - r0)]
+            out[k][r0:r1] = v
+
+    _geometry_bands(scene, s, work, band_rows)
     return out
 
 
@@ -271,19 +294,32 @@ class Renderer:
         self.pattern_set = _patterns.pattern_set(*scene.proj_size, order)
         Wp, Hp = scene.proj_size
         self.pad = int(np.ceil(4 * max(scene.proj_defocus, 0.25) * PROFILE_UPSAMPLE)) + PROFILE_UPSAMPLE
-        g = _geometry(scene, scene.supersample)
-        # float32 maps (faster than fixed-point ones for a one-row source image)
-        self.mapx = _to_profile_map(g["xp"], self.pad)
-        self.mapy = _to_profile_map(g["yp"], self.pad)
-        self.zeros = np.zeros_like(self.mapx)
+        s = scene.supersample
+        W, H = scene.cam_size
+        shape = (H * s, W * s)
         self.sigma = scene.proj_defocus
-        mask_x = self._lookup(_profile(np.ones(Wp), self.sigma, self.pad), "x")
-        mask_y = self._lookup(_profile(np.ones(Hp), self.sigma, self.pad), "y")
-        coef = g["coef"]
-        self.coef_cols = coef * mask_y          # column patterns vary with x only
-        self.coef_rows = coef * mask_x          # row patterns vary with y only
-        self.full = coef * mask_x * mask_y      # a white panel
-        self.amb = g["amb"]
+        # float32 maps (faster than fixed-point ones for a one-row source image); the y map of the one-row profile
+        # is all zeros: one band of it serves every band
+        self.mapx, self.mapy, self.coef_cols, self.coef_rows, self.full, self.amb = (
+            np.empty(shape, np.float32) for _ in range(6))
+        self._zeros = np.zeros((max(self.BAND * s, GEOMETRY_BAND), W * s), np.float32)
+        ones_x = _profile(np.ones(Wp), self.sigma, self.pad)
+        ones_y = _profile(np.ones(Hp), self.sigma, self.pad)
+
+        def work(r0, r1, g):  # the geometry of rows r0:r1, as stored by _geometry, into the lookup tables
+            b = slice(r0, r1)
+            self.mapx[b] = _to_profile_map(g["xp"].astype(np.float32), self.pad)
+            self.mapy[b] = _to_profile_map(g["yp"].astype(np.float32), self.pad)
+            mask_x = self._lookup(ones_x, "x", b)
+            mask_y = self._lookup(ones_y, "y", b)
+            coef = g["coef"].astype(np.float32)
+            self.coef_cols[b] = coef * mask_y          # column patterns vary with x only
+            self.coef_rows[b] = coef * mask_x          # row patterns vary with y only
+            self.full[b] = coef * mask_x * mask_y      # a white panel
+            self.amb[b] = g["amb"]
+
+        # band by band: no full-size intermediates (the float64 maps, the masks, the products)
+        _geometry_bands(scene, s, work, GEOMETRY_BAND)
         self.col_planes = _patterns.bit_planes(Wp, self.pattern_set.col_bits, self.pattern_set.col_offset)
         self.row_planes = _patterns.bit_planes(Hp, self.pattern_set.row_bits, self.pattern_set.row_offset)
         self.index = {}
@@ -292,9 +328,13 @@ class Renderer:
         for j, (a, b) in enumerate(self.pattern_set.pair_indices("row")):
             self.index[int(a)], self.index[int(b)] = ("row", j, False), ("row", j, True)
 
-    def _lookup(self, profile, axis):
-        m = self.mapx if axis == "x" else self.mapy
-        return cv2.remap(profile, m, self.zeros, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    #: camera rows per band of :meth:`linear` (its buffer is then over 4 MB: huge pages, few page faults)
+    BAND = 96
+
+    def _lookup(self, profile, axis, rows: slice, out=None):
+        m = (self.mapx if axis == "x" else self.mapy)[rows]
+        return cv2.remap(profile, m, self._zeros[:m.shape[0]], cv2.INTER_LINEAR, dst=out,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
     def frame(self, k: int, rng: np.random.Generator) -> np.ndarray:
         """Image ``k`` of the sequence as the camera records it.
@@ -317,23 +357,35 @@ class Renderer:
             raise IndexError(f"frame {k} is outside the sequence of {self.pattern_set.count} images")
         sc = self.scene
         black = sc.proj_black
-        if k == self.pattern_set.white:
-            hi = self.full + self.amb
-        elif k == self.pattern_set.black:
-            hi = black * self.full + self.amb
-        else:
+        prof = axis = None
+        if k not in (self.pattern_set.white, self.pattern_set.black):
             axis, j, inv = self.index[k]
             plane = self.col_planes[j] if axis == "col" else self.row_planes[j]
             if inv:
                 plane = ~plane
-            light = black + (1.0 - black) * plane
-            prof = _profile(light, self.sigma, self.pad)
-            if axis == "col":
-                hi = self._lookup(prof, "x") * self.coef_cols + self.amb
-            else:
-                hi = self._lookup(prof, "y") * self.coef_rows + self.amb
+            prof = _profile(black + (1.0 - black) * plane, self.sigma, self.pad)
         W, H = sc.cam_size
-        return cv2.resize(hi, (W, H), interpolation=cv2.INTER_AREA)
+        s = self.mapx.shape[0] // H  # supersamples per pixel and axis
+        out = np.empty((H, W), np.float32)
+        buf = np.empty((self.BAND * s, W * s), np.float32)
+        # in bands of camera rows, in one buffer: no supersampled temporaries of the whole image (37 MB each for a
+        # 1280x800 camera at 3x3); every step is per pixel (the area average per block of s x s samples), so the
+        # bands and the in-place operations give the same numbers as whole-image ones
+        for y0 in range(0, H, self.BAND):
+            y1 = min(H, y0 + self.BAND)
+            b = slice(y0 * s, y1 * s)
+            hi = buf[:(y1 - y0) * s]
+            if k == self.pattern_set.white:
+                np.add(self.full[b], self.amb[b], out=hi)
+            elif k == self.pattern_set.black:
+                np.multiply(self.full[b], black, out=hi)
+                hi += self.amb[b]
+            else:
+                self._lookup(prof, "x" if axis == "col" else "y", b, out=hi)
+                hi *= self.coef_cols[b] if axis == "col" else self.coef_rows[b]
+                hi += self.amb[b]
+            cv2.resize(hi, (W, y1 - y0), dst=out[y0:y1], interpolation=cv2.INTER_AREA)
+        return out
 
     def finish(self, lin: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Optics, noise, gamma and quantisation of a linear image."""

@@ -1,0 +1,410 @@
+"""Benchmark: a five-pose ``procam calibrate`` against the time it takes to read its PNGs (issue 12).
+
+Renders (once, into ``--data``) five poses of a 1280x1024 camera and a 1024x768 projector with procam's
+simulator (42 PNGs each, OpenCV order, ``truth.json`` next to them), then, in one run and alternating the
+commands round by round (the machine may be shared, so every command sees the same load):
+
+1. ``procam calibrate pose1 .. pose5`` as a cold process (interpreter start and imports included);
+2. a cold process that only reads the 210 PNGs with two threads (``cv2.imread`` grey, the function
+   :func:`read_all` below) -- the floor any tool that reads PNGs must pay;
+3. ``procam --help`` as a cold process (start-up);
+4. with ``--kamino410 PATH --kamino410-python PY``: kamino410's ``calibrate.py`` (procam-calibration) on the
+   same files (linked into its ``capture_*/graycode_*`` layout), run by its own Python (OpenCV contrib).
+
+procam's source is byte-compiled first (as an installed package is).
+
+Each command's wall time, CPU time (user + sys) and peak memory (max RSS) come from ``os.wait4``; the
+tables print medians (and minima) over ``--repeat`` rounds and the ratios.  Then a per-stage profile of
+``procam calibrate`` (in a fresh process: stage functions wrapped with timers, ``--stages`` runs), and the
+accuracy of the result (parameters and corners against the simulator's truth; kamino410's too when run).
+
+    OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/pipeline.py [--data DIR] [--repeat 7] [--stages 3]
+        [--kamino410 PATH/calibrate.py --kamino410-python PATH/python]
+
+Stage times are wall seconds summed over calls; stages that run in a background thread (reading the next
+pose while this one is processed) overlap the others, so their sum can exceed the run's wall time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+SRC = HERE.parent / "src"
+BOARD = ("10x6", "24")
+N_POSES = 5
+#: (psi, nu, phi) board -> camera in degrees, board-centre depth (mm), noise seed
+POSES = [((20, 5, 0), 525, 101), ((-22, 10, 3), 500, 102), ((5, 20, -5), 500, 103), ((15, -22, 8), 500, 104),
+         ((-12, -30, -6), 500, 105)]
+
+
+# --------------------------------------------------------------------------------------------
+# data
+# --------------------------------------------------------------------------------------------
+
+def base_scene():
+    """The rig: 1280x1024 camera with Brown distortion, 1024x768 lens-shifted projector, 10x6 board of 24 mm."""
+    import numpy as np
+
+    from procam import simulate as S
+
+    K_cam = np.array([[1850.0, 0, 642.0], [0, 1850.0 * 1.001, 508.0], [0, 0, 1]])
+    K_proj = np.array([[1350.0, 0, 515.0], [0, 1350.0 * 1.002, 740.0], [0, 0, 1]])
+    R = S.euler_matrix((9.0, 15.0, -0.5))
+    T = -R @ np.array([165.0, 45.0, 10.0])  # projector centre (165, 45, 10) mm in the camera frame
+    return S.Scene(cam_size=(1280, 1024), K_cam=K_cam, cam_distortion="opencv",
+                   cam_dist_coeffs=(-0.09, 0.14, 0.0004, -0.0003, 0.0), proj_size=(1024, 768), K_proj=K_proj,
+                   R=R, T=T, board_cols=10, board_rows=6, square=24.0, name="bench-5pose")
+
+
+def pose_dirs(data: Path) -> list[Path]:
+    return [data / f"pose{i}" for i in range(1, N_POSES + 1)]
+
+
+def ensure_data(data: Path) -> None:
+    """Render the five poses into ``data`` unless they are there already (checked by file count + truth)."""
+    todo = [(i, p) for i, p in enumerate(pose_dirs(data)) if not ((p / "truth.json").is_file()
+                                                                 and len(list(p.glob("[0-9][0-9].png"))) == 42)]
+    if not todo:
+        return
+    from procam import simulate as S
+
+    base = base_scene()
+    for i, folder in todo:
+        ang, dist, seed = POSES[i]
+        t0 = time.perf_counter()
+        sc = S.with_board_pose(base.replace(name=f"bench-pose{i + 1}"), ang, distance=dist)
+        stack, truth = S.render(sc, seed=seed)
+        S.write_capture(folder, stack, truth)
+        print(f"rendered {folder} in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+
+
+def png_files(data: Path) -> list[Path]:
+    return [f for p in pose_dirs(data) for f in sorted(p.glob("[0-9][0-9].png"))]
+
+
+def kamino_layout(data: Path) -> Path:
+    """``data/kamino410/capture_N/graycode_MM.png`` links to the poses' PNGs (the script's layout)."""
+    root = data / "kamino410"
+    for n, folder in enumerate(pose_dirs(data), start=1):
+        d = root / f"capture_{n}"
+        d.mkdir(parents=True, exist_ok=True)
+        for f in sorted(folder.glob("[0-9][0-9].png")):
+            link = d / f"graycode_{f.stem}.png"
+            if not link.exists():
+                link.symlink_to(f.resolve())
+    return root
+
+
+# --------------------------------------------------------------------------------------------
+# the reader (the floor) and the cold processes
+# --------------------------------------------------------------------------------------------
+
+def read_all(files, threads: int = 2):
+    """Read ``files`` as grey images with ``threads`` threads (cv2.imread); returns the list of arrays."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import cv2
+
+    with ThreadPoolExecutor(threads) as ex:
+        return list(ex.map(lambda f: cv2.imread(str(f), cv2.IMREAD_GRAYSCALE), files))
+
+
+def _env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(SRC)] + [p for p in [env.get("PYTHONPATH")] if p])
+    return env
+
+
+def commands(args, data: Path, out: Path) -> dict:
+    """name -> (argv, cwd)."""
+    cmds = {
+        "procam": ([sys.executable, "-c", "from procam.cli import main; main()", "calibrate",
+                    *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)], None),
+        "read": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "--data", str(data)], None),
+        "help": ([sys.executable, "-c", "from procam.cli import main; main()", "--help"], None),
+    }
+    if args.kamino410:
+        root = kamino_layout(data)
+        cmds["kamino410"] = ([args.kamino410_python, str(Path(args.kamino410).resolve()), "768", "1024",
+                              BOARD[0].split("x")[0], BOARD[0].split("x")[1], BOARD[1], "1"], root)
+    return cmds
+
+
+def run_cold(argv, cwd=None) -> dict:
+    """Run ``argv``; wall s, CPU s (user + sys of the process and its children) and max RSS (MB)."""
+    import subprocess
+
+    t0 = time.perf_counter()
+    p = subprocess.Popen(argv, cwd=cwd, env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, ru = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - t0
+    p.returncode = os.waitstatus_to_exitcode(status)
+    err = p.stderr.read().decode(errors="replace")
+    p.stderr.close()
+    if p.returncode != 0:
+        raise SystemExit(f"{' '.join(argv[:4])} ... failed ({p.returncode}):\n{err[-2000:]}")
+    return {"wall": wall, "cpu": ru.ru_utime + ru.ru_stime, "rss": ru.ru_maxrss / 1024}
+
+
+# --------------------------------------------------------------------------------------------
+# per-stage profile (run in a fresh process: --profile)
+# --------------------------------------------------------------------------------------------
+
+#: (stage, module, function) -- functions that do not exist in the profiled version are skipped
+STAGES = [
+    ("read PNGs (all reader threads)", "procam._files", "read_image"),
+    ("waiting for the images", "procam._files", "read_images"),
+    ("waiting for the images", "procam.stream", "Prefetcher.read"),
+    ("capture checks", "procam.capture", "_sample"),
+    ("capture checks", "procam.capture", "check_light"),
+    ("capture checks", "procam.capture", "check_white_black"),
+    ("capture checks", "procam.capture", "check_pairs"),
+    ("capture checks", "procam.capture", "exposure_warnings"),
+    ("decode", "procam.decode", "decode"),
+    ("board corners", "procam.pipeline", "find_board"),
+    ("local homographies", "procam.correspond", "projector_corners"),
+    ("plausibility checks", "procam.plausibility", "check_projector_size"),
+    ("plausibility checks", "procam.plausibility", "check_swapped_bits"),
+    ("plausibility checks", "procam.plausibility", "check_orientation"),
+    ("calibration (multi_pose)", "procam.multi_pose", "calibrate"),
+    ("verification (leave-one-out)", "procam.verify", "check_calibration"),
+    ("summary + JSON", "procam.cli.calibrate", "print_summary"),
+    ("summary + JSON", "procam.io", "save_calibration"),
+    ("summary + JSON", "procam.cli.report", "print_check"),
+    ("summary + JSON", "procam.cli.calibrate", "spread_table"),
+    ("imports during the run (solvers)", "procam.cli.calibrate", "_import_solvers"),
+]
+
+
+def profile_once(data: Path, out: Path) -> dict:
+    """Import procam's CLI, wrap the stage functions with timers, run ``calibrate``; stage -> seconds."""
+    import importlib
+    import io as _io
+    import threading
+    from contextlib import redirect_stdout
+
+    t0, c0 = time.perf_counter(), time.thread_time()
+    from procam.cli import main
+    lock = threading.Lock()
+    timers: dict = {}
+
+    def wrap(stage, f):
+        def timed(*a, **k):
+            t, c = time.perf_counter(), time.thread_time()
+            try:
+                return f(*a, **k)
+            finally:
+                with lock:
+                    w0, c0 = timers.get(stage, (0.0, 0.0))
+                    timers[stage] = (w0 + time.perf_counter() - t, c0 + time.thread_time() - c)
+        return timed
+
+    for stage, mod, attr in STAGES:
+        try:
+            owner = importlib.import_module(mod)
+            *path, name = attr.split(".")
+            for part in path:
+                owner = getattr(owner, part)
+            f = getattr(owner, name)
+        except (ImportError, AttributeError):
+            continue
+        setattr(owner, name, wrap(stage, f))
+    # the modules calibrate imports lazily are imported here, to wrap them
+    t_import = (time.perf_counter() - t0, time.thread_time() - c0)
+    argv = ["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)]
+    t2, c2 = time.perf_counter(), time.process_time()
+    with redirect_stdout(_io.StringIO()):
+        try:
+            main(argv)
+        except SystemExit as e:
+            if e.code not in (0, None):
+                raise
+    t_run = (time.perf_counter() - t2, time.process_time() - c2)
+    out = {"imports": t_import, **timers}
+    main_cpu = sum(c for k, (w, c) in timers.items() if not k.startswith("read PNGs"))
+    out["other (main thread)"] = (float("nan"), t_run[1] - timers.get("read PNGs (all reader threads)", (0, 0))[1]
+                                  - main_cpu)
+    out["run after imports (wall; CPU of all threads)"] = t_run
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# accuracy
+# --------------------------------------------------------------------------------------------
+
+def accuracy(data: Path, calib_json: Path, kamino_xml: Path | None) -> str:
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    truth = json.loads((pose_dirs(data)[0] / "truth.json").read_text())
+    t = {"Kc": np.array(truth["camera"]["K"]), "Kp": np.array(truth["projector"]["K"]),
+         "R": np.array(truth["extrinsics"]["R"]), "T": np.array(truth["extrinsics"]["T"])}
+    res = {}
+    p = json.loads(calib_json.read_text())
+    res["procam"] = {"Kc": np.array(p["camera"]["K"]), "Kp": np.array(p["projector"]["K"]), "R": np.array(p["R"]),
+                     "T": np.array(p["T"]), "rms": p.get("stereo_rms_px")}
+    if kamino_xml is not None and kamino_xml.is_file():
+        import cv2
+
+        fs = cv2.FileStorage(str(kamino_xml), cv2.FILE_STORAGE_READ)
+        rot = fs.getNode("rotation").mat()
+        if rot is None:
+            rot = fs.getNode("roration").mat()  # some versions of the script spell it so
+        res["kamino410"] = {"Kc": fs.getNode("cam_int").mat(), "Kp": fs.getNode("proj_int").mat(), "R": rot,
+                            "T": fs.getNode("translation").mat().ravel(), "rms": fs.getNode("rms").real()}
+        fs.release()
+
+    def params(d):
+        Kc, Kp = d["Kc"], d["Kp"]
+        return {"f_c": Kc[0, 0], "fy_c": Kc[1, 1], "u0_c": Kc[0, 2], "v0_c": Kc[1, 2], "f_p": Kp[0, 0],
+                "fy_p": Kp[1, 1], "u0_p": Kp[0, 2], "v0_p": Kp[1, 2]}
+
+    names = list(res)
+    lines = ["| parameter | truth | " + " | ".join(f"{n} | error" for n in names) + " |",
+             "| --- | --- | " + " | ".join("--- | ---" for _ in names) + " |"]
+    P0 = params(t)
+    for k, v0 in P0.items():
+        cells = [f"{params(res[n])[k]:.3f} | {params(res[n])[k] - v0:+.3f}" for n in names]
+        lines.append(f"| {k} | {v0:.3f} | " + " | ".join(cells) + " |")
+    for n in names:
+        dT = np.linalg.norm(res[n]["T"] - t["T"])
+        dR = np.degrees(Rotation.from_matrix(res[n]["R"] @ t["R"].T).magnitude())
+        lines.append(f"\n{n}: |T - T_true| {dT:.3f} mm, rotation error {dR:.4f} deg, stereo RMS {res[n]['rms']:.3f} px")
+    # corners of the procam result against the exact ones
+    ec, ep = [], []
+    for v in p.get("views", []):
+        tr = json.loads((Path(v["pose"]) / "truth.json").read_text()) if Path(v["pose"]).is_dir() else None
+        if tr is None:
+            continue
+        cam, proj = np.array(v["camera_points"], float), np.array(v["projector_points"], float)
+        ec.append(np.linalg.norm(cam - np.array(tr["corners"]["camera_distorted"]), axis=1))
+        ep.append(np.linalg.norm(proj - np.array(tr["corners"]["projector"]), axis=1))
+    if ec:
+        ec, ep = np.concatenate(ec), np.concatenate(ep)
+        ep = ep[np.isfinite(ep)]
+        lines.append(f"\nprocam corners against the truth ({ec.size} camera, {ep.size} projector): camera median "
+                     f"{np.median(ec):.4f} px, RMS {np.sqrt(np.mean(ec ** 2)):.4f}, max {ec.max():.4f}; projector "
+                     f"median {np.median(ep):.4f} px, RMS {np.sqrt(np.mean(ep ** 2)):.4f}, max {ep.max():.4f}")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# main
+# --------------------------------------------------------------------------------------------
+
+def _med(xs):
+    return statistics.median(xs) if xs else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=HERE / ".cache" / "pipeline",
+                    help="folder of the rendered poses (rendered there when missing, reused otherwise)")
+    ap.add_argument("--repeat", type=int, default=7, help="rounds of the cold-process comparison")
+    ap.add_argument("--stages", type=int, default=3, help="runs of the in-process per-stage profile (0: none)")
+    ap.add_argument("--kamino410", help="path of kamino410's calibrate.py (procam-calibration), to run it too")
+    ap.add_argument("--kamino410-python", default=None, help="the Python that runs it (with opencv-contrib)")
+    ap.add_argument("--read-only", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--profile", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    data = args.data.resolve()
+    sys.path.insert(0, str(SRC))  # this checkout's procam, as in the cold processes
+
+    if args.read_only:  # the cold reader process
+        t0 = time.perf_counter()
+        imgs = read_all(png_files(data))
+        assert len(imgs) == 42 * N_POSES and all(i is not None for i in imgs)
+        print(json.dumps({"read": time.perf_counter() - t0}))
+        return
+    if args.profile:  # one in-process per-stage run
+        print(json.dumps(profile_once(data, args.out)))
+        return
+    if args.kamino410 and not args.kamino410_python:
+        ap.error("--kamino410 needs --kamino410-python (a Python with opencv-contrib)")
+
+    sys.path.insert(0, str(HERE))
+    from _common import header
+
+    ensure_data(data)
+    import compileall
+    import tempfile
+
+    # an installed procam has its bytecode; a checkout run with PYTHONDONTWRITEBYTECODE=1 would compile every module
+    # in every cold process (0.07 s of procam --help)
+    compileall.compile_dir(str(SRC), quiet=1)
+
+    tmp = Path(tempfile.mkdtemp(prefix="procam-bench-"))
+    out = tmp / "calib.json"
+    cmds = commands(args, data, out)
+    names = list(cmds)
+    runs = {n: [] for n in names}
+    loads = []
+    for r in range(args.repeat):
+        order = names[r % len(names):] + names[:r % len(names)]  # rotate who goes first
+        for n in order:
+            argv, cwd = cmds[n]
+            runs[n].append(run_cold(argv, cwd))
+        loads.append(os.getloadavg()[0])
+
+    stage_runs = []
+    for _ in range(args.stages):
+        import subprocess
+
+        res = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--profile", "--data", str(data),
+                              "--out", str(tmp / "calib_profile.json")], env=_env(), capture_output=True,
+                             text=True, check=True)
+        stage_runs.append(json.loads(res.stdout.strip().splitlines()[-1]))
+
+    import procam
+
+    print(header(f"pipeline: procam calibrate of {N_POSES} poses (42 PNGs of 1280x1024 each, projector 1024x768)"))
+    print(f"procam from {Path(procam.__file__).parent}; data {data} "
+          f"({sum(f.stat().st_size for f in png_files(data)) / 1e6:.0f} MB of PNG); {args.repeat} rounds, "
+          f"commands alternating; 1-min load average during the rounds: median {_med(loads):.1f} "
+          f"(min {min(loads):.1f}, max {max(loads):.1f}); OPENBLAS_NUM_THREADS="
+          f"{os.environ.get('OPENBLAS_NUM_THREADS', '-')}\n")
+    print("| command | wall median (s) | wall min | CPU median (s) | peak memory (MB) |")
+    print("| --- | --- | --- | --- | --- |")
+    label = {"procam": "procam calibrate (cold process)", "read": "read the 210 PNGs, 2 threads (cold process)",
+             "kamino410": "kamino410 calibrate.py (cold process)", "help": "procam --help (cold process)"}
+    for n in names:
+        w = [x["wall"] for x in runs[n]]
+        print(f"| {label[n]} | {_med(w):.2f} | {min(w):.2f} | {_med([x['cpu'] for x in runs[n]]):.2f} | "
+              f"{max(x['rss'] for x in runs[n]):.0f} |")
+    print("\n| ratio | median of the per-round ratios | ratio of the medians | ratio of the minima |")
+    print("| --- | --- | --- | --- |")
+    pairs = [("procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else [])
+    for a, b in pairs:
+        wa, wb = [x["wall"] for x in runs[a]], [x["wall"] for x in runs[b]]
+        per_round = [x / y for x, y in zip(wa, wb)]
+        print(f"| {a} / {b}, wall | {_med(per_round):.2f} | {_med(wa) / _med(wb):.2f} | {min(wa) / min(wb):.2f} |")
+        ca, cb = [x["cpu"] for x in runs[a]], [x["cpu"] for x in runs[b]]
+        print(f"| {a} / {b}, CPU | {_med([x / y for x, y in zip(ca, cb)]):.2f} | {_med(ca) / _med(cb):.2f} | "
+              f"{min(ca) / min(cb):.2f} |")
+
+    if stage_runs:
+        keys = list(dict.fromkeys(k for s in stage_runs for k in s))
+        print(f"\nper stage (in-process, fresh interpreter per run; median of {len(stage_runs)} runs; seconds summed "
+              "over calls; CPU = the CPU time of the thread(s) running the stage; the images are read in reader "
+              "threads, and 'waiting for the images' is the main thread's wait for them):\n")
+        print("| stage | wall median | wall min | CPU median | CPU min |")
+        print("| --- | --- | --- | --- | --- |")
+        for k in keys:
+            w = [s.get(k, (0.0, 0.0))[0] for s in stage_runs]
+            c = [s.get(k, (0.0, 0.0))[1] for s in stage_runs]
+            print(f"| {k} | {_med(w):.3f} | {min(w):.3f} | {_med(c):.3f} | {min(c):.3f} |")
+
+    print("\naccuracy against the simulator's truth:\n")
+    print(accuracy(data, out, (cmds["kamino410"][1] / "calibration_result.xml") if "kamino410" in cmds else None))
+
+
+if __name__ == "__main__":
+    main()

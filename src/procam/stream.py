@@ -1,0 +1,141 @@
+"""Read pose folders ahead: the images of the next pose are read in background threads while this one is
+processed, so decoding, corner detection and the checks of a multi-pose run overlap the reading of the PNGs
+(which is most of a run's time).
+
+:class:`Prefetcher` reads the folders' images in order, at most ``ahead`` poses ahead of the one being
+processed (memory stays bounded: the pose in use plus ``ahead`` being read), and hands them over through
+:meth:`Prefetcher.read`, a drop-in for :func:`procam._files.read_images` that
+:func:`procam.capture.load_capture` takes as its ``reader``. Anything unusual (a file list other than the
+folder's, images of different sizes or bit depths, a file that cannot be read) is read again by
+:func:`procam._files.read_images` itself, so errors are the same, word for word.
+
+>>> from procam import stream, capture
+>>> with stream.Prefetcher(["pose1", "pose2"]) as pf:            # doctest: +SKIP
+...     caps = [capture.load_capture(f, reader=pf.read) for f in ["pose1", "pose2"]]
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from . import _files
+
+
+class _Pose:
+    """One folder being read: its files, the stack filled in by the reader threads, the first failure."""
+
+    def __init__(self, files):
+        self.files = tuple(files)
+        self.stack = None
+        self.failed = False
+        self.left = len(self.files)
+        self.done = threading.Event()
+        self.lock = threading.Lock()
+        if not self.files:
+            self.done.set()
+
+    def put(self, i: int, img: np.ndarray | None):
+        with self.lock:
+            if img is None:
+                self.failed = True
+            elif not self.failed:
+                if self.stack is None:
+                    self.stack = np.empty((len(self.files),) + img.shape, img.dtype)
+                if img.shape != self.stack.shape[1:] or img.dtype != self.stack.dtype:
+                    self.failed = True  # read_images names the file that differs
+                else:
+                    self.stack[i] = img
+            self.left -= 1
+            if self.left == 0:
+                self.done.set()
+
+
+class Prefetcher:
+    """Reads the images of ``folders`` in order, ``ahead`` poses ahead of :meth:`read`.
+
+    Parameters
+    ----------
+    folders : pose folders, in the order they will be read.
+    threads : reader threads (OpenCV's PNG decoder releases the GIL); default ``min(2, cpu_count)``.
+    ahead : poses read ahead of the one handed out last (1: the next pose is read while this one is processed;
+        the first pose is read from the start).
+    gray : as :func:`procam._files.read_images`.
+
+    Use as a context manager (the threads stop on exit); :meth:`read` is the reader for
+    :func:`procam.capture.load_capture`.
+    """
+
+    def __init__(self, folders, threads: int | None = None, ahead: int = 1, gray: bool = True):
+        self.folders = [Path(f) for f in folders]
+        self.gray = gray
+        self.ahead = max(1, int(ahead))
+        n = threads if threads is not None else min(2, os.cpu_count() or 1)
+        self._pool = ThreadPoolExecutor(max(1, n), thread_name_prefix="procam-read")
+        self._poses: dict[tuple, _Pose] = {}
+        self._next = 0          # next folder to start reading
+        self._handed = 0        # poses handed out by read()
+        self._closed = False
+        self._lock = threading.Lock()
+        self._fill()
+
+    # -- scheduling ----------------------------------------------------------------------------
+    def _fill(self):
+        """Start reading folders until ``ahead`` poses are ahead of those handed out."""
+        with self._lock:
+            while not self._closed and self._next < len(self.folders) and self._next < self._handed + self.ahead:
+                folder = self.folders[self._next]
+                self._next += 1
+                try:
+                    files = _files.list_images(folder)
+                except Exception:  # load_capture reports it
+                    continue
+                pose = _Pose(files)
+                self._poses[tuple(str(f) for f in files)] = pose
+                for i, f in enumerate(pose.files):
+                    self._pool.submit(self._load, pose, i, f)
+
+    def _load(self, pose: _Pose, i: int, path):
+        if self._closed or pose.failed:
+            pose.put(i, None)
+            return
+        try:
+            img = _files.read_image(path, self.gray)
+        except Exception:
+            img = None
+        pose.put(i, img)
+
+    # -- the reader ----------------------------------------------------------------------------
+    def read(self, files) -> np.ndarray:
+        """The stack of ``files`` (K, H, W): read ahead when they are a folder's images, else read now.
+
+        Same result and same errors as :func:`procam._files.read_images`.
+        """
+        key = tuple(str(Path(f)) for f in files)
+        with self._lock:
+            pose = self._poses.pop(key, None)
+            self._handed += 1
+        self._fill()
+        if pose is not None:
+            pose.done.wait()
+            if not pose.failed and pose.stack is not None:
+                return pose.stack
+        return _files.read_images(files, self.gray)
+
+    def close(self):
+        """Stop reading (pending images are skipped) and wait for the threads."""
+        with self._lock:
+            self._closed = True
+            self._poses.clear()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
