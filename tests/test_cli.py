@@ -170,3 +170,34 @@ def test_readme_python_example_runs(paper_capture, tmp_path, monkeypatch):
     assert calib.verdict in ("good", "weak")
     assert abs(calib.projector.K[0, 0] - scene.K_proj[0, 0]) < 5 * calib.std["f_p"] + 10
     assert (tmp_path / "calib.json").is_file() and (tmp_path / "calib.yml").is_file()
+
+
+def test_no_command_has_two_options_with_one_name():
+    """Every flag of every command means one thing (``procam experiment`` once had two ``--refine``)."""
+    import typer.main
+
+    from procam.cli import app
+
+    group = typer.main.get_command(app)
+    for name, cmd in group.commands.items():
+        flags = [f for p in cmd.params for f in (*p.opts, *p.secondary_opts) if f.startswith("-")]
+        dup = {f for f in flags if flags.count(f) > 1}
+        assert not dup, (name, dup)
+
+
+def test_commands_that_read_poses_share_the_capture_options():
+    """calibrate, check, correspond, evaluate, experiment and report take the same capture-processing options
+    with the same defaults (one definition: ``cli._app.POSE_OPTIONS``)."""
+    import typer.main
+
+    from procam.cli import app
+
+    group = typer.main.get_command(app)
+    want = {"--decode", "--shadow-threshold", "--contrast-threshold", "--detector", "--refine-window",
+            "--corner-refine", "--window", "--estimator"}
+    seen = {}
+    for name in ("calibrate", "check", "correspond", "evaluate", "experiment", "report"):
+        opts = {p.opts[0]: p.default for p in group.commands[name].params if p.opts and p.opts[0] in want}
+        assert set(opts) == want, (name, want - set(opts))
+        seen[name] = opts
+    assert all(v == seen["calibrate"] for v in seen.values())

@@ -233,10 +233,39 @@ DetectorOpt = Annotated[Detector, typer.Option("--detector", help="Chessboard co
 RefineOpt = Annotated[Optional[int], typer.Option(
     "--refine-window", help="Half-window of the corner refinement, camera px (default: 15 for fit, 11 for subpix).")]
 RefinerOpt = Annotated[Refiner, typer.Option(
-    "--refine", help="Corner refinement: fit (a blurred X-corner model with uneven lighting; default), subpix "
+    "--corner-refine", help="Corner refinement: fit (a blurred X-corner model with uneven lighting; default), subpix "
                      "(OpenCV cornerSubPix, the paper's) or none.")]
 WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
 EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
+
+#: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
+POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),
+                ("contrast", ContrastOpt, 3.0), ("detector", DetectorOpt, Detector.auto),
+                ("refine_window", RefineOpt, None), ("refine", RefinerOpt, Refiner.fit), ("window", WindowOpt, 60),
+                ("estimator", EstimatorOpt, Estimator.trimmed))
+
+
+def with_pose_options(fn):
+    """Give a command that reads pose folders the shared capture-processing options (:data:`POSE_OPTIONS`:
+    ``--decode``, ``--shadow-threshold``, ..., ``--estimator``): one definition, the same defaults everywhere.
+
+    The command declares ``**pose_args`` and receives them there, ready for
+    ``pose_options(**pose_args, min_corners=...)``.
+    """
+    import inspect
+
+    sig = inspect.signature(fn, eval_str=True)  # typer reads a given __signature__ as it is
+    params = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    params += [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=annotation)
+               for name, annotation, default in POSE_OPTIONS]
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        return fn(*args, **kwargs)
+
+    wrapper.__signature__ = sig.replace(parameters=params)
+    return wrapper
+
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 

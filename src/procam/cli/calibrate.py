@@ -10,11 +10,9 @@ from rich.table import Table
 from .. import multi_pose as _mp
 from .. import single_pose as _sp
 from ..summary import PLUS_MINUS, parameter_rows, pose_rows
-from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
-                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
-                   plain, pose_options, say,
-                   user_errors, value, warn)
+from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
+                   distinct_poses, fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors,
+                   value, warn, with_pose_options)
 
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_CHOICES)
@@ -79,6 +77,7 @@ def print_summary(calib):
 
 @app.command("calibrate")
 @user_errors
+@with_pose_options
 def calibrate_cmd(
     board: BoardOpt,
     square: SquareOpt,
@@ -110,14 +109,7 @@ def calibrate_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    decode_method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = None,
-    refiner: RefinerOpt = Refiner.fit,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
+    **pose_args,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     import contextlib
@@ -127,8 +119,7 @@ def calibrate_cmd(
     brd = parse_board(board, square)
     multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
-    opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator,
+    opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
                         background=not multi and value(background) != "off")
     camera = _sp.CameraOptions(cod=value(cod))

@@ -14,8 +14,8 @@ import typer
 from rich.markup import escape
 
 from ..errors import ProcamError
-
-from ._app import Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors, value
+from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors,
+                   value)
 
 #: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
 VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
@@ -270,8 +270,8 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
             if given:
                 fail(f"{flag} belongs to --advise; add --advise")
         return None
-    from .advise import LiveAdvice, advisor_options, load_calibration_for
     from ._app import parse_board
+    from .advise import LiveAdvice, advisor_options, load_calibration_for
 
     if not board:
         fail("--advise needs --board COLSxROWS (the advisor finds and measures the board)")

@@ -6,10 +6,8 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
-                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, fail, optional_size, output_path, parse_board, pose_options, say, user_errors,
-                   value)
+from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, fail, optional_size,
+                   output_path, parse_board, pose_options, say, user_errors, value, with_pose_options)
 
 
 def report_check(check, png=None) -> None:
@@ -27,6 +25,7 @@ def report_check(check, png=None) -> None:
 
 @app.command("check")
 @user_errors
+@with_pose_options
 def check_cmd(
     pose_dir: Path = typer.Argument(..., help="Folder with one pose's captured sequence."),
     board: BoardOpt = ...,
@@ -35,14 +34,7 @@ def check_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = None,
-    refiner: RefinerOpt = Refiner.fit,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
+    **pose_args,
 ):
     """Is this pose good for single-pose calibration? Checks the capture, decodes it, finds the corners,
     calibrates it from this one pose and says: good, weak, degenerate or failed, and why (exit code 3 for
@@ -50,8 +42,7 @@ def check_cmd(
     from ..check import check_pose
 
     brd = parse_board(board, square)
-    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
+    opts = pose_options(**pose_args)
     output_path(png, "--png", FIGURE_SUFFIXES)
     check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step)
     report_check(check, png)

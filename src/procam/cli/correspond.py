@@ -6,13 +6,13 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator,
-                   EstimatorOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, optional_size, output_path, parse_board, pose_options, say, user_errors, value, warn)
+from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, optional_size,
+                   output_path, parse_board, pose_options, say, user_errors, value, warn, with_pose_options)
 
 
 @app.command("correspond")
 @user_errors
+@with_pose_options
 def correspond_cmd(
     board: BoardOpt,
     square: SquareOpt,
@@ -22,14 +22,7 @@ def correspond_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = None,
-    refiner: RefinerOpt = Refiner.fit,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
+    **pose_args,
 ):
     """Camera corners (white frame) and their projector coordinates by local homographies."""
     import dataclasses
@@ -41,8 +34,7 @@ def correspond_cmd(
     from .. import correspond as corr
 
     brd = parse_board(board, square)
-    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator)
+    opts = pose_options(**pose_args)
     output_path(out, "-o", (".json",), inputs=(pose_dir,))
     output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
     cap = capture.load_capture(pose_dir, optional_size(projector), value(order), step=step)

@@ -7,10 +7,9 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt, WindowOpt,
-                   app, assumed_size, console, distinct_poses, fail, optional_size, output_path, parse_board, plain,
-                   pose_options, say, user_errors, value)
+from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, assumed_size, console, distinct_poses,
+                   fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value,
+                   with_pose_options)
 
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
@@ -40,6 +39,7 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
 
 @app.command("evaluate")
 @user_errors
+@with_pose_options
 def evaluate_cmd(
     board: BoardOpt,
     square: SquareOpt,
@@ -49,14 +49,7 @@ def evaluate_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = None,
-    refiner: RefinerOpt = Refiner.fit,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
+    **pose_args,
 ):
     """Per pose: camera/projector RMS (PnP, intrinsics fixed), stereo RMS, the procam extrinsics from
     per-pose PnP; overall: the spread σ_T and σ_|T| of those extrinsics, the board angles in both device frames."""
@@ -68,8 +61,7 @@ def evaluate_cmd(
 
     brd = parse_board(board, square)
     distinct_poses(poses)
-    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine, refine=refiner, window=window, estimator=estimator, min_corners=6)
+    opts = pose_options(**pose_args, min_corners=6)
     output_path(out, "-o", (".json",), inputs=(calibration, *poses))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:

@@ -9,10 +9,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from .._fmt import fmt_number
-from ._app import (BoardOpt, ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt,
-                   ForceOpt, OrderOpt, ProjectorOpt, RefineOpt, Refiner, RefinerOpt, ShadowOpt, SquareOpt, StepOpt,
-                   WindowOpt, app, console, distinct_poses, err_console, fail, is_tty, optional_size, output_dir,
-                   parse_board, plain, pose_options, say, user_errors, value)
+from ._app import (BoardOpt, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
+                   err_console, fail, is_tty, optional_size, output_dir, parse_board, plain, pose_options, say,
+                   user_errors, value, with_pose_options)
 
 #: Most pose sets the experiment calibrates (every subset of at least --min-set poses).
 MAX_SETS = 2000
@@ -64,6 +63,7 @@ class _LineProgress:
 
 @app.command("experiment")
 @user_errors
+@with_pose_options
 def experiment_cmd(
     board: BoardOpt,
     square: SquareOpt,
@@ -72,7 +72,7 @@ def experiment_cmd(
     html_report: Path = typer.Option(None, "--report", help="Also write the HTML report of the multi-pose "
                                                             "calibration from all poses (self-contained .html)."),
     min_set: int = typer.Option(3, "--min-set", help="Smallest pose set for the multi-pose calibrations."),
-    refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
+    joint_refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
                                                         "here (Moreno-Taubin's frozen-intrinsics stereo, as the paper), "
                                                         "unlike `procam calibrate`, which refines unless --no-refine."),
     cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
@@ -80,27 +80,18 @@ def experiment_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    decode_method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine_window: RefineOpt = None,
-    refiner: RefinerOpt = Refiner.fit,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
     force: ForceOpt = False,
+    **pose_args,
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
-    from ..paper import experiment, report
-    from ..multi_pose import DIST_CHOICES
-
     from .. import pipeline
+    from ..multi_pose import DIST_CHOICES
+    from ..paper import experiment, report
 
     brd = parse_board(board, square)
     distinct_poses(poses)
-    opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                        refine_window=refine_window, refine=refiner, window=window, estimator=estimator)
+    opts = pose_options(**pose_args)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
@@ -129,7 +120,7 @@ def experiment_cmd(
             poses, brd, size, value(order), options=opts, step=step,
             progress=lambda d, t, label: bar.update(t_dec, completed=d, label=Path(label).name))
         t_cal = bar.add_task("calibrating", total=n_sets + len(poses), label="")
-        result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=refine,
+        result = experiment.run(views, size or views[0].proj_size, min_set=min_set, refine=joint_refine,
                                 cam_dist=cam_dist, proj_dist=proj_dist,
                                 progress=lambda d, t, label: bar.update(t_cal, completed=d, total=t, label=label))
         output_dir(out, "-o", "experiment", force, create=True)
@@ -145,5 +136,5 @@ def experiment_cmd(
         from .report import write_calibration_report
 
         calib = multi_pose.calibrate(views, proj_size=size or views[0].proj_size, cam_dist=cam_dist,
-                                     proj_dist=proj_dist, refine=refine)
+                                     proj_dist=proj_dist, refine=joint_refine)
         write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")

@@ -12,18 +12,7 @@ import typer
 
 from .. import _files, io
 from .. import export as _ex
-from ._app import (
-    ForceOpt,
-    app,
-    choice,
-    fail,
-    number,
-    output_dir,
-    output_path,
-    say,
-    user_errors,
-    value,
-)
+from ._app import ForceOpt, app, choice, fail, number, output_dir, output_path, say, user_errors, value
 
 Format = choice("Format", _ex.FORMATS)
 World = choice("World", _ex.WORLDS)

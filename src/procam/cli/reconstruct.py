@@ -12,24 +12,8 @@ from rich.table import Table
 
 from .. import board as _board
 from .. import triangulate as _tri
-from ._app import (
-    OrderOpt,
-    ProjectorOpt,
-    StepOpt,
-    app,
-    assumed_size,
-    choice,
-    console,
-    fail,
-    optional_size,
-    output_path,
-    parse_size,
-    plain,
-    say,
-    user_errors,
-    value,
-    warn,
-)
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, optional_size,
+                   output_path, parse_size, plain, say, user_errors, value, warn)
 
 Use = choice("Use", _tri.USES)
 

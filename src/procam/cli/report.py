@@ -7,9 +7,8 @@ from typing import Optional
 
 import typer
 
-from ._app import (ContrastOpt, DecodeMethod, DecodeOpt, Detector, DetectorOpt, Estimator, EstimatorOpt, OrderOpt,
-                   ProjectorOpt, RefineOpt, ShadowOpt, StepOpt, WindowOpt, app, console, fail, optional_size,
-                   output_path, parse_board, pose_options, say, user_errors, value, warn)
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_board,
+                   pose_options, say, user_errors, value, warn, with_pose_options)
 
 REPORT_SUFFIXES = (".html", ".htm")
 
@@ -43,6 +42,7 @@ def write_calibration_report(calib, path, *, views=None, decodes=None, check=Non
 
 @app.command("report")
 @user_errors
+@with_pose_options
 def report_cmd(
     calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, or OpenCV YAML with pose folders)."),
     poses: Optional[list[Path]] = typer.Argument(None, help="Pose folders to show and verify (default: the poses "
@@ -54,13 +54,7 @@ def report_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    decode_method: DecodeOpt = DecodeMethod.robust,
-    shadow: ShadowOpt = 10.0,
-    contrast: ContrastOpt = 3.0,
-    detector: DetectorOpt = Detector.auto,
-    refine: RefineOpt = 11,
-    window: WindowOpt = 60,
-    estimator: EstimatorOpt = Estimator.trimmed,
+    **pose_args,
 ):
     """One HTML page a person reads top to bottom: the verdict, the parameters with their uncertainty and
     assumptions, coverage, residuals, the metric verification, the rig in 3-D and (multi-pose) leave-one-out."""
@@ -74,8 +68,7 @@ def report_cmd(
         if board is None or square is None:
             fail("give --board COLSxROWS and --square with the pose folders (the board they show)")
         brd = parse_board(board, square)
-        opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, detector=detector,
-                            refine_window=refine, window=window, estimator=estimator)
+        opts = pose_options(**pose_args)
     calib = io.load_calibration(calibration)
     if poses:
         size = optional_size(projector)
