@@ -16,6 +16,7 @@ Usage::
     python benchmarks/single_pose.py --trials 200 --sigma-cam 0.1 --sigma-proj 0.2
     python benchmarks/single_pose.py --source render    # rendered Gray-code captures (needs procam.pipeline)
     python benchmarks/single_pose.py --outliers 3 --skip-paper   # 3 outlier corners per device (3-10 px)
+    python benchmarks/single_pose.py --skip-sim --skip-paper --known --trials 200   # camera intrinsics known
 """
 
 from __future__ import annotations
@@ -231,6 +232,51 @@ def part3(folder):
           f"({len(devs['joint_ok'])} of {len(devs['joint'])})")
 
 
+def part4(args):
+    """Known camera intrinsics (``single_pose.calibrate(known_camera=...)``): Monte-Carlo std of f_p and T
+    against the Cramer-Rao bound of that case, and against the same poses with the camera estimated."""
+    import warnings
+
+    from procam.calibration import Device, Distortion
+    from procam.errors import ProcamWarning
+    from procam.view import View
+
+    print("\n## Part 4: known camera intrinsics ('ideal' rig; Monte-Carlo std over "
+          f"{args.trials} trials, sigma {args.sigma_cam} / {args.sigma_proj} px)\n")
+    print("| pose (camera) | | f_p std | T std (x, y, z) | T bias (x, y, z) |")
+    print("|---|---|---|---|---|")
+    for pose in args.known_grid:
+        sc = simulate.with_board_pose(simulate.preset("ideal"), pose)
+        dev = Device(np.array(sc.K_cam), sc.cam_size, Distortion("division", tuple(sc.cam_center), *sc.cam_dist_coeffs))
+        obj = simulate.board_corners(sc)
+        cb = crlb.camera_bound(sc.K_cam, None, sc.cam_dist_coeffs[0], 0.0, sc.R_board, sc.t_board, obj,
+                               args.sigma_cam, "known_intrinsics")
+        pb = crlb.projector_bound(sc.K_proj, sc.R_board_proj, sc.t_board_proj, obj, args.sigma_proj)
+        eb = crlb.extrinsics_bound(cb, pb, sc.R_board, sc.t_board, sc.R_board_proj, sc.t_board_proj)
+        rows = {"known": [], "free": []}
+        for k in range(args.trials):
+            o, c, p = simulate.correspondences(sc, args.sigma_cam, args.sigma_proj, args.seed + 1000 + k)
+            v = View(o, c, p, "s", sc.cam_size, sc.proj_size)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ProcamWarning)
+                for key, kw in (("known", {"known_camera": dev}), ("free", {})):
+                    try:
+                        cal = sp.calibrate(v, **kw)
+                    except ProcamError:
+                        continue
+                    rows[key].append(np.r_[cal.projector.K[0, 0] - sc.K_proj[0, 0], cal.T - sc.T])
+        def fmt3(a):
+            return ", ".join(f"{x:.2f}" for x in a)
+        print(f"| {pose} | bound (camera known) | {pb.std['f_p']:.2f} | {fmt3(eb.T)} | |")
+        for key, label in (("known", "camera known"), ("free", "camera from the same pose")):
+            e = np.array(rows[key])
+            if len(e) < 2:
+                print(f"| | {label} | failed | | |")
+                continue
+            print(f"| | {label} ({len(e)} runs) | {e[:, 0].std():.2f} | {fmt3(e[:, 1:].std(axis=0))} | "
+                  f"{fmt3(e[:, 1:].mean(axis=0))} |")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--source", choices=("points", "render"), default="points")
@@ -244,6 +290,7 @@ def main(argv=None):
     ap.add_argument("--grid", type=str, default=None, help="poses 'psi,nu;psi,nu;...' in degrees (camera frame)")
     ap.add_argument("--skip-paper", action="store_true", help="skip part 2")
     ap.add_argument("--skip-sim", action="store_true", help="skip part 1")
+    ap.add_argument("--known", action="store_true", help="part 4: known camera intrinsics against their bound")
     ap.add_argument("--real", type=str, default=None,
                     help="folder of the OpenCV left/right sample photos (part 3), "
                          "e.g. ../shared/data/opencv-left-right")
@@ -256,6 +303,9 @@ def main(argv=None):
         part2()
     if args.real:
         part3(args.real)
+    if args.known:
+        args.known_grid = [simulate.RECOMMENDED_POSE, (20.0, 20.0, 0.0), (10.0, 30.0, 0.0)]
+        part4(args)
 
 
 if __name__ == "__main__":
