@@ -68,7 +68,12 @@ def test_demo_runs(tmp_path):
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-@pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("plot_*.py")))
+#: Examples whose stage other fast tests run already: slow (``pytest -m slow`` runs them).
+SLOW_EXAMPLES = ("plot_decode.py", "plot_study_slice.py")
+
+
+@pytest.mark.parametrize("name", [pytest.param(p.name, marks=pytest.mark.slow) if p.name in SLOW_EXAMPLES else p.name
+                                  for p in sorted(EXAMPLES.glob("plot_*.py"))])
 def test_gallery_examples_run(name, tmp_path, monkeypatch):
     """Every gallery example (examples/plot_*.py) runs and writes its figure to the path it is given."""
     import runpy

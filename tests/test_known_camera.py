@@ -97,6 +97,7 @@ def test_camera_only_from_several_photos(shared_data):
     assert 0 < calib.std["f_c"] < 2.0 and calib.info["coverage"] > 0.3
 
 
+@pytest.mark.slow
 def test_cli_camera_only_then_one_pose(ideal_capture, tmp_path):
     """Camera-only from several rendered photos (white frames of renders at other poses), then one pose
     with --camera: the whole workflow through the command line."""

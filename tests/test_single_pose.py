@@ -292,6 +292,7 @@ def _corners(path):
     return c.reshape(-1, 2), (img.shape[1], img.shape[0])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not OPENCV_DIR.is_dir(), reason="shared real-image data absent")
 def test_real_photos_single_pose_camera_only():
     obj = board.object_points(9, 6, 25.0)

@@ -81,7 +81,7 @@ def _check_tracks_bound(device, cell, trials):
     assert abs(row["mean_df"]) < 3 * row["bound_f"] / np.sqrt(trials) + 0.5
 
 
-@pytest.mark.parametrize("device,cell", [("camera", (20, 20)), ("projector", (-30, -20))])
+@pytest.mark.parametrize("device,cell", [pytest.param("camera", (20, 20), marks=pytest.mark.slow), ("projector", (-30, -20))])
 def test_noisy_spread_tracks_the_bound_without_model_error(device, cell):
     _check_tracks_bound(device, cell, 40)
 
@@ -108,6 +108,7 @@ def _strip(rows):
             for r in rows]
 
 
+@pytest.mark.slow
 def test_joblib_processes_give_the_serial_result():
     pytest.importorskip("joblib")
     cfg = StudyConfig("camera", psi=[-10.0, 10.0], nu=[5.0, 20.0], trials=2, slices=False)
