@@ -689,7 +689,8 @@ def test_version():
     assert rc == 0 and out.strip() == f"procam {procam.__version__}"
 
 
-@pytest.mark.parametrize("cod", ["auto", "paper", "image-center"])
+@pytest.mark.parametrize("cod", ["auto", pytest.param("paper", marks=pytest.mark.slow),
+                                 pytest.param("image-center", marks=pytest.mark.slow)])
 def test_every_cod_choice(cod, poses, tmp_path):
     rc, _, err = run_cli(["calibrate", poses[0], *BOARD, "--cod", cod, "-o", tmp_path / "c.json"])
     assert rc in (0, 3), err  # 3: a degenerate verdict (the lead's --force); never a traceback

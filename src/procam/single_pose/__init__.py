@@ -347,6 +347,8 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
     ``rejected_corners``).
     """
     obj, pts, finite = clean(obj_pts, cam_pts, name)
+    # too few or collinear corners are that error, whatever the prediction (the first thing the fit checks)
+    check_corners(obj, finite, robust.min_points, name, "camera corners", "check the board detection")
     predicted = {"camera": predict("camera", obj, pts, image_size, advice_options.camera_noise_px)
                  if image_size is not None else None}
     with _degenerate_if_unsolved(name, predicted, advice_options):
