@@ -15,13 +15,19 @@ Pixels are ``(x, y)`` = (column, row) with the origin at the centre of the top-l
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-if TYPE_CHECKING:
-    from .scene import Scene
+
+class CameraLens(Protocol):
+    """What :func:`distort` and :func:`undistort` read of a scene (a :class:`~procam.simulate.Scene` is one)."""
+
+    cam_distortion: str  # "none", "division" or "opencv"
+    cam_dist_coeffs: tuple  # (k1, k2) of the division model, or OpenCV's (k1, k2, p1, p2[, k3])
+    cam_center: tuple  # (x, y) px, centre of the division model
+    K_cam: np.ndarray  # (3, 3) camera matrix
 
 __all__ = ["project", "distort", "undistort", "euler_matrix", "matrix_euler"]
 
@@ -116,7 +122,7 @@ def _to_pix(K, xn) -> np.ndarray:
     return np.stack([K[0, 0] * xn[..., 0] + K[0, 2], K[1, 1] * xn[..., 1] + K[1, 2]], axis=-1)
 
 
-def distort(scene: "Scene", pts) -> np.ndarray:
+def distort(scene: CameraLens, pts) -> np.ndarray:
     """Camera lens: undistorted (ideal pinhole) pixels (..., 2) -> distorted (observed) pixels."""
     pts = np.asarray(pts, float)
     if scene.cam_distortion == "none":
@@ -127,7 +133,7 @@ def distort(scene: "Scene", pts) -> np.ndarray:
     return _to_pix(scene.K_cam, _brown_distort_norm(_to_norm(scene.K_cam, pts), scene.cam_dist_coeffs))
 
 
-def undistort(scene: "Scene", pts) -> np.ndarray:
+def undistort(scene: CameraLens, pts) -> np.ndarray:
     """Camera lens: distorted (observed) pixels (..., 2) -> undistorted pixels."""
     pts = np.asarray(pts, float)
     if scene.cam_distortion == "none":
