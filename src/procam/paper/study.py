@@ -428,6 +428,10 @@ class StudyResult:
                 val[i, j] = r[name]
         return psi, nu, val
 
+    def slice_specs(self) -> list[tuple[str, str, str, float]]:
+        """The study's slices: ``(label, axis, fixed_axis, fixed_value)`` each (see :func:`slice_specs`)."""
+        return slice_specs(self.config)
+
     def slice(self, label: str) -> list[dict]:
         """Rows of one slice (``"nu=10"``), sorted along the varying axis."""
         spec = {s[0]: s for s in slice_specs(self.config)}.get(label)

@@ -100,9 +100,7 @@ def slices(result):
     -------
     matplotlib.figure.Figure
     """
-    from ..paper.study import slice_specs
-
-    specs = slice_specs(result.config)
+    specs = result.slice_specs()
     fig = _figure(figsize=(5.2 * len(specs), 4.3), constrained_layout=True)
     axes = fig.subplots(1, len(specs), squeeze=False)
     s = _SYM[result.config.device]
