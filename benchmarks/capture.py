@@ -7,6 +7,8 @@
 2. ``ProjectorWindow.show`` of 1920x1080 patterns on a virtual X server (Xvfb), when Xvfb and
    pygame-ce are installed: the time from the call to the return after the flip (software
    rendering into Xvfb; a GPU desktop differs).
+3. ``procam check`` of a written pose folder (46 PNGs of 1280x800, the board found and judged), run
+   as a cold process, next to the time to read those PNGs with two threads in the same process.
 
     python benchmarks/capture.py [--repeat 3]
 """
@@ -88,6 +90,34 @@ def _xvfb_show(repeat: int, size=(1920, 1080)) -> list[str]:
     return rows
 
 
+def _check_cli(repeat: int) -> list[str]:
+    from concurrent.futures import ThreadPoolExecutor
+
+    import cv2
+
+    scene = simulate.with_board_pose(simulate.preset("paper"), simulate.RECOMMENDED_POSE)
+    stack, truth = simulate.render(scene, seed=0)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "pose"
+        simulate.write_capture(folder, stack, truth)
+        files = sorted(folder.glob("*.png"))
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+        exe = Path(sys.executable).with_name("procam")
+        argv = [str(exe) if exe.exists() else "procam", "check", str(folder), "--board", "10x6", "--square", "24"]
+        for r in range(repeat):
+            t = time.perf_counter()
+            with ThreadPoolExecutor(2) as ex:
+                list(ex.map(lambda f: cv2.imread(str(f), cv2.IMREAD_UNCHANGED), files))
+            t_read = time.perf_counter() - t
+            t = time.perf_counter()
+            done = subprocess.run(argv, env=env, capture_output=True, text=True)
+            t_check = time.perf_counter() - t
+            verdict = (done.stdout.strip().splitlines() or ["?"])[-1][:60]
+            rows.append(f"| {r + 1} | {len(files)} | {t_read:.2f} | {t_check:.2f} | {done.returncode} | {verdict} |")
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -100,6 +130,9 @@ def main():
     print("\nProjectorWindow.show, 1920x1080 patterns, Xvfb (software)")
     print("| run | shows | median ms | max ms |\n|---|---|---|---|")
     print("\n".join(_xvfb_show(args.repeat)))
+    print("\nprocam check, cold process, paper rig at the recommended pose (46 PNGs of 1280x800)")
+    print("| run | images | read (2 threads) s | procam check s | exit | last line |\n|---|---|---|---|---|---|")
+    print("\n".join(_check_cli(args.repeat)))
 
 
 if __name__ == "__main__":

@@ -49,14 +49,17 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
     row("u0 (px)", "u0c", cK[0, 2], "u0p", None if pK is None else pK[0, 2])
     row("v0 (px)", "v0c", cK[1, 2], "v0p", None if pK is None else pK[1, 2])
     d = calib.camera.distortion
+    p_dist = ""  # the projector's distortion shares the camera's row
+    if calib.projector is not None and calib.projector.distortion.model == "opencv":
+        p_dist = "opencv " + " ".join(f"{c:.4g}" for c in calib.projector.distortion.coeffs)
     if d.model == "division":
-        rows.append(("distortion", f"division c=({d.center[0]:.1f}, {d.center[1]:.1f})", ""))
+        rows.append(("distortion", f"division c=({d.center[0]:.1f}, {d.center[1]:.1f})", p_dist))
         row("k1 (px^-2)", "k1", d.k1, fmt=".4g")
         row("k2 (px^-4)", "k2", d.k2, fmt=".4g")
     elif d.model == "opencv":
-        rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs), ""))
-    if calib.projector is not None and calib.projector.distortion.model == "opencv":
-        rows.append(("distortion", "", "opencv " + " ".join(f"{c:.4g}" for c in calib.projector.distortion.coeffs)))
+        rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs), p_dist))
+    elif p_dist:
+        rows.append(("distortion", "none", p_dist))
     rows.append(("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}"))
     if calib.R is not None:
         eul = models.euler_deg(calib.R)
