@@ -78,9 +78,9 @@ def _stats(ms) -> str:
 
 def speed(frames_per_pose: int = 6) -> None:
     print("## speed: Advisor.update per frame (ms), frames timed as from a 15 fps camera (default options)")
-    print("| camera | board | frames | detect median ms | update median / p90 / max ms | advisor fps | "
+    print("| camera | board | frames | detect median ms | update median ms | p90 ms | max ms | advisor fps | "
           "draw median ms | fps with preview |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     try:
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         import pygame  # noqa: F401
