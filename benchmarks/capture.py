@@ -113,7 +113,8 @@ def _check_cli(repeat: int) -> list[str]:
             t = time.perf_counter()
             done = subprocess.run(argv, env=env, capture_output=True, text=True)
             t_check = time.perf_counter() - t
-            verdict = (done.stdout.strip().splitlines() or ["?"])[-1][:60]
+            lines = done.stdout.strip().splitlines()
+            verdict = next((ln for ln in lines if ln.startswith("verdict")), (lines or ["?"])[-1])[:60]
             rows.append(f"| {r + 1} | {len(files)} | {t_read:.2f} | {t_check:.2f} | {done.returncode} | {verdict} |")
     return rows
 
@@ -131,7 +132,7 @@ def main():
     print("| run | shows | median ms | max ms |\n|---|---|---|---|")
     print("\n".join(_xvfb_show(args.repeat)))
     print("\nprocam check, cold process, paper rig at the recommended pose (46 PNGs of 1280x800)")
-    print("| run | images | read (2 threads) s | procam check s | exit | last line |\n|---|---|---|---|---|---|")
+    print("| run | images | read (2 threads) s | procam check s | exit | verdict |\n|---|---|---|---|---|---|")
     print("\n".join(_check_cli(args.repeat)))
 
 
