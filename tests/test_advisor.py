@@ -421,3 +421,17 @@ def test_cli_capture_with_advice_learns_the_projector_side(cli, tmp_path):
     assert all(d["phase"] == "first" and d["projector"] is None for d in advice[:5])
     assert all(d["phase"] == "target" and d["projector"]["std_f"] > 0 for d in advice[5:])
     assert "quick calibration of pose01" in out and (tmp_path / "s" / "pose02" / "capture.json").is_file()
+
+
+def test_quick_calibration_after_a_capture_teaches_the_advisor(ideal_capture, capsys):
+    """``capture --advise`` calibrates each captured pose at once (LiveAdvice.learn): the result's K, R, T
+    become the advisor's projector side. (The whole CLI session is the slow test above.)"""
+    from procam.cli.advise import LiveAdvice
+
+    folder, _, truth, _ = ideal_capture
+    session = LiveAdvice(Board(10, 6, 24.0), AdvisorOptions())
+    calib = session.learn(folder, "pose01")
+    assert calib is not None and session.best is not None and session.best[1] is calib
+    assert abs(calib.projector.K[0, 0] - truth["projector"]["f"]) < 4 * calib.std["f_p"] + 2
+    assert session.best[2] == "pose01 (captured)"
+    assert f"quick calibration of {folder.name}: f_c = " in capsys.readouterr().out

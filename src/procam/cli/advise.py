@@ -159,7 +159,7 @@ class LiveAdvice:
 
         try:
             view, _ = pipeline.view_from_folder(folder, self.board)
-            calib = single_pose.calibrate(view, on_failure="warn")
+            calib = single_pose.calibrate(view)  # a failed or degenerate pose comes back flagged
         except _E as e:
             warn(f"quick calibration of {folder}: {e}; the advice keeps what it knew")
             return None
