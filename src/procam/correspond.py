@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._threads import single_threaded_blas
 from .decode import DecodeResult
 
 #: Per-corner reason codes (``diagnostics["reason"]``).
@@ -185,6 +186,7 @@ def _trimmed_corners(ks, cam_pts, maps, half, options, proj, reason, inliers, re
     return [int(k) for k in ks[~settled]]
 
 
+@single_threaded_blas()  # its one large product's sums must not depend on BLAS's threads (the same bytes anywhere)
 def fit_homographies(src: np.ndarray, dst: np.ndarray, mask: np.ndarray, threshold: float = 3.0, *,
                      iterations: int = 12, min_inliers: float = 0.8):
     """Robust homographies of many point sets seen at the same source points (windows of pixels), all at once:
