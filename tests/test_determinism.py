@@ -134,3 +134,34 @@ def test_rendering_commands_twice(cmd, tmp_path):
         assert rc == 0, err
         out.rename(tmp_path / run)
     assert_same(tmp_path / "a", tmp_path / "b")
+
+
+def test_one_thread_holds_while_any_caller_is_inside():
+    """Leave-one-out refits run two at a time: the first to finish must not restore OpenCV's threads under
+    the other (which would then sum in another order); the last to finish restores them."""
+    import threading
+
+    import cv2
+
+    from procam._threads import deterministic
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(3)
+    try:
+        a_in, a_out, seen = threading.Event(), threading.Event(), []
+
+        def first():
+            with deterministic():
+                a_in.set()
+                a_out.wait(10)
+
+        t = threading.Thread(target=first)
+        t.start()
+        a_in.wait(10)
+        with deterministic():  # the second caller enters while the first is inside ...
+            a_out.set()
+            t.join(10)  # ... and the first leaves
+            seen.append(cv2.getNumThreads())
+        assert seen == [1] and cv2.getNumThreads() == 3
+    finally:
+        cv2.setNumThreads(before)

@@ -11,11 +11,58 @@ nothing measurable.
 from __future__ import annotations
 
 import functools
+import threading
 from contextlib import contextmanager
 
 import numpy as np
 
 __all__ = ["deterministic", "deterministic_call", "single_threaded_blas"]
+
+
+_LOCK = threading.Lock()
+_depth = {"blas": 0, "cv": 0}  # blocks open (in any thread) that hold the setting at one thread
+_restore: dict = {}  # how to undo it when the last of them closes
+
+
+def _enter(kind: str, limit) -> None:
+    with _LOCK:
+        if _depth[kind] == 0:
+            _restore[kind] = limit()
+        _depth[kind] += 1
+
+
+def _leave(kind: str) -> None:
+    with _LOCK:
+        _depth[kind] -= 1
+        if _depth[kind] == 0:
+            _restore.pop(kind)()
+
+
+def _limit_blas():
+    """Set BLAS to one thread; return the function that restores the previous setting."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        threadpool_limits = None
+    if threadpool_limits is not None:
+        limits = threadpool_limits(limits=1, user_api="blas")
+        return limits.restore_original_limits
+    old = []
+    for get, set_ in _openblas_handles():
+        try:
+            old.append((set_, int(get())))
+            set_(1)
+        except Exception:  # pragma: no cover - exotic builds
+            pass
+
+    def restore():
+        for set_, n in old:
+            try:
+                set_(n)
+            except Exception:  # pragma: no cover
+                pass
+
+    return restore
 
 
 @contextmanager
@@ -27,32 +74,14 @@ def single_threaded_blas():
     threads against 0.02 s with one.  Uses ``threadpoolctl`` when installed, otherwise the
     ``*_set_num_threads`` entry points of the OpenBLAS copies bundled with numpy and scipy.
     Parallel workers need nothing: joblib's loky workers already get ``cpu_count // n_jobs``
-    BLAS threads.
+    BLAS threads.  The setting is process-wide: blocks open at the same time in several threads
+    share it, and the last one to close restores it (no block runs with the setting undone under it).
     """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        threadpool_limits = None
-    if threadpool_limits is not None:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-        return
-    handles = _openblas_handles()
-    old = []
-    for get, set_ in handles:
-        try:
-            old.append((set_, int(get())))
-            set_(1)
-        except Exception:  # pragma: no cover - exotic builds
-            pass
+    _enter("blas", _limit_blas)
     try:
         yield
     finally:
-        for set_, n in old:
-            try:
-                set_(n)
-            except Exception:  # pragma: no cover
-                pass
+        _leave("blas")
 
 
 _BLAS_HANDLES = None
@@ -91,16 +120,21 @@ def _openblas_handles():
 
 @contextmanager
 def deterministic():
-    """One OpenCV thread and one BLAS thread inside the block (previous settings restored)."""
+    """One OpenCV thread and one BLAS thread inside the block (previous settings restored when the last block
+    open in any thread closes)."""
     import cv2
 
-    n = cv2.getNumThreads()
-    cv2.setNumThreads(1)
+    def limit_cv():
+        n = cv2.getNumThreads()
+        cv2.setNumThreads(1)
+        return lambda: cv2.setNumThreads(n)
+
+    _enter("cv", limit_cv)
     try:
         with single_threaded_blas():
             yield
     finally:
-        cv2.setNumThreads(n)
+        _leave("cv")
 
 
 def deterministic_call(fn):
