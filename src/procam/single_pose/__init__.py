@@ -29,6 +29,7 @@ import numpy as np
 from .. import background as _background
 from .. import models
 from .. import uncertainty as unc
+from .._threads import deterministic_call
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..misfit import misfit
@@ -215,6 +216,7 @@ def _rejected_list(sol) -> list:
     return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
 
 
+@deterministic_call  # one OpenCV and one BLAS thread: the same view gives the same bytes on any machine
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
               advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
@@ -337,6 +339,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     return cal
 
 
+@deterministic_call
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
                           robust: RobustOptions = RobustOptions(), advice_options: AdviceOptions = AdviceOptions(),
                           name: str = "view", strict: bool = False) -> Calibration:
