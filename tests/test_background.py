@@ -381,3 +381,31 @@ def test_known_camera_with_the_background(paper_standins, model):
     assert abs(Kp[0, 2] - u0_true) < 4 * lifted.std["u0p"] + 2
     assert abs(Kp[0, 0] - f_true) < 4 * lifted.std["f_p"] + 3
     assert abs(Kp[0, 0] - f_true) < 0.5 * abs(kept.projector.K[0, 0] - f_true)
+
+
+def test_every_output_says_what_the_background_estimated(paper_standins):
+    """When the background lifts u0p, the report, the JSON and the check line say it was estimated (with its
+    value and std), not the paper's 'u0p = W/2 is ASSUMED'; when the assumption is kept, they say that."""
+    import warnings
+
+    from procam import io, report, summary
+    from procam.errors import ProcamWarning
+
+    _, view, _ = paper_standins[PAPER_POSES[0]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        lifted = sp.calibrate(view)
+        kept = sp.calibrate(view, background=bg.BackgroundOptions(mode="check"))
+    assert lifted.info["background_model"].startswith("u0p")
+    assert kept.info["background_model"] in ("single-pose", "assumed")
+    u0, s = lifted.projector.K[0, 2], lifted.std["u0p"]
+    words = summary.projector_assumptions(lifted)
+    assert words[0] == f"u0p = {u0:.1f} ± {s:.1f} px is ESTIMATED from the background behind the board"
+    assert io.calibration_to_dict(lifted)["assumptions"] == words
+    page = report.build_report(lifted, name="lifted.json")
+    assert "ESTIMATED from the background" in page and "(from the background)" in page
+    assert "is ASSUMED, not estimated" not in page and "(assumed W/2)" not in page
+    W = kept.projector.image_size[0]
+    assert summary.projector_assumptions(kept)[0] == f"u0p = W/2 = {W / 2:g} px is ASSUMED, not estimated"
+    page = report.build_report(kept, name="kept.json")
+    assert "(assumed W/2)" in page and "ESTIMATED from the background" not in page

@@ -28,6 +28,10 @@ def test_check_of_a_good_pose(paper_capture, tmp_path):
     chk = check_pose(folder, Board(10, 6, 24.0))
     assert chk.verdict in ("good", "weak") and chk.calibration is not None
     assert chk.lines[-1].startswith(f"verdict: {chk.verdict}")
+    # the paper rig's u0p is 1013, not W/2: the background lifts it, and the line says so, not the assumption
+    assert chk.calibration.info["background_model"].startswith("u0p")
+    assert any("ESTIMATED from the background behind the board" in ln for ln in chk.lines)
+    assert not any("u0p = W/2" in ln for ln in chk.lines)
     f_true = paper_capture[2]["camera"]["f"]
     assert abs(chk.calibration.camera.K[0, 0] - f_true) < 0.03 * f_true
     img = overlay(chk)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import capture, pipeline, single_pose
+from . import capture, pipeline, single_pose, summary
 from .board import Board
 from .errors import CalibrationError, DegeneratePoseError, ProcamWarning
 
@@ -79,7 +79,7 @@ def check_pose(folder, board: Board, projector=None, order=None, *, options: pip
                      f"nu {pa[1]:.1f} deg")
         lines.append(f"f_c = {calib.camera.K[0, 0]:.1f} ± {calib.std.get('f_c', float('nan')):.2g} px, "
                      f"f_p = {calib.projector.K[0, 0]:.1f} ± {calib.std.get('f_p', float('nan')):.2g} px "
-                     "(± from the fit; single-pose model: u0p = W/2, alpha_p = 1)")
+                     f"(± from the fit; {_projector_model(calib)})")
     for r in reasons:
         lines.append(r)
     lines.append(f"verdict: {verdict}" + {"good": " -- keep this pose", "weak": " -- usable; a better pose would be "
@@ -87,6 +87,11 @@ def check_pose(folder, board: Board, projector=None, order=None, *, options: pip
                                           "failed": " -- capture another pose as advised"}.get(verdict, ""))
     return PoseCheck(folder, verdict, tuple(reasons), tuple(lines), view, maps, calib, cap.white,
                      time.perf_counter() - t0)
+
+
+def _projector_model(calib) -> str:
+    """What the projector's numbers assume: the paper's u0p = W/2, alpha_p = 1, or what the background freed."""
+    return "single-pose model: " + "; ".join(summary.projector_assumptions(calib)[:2])
 
 
 _COLOUR = {"good": (60, 180, 60), "weak": (0, 190, 230), "degenerate": (40, 40, 220), "failed": (40, 40, 220)}

@@ -18,6 +18,7 @@ from .calibration import Calibration, Device, Distortion
 from .correspond import CORNER_REASONS
 from .distortion import opencv_from_division
 from .errors import CalibrationFileError
+from .summary import projector_assumptions
 from .view import View
 
 
@@ -107,8 +108,7 @@ VERDICT_MEANING = {
 }
 #: What every standard deviation in the file means.
 UNCERTAINTY_NOTE = ("std: 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise "
-                    "independent and Gaussian; single-pose results also assume u0p = W/2, alpha_p = 1 and no "
-                    "projector distortion")
+                    "independent and Gaussian; single-pose results also assume what 'assumptions' lists")
 
 
 def calibration_to_dict(calib, include_views: bool = True) -> dict:
@@ -119,6 +119,7 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         "verdict": {"level": calib.verdict, "reasons": list(calib.verdict_reasons),
                     "meaning": VERDICT_MEANING.get(calib.verdict, "")},
         "uncertainty": UNCERTAINTY_NOTE,
+        "assumptions": projector_assumptions(calib),
         "conventions": CONVENTIONS,
         "camera": _device_dict(calib.camera, calib.cam_rms),
         "projector": _device_dict(calib.projector, calib.proj_rms),

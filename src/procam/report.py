@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .residuals import calibration_residuals, pnp
-from .summary import PLUS_MINUS, parameter_rows, pose_rows
+from .summary import PLUS_MINUS, parameter_rows, pose_rows, projector_assumptions, projector_freed
 from .verify import CalibrationCheck, check_calibration
 
 __all__ = ["Verdict", "calibration_verdict", "coverage_fractions", "rig_geometry", "rig_svg", "build_report",
@@ -435,11 +435,9 @@ def _assumptions(calib) -> list[str]:
                    f"({_e(str(calib.info.get('cam_dist_model', len(d.coeffs))))}).")
     if calib.projector is not None:
         if calib.method == "single-pose":
-            W = calib.projector.image_size[0]
-            out.append(f"Projector (single-pose assumptions): u0p = W/2 = {W / 2:g} px is ASSUMED, not estimated; "
-                       "alpha_p = 1 (fy_p = f_p) is ASSUMED; the projector has NO lens distortion (ASSUMED). "
-                       "The ± of the projector do not cover a projector that breaks these assumptions "
-                       "(e.g. a lens-shifted projector with u0p far from W/2).")
+            out.append("Projector (single-pose model): " + "; ".join(projector_assumptions(calib)) + ". "
+                       "The ± of the projector do not cover a projector that breaks what is assumed "
+                       "(e.g. a lens-shifted projector with u0p far from W/2 when the background could not tell).")
         elif calib.projector.distortion.model == "opencv":
             out.append(f"Projector: pinhole, zero skew, OpenCV distortion "
                        f"({_e(str(calib.info.get('proj_dist_model', '')))}).")
@@ -460,11 +458,12 @@ def _assumptions(calib) -> list[str]:
 def _parameters_section(calib) -> str:
     rows = [list(r) for r in parameter_rows(calib)]
     if calib.method == "single-pose" and calib.projector is not None:
+        freed = projector_freed(calib)
         for r in rows:
             if r[0].startswith("u0"):
-                r[2] += " (assumed W/2)"
+                r[2] += " (from the background)" if "u0p" in freed else " (assumed W/2)"
             elif r[0].startswith("fy"):
-                r[2] += " (assumed = f)"
+                r[2] += " (from the background)" if "alpha_p" in freed else " (assumed = f)"
         rows.append(["projector distortion", "", "none (assumed)"])
     head = ["parameter", "camera"] + (["projector"] if calib.projector is not None else [])
     rows = [r[:len(head)] for r in rows]

@@ -17,6 +17,36 @@ from . import models
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
 
 
+def projector_freed(calib) -> frozenset:
+    """Which of the single-pose projector assumptions (``"u0p"``, ``"alpha_p"``) the background behind the board
+    replaced by estimates (:mod:`procam.background`); empty when the paper's model was kept."""
+    model = calib.info.get("background_model")  # "single-pose" (unchanged), "assumed", "u0p", "u0p+alpha_p"
+    return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
+
+
+def projector_assumptions(calib) -> list[str]:
+    """What a single-pose calibration's projector numbers assume, in words (empty for other methods): the
+    paper's u0p = W/2 and alpha_p = 1 where they were kept, what the background estimated instead, and no
+    projector lens distortion."""
+    if calib.method != "single-pose" or calib.projector is None:
+        return []
+    freed = projector_freed(calib)
+    W = calib.projector.image_size[0]
+    u0 = float(calib.projector.K[0, 2])
+    if "u0p" in freed:
+        out = [f"u0p = {pm(u0, _std(calib, 'u0p'), '.1f')} px is ESTIMATED from the background behind the board"]
+    elif abs(u0 - W / 2) < 1e-6:
+        out = [f"u0p = W/2 = {W / 2:g} px is ASSUMED, not estimated"]
+    else:
+        out = [f"u0p = {u0:g} px is GIVEN, not estimated"]
+    if "alpha_p" in freed:
+        out.append("alpha_p is ESTIMATED from the background")
+    else:
+        out.append("alpha_p = 1 (fy_p = f_p) is ASSUMED")
+    out.append("the projector has NO lens distortion (ASSUMED)")
+    return out
+
+
 def _std(calib, key, idx=None):
     v = calib.std.get(key)
     if v is None:

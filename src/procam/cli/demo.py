@@ -95,7 +95,13 @@ def demo_cmd(
         _row(t, "camera k1 (1e-8 px^-2)", cam["distortion"]["k1"] * 1e8, d.k1 * 1e8,
              None if std.get("k1") is None else std["k1"] * 1e8)
     _row(t, "projector f (px)", proj["f"], Kp[0, 0], std.get("f_p"))
-    _row(t, "projector u0 (px, fixed W/2)", proj["u0"], Kp[0, 2])
+    from ..summary import projector_assumptions, projector_freed
+
+    freed = projector_freed(calib)
+    if "u0p" in freed:
+        _row(t, "projector u0 (px, from the background)", proj["u0"], Kp[0, 2], std.get("u0p"))
+    else:
+        _row(t, "projector u0 (px, fixed W/2)", proj["u0"], Kp[0, 2])
     _row(t, "projector v0 (px)", proj["v0"], Kp[1, 2], std.get("v0p"))
     eul = euler_deg(calib.R)
     rstd = std.get("R_euler_deg") or [None] * 3
@@ -105,9 +111,13 @@ def demo_cmd(
     for i, n in enumerate("XYZ"):
         _row(t, f"T {n} (mm)", truth["extrinsics"]["T"][i], float(calib.T[i]), tstd[i])
     console.print(t)
-    if preset == "paper":
-        console.print("note: the 'paper' rig's projector has u0 = 1013 px, but the single-pose method assumes "
+    if preset == "paper" and "u0p" in freed:
+        console.print("note: the 'paper' rig's projector has u0 = 1013 px, but the paper's single-pose method assumes "
+                      "u0 = W/2 = 960; the background behind the board refuted that and procam estimated u0 from it.")
+    elif preset == "paper":
+        console.print("note: the 'paper' rig's projector has u0 = 1013 px, but the single-pose model here assumes "
                       "u0 = W/2 = 960 and alpha = 1 (the paper's model error), so f_p and T carry that bias.")
+    console.print("projector model: " + "; ".join(projector_assumptions(calib)))
     summary = {"preset": preset, "seed": seed, "pose_deg": list(simulate.RECOMMENDED_POSE),
                "camera_f": [cam["f"], float(K[0, 0])], "projector_f": [proj["f"], float(Kp[0, 0])]}
     _files.write_text(out_dir / "demo_summary.json", json.dumps(summary, indent=1))
