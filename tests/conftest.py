@@ -95,6 +95,32 @@ def ideal_capture(tmp_path_factory):
     return folder, stack, truth, scene
 
 
+def fake_pose_folders(monkeypatch, root, *, check_board=None, pass_board=False):
+    """Fast CLI tests without rendering: ``pipeline.view_from_folder`` returns, for a folder made by the returned
+    ``add(name, view) -> Path``, that View named after the folder (with the command's board when
+    ``pass_board``); ``check_board(board)`` sees the board the command passed."""
+    from procam import pipeline
+    from procam.view import View
+
+    by_name = {}
+
+    def fake(folder, board, projector=None, order=None, **kw):
+        if check_board is not None:
+            check_board(board)
+        v = by_name[Path(folder).name]
+        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size,
+                    board=board if pass_board else None), None
+
+    monkeypatch.setattr(pipeline, "view_from_folder", fake)
+
+    def add(name, view):
+        (Path(root) / name).mkdir()
+        by_name[name] = view
+        return Path(root) / name
+
+    return add
+
+
 def rms(a, b):
     d = np.asarray(a, float) - np.asarray(b, float)
     return float(np.sqrt(np.nanmean(np.sum(d * d, axis=1))))

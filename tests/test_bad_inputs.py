@@ -87,15 +87,18 @@ def render_pose(folder, angles, seed=0, **changes):
 POSE_ANGLES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0))
 
 
+def render_poses(root) -> list:
+    """Three small rendered poses of the same rig (``POSE_ANGLES``, seeds 0-2) as ``root/pose1..3``."""
+    folders = [root / f"pose{k + 1}" for k in range(len(POSE_ANGLES))]
+    for k, (folder, a) in enumerate(zip(folders, POSE_ANGLES)):
+        render_pose(folder, a, seed=k)
+    return folders
+
+
 @pytest.fixture(scope="module")
 def poses(tmp_path_factory):
     """Three small rendered poses of the same rig (procam simulate's layout, with a manifest)."""
-    root = tmp_path_factory.mktemp("poses")
-    folders = []
-    for k, a in enumerate(POSE_ANGLES):
-        render_pose(root / f"pose{k + 1}", a, seed=k)
-        folders.append(root / f"pose{k + 1}")
-    return folders
+    return render_poses(tmp_path_factory.mktemp("poses"))
 
 
 @pytest.fixture(scope="module")

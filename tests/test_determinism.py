@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 from conftest import run_cli
-from test_bad_inputs import POSE_ANGLES, render_pose
+from test_bad_inputs import render_poses
 
 from procam import io
 
@@ -28,10 +28,7 @@ def rig(tmp_path_factory):
     from sim_small import small_scene, truth_calibration
 
     root = tmp_path_factory.mktemp("rig")
-    poses = []
-    for k, a in enumerate(POSE_ANGLES):
-        render_pose(root / f"pose{k + 1}", a, seed=k)
-        poses.append(root / f"pose{k + 1}")
+    poses = render_poses(root)
     calib = io.save_calibration(truth_calibration(small_scene()), root / "truth.json")
     return poses, calib
 

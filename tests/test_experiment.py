@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import csv
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import fake_pose_folders
 from typer.testing import CliRunner
 
-from procam import evaluate, io, multi_pose, pipeline, simulate
+from procam import evaluate, io, multi_pose, simulate
 from procam.paper import experiment, report
 from procam.errors import CalibrationError
 from procam.view import View
@@ -118,19 +118,11 @@ def test_failures_are_recorded(views, monkeypatch):
 
 @pytest.fixture()
 def fake_folders(views, tmp_path, monkeypatch):
-    by_name = {}
-    for v in views:
-        d = tmp_path / v.name
-        d.mkdir()
-        by_name[d.name] = v
-
-    def fake(folder, board, projector=None, order=None, **kw):
+    def check_board(board):
         assert board.pattern_size == (10, 6) and board.square == 24.0
-        v = by_name[Path(folder).name]
-        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size), None
 
-    monkeypatch.setattr(pipeline, "view_from_folder", fake)
-    return [str(tmp_path / v.name) for v in views]
+    add = fake_pose_folders(monkeypatch, tmp_path, check_board=check_board)
+    return [str(add(v.name, v)) for v in views]
 
 
 def test_cli_experiment(fake_folders, tmp_path):

@@ -8,9 +8,9 @@ import re
 from pathlib import Path
 
 import pytest
-from conftest import run_cli
+from conftest import fake_pose_folders, run_cli
 
-from procam import io, multi_pose, pipeline, simulate, verify
+from procam import io, multi_pose, simulate, verify
 from procam.view import View
 
 ANGLES = [(15, -35, 0), (-15, 20, 5), (10, 25, -5), (-25, 15, 0)]
@@ -31,18 +31,8 @@ def views():
 @pytest.fixture()
 def folders(views, tmp_path, monkeypatch):
     """Pose folders whose decoding returns the simulator's correspondences."""
-    by_name = {}
-    for v in views:
-        d = tmp_path / v.name
-        d.mkdir()
-        by_name[d.name] = v
-
-    def fake(folder, board, projector=None, order=None, **kw):
-        v = by_name[Path(folder).name]
-        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size), None
-
-    monkeypatch.setattr(pipeline, "view_from_folder", fake)
-    return [tmp_path / v.name for v in views]
+    add = fake_pose_folders(monkeypatch, tmp_path)
+    return [add(v.name, v) for v in views]
 
 
 def _sections(path):

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import json
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import run_cli
+from conftest import fake_pose_folders, run_cli
 
-from procam import evaluate, io, multi_pose, pipeline, simulate, single_pose
+from procam import evaluate, io, multi_pose, simulate, single_pose
 from procam.board import Board
 from procam.calibration import Distortion
 from procam.errors import CalibrationError, DegeneratePoseWarning, ProcamWarning, WeakPoseWarning
@@ -28,21 +27,8 @@ def _view(preset, angles, frame="camera", seed=0, name="pose", distance=None):
 
 @pytest.fixture()
 def fake_folders(tmp_path, monkeypatch):
-    """Pose folders whose View comes from the simulator (fast): name -> View."""
-    by_name = {}
-
-    def fake(folder, board, projector=None, order=None, **kw):
-        v = by_name[Path(folder).name]
-        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size, board=board), None
-
-    monkeypatch.setattr(pipeline, "view_from_folder", fake)
-
-    def make(name, view):
-        (tmp_path / name).mkdir()
-        by_name[name] = view
-        return tmp_path / name
-
-    return make
+    """Pose folders whose View comes from the simulator (fast): ``make(name, view) -> folder``."""
+    return fake_pose_folders(monkeypatch, tmp_path, pass_board=True)
 
 
 def _calibrate(args, tmp_path):
