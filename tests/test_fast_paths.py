@@ -379,3 +379,27 @@ def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):
         for k, f in enumerate(folders):
             pf.read(_files.list_images(f))
             assert pf._next == min(len(folders), k + 2)
+
+
+def test_prefetcher_reads_each_frame_once_beside_procams_own_outputs(tmp_path, monkeypatch):
+    """A pose folder that also holds an image procam wrote (listed in its manifest) is read ahead all the same:
+    the prefetcher asks for the files load_capture asks for, so no frame is read twice."""
+    from pathlib import Path
+
+    import cv2
+
+    from procam import _files, capture, stream
+
+    folders = _small_poses(tmp_path, 2)
+    for f in folders:
+        _files.write_image(f / "overlay.png", np.zeros((48, 64), np.uint8))
+        _files.record_files(f, {"overlay.png": "output"}, writer="check")
+    reads = []
+    real = _files.read_image
+    monkeypatch.setattr(_files, "read_image", lambda p, *a, **k: (reads.append(Path(p).name), real(p, *a, **k))[1])
+    with stream.Prefetcher(folders, ahead=1) as pf:
+        caps = [capture.load_capture(f, (64, 48), reader=pf.read) for f in folders]
+    n = len(caps[0].files)
+    assert "overlay.png" not in reads and all(c.stack.shape[0] == n for c in caps)
+    assert sorted(reads) == sorted(2 * [p.name for p in caps[0].files])  # each frame once
+    assert cv2.imread(str(folders[0] / "overlay.png")) is not None

@@ -225,6 +225,20 @@ def read_image(path, gray: bool = True) -> np.ndarray:
     return img
 
 
+def png_header(path) -> tuple[int, int, int] | None:
+    """``(height, width, bytes per sample)`` of a PNG file from its IHDR chunk, without decoding it; None for
+    another format or a header that cannot be read (:func:`read_image` then says what is wrong)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(26)
+    except OSError:
+        return None
+    if len(head) < 26 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    w, h = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    return (h, w, 2 if head[24] == 16 else 1) if w > 0 and h > 0 else None
+
+
 def read_images(files, gray: bool = True, threads: int | None = None) -> np.ndarray:
     """Read ``files`` into one array (K, H, W) of a single dtype.
 

@@ -540,8 +540,11 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + (why or _count_hint(len(files), ps)))
-    first = _files.read_image(files[0])
-    check_memory(folder, len(files), first.shape, first.dtype.itemsize)
+    head = _files.png_header(files[0])  # size and depth without decoding a frame the reader reads anyway
+    if head is None:
+        first = _files.read_image(files[0])
+        head = (*first.shape[:2], first.dtype.itemsize)
+    check_memory(folder, len(files), head[:2], head[2])
     stack = (reader or _files.read_images)(files)
     warnings = notes
     if check:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _files
+from . import _files, capture
 
 
 class _Pose:
@@ -90,8 +90,8 @@ class Prefetcher:
             while not self._closed and self._next < len(self.folders) and self._next < self._handed + self.ahead:
                 folder = self.folders[self._next]
                 self._next += 1
-                try:
-                    files = _files.list_images(folder)
+                try:  # the files load_capture will ask for: the sequence, not procam's outputs beside it
+                    files, _ = capture.sequence_files(folder, _files.list_images(folder))
                 except Exception:  # load_capture reports it
                     continue
                 pose = _Pose(files)
