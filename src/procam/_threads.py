@@ -10,13 +10,12 @@ nothing measurable.
 
 from __future__ import annotations
 
-import functools
 import threading
 from contextlib import contextmanager
 
 import numpy as np
 
-__all__ = ["deterministic", "deterministic_call", "single_threaded_blas"]
+__all__ = ["deterministic", "single_threaded_blas"]
 
 
 _LOCK = threading.Lock()
@@ -135,14 +134,3 @@ def deterministic():
             yield
     finally:
         _leave("cv")
-
-
-def deterministic_call(fn):
-    """Decorator: run ``fn`` inside :func:`deterministic`."""
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        with deterministic():
-            return fn(*args, **kwargs)
-
-    return wrapper

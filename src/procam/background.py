@@ -332,7 +332,7 @@ def _local_noise(cam, d):
         return float("nan"), np.zeros(len(d))
     _, idx = cKDTree(cam).query(cam, k=9)
     e = d - np.median(d[idx[:, 1:]], axis=1)
-    return float(1.4826 * np.median(np.abs(e - np.median(e))) / np.sqrt(1.2)), e
+    return _mad(e) / float(np.sqrt(1.2)), e
 
 
 def _mad(r) -> float:

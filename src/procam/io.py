@@ -139,31 +139,6 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
     return to_jsonable(out)
 
 
-def calibration_from_dict(d: dict):
-    """Inverse of :func:`calibration_to_dict`."""
-    if d.get("format") != "procam-calibration":
-        raise ValueError("not a procam calibration document (missing format: procam-calibration)")
-
-    def dev(x):
-        if not x:
-            return None
-        return Device(np.array(x["K"], float), tuple(x["image_size"]), Distortion.from_dict(x["distortion"]))
-
-    def num(v):
-        return float("nan") if v is None else float(v)
-
-    return Calibration(
-        camera=dev(d["camera"]), projector=dev(d.get("projector")),
-        R=None if d.get("R") is None else np.array(d["R"], float),
-        T=None if d.get("T") is None else np.array(d["T"], float),
-        method=d.get("method", "unknown"),
-        cam_rms=num((d.get("camera") or {}).get("rms_px")), proj_rms=num((d.get("projector") or {}).get("rms_px")),
-        stereo_rms=num(d.get("stereo_rms_px")), std=d.get("std", {}), poses=tuple(d.get("poses", [])),
-        views=tuple(view_from_dict(v) for v in d.get("views", [])), warnings=tuple(d.get("warnings", [])),
-        info=d.get("info", {}), verdict=_verdict(d.get("verdict")),
-        verdict_reasons=tuple((d.get("verdict") or {}).get("reasons", [])) if isinstance(d.get("verdict"), dict) else ())
-
-
 def _verdict(v) -> str:
     level = v.get("level") if isinstance(v, dict) else v
     return level if level in VERDICT_MEANING else "unknown"

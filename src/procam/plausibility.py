@@ -163,8 +163,7 @@ def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     """The smoothness of the decoded maps as decoded and with each Gray-code bit decoded the other way round.
 
     The column map is read on every ``sample``-th camera row (differences along the row), the row map on every
-    ``sample``-th camera column (``maps`` may hold only those lines: :func:`procam.decode.decode_lines`). Only
-    pixels decoded to full precision count.
+    ``sample``-th camera column. Only pixels decoded to full precision count.
 
     Returns
     -------

@@ -117,7 +117,8 @@ def calibrate_cmd(
     from .. import io, pipeline
 
     brd = parse_board(board, square)
-    multi = not camera_only and (value(method) or ("single" if len(poses) == 1 else "multi")) == "multi"
+    method = value(method) or ("single" if len(poses) == 1 else "multi")
+    multi = not camera_only and method == "multi"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
@@ -145,7 +146,6 @@ def calibrate_cmd(
         else:
             calib = _mp.calibrate_camera(views, dist=value(cam_dist))
     else:
-        method = value(method) or ("single" if len(poses) == 1 else "multi")
         if method == "single" and len(poses) != 1:
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
         if method == "multi" and len(poses) < 2:

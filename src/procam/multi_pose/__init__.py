@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import models
 from .. import uncertainty as unc
-from .._threads import deterministic_call
+from .._threads import deterministic
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, WeakPoseWarning
 from ..residuals import rms
@@ -117,7 +117,7 @@ AUTO_MODELS = ("k1k2p1p2k3", "k1k2p1p2", "k1k2", "k1", "none")
 DIST_CHOICES = ("auto", *DIST_MODELS)
 
 
-@deterministic_call
+@deterministic()
 def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True,
               **options) -> Calibration:
     """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined), with the distortion

@@ -29,7 +29,7 @@ import numpy as np
 from .. import background as _background
 from .. import models
 from .. import uncertainty as unc
-from .._threads import deterministic_call
+from .._threads import deterministic
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..misfit import misfit
@@ -216,7 +216,7 @@ def _rejected_list(sol) -> list:
     return [{"index": int(i), "residual_px": float(r)} for i, r in zip(sol.rejected, sol.rejected_residuals_px)]
 
 
-@deterministic_call  # one OpenCV and one BLAS thread: the same view gives the same bytes on any machine
+@deterministic()  # one OpenCV and one BLAS thread: the same view gives the same bytes on any machine
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
               advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
@@ -276,7 +276,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         return np.where(valid[:, None], a, np.nan)
 
     # the verdict's stable part comes first: it does not depend on where the fits stop
-    predicted = {"camera": predict("camera", obj_all, only_valid(view.cam_pts), cam_size, advice_options.camera_noise_px),
+    predicted = {"camera": None if known_camera is not None else
+                 predict("camera", obj_all, only_valid(view.cam_pts), cam_size, advice_options.camera_noise_px),
                  "projector": predict("projector", obj_all, only_valid(view.proj_pts), proj_size,
                                       advice_options.projector_noise_px, u0=projector.u0)}
     # NaN for corners invalid in either device, so that both fits use the same corners and the
@@ -285,7 +286,6 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         if cam_size is not None and tuple(known_camera.image_size) != tuple(cam_size):
             raise CalibrationError(f"pose {name!r}: the given camera intrinsics are for {known_camera.image_size[0]}x"
                                    f"{known_camera.image_size[1]} images, this pose's are {cam_size[0]}x{cam_size[1]}")
-        predicted["camera"] = None
     with _degenerate_if_unsolved(name, predicted, advice_options):
         if known_camera is not None:
             cam = known_camera_pose(obj_all, only_valid(view.cam_pts), known_camera, robust=robust, name=name)
@@ -339,7 +339,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     return cal
 
 
-@deterministic_call
+@deterministic()
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
                           robust: RobustOptions = RobustOptions(), advice_options: AdviceOptions = AdviceOptions(),
                           name: str = "view", strict: bool = False) -> Calibration:
