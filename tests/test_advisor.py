@@ -435,3 +435,13 @@ def test_quick_calibration_after_a_capture_teaches_the_advisor(ideal_capture, ca
     assert abs(calib.projector.K[0, 0] - truth["projector"]["f"]) < 4 * calib.std["f_p"] + 2
     assert session.best[2] == "pose01 (captured)"
     assert f"quick calibration of {folder.name}: f_c = " in capsys.readouterr().out
+    # capture --advise hands over the instant verdict's calibration: the pose is not calibrated a second time
+    from procam.check import check_pose
+
+    checked = check_pose(folder, session.board)
+    again = LiveAdvice(Board(10, 6, 24.0), AdvisorOptions())
+    assert again.learn(folder, "pose01", checked=checked) is checked.calibration
+    np.testing.assert_array_equal(checked.calibration.projector.K, calib.projector.K)
+    failed = again.learn(folder, "pose02", checked=ProcamError("no corners"))
+    said = capsys.readouterr()
+    assert failed is None and "no corners; the advice keeps what it knew" in said.out + said.err

@@ -151,16 +151,24 @@ class LiveAdvice:
         poll = self.window.poll if self.window is not None else self._key.poll
         return live.advise(camera, advisor, on_advice=on_advice, poll=poll, auto=self.auto, max_frames=self.max_frames)
 
-    def learn(self, folder, name: str | None = None):
+    def learn(self, folder, name: str | None = None, checked=None):
         """Calibrate a captured pose quickly (single-pose) and use its R, T, K for the next advice when it is the
-        best so far.  Returns the calibration or None (one warning line when it fails)."""
+        best so far.  ``checked``: the pose's instant verdict (:class:`procam.check.PoseCheck`, or the
+        ProcamError that stopped it) when the caller has it, whose calibration is then used as it is.  Returns the
+        calibration or None (one warning line when it fails)."""
         from .. import pipeline, single_pose
-        from ..errors import ProcamError as _E
 
         try:
-            view, _ = pipeline.view_from_folder(folder, self.board)
-            calib = single_pose.calibrate(view)  # a failed or degenerate pose comes back flagged
-        except _E as e:
+            if isinstance(checked, ProcamError):
+                raise checked
+            if checked is not None and checked.calibration is None:
+                raise ProcamError("; ".join(checked.reasons) or checked.verdict)
+            if checked is not None:
+                calib = checked.calibration
+            else:
+                view, _ = pipeline.view_from_folder(folder, self.board)
+                calib = single_pose.calibrate(view)  # a failed or degenerate pose comes back flagged
+        except ProcamError as e:
             warn(f"quick calibration of {folder}: {e}; the advice keeps what it knew")
             return None
         adv = calib.poses[0]["advice"]

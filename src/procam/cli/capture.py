@@ -232,21 +232,26 @@ def capture_cmd(
                              default="", show_default=False, prompt_suffix=" ", err=True)
 
         def after_pose(i, result):
+            """Report the pose; its instant verdict (a PoseCheck, or the error that stopped it) when --board."""
             _report_pose(result)
-            if brd is not None:  # the instant verdict, before the next pose
-                from ..check import check_pose
-                from .check import report_check
+            if brd is None:
+                return None
+            from ..check import check_pose
+            from .check import report_check
 
-                png = result.folder.with_name(result.folder.name + ".check.png")
-                try:
-                    report_check(check_pose(result.folder, brd), png)
-                except ProcamError as e:
-                    console.print(f"[yellow]check:[/yellow] {escape(str(e))}", highlight=False)
+            png = result.folder.with_name(result.folder.name + ".check.png")
+            try:  # with --advise, on the advisor's board: its calibration (T in that unit) teaches the advisor
+                checked = check_pose(result.folder, brd if live is None else live.board)
+                report_check(checked, png)
+            except ProcamError as e:
+                console.print(f"[yellow]check:[/yellow] {escape(str(e))}", highlight=False)
+                checked = e
+            return checked
 
         def after(i, result):
-            after_pose(i, result)
+            checked = after_pose(i, result)
             if live is not None:
-                live.learn(result.folder)
+                live.learn(result.folder, checked=checked)
 
         if live is not None:
             stack.callback(live.close)
