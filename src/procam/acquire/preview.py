@@ -33,6 +33,7 @@ COLOURS = {"ready": (40, 220, 90), "good": (40, 220, 90), "adjust": (255, 190, 0
 TEXT = (255, 255, 255)
 ARROW = (0, 200, 255)
 PANEL = (0, 0, 0, 170)
+_GREY_PALETTE = [(v, v, v) for v in range(256)]  # a camera frame drawn as an 8-bit palette surface
 
 
 def _pygame():
@@ -137,8 +138,9 @@ def draw_advice(surface, image: np.ndarray, advice, fonts: _Fonts | None = None)
     h, w = img.shape[:2]
     if (w, h) != (sw, sh):
         img = cv2.resize(img, (sw, sh), interpolation=cv2.INTER_AREA)
-    rgb = np.ascontiguousarray(np.repeat(img[:, :, None], 3, axis=2))
-    surface.blit(pg.image.frombuffer(rgb.tobytes(), (sw, sh), "RGB"), (0, 0))
+    grey = pg.image.frombuffer(np.ascontiguousarray(img), (sw, sh), "P")  # 8-bit grey palette: no RGB copies
+    grey.set_palette(_GREY_PALETTE)
+    surface.blit(grey, (0, 0))
     sx, sy = sw / w, sh / h
 
     def px(p):
