@@ -70,6 +70,17 @@ class Verdict:
         return f"{self.word}: " + ("; ".join(self.reasons) if self.word == "good" else self.reasons[0])
 
 
+def _advice_messages(calib) -> list[str]:
+    """Every device's advice message over the poses (the words of a good single-pose verdict)."""
+    return [a["message"] for p in calib.poses for k in ("camera", "projector")
+            if isinstance(a := (p.get("advice") or {}).get(k), dict) and a.get("message")]
+
+
+def _multi_pose_words(calib) -> list[str]:
+    how = "jointly refined" if calib.info.get("refined") else "without a joint refinement"
+    return [f"{len(calib.poses)} poses, {how}, no warnings"]
+
+
 def calibration_verdict(calib) -> Verdict:
     """The verdict of a calibration in words, from what the calibration carries.
 
@@ -89,11 +100,7 @@ def calibration_verdict(calib) -> Verdict:
     if calib.verdict != "unknown":  # the calibration's own verdict (procam.single_pose.advice / multi_pose)
         reasons = list(calib.verdict_reasons)
         if not reasons:
-            reasons = [a["message"] for p in calib.poses for k in ("camera", "projector")
-                       if isinstance(a := (p.get("advice") or {}).get(k), dict) and a.get("message")]
-        if not reasons and calib.method == "multi-pose":
-            how = "jointly refined" if calib.info.get("refined") else "without a joint refinement"
-            reasons = [f"{len(calib.poses)} poses, {how}, no warnings"]
+            reasons = _advice_messages(calib) or (_multi_pose_words(calib) if calib.method == "multi-pose" else [])
         return Verdict(calib.verdict, tuple(reasons))
     word, reasons = "good", []
     rank = {w: i for i, w in enumerate(VERDICTS)}
@@ -125,11 +132,9 @@ def calibration_verdict(calib) -> Verdict:
         worse("weak")
     if word == "good":
         if advised:
-            reasons = [a["message"] for p in calib.poses for k in ("camera", "projector")
-                       if isinstance(a := (p.get("advice") or {}).get(k), dict) and a.get("message")]
+            reasons = _advice_messages(calib)
         elif calib.method == "multi-pose" and not calib.warnings:
-            how = "jointly refined" if calib.info.get("refined") else "without a joint refinement"
-            reasons = [f"{len(calib.poses)} poses, {how}, no warnings"]
+            reasons = _multi_pose_words(calib)
     for w in calib.warnings:
         if not any(r.split(": ", 1)[-1] in w for r in reasons):
             reasons.append(str(w))

@@ -266,13 +266,13 @@ def judge(adv: dict, name: str, strict: bool, warnings: list) -> tuple[str, tupl
     them as procam warnings (:class:`~procam.errors.WeakPoseWarning`, ...), and with ``strict`` raises
     :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose."""
     keys = [k for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
-    reasons = tuple(f"pose {name!r}: {adv[k]['message']}" for k in keys if adv[k]["level"] != "good")
+    bad = [k for k in keys if adv[k]["level"] != "good"]
+    reasons = tuple(f"pose {name!r}: {adv[k]['message']}" for k in bad)
     level = adv["level"]
     warnings.extend(reasons)
     if strict and level in ("degenerate", "failed"):
         raise DegeneratePoseError(f"pose {name!r}: {level} pose for single-pose calibration: "
                                + "; ".join(adv[k]["message"] for k in keys if adv[k]["level"] == level))
-    for r in reasons:
-        cls = _WARNING[max((adv[k]["level"] for k in keys if r.endswith(adv[k]["message"])), key=LEVELS.index)]
-        _warnings.warn(r, cls, stacklevel=3)
+    for k, r in zip(bad, reasons):
+        _warnings.warn(r, _WARNING[adv[k]["level"]], stacklevel=3)
     return level, reasons
