@@ -157,3 +157,20 @@ def test_bound_is_computed_on_the_model_the_solver_fits():
     Jp = unc.jacobian(lambda v: models.projector_predict(v, M, 960.0).ravel(), q, method="complex")
     sp_ = unc.std(unc.covariance(Jp, 0.2))
     assert sp_[0] == pytest.approx(pb.std["f_p"], rel=1e-6) and sp_[1] == pytest.approx(pb.std["v0p"], rel=1e-6)
+
+
+@pytest.mark.parametrize("k1,angles", [(-1e-7, (20.0, 20.0, 0.0)), (0.0, (20.0, 20.0, 0.0)), (-1e-7, (2.0, 1.0, 0.0))])
+def test_prior_when_needed_is_the_solvers_rule(k1, angles):
+    """pp_prior_when='needed' gives the data-only bound where it pins the principal point to within the prior's
+    std, else the bound with the prior -- the same numbers as choosing by hand, from one Jacobian."""
+    K = intrinsic_matrix(1539.0, 674.0, 512.0, alpha=1.004)
+    R = euler_to_matrix(*np.radians(angles))
+    obj = object_points(10, 6, 24.0)
+    args = (K, None, k1, 0.0, R, [0, 0, 500], obj)
+    free = camera_bound(*args, jacobian="central")
+    with_prior = camera_bound(*args, jacobian="central", pp_prior_std=32.0)
+    auto = camera_bound(*args, jacobian="central", pp_prior_std=32.0, pp_prior_when="needed")
+    pinned = bool(np.isfinite(free.std["u0c"]) and max(free.std["u0c"], free.std["v0c"]) <= 32.0)
+    expected = free if pinned else with_prior
+    assert auto.prior_used == (not pinned) and with_prior.prior_used and not free.prior_used
+    assert auto.std == expected.std and np.array_equal(auto.cov, expected.cov)

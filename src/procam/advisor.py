@@ -535,14 +535,11 @@ class Advisor:
         c, k1, k2, _ = _distortion_for_bound(dev)
         K = np.asarray(dev.K, float)
         sig_pp = o.pp_prior_fraction * max(self.image_size)
-        if prior is None or prior is False:
-            b = crlb.camera_bound(K, c, k1, k2, R_c, t_c, self.obj, o.sigma_camera, jacobian="central")
-            pp = max(b.std["u0c"], b.std["v0c"])
-            if prior is False or (math.isfinite(pp) and pp <= sig_pp):
-                return b.std["f_c"], b.std, False
+        # prior None: the solver's rule (the prior only where the corners do not pin the principal point)
         b = crlb.camera_bound(K, c, k1, k2, R_c, t_c, self.obj, o.sigma_camera, jacobian="central",
-                              pp_prior_std=sig_pp)
-        return b.std["f_c"], b.std, True
+                              pp_prior_std=None if prior is False else sig_pp,
+                              pp_prior_when="needed" if prior is None else "always")
+        return b.std["f_c"], b.std, b.prior_used
 
     def _projector_pose(self, R_c, t_c):
         p = self.projector

@@ -55,6 +55,7 @@ class Bound:
     params : tuple of the parameter names (rows of ``cov``).
     condition : ``s_min / s_max`` of the column-normalised Jacobian (degenerate below ``cond_limit``).
     model : ``"full"``, ``"known_distortion"``, ``"known_alpha"`` (camera) or ``"projector"``.
+    prior_used : whether the camera bound includes the principal-point prior (``pp_prior_std``).
     """
 
     std: dict
@@ -64,6 +65,7 @@ class Bound:
     params: tuple
     condition: float
     model: str
+    prior_used: bool = False
 
     @property
     def degenerate(self) -> bool:
@@ -127,7 +129,8 @@ def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="
 
 
 def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full", *,
-                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", pp_prior_std=None):
+                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", pp_prior_std=None,
+                 pp_prior_when="always"):
     """CRLB of a single-pose camera calibration with the division model.
 
     Observations are the 2N **distorted** corners
@@ -165,6 +168,9 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
         ``"full"`` model only: a Gaussian prior of this std (px) on the principal point / COD, as the
         single-pose solver assumes it (image centre, ``CameraOptions.pp_prior_std``) when the corners do not
         pin it. The bound is then the Bayesian one (finite even without distortion).
+    pp_prior_when : ``"always"``, or ``"needed"``: the solver's rule -- the prior only when the bound without
+        it leaves the principal point less certain than ``pp_prior_std`` (or undetermined); one Jacobian
+        serves both bounds. ``Bound.prior_used`` says which it is.
 
     Returns
     -------
@@ -232,6 +238,8 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
             return observe(f0 + 0 * p[0], alpha0, np.zeros(2) + 0 * p[0], kap1, kap2, p[0:3], p[3:6])
         raw_scale = np.ones(6)
 
+    if pp_prior_when not in ("always", "needed"):
+        raise ValueError(f"pp_prior_when must be 'always' or 'needed', got {pp_prior_when!r}")
     prior = None
     if pp_prior_std is not None:
         if model != "full":
@@ -240,10 +248,20 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
             raise ValueError(f"pp_prior_std must be a positive number of pixels, got {pp_prior_std}")
         prior = np.zeros(len(p0))
         prior[2:4] = 1.0 / float(pp_prior_std) ** 2
-    cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
-                             jacobian=jacobian, prior_precision=prior)
-    cov = cov * np.outer(raw_scale, raw_scale)
-    return _pack(cov, names, cond, model, ["f_c", "alpha_c", "u0c", "v0c", "k1", "k2"])
+    keys = ["f_c", "alpha_c", "u0c", "v0c", "k1", "k2"]
+    if prior is None or pp_prior_when == "always":
+        cov, cond = fisher_bound(fun, p0, sigma, rel_step=rel_step, cond_limit=cond_limit,
+                                 jacobian=jacobian, prior_precision=prior)
+        return _pack(cov * np.outer(raw_scale, raw_scale), names, cond, model, keys, prior_used=prior is not None)
+    J = unc.jacobian(fun, np.asarray(p0, float), method=jacobian, rel_step=rel_step)
+    cond = unc.condition(J)
+    free = _pack(unc.covariance(J, sigma, rcond=cond_limit) * np.outer(raw_scale, raw_scale), names, cond, model,
+                 keys)
+    pp = max(free.std["u0c"], free.std["v0c"])
+    if np.isfinite(pp) and pp <= pp_prior_std:
+        return free
+    cov = unc.covariance(J, sigma, prior_precision=prior, rcond=cond_limit)
+    return _pack(cov * np.outer(raw_scale, raw_scale), names, cond, model, keys, prior_used=True)
 
 
 def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
@@ -303,14 +321,15 @@ def _std(cov, k):
     return float(np.sqrt(v)) if np.isfinite(v) and v >= 0 else float("inf")
 
 
-def _pack(cov, names, cond, model, scalar_keys) -> Bound:
+def _pack(cov, names, cond, model, scalar_keys, prior_used=False) -> Bound:
     if not np.all(np.isfinite(cov)):
         std = {key: (float("inf") if key in names else 0.0) for key in scalar_keys}
     else:
         std = {key: (_std(cov, names.index(key)) if key in names else 0.0) for key in scalar_keys}
     omega = np.array([_std(cov, names.index(k)) for k in ("wx", "wy", "wz")])
     t = np.array([_std(cov, names.index(k)) for k in ("tx", "ty", "tz")])
-    return Bound(std=std, omega=omega, t=t, cov=cov, params=tuple(names), condition=cond, model=model)
+    return Bound(std=std, omega=omega, t=t, cov=cov, params=tuple(names), condition=cond, model=model,
+                 prior_used=prior_used)
 
 
 def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
