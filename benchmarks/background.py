@@ -8,7 +8,7 @@ the board) of two rigs at several board poses:
 * ``ideal``: u0p = 960, alpha_p = 1 -- they hold.
 
 Every pose goes through the pipeline (decode, corners, background points), the paper's single-pose
-method (no background), then :mod:`procam.background`. Tables:
+method (no background), then :mod:`procam.single_pose.background`. Tables:
 
 1. the check at every pose: the true u0p error of the assumption, the check's verdict, the size of the
    disagreement (median / 90th percentile distance of the background to its epipolar lines under the
@@ -48,7 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _common import header  # noqa: E402
 
-from procam import background as bg  # noqa: E402
+from procam.single_pose import background as bg  # noqa: E402
 from procam import models, patterns, pipeline, simulate, single_pose, verify  # noqa: E402
 from procam.board import Board  # noqa: E402
 from procam.errors import ProcamError  # noqa: E402

@@ -11,21 +11,6 @@ import functools
 import numpy as np
 
 
-def truth_calibration(scene, method: str = "truth"):
-    """The simulator's ground truth as a :class:`procam.calibration.Calibration`."""
-    from procam.calibration import Calibration, Device, Distortion
-
-    if scene.cam_distortion == "division":
-        dist = Distortion("division", tuple(float(v) for v in scene.cam_center), *scene.cam_dist_coeffs)
-    elif scene.cam_distortion == "opencv":
-        dist = Distortion("opencv", coeffs=tuple(scene.cam_dist_coeffs))
-    else:
-        dist = Distortion()
-    return Calibration(Device(np.array(scene.K_cam), scene.cam_size, dist),
-                       Device(np.array(scene.K_proj), scene.proj_size), np.array(scene.R), np.array(scene.T), method,
-                       stereo_rms=0.0)
-
-
 @functools.lru_cache(maxsize=None)
 def small_scene():
     from procam import simulate

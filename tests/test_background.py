@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from procam import background as bg
+from procam.single_pose import background as bg
 from procam import correspond, patterns, pipeline, simulate
 from procam import single_pose as sp
 from procam.board import Board

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from procam import evaluate, simulate
-from procam.calibration import Calibration, Device, Distortion
+from procam.calibration import Device, Distortion
 from procam.errors import CalibrationError
 from procam.view import View
 
@@ -23,16 +23,6 @@ def _views(scenes, sigma_c=0.0, sigma_p=0.0, seed=0):
         obj, cam, proj = simulate.correspondences(sc, sigma_c, sigma_p, seed * 100 + k)
         out.append(View(obj, cam, proj, f"pose{k + 1}", sc.cam_size, sc.proj_size))
     return out
-
-
-def _truth_calibration(base) -> Calibration:
-    if base.cam_distortion == "opencv":
-        dist = Distortion("opencv", coeffs=tuple(base.cam_dist_coeffs))
-    else:
-        center = base.cam_dist_center if base.cam_dist_center is not None else tuple(base.K_cam[:2, 2])
-        dist = Distortion("division", tuple(center), *base.cam_dist_coeffs)
-    return Calibration(Device(base.K_cam, base.cam_size, dist), Device(base.K_proj, base.proj_size, Distortion()),
-                       base.R, base.T, "truth")
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +41,7 @@ def division_rig():
 @pytest.mark.parametrize("rig_name", ["opencv_rig", "division_rig"])
 def test_truth_on_noise_free_data_is_exact(rig_name, request):
     base, scenes = request.getfixturevalue(rig_name)
-    ev = evaluate.evaluate(_truth_calibration(base), _views(scenes))
+    ev = evaluate.evaluate(simulate.truth_calibration(base), _views(scenes))
     assert ev.cam_rms < 1e-5 and ev.proj_rms < 1e-5 and ev.stereo_rms < 1e-5
     assert ev.sigma_T < 1e-4 and ev.sigma_abs_T < 1e-4
     np.testing.assert_allclose(ev.T_mean, base.T, atol=1e-4)
@@ -65,7 +55,7 @@ def test_truth_on_noise_free_data_is_exact(rig_name, request):
 
 def test_sigma_T_grows_with_noise(opencv_rig):
     base, scenes = opencv_rig
-    calib = _truth_calibration(base)
+    calib = simulate.truth_calibration(base)
     sig = {}
     for s in (0.0, 0.05, 0.1, 0.2, 0.4):
         ev = evaluate.evaluate(calib, _views(scenes, s, 2 * s, seed=1))
@@ -84,7 +74,7 @@ def test_sigma_T_grows_with_noise(opencv_rig):
 
 def test_spread_definitions(opencv_rig):
     base, scenes = opencv_rig
-    ev = evaluate.evaluate(_truth_calibration(base), _views(scenes, 0.1, 0.2, seed=2))
+    ev = evaluate.evaluate(simulate.truth_calibration(base), _views(scenes, 0.1, 0.2, seed=2))
     Ts = np.array([p.T for p in ev.poses])
     n = len(Ts)
     assert ev.sigma_T == pytest.approx(np.sqrt(np.sum(np.var(Ts, axis=0, ddof=1))))
@@ -104,8 +94,8 @@ def test_spread_definitions(opencv_rig):
 def test_wrong_calibration_is_worse(opencv_rig):
     base, scenes = opencv_rig
     views = _views(scenes, 0.1, 0.2, seed=3)
-    good = evaluate.evaluate(_truth_calibration(base), views)
-    bad = _truth_calibration(base).replace(T=base.T + np.array([5.0, 0.0, 0.0]))
+    good = evaluate.evaluate(simulate.truth_calibration(base), views)
+    bad = simulate.truth_calibration(base).replace(T=base.T + np.array([5.0, 0.0, 0.0]))
     ev_bad = evaluate.evaluate(bad, views)
     # PnP-based metrics do not depend on (R, T); the stereo RMS does
     assert ev_bad.cam_rms == pytest.approx(good.cam_rms) and ev_bad.sigma_T == pytest.approx(good.sigma_T)
@@ -113,7 +103,7 @@ def test_wrong_calibration_is_worse(opencv_rig):
     Kbad = base.K_cam.copy()
     Kbad[0, 0] *= 1.03
     Kbad[1, 1] *= 1.03
-    ev_k = evaluate.evaluate(_truth_calibration(base).replace(
+    ev_k = evaluate.evaluate(simulate.truth_calibration(base).replace(
         camera=Device(Kbad, base.cam_size, Distortion("opencv", coeffs=CAM_DIST))), views)
     assert ev_k.sigma_T > 2 * good.sigma_T
 
@@ -124,15 +114,15 @@ def test_nan_corners_and_errors(opencv_rig):
     proj = views[1].proj_pts.copy()
     proj[:7] = np.nan
     views[1] = View(views[1].obj_pts, views[1].cam_pts, proj, "holes", base.cam_size, base.proj_size)
-    ev = evaluate.evaluate(_truth_calibration(base), views)
+    ev = evaluate.evaluate(simulate.truth_calibration(base), views)
     assert ev.poses[1].n_points == 53 and ev.stereo_rms < 1e-5
     with pytest.raises(CalibrationError, match="no projector"):
-        evaluate.evaluate(_truth_calibration(base).replace(projector=None), views)
+        evaluate.evaluate(simulate.truth_calibration(base).replace(projector=None), views)
     with pytest.raises(CalibrationError, match="at least one pose"):
-        evaluate.evaluate(_truth_calibration(base), [])
+        evaluate.evaluate(simulate.truth_calibration(base), [])
     tiny = views[0].subset(np.arange(60) < 4)
     with pytest.raises(CalibrationError, match="pose1"):
-        evaluate.evaluate(_truth_calibration(base), [tiny])
+        evaluate.evaluate(simulate.truth_calibration(base), [tiny])
 
 
 def test_multi_pose_calibration_evaluates_near_truth(opencv_rig):
@@ -142,7 +132,7 @@ def test_multi_pose_calibration_evaluates_near_truth(opencv_rig):
     views = _views(scenes, 0.1, 0.2, seed=4)
     calib = multi_pose.calibrate(views)
     ev = evaluate.evaluate(calib, views)
-    ev_truth = evaluate.evaluate(_truth_calibration(base), views)
+    ev_truth = evaluate.evaluate(simulate.truth_calibration(base), views)
     # the fitted model explains its own data at least as well as the truth does
     assert ev.stereo_rms <= ev_truth.stereo_rms * 1.01
     assert ev.sigma_T < 3.0 and abs(ev.stereo_rms - calib.stereo_rms) < 0.05
@@ -194,6 +184,6 @@ def test_report_residuals_observed_minus_predicted(division_rig):
     moved = views[0].cam_pts.copy()
     moved[0, 0] += 3.0
     view = dataclasses.replace(views[0], cam_pts=moved)
-    out = pose_residuals(_truth_calibration(base), [view])[0]
+    out = pose_residuals(simulate.truth_calibration(base), [view])[0]
     assert out["cam_res"][0, 0] > 2.0
     assert np.nanmax(np.abs(out["proj_res"])) < 1e-5

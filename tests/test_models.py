@@ -62,15 +62,6 @@ def test_board_angles_same_physical_pose_same_angles():
     assert np.allclose(models.board_angles_deg(R @ FLIP, t), np.degrees(ang))
 
 
-def test_rms_skips_nan_rows():
-    e = np.array([[3.0, 4.0], [np.nan, 1.0], [0.0, 0.0], [np.inf, 0.0]])
-    assert residuals.rms(e) == pytest.approx(np.sqrt(25 / 2))
-    assert np.isnan(residuals.rms(np.full((3, 2), np.nan)))
-    assert np.isnan(residuals.rms(np.zeros((0, 2))))
-    # lists of arrays of different lengths are pooled
-    assert residuals.rms([np.array([[3.0, 4.0]]), np.zeros((3, 2)), e]) == pytest.approx(np.sqrt(50 / 6))
-
-
 def _scene(seed=4):
     rng = np.random.default_rng(seed)
     gx, gy = np.meshgrid(np.arange(9) * 20.0, np.arange(6) * 20.0)

@@ -11,7 +11,8 @@ from procam.errors import ProcamError
 from procam.reconstruct import (PointCloud, board_region, fit_plane, read_ply, reconstruct, residual_image,
     residual_map, write_ply)
 from procam.triangulate import triangulate_dense
-from sim_small import small_capture, small_scene, truth_calibration
+from procam.simulate import truth_calibration
+from sim_small import small_capture, small_scene
 
 plyfile = pytest.importorskip("plyfile", reason="the PLY tests need the plyfile package")
 

@@ -11,8 +11,8 @@ from procam.calibration import Device, Distortion
 from procam.errors import CalibrationError
 from procam.triangulate import midpoint, rays, triangulate_points
 from procam.verify import adjacent_pairs, leave_one_out, single_pose_cross, verify, verify_pose
+from procam.simulate import truth_calibration
 from procam.view import View
-from sim_small import truth_calibration
 
 POSES = [(15, 12, 0), (-10, 20, 5), (20, -15, -5), (5, 25, 10), (-20, -10, 0)]
 

@@ -22,10 +22,10 @@ The modules, from the captures up (each imports only those above it in this list
     uncertainty   the only Jacobian / covariance code
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
-    residuals     RMS, PnP, stereo pose, per-pose residuals
-    misfit        model error versus noise: a smooth field in a fit's residuals across the board
-    background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
-    single_pose   the seed method (camera, projector, extrinsics, advice)
+    stats         RMS, robust sigma (MAD), total-least-squares plane: one definition each
+    residuals     PnP, stereo pose, per-pose residuals
+    single_pose   the seed method (camera, projector, extrinsics, the pose's rating), with its background check
+                  and refinement (single_pose.background) and its misfit test (single_pose.misfit)
     advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
@@ -62,9 +62,9 @@ import importlib
 __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
-               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "stats",
                "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
-               "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check",
+               "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
                "acquire")
 
 #: Public names re-exported here: name -> module.

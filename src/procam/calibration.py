@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import models
+from .parameters import PARAMETERS
 
 
 @dataclass(frozen=True)
@@ -123,7 +124,9 @@ class Calibration:
         projector; :func:`procam.single_pose.calibrate_camera_only`), with variant details in ``info``.
     cam_rms, proj_rms, stereo_rms : RMS reprojection errors in pixels (NaN if not computed).
     std : dict name -> standard deviation (same units as the parameter; angles in degrees),
-        from the Jacobian at the solution.
+        from the Jacobian at the solution. Every name is a declared parameter
+        (:data:`procam.parameters.PARAMETERS`): a result with another name is refused (``ValueError``), so a
+        solver cannot report a number no table, file or reader knows.
     poses : list of per-pose dicts (name, angles, advice, errors).
     views : the :class:`procam.view.View` s it was computed from.
     warnings : human-readable caveats (unreliable centre of distortion, degenerate pose, ...).
@@ -148,6 +151,11 @@ class Calibration:
     info: dict = field(default_factory=dict)
     verdict: str = "good"
     verdict_reasons: tuple = ()
+
+    def __post_init__(self):
+        unknown = sorted(set(self.std) - set(PARAMETERS))
+        if unknown:
+            raise ValueError(f"std names not declared in procam.parameters: {', '.join(unknown)}")
 
     @property
     def trusted(self) -> bool:

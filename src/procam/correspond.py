@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._threads import single_threaded_blas
+from .stats import rms
 from .decode import DecodeResult
 
 #: Per-corner reason codes (``diagnostics["reason"]``).
@@ -116,7 +117,7 @@ def _finish(k, Hm, src, dst, do, inl, options, proj, reason, inliers, resid):
     inliers[k] = int(inl.sum())
     ph = np.column_stack([src, np.ones(len(src))]) @ Hm.T
     e = ph[inl, :2] / ph[inl, 2:3] - dst[inl]
-    resid[k] = float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if inl.any() else np.inf
+    resid[k] = rms(e) if inl.any() else np.inf
     if inliers[k] < 8 or resid[k] > options.max_residual:
         reason[k] = 4
         return

@@ -30,7 +30,8 @@ import numpy as np
 from . import models
 from .calibration import Calibration
 from .errors import CalibrationError
-from .residuals import pnp, rms, stereo_pose
+from .residuals import pnp, stereo_pose
+from .stats import rms
 from .view import View
 
 

@@ -41,7 +41,7 @@ class PoseOptions:
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
     background : keep the decoded points off the board (:func:`procam.correspond.background_points`) in
-        ``view.background``, for the single-pose background check (:mod:`procam.background`).
+        ``view.background``, for the single-pose background check (:mod:`procam.single_pose.background`).
     """
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)

@@ -25,6 +25,8 @@ import numpy as np
 
 from .errors import ProcamError
 from ._files import atomic_path, full_scale_of
+from .stats import rms as _rms
+from .stats import robust_sigma, tls_plane
 from .triangulate import triangulate_dense
 
 
@@ -182,9 +184,8 @@ class Plane:
 
 
 def _tls_plane(X):
-    c = X.mean(axis=0)
-    _, _, Vt = np.linalg.svd(X - c, full_matrices=False)
-    n = Vt[-1]
+    """:func:`procam.stats.tls_plane` as ``(normal, offset)`` with ``normal . x + offset = 0``, offset >= 0."""
+    n, c = tls_plane(X)
     d = -float(n @ c)
     if d < 0:
         n, d = -n, -d
@@ -235,23 +236,23 @@ def fit_plane(points, *, robust: bool = True, k: float = 3.0, trials: int = 300,
         else:
             n, d = best[1], best[2]
         r = Xf @ n + d
-        inl = np.abs(r) <= max(2.5 * 1.4826 * float(np.median(np.abs(r))), 1e-12)
+        inl = np.abs(r) <= max(2.5 * robust_sigma(r, about=0.0), 1e-12)
         for _ in range(3):
             if inl.sum() < 3:
                 break
             n, d = _tls_plane(Xf[inl])
             r = Xf @ n + d
-            sig = 1.4826 * float(np.median(np.abs(r[inl])))
+            sig = robust_sigma(r[inl], about=0.0)
             inl = np.abs(r) <= max(k * sig, 1e-12)
     if d < 0:
         n, d = -n, -d
     r = Xf @ n + d
-    sig = 1.4826 * float(np.median(np.abs(r[inl]))) if inl.any() else float("nan")
+    sig = robust_sigma(r[inl], about=0.0)
     r_all = np.full(len(X), np.nan)
     r_all[fin] = r
     inliers = np.zeros(len(X), bool)
     inliers[fin] = inl
-    rms = float(np.sqrt(np.mean(r[inl] ** 2))) if inl.any() else float("nan")
+    rms = _rms(r[inl], dim=1)
     return Plane(np.asarray(n, float), float(d), inliers, r_all, rms, sig)
 
 
@@ -274,7 +275,7 @@ def residual_image(res_map: np.ndarray, scale: float | None = None) -> np.ndarra
     r = np.asarray(res_map, float)
     fin = np.isfinite(r)
     if scale is None:
-        scale = 3.0 * 1.4826 * float(np.median(np.abs(r[fin]))) if fin.any() else 1.0
+        scale = 3.0 * robust_sigma(r[fin], about=0.0) if fin.any() else 1.0
     scale = scale if scale > 0 else 1.0
     u = np.clip((np.where(fin, r, 0.0) / scale + 1.0) * 127.5, 0, 255).astype(np.uint8)
     img = cv2.applyColorMap(u, cv2.COLORMAP_JET)

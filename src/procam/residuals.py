@@ -1,10 +1,8 @@
 """Reprojection residuals shared by the solvers, the evaluation and the reports.
 
 One implementation of each measure, so that a calibration's own ``cam_rms`` / ``stereo_rms`` and
-``procam evaluate`` on the same pose agree:
+``procam evaluate`` on the same pose agree (every RMS is :func:`procam.stats.rms`):
 
-* :func:`rms` -- ``sqrt(sum |e|^2 / n)`` over points (Euclidean pixel distances), rows with a NaN
-  skipped;
 * :func:`pnp` -- board pose from undistorted pixels with the intrinsics fixed;
 * :func:`stereo_pose` -- board pose with both devices' intrinsics and ``(R, T)`` fixed;
 * :func:`pose_residuals` -- every view's residual vectors under a calibration, each device on its own
@@ -15,7 +13,7 @@ One implementation of each measure, so that a calibration's own ``cam_rms`` / ``
 Sign convention: every residual is **observed - predicted** (pixels).
 
 This module is below :mod:`procam.single_pose`, :mod:`procam.multi_pose` and
-:mod:`procam.evaluate`; it imports only :mod:`procam.models` and :mod:`procam.errors`.
+:mod:`procam.evaluate`; it imports only :mod:`procam.models`, :mod:`procam.stats` and :mod:`procam.errors`.
 """
 
 from __future__ import annotations
@@ -28,26 +26,6 @@ from .errors import CalibrationError
 #: Termination of the final ``cv2.solvePnPRefineLM`` step of :func:`pnp`: at most this many iterations,
 #: or a step below this epsilon.
 PNP_REFINE_ITERATIONS, PNP_REFINE_EPS = 100, 1e-15
-
-
-def rms(e) -> float:
-    """RMS point distance ``sqrt(sum_i |e_i|^2 / n)`` of residual vectors, skipping non-finite rows.
-
-    Parameters
-    ----------
-    e : (N, 2) array (anything reshapeable to it), or a list/tuple of such arrays (pooled).
-
-    Returns
-    -------
-    float
-        Pixels; NaN when no finite row is left.
-    """
-    if isinstance(e, (list, tuple)):
-        parts = [np.asarray(a, float).reshape(-1, 2) for a in e]
-        e = np.concatenate(parts) if parts else np.zeros((0, 2))
-    e = np.asarray(e, float).reshape(-1, 2)
-    e = e[np.isfinite(e).all(axis=1)]
-    return float(np.sqrt(np.mean(np.sum(e * e, axis=1)))) if len(e) else float("nan")
 
 
 def pnp(obj, pts, K, *, refine: bool = True):

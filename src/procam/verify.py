@@ -38,6 +38,7 @@ import numpy as np
 
 from . import multi_pose, single_pose
 from .errors import CalibrationError, ProcamError, ProcamWarning
+from .stats import rms, tls_plane
 from .triangulate import triangulate_points
 from .view import View
 
@@ -160,11 +161,10 @@ def adjacent_pairs(obj_pts, rel_tol: float = 1e-6):
 
 
 def plane_fit(X):
-    """Total-least-squares plane of points X (N, 3): ``(normal (3,), centroid (3,), distances (N,))``."""
+    """Total-least-squares plane of points X (N, 3) (:func:`procam.stats.tls_plane`): ``(normal (3,),
+    centroid (3,), distances (N,))``."""
     X = np.asarray(X, float).reshape(-1, 3)
-    c = X.mean(axis=0)
-    _, _, Vt = np.linalg.svd(X - c, full_matrices=False)
-    n = Vt[-1]
+    n, c = tls_plane(X)
     return n, c, (X - c) @ n
 
 
@@ -182,11 +182,6 @@ def rigid_fit(A, B):
     R = Vt.T @ D @ U.T
     t = cb - R @ ca
     return R, t, np.linalg.norm(B - (A @ R.T + t), axis=1)
-
-
-def _rms(a) -> float:
-    a = np.asarray(a, float).ravel()
-    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -219,9 +214,9 @@ def _metric(name, n, s, d, pd, rd, reproj, dist) -> PoseMetric:
     rel = (d - s) / s
     return PoseMetric(
         name=name, n_corners=int(n), n_pairs=int(len(d)), square=float(s), mean_spacing=float(np.mean(d)),
-        scale_error_pct=float(100.0 * np.mean(rel)), spacing_rms=_rms(d - s), planarity_rms=_rms(pd),
-        planarity_max=float(np.max(np.abs(pd))), rigid_rms=_rms(rd),
-        reproj_rms=float(np.sqrt(np.mean(np.sum(reproj * reproj, axis=1)))), distance=float(np.mean(dist)))
+        scale_error_pct=float(100.0 * np.mean(rel)), spacing_rms=rms(d - s, dim=1), planarity_rms=rms(pd, dim=1),
+        planarity_max=float(np.max(np.abs(pd))), rigid_rms=rms(rd, dim=1),
+        reproj_rms=rms(reproj), distance=float(np.mean(dist)))
 
 
 def _pool(raws) -> PoseMetric:
@@ -234,10 +229,10 @@ def _pool(raws) -> PoseMetric:
     reproj = np.concatenate([r["reproj"] for r in raws])
     return PoseMetric(
         name="all", n_corners=int(sum(r["n"] for r in raws)), n_pairs=int(len(d)), square=s,
-        mean_spacing=float(np.mean(d)), scale_error_pct=float(100.0 * np.mean(rel)), spacing_rms=_rms(dev),
-        planarity_rms=_rms(pd), planarity_max=float(np.max(np.abs(pd))),
-        rigid_rms=_rms(np.concatenate([r["rd"] for r in raws])),
-        reproj_rms=float(np.sqrt(np.mean(np.sum(reproj * reproj, axis=1)))),
+        mean_spacing=float(np.mean(d)), scale_error_pct=float(100.0 * np.mean(rel)), spacing_rms=rms(dev, dim=1),
+        planarity_rms=rms(pd, dim=1), planarity_max=float(np.max(np.abs(pd))),
+        rigid_rms=rms(np.concatenate([r["rd"] for r in raws]), dim=1),
+        reproj_rms=rms(reproj),
         distance=float(np.mean(np.concatenate([r["dist"] for r in raws]))))
 
 

@@ -170,7 +170,7 @@ def calibrate_cmd(
                 from ..export import load_camera_intrinsics
 
                 known = load_camera_intrinsics(camera_file, views[0].cam_size)
-            from ..background import BackgroundOptions
+            from ..single_pose.background import BackgroundOptions
 
             calib = _sp.calibrate(views[0], camera=camera, known_camera=known,
                                   background=BackgroundOptions(mode=value(background)))

@@ -37,7 +37,7 @@ def demo_cmd(
     from ..plots import save_figure
     from ..plots.correspond import correspond_figure
     from ..plots.decode import decode_figure
-    from ..residuals import rms
+    from ..stats import rms
     from .calibrate import print_summary
 
     if preset not in simulate.PRESETS:

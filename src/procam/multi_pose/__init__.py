@@ -30,7 +30,7 @@ from .. import uncertainty as unc
 from .._threads import deterministic
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, WeakPoseWarning
-from ..residuals import rms
+from ..stats import rms
 from ..view import View
 from .device import DIST_MODELS, DeviceCalibration, _as_cv, _check_dist, _criteria, calibrate_device, zhang_intrinsics
 from .refine import StereoRefinement, refine_stereo
@@ -85,11 +85,6 @@ def check_counts(obj_list, cam_dist: str = "k1k2p1p2k3", proj_dist: str = "k1k2p
             + (f", {len(free)} distortion terms {terms}" if free else "") + "): so few points cannot determine "
             + ("the distortion" if free else "the intrinsics") + "; use more poses or a larger board"
             + (f", {simpler}" if simpler else ""))
-
-
-def _rms(arrs) -> float:
-    """Pooled RMS (px) of a list of (N, 2) residual arrays (:func:`procam.residuals.rms`)."""
-    return rms(list(arrs))
 
 
 def _std_dict(ref: StereoRefinement, n_cam_dist: int, n_proj_dist: int) -> dict:
@@ -260,8 +255,8 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
         res = ref.residuals
         cam_res = [r[0] for r in res]
         proj_res = [r[1] for r in res]
-        cam_rms, proj_rms = _rms(cam_res), _rms(proj_res)
-        stereo_rms = _rms(cam_res + proj_res)
+        cam_rms, proj_rms = rms(cam_res), rms(proj_res)
+        stereo_rms = rms(cam_res + proj_res)
         std = _std_dict(ref, len(dc), len(dp))
         info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref.status,
                               "nfev": ref.nfev, "cost": ref.cost}
@@ -290,8 +285,8 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
                       "camera_angles_deg": models.board_angles_deg(Rc, tv_board[j]).tolist(),
                       "projector_angles_deg": models.board_angles_deg(Rp, tp).tolist(),
                       "R_cam": Rc.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
-                      "cam_rms": _rms([cam_res[j]]), "proj_rms": _rms([proj_res[j]]),
-                      "stereo_rms": _rms([cam_res[j], proj_res[j]])})
+                      "cam_rms": rms([cam_res[j]]), "proj_rms": rms([proj_res[j]]),
+                      "stereo_rms": rms([cam_res[j], proj_res[j]])})
     if len(views) < 3:
         warnings.append("only 2 poses: the multi-pose intrinsics are weakly constrained; use 3 or more")
     info["undetermined"] = {}
@@ -321,7 +316,7 @@ def check_distinct(views: Sequence[View], min_px: float = 1.0) -> None:
                 continue
             d = a.cam_pts - b.cam_pts
             ok = np.isfinite(d).all(1)
-            if ok.sum() >= 4 and np.sqrt(np.mean(np.sum(d[ok] ** 2, axis=1))) < min_px:
+            if ok.sum() >= 4 and rms(d[ok]) < min_px:
                 raise CalibrationError(f"poses {a.name!r} and {b.name!r} are the same pose (their board corners lie "
                                        f"within {min_px:g} px of each other): give every pose once -- a pose given "
                                        "twice counts twice and skews the calibration")

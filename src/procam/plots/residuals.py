@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import stats
 from . import _figure
 
 #: Colour of the verdict line in the figure's title, by the verdict's first word.
@@ -127,7 +128,7 @@ def residual_figure(per_pose, cam_size, proj_size=None, scale: float | None = No
             L = nice_length(np.percentile(used_len, 95))
             ax.quiverkey(quiver, 0.03, 0.955, L * k, f"{L:g} px (arrows x{k:.3g})", labelpos="E", coordinates="axes",
                          color="k", fontproperties={"size": 8})
-        rms = float(np.sqrt(np.mean(used_len ** 2))) if used_len.size else float("nan")
+        rms = stats.rms(used_len, dim=1)
         mx = float(used_len.max()) if used_len.size else float("nan")
         head = f"{label}: RMS {rms:.3f} px over {used_len.size} corners, max {mx:.3f} px"
         if rej_len.size:

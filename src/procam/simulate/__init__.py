@@ -31,11 +31,12 @@ from __future__ import annotations
 from .lens import distort, euler_matrix, matrix_euler, project, undistort
 from .renderer import Renderer, render, true_projector_maps, write_capture
 from .scene import (DEFAULT_DISTANCE, PRESETS, RECOMMENDED_POSE, Scene, board_corners, board_extent,
-                    corner_truth, correspondences, fit_margin, preset, truth, with_board_pose)
+                    corner_truth, correspondences, fit_margin, preset, truth, truth_calibration,
+                    with_board_pose)
 
 __all__ = [
     "Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
-    "truth", "correspondences", "true_projector_maps", "render", "Renderer", "write_capture",
+    "truth", "truth_calibration", "correspondences", "true_projector_maps", "render", "Renderer", "write_capture",
     "board_corners", "board_extent", "corner_truth", "fit_margin", "project", "distort", "undistort",
     "euler_matrix", "matrix_euler",
 ]

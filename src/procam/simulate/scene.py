@@ -26,7 +26,8 @@ from .._files import to_jsonable
 from .lens import _K, distort, euler_matrix, matrix_euler, project
 
 __all__ = ["Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",
-           "fit_margin", "board_corners", "board_extent", "corner_truth", "truth", "correspondences"]
+           "fit_margin", "board_corners", "board_extent", "corner_truth", "truth", "truth_calibration",
+           "correspondences"]
 
 #: Board (psi, nu, phi) in degrees in the CAMERA frame recommended for a single-pose calibration
 #: with the ``paper`` / ``ideal`` rigs: |psi_c| + |nu_c| = 27 > 10 and, through the rig's
@@ -419,6 +420,23 @@ def truth(scene: Scene) -> dict:
     d["canonical_order"] = bool(np.all(np.isfinite(cam)) and np.argmin(cam.sum(axis=1)) == 0
                                 and cam[1, 0] > cam[0, 0] and cam[cols, 1] > cam[0, 1] and n > cols)
     return to_jsonable(d)
+
+
+def truth_calibration(scene: Scene, method: str = "truth"):
+    """The scene's exact devices and extrinsics as a :class:`procam.calibration.Calibration` (no ``std``;
+    ``stereo_rms`` 0, the per-device RMS not computed): what a perfect calibration of this rig would return, to
+    hold a result or a metric against."""
+    from ..calibration import Calibration, Device, Distortion
+
+    if scene.cam_distortion == "division":
+        dist = Distortion("division", tuple(float(v) for v in scene.cam_center), *scene.cam_dist_coeffs)
+    elif scene.cam_distortion == "opencv":
+        dist = Distortion("opencv", coeffs=tuple(scene.cam_dist_coeffs))
+    else:
+        dist = Distortion()
+    return Calibration(Device(np.array(scene.K_cam), scene.cam_size, dist),
+                       Device(np.array(scene.K_proj), scene.proj_size), np.array(scene.R), np.array(scene.T),
+                       method, stereo_rms=0.0)
 
 
 def correspondences(scene: Scene, sigma_cam: float = 0.1, sigma_proj: float = 0.2, seed: int = 0):

@@ -26,15 +26,16 @@ import warnings as _warnings
 
 import numpy as np
 
-from .. import background as _background
+from . import background as _background
 from .. import models
 from .. import uncertainty as unc
 from .._threads import deterministic
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
-from ..misfit import misfit
-from ..residuals import pnp, rms, stereo_pose
-from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report, robust_sigma
+from .misfit import misfit
+from ..residuals import pnp, stereo_pose
+from ..stats import rms, robust_sigma
+from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from .advice import AdviceOptions, Prediction, advice, judge, predict
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
@@ -44,7 +45,7 @@ __all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_
            "CameraOptions", "ProjectorOptions", "RobustOptions", "AdviceOptions", "CameraSolution",
            "ProjectorSolution", "COD_MODES", "REFINE_MODES", "BACKGROUND_MODES", "robust_sigma"]
 
-#: The background modes of :func:`calibrate` (:data:`procam.background.MODES`).
+#: The background modes of :func:`calibrate` (:data:`procam.single_pose.background.MODES`).
 BACKGROUND_MODES = _background.MODES
 
 
@@ -190,7 +191,7 @@ def known_camera_pose(obj_pts, cam_pts, device: Device, *, robust: RobustOptions
 
 
 def _misfit(obj, sol, floor_px: float):
-    """The misfit test (:mod:`procam.misfit`) of a device solution's residuals on the corners it used."""
+    """The misfit test (:mod:`procam.single_pose.misfit`) of a device solution's residuals on the corners it used."""
     res = np.where(sol.mask[:, None], sol.residuals, np.nan)
     return misfit(obj, res, device="camera" if isinstance(sol, CameraSolution) else "projector", floor_px=floor_px)
 
@@ -239,10 +240,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         the projector and ``R, T`` (``camera`` options are not used).
     strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of
         returning it with its verdict and a warning.
-    background : :class:`procam.background.BackgroundOptions` (default: mode ``free``) -- used only when
+    background : :class:`procam.single_pose.background.BackgroundOptions` (default: mode ``free``) -- used only when
         ``view.background`` holds decoded points off the board: the check of the projector's assumptions
         (u0p = W/2, alpha_p = 1) against them and, by its mode, the joint refinement that lifts them
-        (:func:`procam.background.apply`). Without ``view.background`` the result is the paper's method alone.
+        (:func:`procam.single_pose.background.apply`). Without ``view.background`` the result is the paper's method alone.
 
     Returns
     -------
@@ -331,7 +332,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                       info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
                             "cod_score": None if cam.cod is None else cam.cod.score,
                             "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
-    # the background behind the board (procam.background): the check, and the refinement, of the projector's
+    # the background behind the board (single_pose.background): the check, and the refinement, of the projector's
     # assumptions -- only when the view carries decoded background points
     bg = getattr(view, "background", None)
     if bg is not None:

@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import models
 from ..errors import CalibrationError
+from ..stats import robust_sigma
 
 
 def clean(obj_pts, img_pts, what):
@@ -94,16 +95,6 @@ def check_corners(obj, mask, min_points: int, name: str, what: str, hint: str) -
     if not spread_ok(obj[mask, :2]):
         raise CalibrationError(f"pose {name!r}: the {n} usable {what} all (or all but one) lie on one line of the "
                                f"board (e.g. one row or column); {need}; {hint}")
-
-
-def robust_sigma(residuals) -> float:
-    """Robust standard deviation (px) of one residual component: ``1.4826 * MAD`` of the x and y
-    components of the (n, 2) residuals pooled (non-finite rows ignored)."""
-    r = np.asarray(residuals, float).reshape(-1, 2)
-    r = r[np.isfinite(r).all(1)].ravel()
-    if r.size == 0:
-        return float("nan")
-    return float(1.4826 * np.median(np.abs(r - np.median(r))))
 
 
 def _prescreen(obj, obs, valid, k: float, floor_px: float):

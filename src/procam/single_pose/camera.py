@@ -22,7 +22,7 @@ from .. import models
 from .. import uncertainty as unc
 from ..calibration import Distortion
 from ..errors import CalibrationError
-from ..residuals import rms
+from ..stats import rms
 from ._principal_axis import _LM, device_side, solve_camera_lm, valid_pose
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from ._solution import DeviceSolution

@@ -16,7 +16,7 @@ from .. import models
 from .. import uncertainty as unc
 from ..calibration import Distortion
 from ..errors import CalibrationError
-from ..residuals import rms
+from ..stats import rms
 from ._principal_axis import solve_projector_lm
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from ._solution import DeviceSolution

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..stats import rms
+
 
 @dataclass(frozen=True)
 class Misfit:
@@ -70,14 +72,14 @@ def misfit(obj_xy, residuals, *, device: str = "camera", floor_px: float = 0.1, 
     ss_res = float(np.sum((r - field) ** 2))
     k = 2 * (A.shape[1] - 1)            # the field's parameters beyond the two means
     dof = 2 * n - 2 * A.shape[1]
-    rms = float(np.sqrt(np.mean(np.sum(r * r, axis=1))))
+    rms_px = rms(r)
     if ss_tot <= 0 or dof <= 0:
-        return Misfit(False, 0.0, rms, 0.0, nan, nan, "")
+        return Misfit(False, 0.0, rms_px, 0.0, nan, nan, "")
     explained = 1.0 - ss_res / ss_tot
     F = (explained / k) / (max(1.0 - explained, 1e-12) / dof)
     p = float(f_dist.sf(F, k, dof))
     centred = field - field.mean(axis=0)
-    field_rms = float(np.sqrt(np.mean(np.sum(centred * centred, axis=1))))
+    field_rms = rms(centred)
     error = bool(p < p_max and explained >= min_explained and field_rms >= floor_px)
     msg = ""
     if error:
@@ -85,6 +87,6 @@ def misfit(obj_xy, residuals, *, device: str = "camera", floor_px: float = 0.1, 
                  "wider-angle lens), or the board is not flat" if device == "camera" else
                  "the projector's lens distorts (the single-pose model assumes it does not), or the board is not flat")
         msg = (f"{device}: model error: its residuals form a smooth pattern across the board ({field_rms:.2f} px of "
-               f"the {rms:.2f} px RMS, {explained:.0%} of the variance; independent noise would leave no pattern): "
+               f"the {rms_px:.2f} px RMS, {explained:.0%} of the variance; independent noise would leave no pattern): "
                f"{cause}; the ± does not cover this")
-    return Misfit(error, field_rms, rms, float(explained), float(F), p, msg)
+    return Misfit(error, field_rms, rms_px, float(explained), float(F), p, msg)
