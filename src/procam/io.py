@@ -15,11 +15,10 @@ import numpy as np
 from ._files import atomic_path, to_jsonable, write_text
 from .board import Board
 from .calibration import Calibration, Device, Distortion
-from .correspond import CORNER_REASONS
 from .distortion import opencv_from_division
 from .errors import CalibrationFileError
 from .summary import projector_assumptions
-from .view import View
+from .view import CORNER_REASONS, View
 
 
 def _nan_to_none(a) -> list:
