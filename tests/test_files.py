@@ -1,9 +1,9 @@
-"""File plumbing: atomic writes, full-scale detection (procam._files)."""
+"""File plumbing: atomic writes, full-scale detection (procam.io.files)."""
 
 import numpy as np
 import pytest
 
-from procam import _files
+from procam.io import files as _files
 
 
 def test_atomic_write_leaves_nothing_on_error(tmp_path):

@@ -48,9 +48,9 @@ def test_imports_no_solver_code():
         for m in _imported_modules(f):
             if m.startswith("procam."):
                 # only the package itself, procam.patterns, procam.capture (the folder format) and
-                # procam._files (no solver code)
+                # procam.io.files (no solver code)
                 assert m.startswith("procam.simulate.") or m in ("procam.patterns", "procam.capture",
-                                                                 "procam._files"), (f.name, m)
+                                                                 "procam.io.files"), (f.name, m)
             else:
                 assert m.startswith(allowed_prefix), (f.name, m)
 

@@ -3,8 +3,8 @@
 The modules, from the captures up (each imports only those above it in this list)::
 
     errors        ProcamError and its subclasses (one-line messages), procam's warning classes
-    _files        image reads, natural sort, atomic writes, JSON helpers, the manifest of procam's files
-                  (the bottom floor)
+    io.files      image reads, natural sort, atomic writes, JSON helpers, the manifest of procam's files
+                  (the bottom floor of the io package; its format modules stand higher, at io below)
     _threads      one OpenCV / BLAS thread where results must not depend on threads
     _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)

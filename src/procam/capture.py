@@ -29,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _files, patterns
+from . import patterns
+from .io import files as _files
 from .errors import CaptureError
 
 
@@ -520,7 +521,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
     step : projector pixels per code (None: patterns.json's, else 1).
-    reader : ``reader(files) -> stack``, default :func:`procam._files.read_images` (e.g.
+    reader : ``reader(files) -> stack``, default :func:`procam.io.files.read_images` (e.g.
         :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
     folder = Path(folder)
@@ -613,7 +614,7 @@ def sequence_names(ps: patterns.PatternSet, prefix: str = "") -> list[str]:
 def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, writer: str = "patterns",
                        force: bool = False, extra=None, option: str | None = None) -> tuple[list[str], list[str]]:
     """Check, before any work and without writing anything, that :func:`write_sequence` may write ``ps`` into
-    ``out_dir`` (:func:`procam._files.prepare_output_dir` without creating it, and no file procam did not write
+    ``out_dir`` (:func:`procam.io.files.prepare_output_dir` without creating it, and no file procam did not write
     would be overwritten).  Returns (image names, side-file names); raises
     :class:`~procam.errors.OutputError`."""
     _files.prepare_output_dir(out_dir, writer, force=force, option=option, create=False)
@@ -629,9 +630,9 @@ def write_sequence(out_dir, stack, ps: patterns.PatternSet, prefix: str = "", *,
 
     ``out_dir`` must be new, empty, or ``writer``'s own earlier output (its manifest lists everything in
     it); ``force`` writes into another folder, but never over a file procam did not write
-    (:func:`procam._files.prepare_output_dir`).  The names are listed in the folder's manifest before the
+    (:func:`procam.io.files.prepare_output_dir`).  The names are listed in the folder's manifest before the
     files are written; each file is written under a hidden temporary name and renamed
-    (:func:`procam._files.write_image`), so an interrupted run leaves no half-written image.
+    (:func:`procam.io.files.write_image`), so an interrupted run leaves no half-written image.
     ``{prefix}NN.png`` frames of an earlier, longer sequence that the manifest lists are deleted
     (:func:`remove_stale`).
 

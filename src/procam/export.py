@@ -24,7 +24,7 @@ import numpy as np
 
 from .calibration import Calibration, Device, Distortion
 from .errors import CalibrationError, CalibrationFileError
-from ._files import atomic_path
+from .io.files import atomic_path
 
 #: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 #: The formats ``procam export --format`` writes.
@@ -362,7 +362,7 @@ def stereo_rectify(calib: Calibration, *, scale: float = 1.0, max_size: int = 81
 def save_maps(path, map_x, map_y, **meta) -> Path:
     """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically (the same
     tables give the same bytes)."""
-    from ._files import write_npz
+    from .io.files import write_npz
 
     return write_npz(path, map_x=np.asarray(map_x, np.float32), map_y=np.asarray(map_y, np.float32),
                      **{k: np.asarray(v) for k, v in meta.items()})

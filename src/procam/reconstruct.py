@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ProcamError
-from ._files import atomic_path, full_scale_of
+from .io.files import atomic_path, full_scale_of
 from .triangulate import triangulate_dense
 
 
@@ -66,7 +66,7 @@ class PointCloud:
 
 def to_rgb8(image) -> np.ndarray:
     """An image as (H, W, 3) uint8 RGB: grey replicated, OpenCV BGR(A) reordered, 16 bit scaled by
-    its full scale (:func:`procam._files.full_scale_of`)."""
+    its full scale (:func:`procam.io.files.full_scale_of`)."""
     img = np.asarray(image)
     if img.dtype == np.uint16:
         img = np.clip(np.rint(img.astype(np.float64) * (255.0 / full_scale_of(img))), 0, 255).astype(np.uint8)

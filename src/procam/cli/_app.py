@@ -24,7 +24,7 @@ from rich.markup import escape
 from rich.text import Text
 from typer.core import TyperGroup
 
-from .. import _files
+from ..io import files as _files
 from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
@@ -388,7 +388,7 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
 def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
     """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
     ``force`` any folder, where nothing procam did not write is overwritten or deleted
-    (:func:`procam._files.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
+    (:func:`procam.io.files.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
     the writer, so an interrupted run leaves none)."""
     try:
         return _files.prepare_output_dir(path, writer, force=force, option=option, create=create)

@@ -26,7 +26,8 @@ def decode_cmd(
     """Decode a pose: projector column and row per camera pixel, validity and reasons."""
     import numpy as np
 
-    from .. import _files, capture
+    from .. import capture
+    from ..io import files as _files
     from .. import decode as dec
 
     size = optional_size(projector)

@@ -10,7 +10,8 @@ from typing import Optional
 import numpy as np
 import typer
 
-from .. import _files, io
+from .. import io
+from ..io import files as _files
 from .. import export as _ex
 from ._app import ForceOpt, app, choice, fail, number, output_dir, output_path, say, user_errors, value
 

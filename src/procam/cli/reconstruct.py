@@ -39,7 +39,8 @@ def reconstruct_cmd(
     step: StepOpt = None,
 ):
     """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
-    from .. import _files, capture, decode, io, pipeline
+    from .. import capture, decode, io, pipeline
+    from ..io import files as _files
     from .. import reconstruct as rc
 
     output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))

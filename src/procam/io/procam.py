@@ -1,7 +1,7 @@
 """procam's file formats: calibrations (JSON, OpenCV FileStorage YAML) and correspondences (JSON).
 
 The schemas are in ``docs/file-formats.md``. Every file is written under a temporary name and renamed
-(:func:`procam._files.atomic_path`); readers validate what they load and raise
+(:func:`procam.io.files.atomic_path`); readers validate what they load and raise
 :class:`~procam.errors.CalibrationFileError` naming the file.
 """
 
@@ -12,13 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ._files import atomic_path, to_jsonable, write_text
-from .board import Board
-from .calibration import Calibration, Device, Distortion
-from .distortion import opencv_from_division
-from .errors import CalibrationFileError
-from .summary import projector_assumptions
-from .view import CORNER_REASONS, View
+from ..board import Board
+from ..calibration import Calibration, Device, Distortion
+from ..distortion import opencv_from_division
+from ..errors import CalibrationFileError
+from ..summary import projector_assumptions
+from ..view import CORNER_REASONS, View
+from .files import atomic_path, to_jsonable, write_text
 
 
 def _nan_to_none(a) -> list:
