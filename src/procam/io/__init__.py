@@ -1,6 +1,9 @@
 """procam's files: one home for every file procam reads or writes.
 
-    files        plumbing: natural sort, image reads, atomic writes, JSON helpers, the manifest of procam's files
+    formats      which files are procam's: the marks its writers leave, defined once
+    files        plumbing: natural sort, image reads, atomic writes, JSON helpers, the manifest of procam's files,
+                 whether an existing file is procam's
+    folders      output folders: what procam may overwrite or delete; a folder made ready for a writer
     procam       procam's JSON: calibrations and correspondences (views)
 
 Submodules load on first use (PEP 562): ``procam.io.load_calibration`` imports the calibration readers when it
@@ -11,7 +14,7 @@ from __future__ import annotations
 
 import importlib
 
-_SUBMODULES = ("files", "procam")
+_SUBMODULES = ("formats", "files", "folders", "procam")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {
