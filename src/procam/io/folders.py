@@ -30,7 +30,8 @@ def _legacy_files(folder: Path) -> set[str]:
     """Files an older procam (before manifests) wrote: a sequence folder's ``patterns.json`` lists its
     frames; ``truth.json`` is the simulator's.  A camera capture (``capture.json``) is not counted."""
     meta = read_sidecar_quiet(folder, "patterns.json")
-    if not (isinstance(meta, dict) and meta.get("format") == formats.GRAYCODE_FORMAT and isinstance(meta.get("files"), list)):
+    if not (isinstance(meta, dict) and meta.get("format") == formats.GRAYCODE_FORMAT
+            and isinstance(meta.get("files"), list)):
         return set()
     if (folder / "capture.json").exists():
         return set()
