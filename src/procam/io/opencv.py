@@ -8,8 +8,8 @@ back; one camera's intrinsics read from the layouts other tools write.
 * :func:`read_camera` -- one camera from any of :data:`CAMERA_LAYOUTS` (procam / Moreno-Taubin, OpenCV's
   calibration and stereo samples, kamino410).
 * :func:`open_storage`, :func:`matrix`, :func:`real` -- the FileStorage plumbing the readers share (kamino410's
-  too): a file OpenCV cannot parse, a node that is not a matrix, a matrix that is a sequence of numbers, a
-  scalar, all give one line naming the file and the key.
+  too): a matrix may also stand as a sequence of numbers or one number (files written by hand); a file OpenCV
+  cannot parse, or a node that is not numbers, gives one line naming the file and the key.
 
 Every number is checked by :mod:`procam.io.validate`.  A distortion vector that is missing, empty or all zeros
 is no distortion (the rules are in :mod:`procam.io.validate`).
