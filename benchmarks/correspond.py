@@ -321,7 +321,7 @@ def section_real(data):
     if data is None or not data.is_dir():
         print(f"skipped: {data} not found\n")
         return
-    from procam import _files
+    from procam.io import files as _files
 
     obj = board.object_points(9, 6, 25.0).astype(np.float32)
     print("cv2.calibrateCamera on the images each option finds the board in (left: CALIB_FIX_ASPECT_RATIO as "

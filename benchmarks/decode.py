@@ -2,7 +2,7 @@
 
 Renders a realistic capture once (a 1920x1080 projector's sequence seen through a perspective warp,
 with defocus, vignetting, ambient light and camera noise), writes it as PNGs to a temporary folder,
-then times, in one run: reading the stack (procam._files.read_images, the same path the CLI uses) and
+then times, in one run: reading the stack (procam.io.files.read_images, the same path the CLI uses) and
 decoding it with both classifiers.  Peak memory is the process's maximum resident set size.
 
     python benchmarks/decode.py [--repeat 5]
@@ -23,7 +23,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
-from procam import _files, decode, patterns  # noqa: E402
+from procam import decode, patterns  # noqa: E402
+from procam.io import files as _files  # noqa: E402
 
 
 def render(cam=(1280, 800), proj=(1920, 1080), seed=0):

@@ -159,8 +159,8 @@ def run_cold(argv, cwd=None) -> dict:
 
 #: (stage, module, function) -- functions that do not exist in the profiled version are skipped
 STAGES = [
-    ("read PNGs (all reader threads)", "procam._files", "read_image"),
-    ("waiting for the images", "procam._files", "read_images"),
+    ("read PNGs (all reader threads)", "procam.io.files", "read_image"),
+    ("waiting for the images", "procam.io.files", "read_images"),
     ("waiting for the images", "procam.stream", "Prefetcher.read"),
     ("capture checks", "procam.capture", "_sample"),
     ("capture checks", "procam.capture", "check_light"),

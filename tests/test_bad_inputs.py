@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
-from procam import _files, capture, io, patterns, simulate
+from procam import capture, io, patterns, simulate
+from procam.io import files as _files
 from procam.errors import CalibrationError, OutputError
 
 BOARD = ["--board", "10x6", "--square", "24"]

@@ -105,7 +105,7 @@ def test_no_board_no_hint():
 def test_real_photos_calibrate_better(shared_data):
     """OpenCV's 13 left photographs: the fitted corners lower calibrateCamera's RMS below procam's
     earlier corners (classic + cornerSubPix 11, clamped), and f agrees with the published 536.1."""
-    from procam import _files
+    from procam.io import files as _files
 
     files = sorted((shared_data / "opencv-left-right").glob("left*.jpg"))
     assert len(files) == 13

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
-from procam import _files, capture, patterns
+from procam import capture, patterns
+from procam.io import files as _files
 from procam.errors import CaptureError, OutputError
 
 W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter1d
 
-from procam import _files, decode, patterns
+from procam import decode, patterns
+from procam.io import files as _files
 
 SIZES = [(1920, 1080), (1024, 768), (1280, 720), (800, 600), (37, 19)]
 

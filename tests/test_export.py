@@ -169,7 +169,7 @@ def test_predistort_maps_invert_the_lens():
 def test_kamino410_file_has_their_keys_and_round_trips(tmp_path):
     sc, calib = _paper()
     calib = calib.replace(stereo_rms=0.25)
-    path = ex.save_kamino410(calib, tmp_path / "calibration_result.xml")
+    path = io.save_kamino410(calib, tmp_path / "calibration_result.xml")
     assert [p.name for p in tmp_path.iterdir()] == ["calibration_result.xml"]
     fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     assert fs.getNode("img_shape").mat().shape == (2, 1)
@@ -181,7 +181,7 @@ def test_kamino410_file_has_their_keys_and_round_trips(tmp_path):
     np.testing.assert_array_equal(fs.getNode("translation").mat().ravel(), calib.T)
     assert fs.getNode("rms").real() == 0.25
     fs.release()
-    back = ex.load_kamino410(path)
+    back = io.load_kamino410(path)
     assert back.camera.image_size == (1280, 800) and back.projector.image_size == (1920, 1080)
     np.testing.assert_array_equal(back.R, calib.R)
     np.testing.assert_array_equal(back.projector.K, calib.projector.K)
@@ -200,43 +200,43 @@ def test_load_kamino410_file_as_their_tool_writes_it(tmp_path):
     fs.write("roration", np.eye(3))              # their early files' spelling
     fs.write("translation", np.array([[39.06], [-278.26], [-61.95]]))
     fs.release()
-    c = ex.load_kamino410(path, proj_size=(1280, 800))
+    c = io.load_kamino410(path, proj_size=(1280, 800))
     assert c.camera.image_size == (1280, 1024) and c.projector.image_size == (1280, 800) and not c.warnings
     np.testing.assert_allclose(c.T, [39.06, -278.26, -61.95])
-    c = ex.load_kamino410(path)
+    c = io.load_kamino410(path)
     assert c.projector.image_size == (898, 1440) and "does not store the projector size" in c.warnings[0]
 
 
 def test_load_camera_intrinsics_from_procam_files(tmp_path):
     sc, calib = _paper()
     j = io.save_calibration(calib, tmp_path / "calib.json")
-    dev = ex.load_camera_intrinsics(j)
+    dev = io.load_camera_intrinsics(j)
     assert dev.distortion == calib.camera.distortion and dev.image_size == (1280, 800)
     np.testing.assert_array_equal(dev.K, calib.camera.K)
     y = io.save_opencv_yaml(calib, tmp_path / "calib.yml")
-    dev = ex.load_camera_intrinsics(y, image_size=(1280, 800))
+    dev = io.load_camera_intrinsics(y, image_size=(1280, 800))
     assert dev.distortion.model == "opencv" and len(dev.distortion.coeffs) == 5
-    x = ex.save_kamino410(calib, tmp_path / "k.xml")
-    dev = ex.load_camera_intrinsics(x)
+    x = io.save_kamino410(calib, tmp_path / "k.xml")
+    dev = io.load_camera_intrinsics(x)
     assert dev.image_size == (1280, 800)
     cfg = tmp_path / "camera_config.json"       # kamino410's camera file
     cfg.write_text(json.dumps({"camera": {"P": np.asarray(calib.camera.K).ravel().tolist(),
                                           "distortion": [0.1, -0.2, 0, 0, 0.05], "width": 1280, "height": 800}}))
-    dev = ex.load_camera_intrinsics(cfg)
+    dev = io.load_camera_intrinsics(cfg)
     assert dev.distortion.coeffs == (0.1, -0.2, 0.0, 0.0, 0.05) and dev.image_size == (1280, 800)
 
 
 def test_load_camera_intrinsics_from_opencv_sample_files(shared_data):
-    dev = ex.load_camera_intrinsics(shared_data / "opencv-left-right" / "left_intrinsics.yml")
+    dev = io.load_camera_intrinsics(shared_data / "opencv-left-right" / "left_intrinsics.yml")
     assert dev.image_size == (640, 480)
     assert dev.K[0, 0] == pytest.approx(535.9157, abs=1e-3) and dev.K[1, 2] == pytest.approx(235.5708, abs=1e-3)
     assert dev.distortion.coeffs[0] == pytest.approx(-0.26637, abs=1e-5)
     with pytest.raises(CalibrationFileError, match="does not say the image size"):
-        ex.load_camera_intrinsics(shared_data / "opencv-left-right" / "intrinsics.yml")
-    dev = ex.load_camera_intrinsics(shared_data / "opencv-left-right" / "intrinsics.yml", image_size=(640, 480))
+        io.load_camera_intrinsics(shared_data / "opencv-left-right" / "intrinsics.yml")
+    dev = io.load_camera_intrinsics(shared_data / "opencv-left-right" / "intrinsics.yml", image_size=(640, 480))
     assert dev.K[0, 0] == pytest.approx(534.8033, abs=1e-3)
     with pytest.raises(CalibrationFileError, match="for 640x480 images, the images are 1280x960"):
-        ex.load_camera_intrinsics(shared_data / "opencv-left-right" / "left_intrinsics.yml", image_size=(1280, 960))
+        io.load_camera_intrinsics(shared_data / "opencv-left-right" / "left_intrinsics.yml", image_size=(1280, 960))
 
 
 def test_load_camera_intrinsics_errors(tmp_path):
@@ -246,31 +246,31 @@ def test_load_camera_intrinsics_errors(tmp_path):
     fs.write("image_width", 640)
     fs.write("image_height", 480)
     fs.release()
-    with pytest.raises(CalibrationFileError, match=r"bad.yml: camera_matrix has non-finite"):
-        ex.load_camera_intrinsics(bad)
+    with pytest.raises(CalibrationFileError, match=r"bad.yml: camera_matrix holds NaN"):
+        io.load_camera_intrinsics(bad)
     other = tmp_path / "other.yml"
     fs = cv2.FileStorage(str(other), cv2.FILE_STORAGE_WRITE)
     fs.write("K", np.eye(3))
     fs.release()
     with pytest.raises(CalibrationFileError, match="no camera matrix found"):
-        ex.load_camera_intrinsics(other)
+        io.load_camera_intrinsics(other)
     dist = tmp_path / "dist.yml"
     fs = cv2.FileStorage(str(dist), cv2.FILE_STORAGE_WRITE)
     fs.write("cam_K", np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]]))
     fs.write("cam_kc", np.zeros((1, 3)))
     fs.release()
-    with pytest.raises(CalibrationFileError, match="cam_kc has 3 coefficients"):
-        ex.load_camera_intrinsics(dist, image_size=(640, 480))
+    with pytest.raises(CalibrationFileError, match="cam_kc must have 4, 5, 8, 12, 14 OpenCV coefficients, got 3"):
+        io.load_camera_intrinsics(dist, image_size=(640, 480))
     garbage = tmp_path / "garbage.yml"
     garbage.write_text("%YAML:1.0\ncam_K: [1, 2\n")
     with pytest.raises(CalibrationFileError, match="garbage.yml"):
-        ex.load_camera_intrinsics(garbage)
+        io.load_camera_intrinsics(garbage)
     txt = tmp_path / "cam.txt"
     txt.write_text("fx 500")
     with pytest.raises(CalibrationFileError, match="unknown file type"):
-        ex.load_camera_intrinsics(txt)
+        io.load_camera_intrinsics(txt)
     with pytest.raises(CalibrationFileError, match="no such file"):
-        ex.load_camera_intrinsics(tmp_path / "missing.json")
+        io.load_camera_intrinsics(tmp_path / "missing.json")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -291,7 +291,7 @@ def test_cli_export(tmp_path):
                                ex.opengl_projection(sc.K_proj, sc.proj_size, 100, 3000))
     code, out, err = run_cli(["export", calib_path, "--format", "kamino410", "-o", tmp_path / "k.xml"])
     assert code == 0, err
-    assert ex.load_kamino410(tmp_path / "k.xml").camera.image_size == (640, 400)
+    assert io.load_kamino410(tmp_path / "k.xml").camera.image_size == (640, 400)
     code, out, err = run_cli(["export", calib_path, "--format", "maps", "-o", tmp_path / "maps", "--rectify"])
     assert code == 0, err
     names = sorted(p.name for p in (tmp_path / "maps").iterdir() if not p.name.startswith("."))
@@ -306,3 +306,18 @@ def test_cli_export(tmp_path):
     assert code == 2 and "0 < near < far" in err
     code, out, err = run_cli(["export", calib_path, "--format", "ply", "-o", tmp_path / "g.json"])
     assert code == 2 and "--format" in err and "opengl" in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_commands_read_a_kamino410_file(tmp_path):
+    """The one reader: a kamino410 XML is a calibration for every command, not only for calibrate --camera."""
+    import procam.cli.export  # noqa: F401  (registers the command)
+    from conftest import run_cli
+
+    sc = small_scene()
+    calib_path = io.save_calibration(truth_calibration(sc), tmp_path / "calib.json")
+    assert run_cli(["export", calib_path, "--format", "kamino410", "-o", tmp_path / "k.xml"])[0] == 0
+    code, out, err = run_cli(["export", tmp_path / "k.xml", "--format", "opengl", "-o", tmp_path / "gl.json",
+                              "--near", "100", "--far", "3000"])
+    assert code == 0, err
+    doc = json.loads((tmp_path / "gl.json").read_text())
+    np.testing.assert_allclose(doc["projector"]["projection"], ex.opengl_projection(sc.K_proj, sc.proj_size, 100, 3000))

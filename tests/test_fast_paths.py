@@ -249,7 +249,8 @@ def test_prefetched_captures_equal_load_capture(tmp_path):
 
 
 def test_prefetcher_reads_other_files_itself_and_out_of_order(tmp_path):
-    from procam import _files, stream
+    from procam import stream
+    from procam.io import files as _files
 
     folders = _small_poses(tmp_path)
     files = [_files.list_images(f) for f in folders]
@@ -263,7 +264,8 @@ def test_prefetcher_reads_other_files_itself_and_out_of_order(tmp_path):
 def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
     import cv2
 
-    from procam import _files, stream
+    from procam import stream
+    from procam.io import files as _files
     from procam.errors import CaptureError
 
     folders = _small_poses(tmp_path, 2)
@@ -371,7 +373,8 @@ print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]
 
 def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):
     """Memory stays bounded: with ahead=1 the pose in use and the next one, never more."""
-    from procam import _files, stream
+    from procam import stream
+    from procam.io import files as _files
 
     folders = _small_poses(tmp_path, 4)
     with stream.Prefetcher(folders, ahead=1) as pf:
@@ -388,7 +391,8 @@ def test_prefetcher_reads_each_frame_once_beside_procams_own_outputs(tmp_path, m
 
     import cv2
 
-    from procam import _files, capture, stream
+    from procam import capture, stream
+    from procam.io import files as _files
 
     folders = _small_poses(tmp_path, 2)
     for f in folders:

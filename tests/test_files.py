@@ -1,9 +1,13 @@
-"""File plumbing: atomic writes, full-scale detection (procam._files)."""
+"""File plumbing: atomic writes, full-scale detection, procam's marks (procam.io.files, procam.io.formats)."""
+
+import json
 
 import numpy as np
 import pytest
 
-from procam import _files
+from procam import io
+from procam.io import files as _files
+from procam.io import formats
 
 
 def test_atomic_write_leaves_nothing_on_error(tmp_path):
@@ -21,3 +25,42 @@ def test_full_scale_of_bit_depths():
     assert _files.full_scale_of(np.full((2, 2), 4095, np.uint16)) == 4095
     assert _files.full_scale_of(np.full((2, 2), 4096, np.uint16)) == 16383
     assert _files.full_scale_of(np.full((2, 2), 65535, np.uint16)) == 65535
+
+
+def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
+    """Each writer leaves the mark of io.formats, and files.procam_wrote knows it (no manifest here)."""
+    from conftest import camera_view_of_patterns
+    from sim_small import small_scene, truth_calibration
+
+    from procam import decode, export, patterns
+
+    assert set(formats.DECODED_MAPS_MARK) <= set(formats.DECODED_MAPS_KEYS)
+    calib = truth_calibration(small_scene())
+    ps = patterns.pattern_set(64, 32)
+    written = [io.save_calibration(calib, tmp_path / "c.json"), io.save_calibration(calib, tmp_path / "c.yml"),
+               io.save_calibration(calib, tmp_path / "c.xml"), io.save_kamino410(calib, tmp_path / "k.xml"),
+               io.save_decoded_maps(tmp_path / "d.npz", decode.decode(camera_view_of_patterns(64, 32), ps)),
+               io.save_maps(tmp_path / "m.npz", *export.undistort_maps(calib.camera)),
+               io.write_image(tmp_path / "i.png", np.zeros((4, 4), np.uint8)),
+               _files.write_text(tmp_path / "gl.json", json.dumps(export.opengl_document(calib, 10, 100)))]
+    try:
+        import plyfile  # noqa: F401
+
+        written.append(io.write_ply(tmp_path / "p.ply", np.zeros((2, 3)), comments=["procam reconstruct"]))
+    except ImportError:
+        pass
+    for path in written:
+        assert _files.procam_wrote(path), path.name
+    np.savez(tmp_path / "theirs.npz", col=np.zeros(2))
+    (tmp_path / "theirs.yml").write_text("%YAML:1.0\nK: 1\n")
+    for name in ("theirs.npz", "theirs.yml"):
+        assert not _files.procam_wrote(tmp_path / name), name
+
+
+def test_importing_the_file_plumbing_imports_no_format_code():
+    import subprocess
+    import sys
+
+    code = ("import sys, procam.io.files; print(sorted(m for m in sys.modules if m.startswith('procam')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert eval(out) == ["procam", "procam.errors", "procam.io", "procam.io.files", "procam.io.formats"]

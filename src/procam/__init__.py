@@ -3,8 +3,8 @@
 The modules, from the captures up (each imports only those above it in this list)::
 
     errors        ProcamError and its subclasses (one-line messages), procam's warning classes
-    _files        image reads, natural sort, atomic writes, JSON helpers, the manifest of procam's files
-                  (the bottom floor)
+    io.files      image reads, natural sort, atomic writes, JSON helpers, the manifest of procam's files
+                  (the bottom floor of the io package; its format modules stand higher, at io below)
     _threads      one OpenCV / BLAS thread where results must not depend on threads
     _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)
@@ -14,7 +14,7 @@ The modules, from the captures up (each imports only those above it in this list
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
     board         Board (inner corners, square size), object points, chessboard corner detection
     correspond    camera corners -> projector corners by local homographies
-    view          View: one pose's board, camera and projector points
+    view          View: one pose's board, camera and projector points; the per-corner reasons
     pipeline      folder(s) / stack / photo -> View(s)
     models        projection, division distortion, homographies, poses, angles (the model every solver fits)
     parameters    one vocabulary of parameter names
@@ -30,11 +30,12 @@ The modules, from the captures up (each imports only those above it in this list
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
     summary       a calibration as rows of text
-    io            calibration and correspondence files (JSON, OpenCV YAML)
+    io            every file format: calibrations (procam JSON, OpenCV YAML/XML, kamino410 XML) read by one
+                  reader and checked by one validator set, correspondences, decoded and remap maps, PLY
     triangulate   camera pixel + projector column/row -> 3-D point (the geometry of a scan)
     verify        a calibration measured in millimetres: board scale, planarity, leave-one-out spread
-    reconstruct   a decoded capture -> point cloud (PLY)
-    export        a calibration for the next tool (OpenCV, kamino410 XML, OpenGL, undistortion maps)
+    reconstruct   a decoded capture -> point cloud, the board's plane
+    export        a calibration for the next tool: OpenGL/Unity matrices, undistortion and rectification maps
     check         one captured pose judged before calibration (verdict + overlay)
     simulate      synthetic procam captures with ground truth (the test oracle)
     paper         the paper's simulation study and real-data experiment

@@ -29,7 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _files, patterns
+from . import patterns
+from .io import files as _files
+from .io import folders
 from .errors import CaptureError
 
 
@@ -520,7 +522,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
     step : projector pixels per code (None: patterns.json's, else 1).
-    reader : ``reader(files) -> stack``, default :func:`procam._files.read_images` (e.g.
+    reader : ``reader(files) -> stack``, default :func:`procam.io.files.read_images` (e.g.
         :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
     folder = Path(folder)
@@ -601,7 +603,7 @@ def remove_stale(out_dir, keep, prefix: str = "") -> list[Path]:
     man = _files.read_manifest(out)
     listed = {n for n, r in man["files"].items() if r == "frame"} if man is not None else set()
     stale = sorted(n for n in listed if pat.fullmatch(n) and n not in keep)
-    return _files.remove_listed(out, stale)
+    return folders.remove_listed(out, stale)
 
 
 def sequence_names(ps: patterns.PatternSet, prefix: str = "") -> list[str]:
@@ -613,13 +615,13 @@ def sequence_names(ps: patterns.PatternSet, prefix: str = "") -> list[str]:
 def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, writer: str = "patterns",
                        force: bool = False, extra=None, option: str | None = None) -> tuple[list[str], list[str]]:
     """Check, before any work and without writing anything, that :func:`write_sequence` may write ``ps`` into
-    ``out_dir`` (:func:`procam._files.prepare_output_dir` without creating it, and no file procam did not write
+    ``out_dir`` (:func:`procam.io.folders.prepare_output_dir` without creating it, and no file procam did not write
     would be overwritten).  Returns (image names, side-file names); raises
     :class:`~procam.errors.OutputError`."""
-    _files.prepare_output_dir(out_dir, writer, force=force, option=option, create=False)
+    folders.prepare_output_dir(out_dir, writer, force=force, option=option, create=False)
     names = sequence_names(ps, prefix)
     sidecars = ["patterns.json", *(extra or {})]
-    _files.check_overwrite(out_dir, names + sidecars, option)
+    folders.check_overwrite(out_dir, names + sidecars, option)
     return names, sidecars
 
 
@@ -629,9 +631,9 @@ def write_sequence(out_dir, stack, ps: patterns.PatternSet, prefix: str = "", *,
 
     ``out_dir`` must be new, empty, or ``writer``'s own earlier output (its manifest lists everything in
     it); ``force`` writes into another folder, but never over a file procam did not write
-    (:func:`procam._files.prepare_output_dir`).  The names are listed in the folder's manifest before the
+    (:func:`procam.io.folders.prepare_output_dir`).  The names are listed in the folder's manifest before the
     files are written; each file is written under a hidden temporary name and renamed
-    (:func:`procam._files.write_image`), so an interrupted run leaves no half-written image.
+    (:func:`procam.io.files.write_image`), so an interrupted run leaves no half-written image.
     ``{prefix}NN.png`` frames of an earlier, longer sequence that the manifest lists are deleted
     (:func:`remove_stale`).
 
@@ -651,7 +653,7 @@ def write_sequence(out_dir, stack, ps: patterns.PatternSet, prefix: str = "", *,
     The image paths.  Raises :class:`~procam.errors.OutputError` (one line) when the folder is refused.
     """
     names, sidecars = check_sequence_dir(out_dir, ps, prefix, writer=writer, force=force, extra=extra_files)
-    out = _files.prepare_output_dir(out_dir, writer, force=force)
+    out = folders.prepare_output_dir(out_dir, writer, force=force)
     _files.record_files(out, {**{n: "frame" for n in names}, **{n: "sidecar" for n in sidecars}}, writer)
     paths = []
     for name, img in zip(names, stack):

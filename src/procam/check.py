@@ -102,7 +102,7 @@ def overlay(check: PoseCheck, max_width: int = 1280) -> np.ndarray:
     coordinates, red without) and the verdict written across the top."""
     import cv2
 
-    from ._files import full_scale_of
+    from .io.files import full_scale_of
 
     w = check.white.astype(np.float32) * (255.0 / full_scale_of(check.white))
     img = np.repeat(np.clip(w, 0, 255).astype(np.uint8)[..., None], 3, axis=2)

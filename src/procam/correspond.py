@@ -15,16 +15,8 @@ import numpy as np
 from ._threads import single_threaded_blas
 from .stats import rms
 from .decode import DecodeResult
+from .view import CORNER_REASONS
 
-#: Per-corner reason codes (``diagnostics["reason"]``).
-CORNER_REASONS = {
-    0: "ok",
-    1: "corner not detected in the camera image",
-    2: "too few decoded pixels in the window (unlit, shadowed or low contrast)",
-    3: "window leaves the image",
-    4: "poor local homography fit (residual above max_residual)",
-    5: "homography estimation failed",
-}
 ESTIMATORS = ("trimmed", "lsq", "ransac", "lmeds")
 
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _files
+from .io import files as _files
 from .patterns import PatternSet
 
 #: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.

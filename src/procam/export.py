@@ -1,4 +1,4 @@
-"""Calibration outputs for the tools users feed next: rendering matrices, remap tables, other tools' files.
+"""Calibration outputs for the tools users feed next: rendering matrices and remap tables.
 
 * :func:`opengl_projection`, :func:`view_matrices`, :func:`clip_to_pixels`, :func:`opengl_document` --
   OpenGL / Unity-style 4x4 projection and view matrices of the camera and the projector.
@@ -6,9 +6,10 @@
   procam device (OpenCV model: OpenCV's own function; division model: computed here);
   :func:`predistort_maps` -- the opposite table, for showing a pinhole-rendered image through a
   projector's (or display's) real lens; :func:`stereo_rectify` -- ``cv2.stereoRectify`` of the pair.
-* :func:`save_kamino410` / :func:`load_kamino410` -- kamino410/procam-calibration's
-  ``calibration_result.xml``; :func:`load_camera_intrinsics` -- one camera's intrinsics from procam
-  JSON, procam / Moreno-Taubin YAML, an OpenCV calibration YAML or kamino410's files.
+
+The files live in :mod:`procam.io`: remap tables as ``.npz`` (:func:`procam.io.save_maps`), kamino410's
+``calibration_result.xml`` (:func:`procam.io.save_kamino410`), one camera's intrinsics from the files people
+have (:func:`procam.io.load_camera_intrinsics`).
 
 Conventions (docs/exports.md has the tables): procam pixels ``(x, y)`` have their origin at the
 centre of the top-left pixel (as OpenCV's); camera frames are OpenCV's (x right, y down, z forward);
@@ -17,21 +18,18 @@ centre of the top-left pixel (as OpenCV's); camera frames are OpenCV's (x right,
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import numpy as np
 
-from .calibration import Calibration, Device, Distortion
-from .errors import CalibrationError, CalibrationFileError
-from ._files import atomic_path
+from .calibration import Calibration, Device
+from .errors import CalibrationError
+from .io.formats import OPENGL_FORMAT
 
-#: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 #: The formats ``procam export --format`` writes.
 FORMATS = ("opengl", "maps", "kamino410")
 #: The world frames of the OpenGL export (``world=``).
 WORLDS = ("camera", "projector")
 
+#: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 
 #: OpenCV camera frame -> Unity's left-handed frame (x right, y up, z forward).
@@ -165,7 +163,7 @@ def opengl_document(calib: Calibration, near: float, far: float, *, world: str =
     if world == "projector":
         Ei = np.linalg.inv(E)
         poses = {"camera": (Ei[:3, :3], Ei[:3, 3]), "projector": (np.eye(3), np.zeros(3))}
-    out = {"format": "procam-opengl", "version": 1,
+    out = {"format": OPENGL_FORMAT, "version": 1,
            "conventions": {
                "eye": "OpenGL: x right, y up, looking down -z; eye = diag(1, -1, -1) @ (OpenCV device frame)",
                "world": f"the procam {world} frame (OpenCV axes: x right, y down, z forward), board units",
@@ -278,19 +276,6 @@ def predistort_maps(device: Device, *, K_ideal=None, size_ideal=None):
     return _as_map(und, size)
 
 
-def _opencv_coeffs(device: Device) -> np.ndarray:
-    """OpenCV distortion coefficients of a device (division model: the OpenCV fit), (1, n)."""
-    d = device.distortion
-    if d.model == "opencv":
-        return np.asarray(d.coeffs, float).reshape(1, -1)
-    if d.model == "division":
-        from .distortion import opencv_from_division
-
-        coeffs, _ = opencv_from_division(device.K, d.center, d.k1, d.k2, device.image_size)
-        return np.asarray(coeffs, float).reshape(1, -1)
-    return np.zeros((1, 5))
-
-
 def _border_rays(device: Device, R_rect, n: int = 64) -> np.ndarray:
     """Normalised rectified coordinates (M, 2) of points along the device image's border."""
     W, H = (int(v) for v in device.image_size)
@@ -357,301 +342,3 @@ def stereo_rectify(calib: Calibration, *, scale: float = 1.0, max_size: int = 81
         out["size" + k] = (width, height)
     out["P2"][0, 3] = f * float((R2 @ T)[0])
     return out
-
-
-def save_maps(path, map_x, map_y, **meta) -> Path:
-    """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically (the same
-    tables give the same bytes)."""
-    from ._files import write_npz
-
-    return write_npz(path, map_x=np.asarray(map_x, np.float32), map_y=np.asarray(map_y, np.float32),
-                     **{k: np.asarray(v) for k, v in meta.items()})
-
-
-# --------------------------------------------------------------------------------------------------
-# kamino410/procam-calibration
-# --------------------------------------------------------------------------------------------------
-
-#: kamino410/procam-calibration's ``calibration_result.xml`` keys -> meaning (procam's name).
-KAMINO410_KEYS = {
-    "img_shape": "camera image shape (height, width), 2x1 double",
-    "rms": "stereoCalibrate RMS, px (procam: stereo_rms)",
-    "cam_int": "camera K, 3x3 (procam: camera.K)",
-    "cam_dist": "camera OpenCV distortion, 1x5 (procam: camera distortion; division -> OpenCV fit)",
-    "proj_int": "projector K, 3x3 (procam: projector.K)",
-    "proj_dist": "projector OpenCV distortion, 1x5",
-    "rotation": "camera -> projector R, 3x3 (older files: 'roration')",
-    "translation": "camera -> projector T, 3x1, chessboard units (procam: T)",
-}
-
-
-def save_kamino410(calib: Calibration, path) -> Path:
-    """Write kamino410/procam-calibration's ``calibration_result.xml`` (``cv2.FileStorage``), atomically.
-
-    Keys as theirs (:data:`KAMINO410_KEYS`): ``img_shape`` (camera ``[height, width]``, 2x1 double),
-    ``rms``, ``cam_int``, ``cam_dist`` (1x5), ``proj_int``, ``proj_dist`` (1x5), ``rotation``,
-    ``translation`` (3x1), with their meaning: ``x_proj = rotation x_cam + translation`` (OpenCV
-    ``stereoCalibrate`` with the camera first, exactly procam's ``R, T``), ``translation`` in the
-    chessboard's unit.  A division-model camera is written as its OpenCV ``(k1, k2, p1, p2, k3)`` fit
-    (as procam's YAML).  procam adds ``proj_shape`` (projector ``[height, width]``), which their
-    reader ignores and :func:`load_kamino410` uses.  ``.xml`` (theirs), ``.yml`` or ``.yaml``.
-    """
-    import cv2
-
-    path = Path(path)
-    if path.suffix.lower() not in (".xml", ".yml", ".yaml"):
-        raise CalibrationFileError(f"{path}: kamino410's format is an OpenCV FileStorage file; name it .xml "
-                                   "(as theirs), .yml or .yaml")
-    if calib.projector is None or calib.R is None or calib.T is None:
-        raise CalibrationFileError(f"{path}: a camera-only calibration has no projector, so no kamino410 file")
-    W, H = (int(v) for v in calib.camera.image_size)
-    Wp, Hp = (int(v) for v in calib.projector.image_size)
-    with atomic_path(path) as tmp:
-        fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
-        fs.write("img_shape", np.array([[H], [W]], float))
-        fs.write("rms", float(calib.stereo_rms))
-        fs.write("cam_int", np.asarray(calib.camera.K, float))
-        fs.write("cam_dist", _opencv_coeffs(calib.camera))
-        fs.write("proj_int", np.asarray(calib.projector.K, float))
-        fs.write("proj_dist", _opencv_coeffs(calib.projector))
-        fs.write("rotation", np.asarray(calib.R, float))
-        fs.write("translation", np.asarray(calib.T, float).reshape(3, 1))
-        fs.write("proj_shape", np.array([[Hp], [Wp]], float))
-        fs.release()
-    return path
-
-
-def _open_fs(path):
-    import cv2
-
-    try:
-        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    except (cv2.error, SystemError) as e:   # a parse error surfaces as SystemError in some OpenCV builds
-        e = e.__cause__ or e
-        msg = str(e).strip().splitlines()[-1] if str(e).strip() else "parse error"
-        raise CalibrationFileError(f"{path}: not a readable OpenCV FileStorage file ({msg})") from None
-    if not fs.isOpened():
-        raise CalibrationFileError(f"{path}: cannot be opened as an OpenCV FileStorage file")
-    return fs
-
-
-def _fs_mat(fs, key):
-    n = fs.getNode(key)
-    if n.empty():
-        return None
-    m = n.mat()
-    if m is None and n.isSeq():
-        m = np.array([n.at(i).real() for i in range(n.size())], float)
-    return None if m is None else np.asarray(m, float)
-
-
-def _fs_real(fs, key):
-    n = fs.getNode(key)
-    return None if n.empty() else float(n.real())
-
-
-def _check_K(K, path, field) -> np.ndarray:
-    K = None if K is None else np.asarray(K, float)
-    if K is None or K.size != 9:
-        raise CalibrationFileError(f"{path}: {field} must be a 3x3 camera matrix, got "
-                                   f"{'nothing' if K is None else f'{K.size} values'}")
-    K = K.reshape(3, 3)
-    if not np.isfinite(K).all():
-        raise CalibrationFileError(f"{path}: {field} has non-finite values; re-export the calibration")
-    if not (K[0, 0] > 0 and K[1, 1] > 0) or not np.allclose(K[2], [0, 0, 1], atol=1e-9) or K[1, 0] != 0:
-        raise CalibrationFileError(f"{path}: {field} is not a camera matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]] "
-                                   "with fx, fy > 0")
-    return K
-
-
-def _check_dist(d, path, field) -> tuple:
-    if d is None:
-        return ()
-    d = np.asarray(d, float).ravel()
-    if d.size not in (0, 4, 5, 8, 12, 14):
-        raise CalibrationFileError(f"{path}: {field} has {d.size} coefficients; OpenCV distortion has 4, 5, 8, 12 "
-                                   "or 14")
-    if not np.isfinite(d).all():
-        raise CalibrationFileError(f"{path}: {field} has non-finite values; re-export the calibration")
-    return tuple(float(v) for v in d)
-
-
-def _check_size(size, path, field) -> tuple[int, int]:
-    try:
-        w, h = (float(v) for v in np.asarray(size, float).ravel())
-    except (TypeError, ValueError):
-        raise CalibrationFileError(f"{path}: {field} must be two numbers (width, height)") from None
-    if not (np.isfinite(w) and np.isfinite(h) and w == int(w) and h == int(h)
-            and 2 <= w <= 100000 and 2 <= h <= 100000):
-        raise CalibrationFileError(f"{path}: {field} = ({w:g}, {h:g}) is not an image size in pixels")
-    return int(w), int(h)
-
-
-def _opencv_distortion(coeffs) -> Distortion:
-    return Distortion("opencv", coeffs=coeffs) if coeffs and any(coeffs) else Distortion()
-
-
-def load_kamino410(path, proj_size=None) -> Calibration:
-    """Read kamino410/procam-calibration's ``calibration_result.xml`` (or a file :func:`save_kamino410` wrote).
-
-    ``proj_size`` (width, height) is needed for files from their tool, which do not store the
-    projector's size; without it procam's ``proj_shape`` is used, else ``(2 u0, 2 v0)`` is assumed and
-    a warning added.  Accepts their old misspelt ``roration`` key.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise CalibrationFileError(f"{path}: no such file")
-    fs = _open_fs(path)
-    try:
-        missing = [k for k in ("cam_int", "proj_int", "translation") if fs.getNode(k).empty()]
-        rot_key = "rotation" if not fs.getNode("rotation").empty() else "roration"
-        if fs.getNode(rot_key).empty():
-            missing.append("rotation")
-        if missing:
-            raise CalibrationFileError(f"{path}: missing {', '.join(missing)}; expected kamino410's keys "
-                                       "cam_int, cam_dist, proj_int, proj_dist, rotation, translation, img_shape")
-        Kc = _check_K(_fs_mat(fs, "cam_int"), path, "cam_int")
-        Kp = _check_K(_fs_mat(fs, "proj_int"), path, "proj_int")
-        dc = _check_dist(_fs_mat(fs, "cam_dist"), path, "cam_dist")
-        dp = _check_dist(_fs_mat(fs, "proj_dist"), path, "proj_dist")
-        R = _fs_mat(fs, rot_key)
-        T = _fs_mat(fs, "translation")
-        if R is None or R.size != 9 or not np.isfinite(R).all():
-            raise CalibrationFileError(f"{path}: {rot_key} must be a finite 3x3 rotation")
-        R = R.reshape(3, 3)
-        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
-            raise CalibrationFileError(f"{path}: {rot_key} is not a rotation matrix")
-        if T is None or T.size != 3 or not np.isfinite(T).all():
-            raise CalibrationFileError(f"{path}: translation must be 3 finite numbers")
-        shape = _fs_mat(fs, "img_shape")
-        if shape is None:
-            raise CalibrationFileError(f"{path}: missing img_shape (the camera's height, width)")
-        cam_size = _check_size(shape.ravel()[::-1], path, "img_shape")
-        warnings = []
-        if proj_size is not None:
-            proj_size = _check_size(proj_size, path, "the projector size")
-        elif _fs_mat(fs, "proj_shape") is not None:
-            proj_size = _check_size(_fs_mat(fs, "proj_shape").ravel()[::-1], path, "proj_shape")
-        else:
-            proj_size = (int(round(2 * Kp[0, 2])), int(round(2 * Kp[1, 2])))
-            warnings.append(f"{path.name} does not store the projector size; assumed {proj_size[0]}x{proj_size[1]} "
-                            "from its principal point: give the real size")
-        rms = _fs_real(fs, "rms")
-    finally:
-        fs.release()
-    return Calibration(Device(Kc, cam_size, _opencv_distortion(dc)), Device(Kp, proj_size, _opencv_distortion(dp)),
-                       R, T.reshape(3), "kamino410", stereo_rms=float("nan") if rms is None else rms,
-                       warnings=tuple(warnings), info={"source": str(path)})
-
-
-# --------------------------------------------------------------------------------------------------
-# one camera's intrinsics from any of the usual files
-# --------------------------------------------------------------------------------------------------
-
-#: FileStorage key sets read by :func:`load_camera_intrinsics`: (K key, distortion key, size reader).
-_FS_LAYOUTS = (
-    ("cam_K", "cam_kc", "procam / Moreno-Taubin YAML"),
-    ("camera_matrix", "distortion_coefficients", "OpenCV calibration sample"),
-    ("cam_int", "cam_dist", "kamino410/procam-calibration"),
-    ("M1", "D1", "OpenCV stereo_calib sample (first camera)"),
-)
-
-
-def _fs_size(fs, K_key, path):
-    if K_key == "cam_K":
-        m = _fs_mat(fs, "cam_size")
-        return None if m is None else _check_size(m, path, "cam_size")
-    if K_key == "camera_matrix":
-        w, h = _fs_real(fs, "image_width"), _fs_real(fs, "image_height")
-        return None if w is None or h is None else _check_size((w, h), path, "image_width/image_height")
-    if K_key == "cam_int":
-        m = _fs_mat(fs, "img_shape")
-        return None if m is None else _check_size(m.ravel()[::-1], path, "img_shape")
-    return None
-
-
-def load_camera_intrinsics(path, image_size=None) -> Device:
-    """One camera's intrinsics (K, distortion, image size) from the files people have.
-
-    Reads, by content:
-
-    * procam calibration JSON (``procam calibrate``, also camera-only): the ``camera`` block, any
-      distortion model;
-    * kamino410's camera JSON (``{"camera": {"P": [9 numbers], "distortion": [...], "width", "height"}}``);
-    * ``cv2.FileStorage`` YAML/XML/JSON with ``cam_K``/``cam_kc`` (procam, Moreno-Taubin's
-      scan3d-capture; size from ``cam_size``), ``camera_matrix``/``distortion_coefficients`` (OpenCV's
-      calibration sample; size from ``image_width``/``image_height``), ``cam_int``/``cam_dist``
-      (kamino410; size from ``img_shape``) or ``M1``/``D1`` (OpenCV's stereo sample: the first camera).
-
-    Parameters
-    ----------
-    path : the file.
-    image_size : (width, height) of the images the intrinsics will be used with.  Required when the
-        file has no size; when it has one they must agree.
-
-    Raises
-    ------
-    CalibrationFileError
-        Missing file, unknown layout, a malformed matrix (naming the field), no image size, or a
-        size that differs from ``image_size``.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise CalibrationFileError(f"{path}: no such file; give a camera calibration file")
-    K = size = dist = None
-    suffix = path.suffix.lower()
-    doc = None
-    if suffix == ".json":
-        try:
-            doc = json.loads(path.read_text())
-        except (OSError, UnicodeDecodeError, ValueError) as e:
-            raise CalibrationFileError(f"{path}: not valid JSON ({e})") from None
-    if isinstance(doc, dict) and doc.get("format") == "procam-calibration":
-        cam = doc.get("camera")
-        if not isinstance(cam, dict):
-            raise CalibrationFileError(f"{path}: the procam calibration has no camera block")
-        K = _check_K(cam.get("K"), path, "camera.K")
-        size = _check_size(cam.get("image_size"), path, "camera.image_size") if cam.get("image_size") else None
-        try:
-            dist = Distortion.from_dict(cam.get("distortion") or {})
-        except (KeyError, TypeError, ValueError) as e:
-            raise CalibrationFileError(f"{path}: camera.distortion is malformed ({e})") from None
-        if dist.model == "division":
-            vals = [*dist.center, dist.k1, dist.k2]
-            if not np.isfinite(vals).all():
-                raise CalibrationFileError(f"{path}: camera.distortion has non-finite values")
-        elif dist.model == "opencv":
-            dist = _opencv_distortion(_check_dist(dist.coeffs, path, "camera.distortion.coeffs"))
-    elif isinstance(doc, dict) and isinstance(doc.get("camera"), dict) and "P" in doc["camera"]:
-        cam = doc["camera"]
-        K = _check_K(cam.get("P"), path, "camera.P")
-        dist = _opencv_distortion(_check_dist(cam.get("distortion"), path, "camera.distortion"))
-        if cam.get("width") is not None and cam.get("height") is not None:
-            size = _check_size((cam["width"], cam["height"]), path, "camera.width/height")
-    elif suffix in (".yml", ".yaml", ".xml", ".json"):
-        fs = _open_fs(path)
-        try:
-            for K_key, d_key, _ in _FS_LAYOUTS:
-                if not fs.getNode(K_key).empty():
-                    K = _check_K(_fs_mat(fs, K_key), path, K_key)
-                    dist = _opencv_distortion(_check_dist(_fs_mat(fs, d_key), path, d_key))
-                    size = _fs_size(fs, K_key, path)
-                    break
-        finally:
-            fs.release()
-        if K is None:
-            keys = ", ".join(f"{k}/{d} ({what})" for k, d, what in _FS_LAYOUTS)
-            raise CalibrationFileError(f"{path}: no camera matrix found; expected one of {keys}")
-    else:
-        raise CalibrationFileError(f"{path}: unknown file type {path.suffix!r}; give a procam .json or an OpenCV "
-                                   ".yml/.yaml/.xml calibration")
-    if image_size is not None:
-        want = _check_size(image_size, path, "the image size")
-        if size is not None and size != want:
-            raise CalibrationFileError(f"{path}: the intrinsics are for {size[0]}x{size[1]} images, the images are "
-                                       f"{want[0]}x{want[1]}; use the calibration of this camera at this resolution")
-        size = want
-    if size is None:
-        raise CalibrationFileError(f"{path}: the file does not say the image size the intrinsics belong to; "
-                                   "give it (width x height)")
-    return Device(K, size, dist if dist is not None else Distortion())

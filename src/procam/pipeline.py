@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from . import _files
+from .io import files as _files
 from . import board as _board
 from . import capture as _capture
 from . import correspond as _corr

@@ -1,5 +1,4 @@
-"""Point clouds from a decoded capture: triangulate every decoded camera pixel, fit the board's plane,
-write binary PLY.
+"""Point clouds from a decoded capture: triangulate every decoded camera pixel, fit the board's plane.
 
 * :func:`reconstruct` -- decoded maps (:class:`procam.decode.DecodeResult`) + calibration (+ the white
   frame for colour) -> :class:`PointCloud` (camera frame, board units), by
@@ -9,8 +8,7 @@ write binary PLY.
 * :func:`fit_plane` -- robust plane (least median of squares, then a least-squares refit on the
   inliers); :func:`residual_map` -- the signed distances as an image, the visual check of a
   calibration (a correct one leaves noise; wrong intrinsics bend or tilt the board).
-* :func:`write_ply` / :func:`read_ply` -- binary little-endian PLY through the ``plyfile`` library
-  (``pip install plyfile``), written atomically.
+* the cloud is written as binary PLY by :func:`procam.io.write_ply` (``procam.io.ply``).
 
 Coordinates: camera frame (origin at the camera centre, x right, y down, z forward), the unit of
 the calibration's ``T`` (the board's square unit, e.g. mm).
@@ -19,12 +17,11 @@ the calibration's ``T`` (the board's square unit, e.g. mm).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from .errors import ProcamError
-from ._files import atomic_path, full_scale_of
+from .io.files import full_scale_of
 from .stats import rms as _rms
 from .stats import robust_sigma, tls_plane
 from .triangulate import triangulate_dense
@@ -68,7 +65,7 @@ class PointCloud:
 
 def to_rgb8(image) -> np.ndarray:
     """An image as (H, W, 3) uint8 RGB: grey replicated, OpenCV BGR(A) reordered, 16 bit scaled by
-    its full scale (:func:`procam._files.full_scale_of`)."""
+    its full scale (:func:`procam.io.files.full_scale_of`)."""
     img = np.asarray(image)
     if img.dtype == np.uint16:
         img = np.clip(np.rint(img.astype(np.float64) * (255.0 / full_scale_of(img))), 0, 255).astype(np.uint8)
@@ -281,67 +278,3 @@ def residual_image(res_map: np.ndarray, scale: float | None = None) -> np.ndarra
     img = cv2.applyColorMap(u, cv2.COLORMAP_JET)
     img[~fin] = 0
     return img
-
-
-def write_ply(path, points, colours=None, *, extra: dict | None = None, comments=()) -> Path:
-    """Write a binary little-endian PLY point cloud through ``plyfile``, atomically.
-
-    Parameters
-    ----------
-    path : output file (``.ply``).
-    points : (N, 3) -> vertex properties ``x, y, z`` (float32).
-    colours : optional (N, 3) uint8 RGB -> ``red, green, blue`` (uchar).
-    extra : optional ``{name: (N,) array}`` of further vertex properties (their dtype is kept).
-    comments : header comment lines (e.g. the units and the frame).
-
-    Raises
-    ------
-    ProcamError
-        ``plyfile`` is not installed.
-    """
-    try:
-        from plyfile import PlyData, PlyElement
-    except ImportError:
-        raise ProcamError("writing PLY needs the plyfile package: pip install plyfile") from None
-    P = np.asarray(points, float).reshape(-1, 3)
-    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
-    cols = None
-    if colours is not None:
-        cols = np.asarray(colours).reshape(-1, 3)
-        if len(cols) != len(P):
-            raise ValueError(f"{len(cols)} colours for {len(P)} points")
-        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
-    extra = dict(extra or {})
-    for name, arr in extra.items():
-        a = np.asarray(arr).reshape(-1)
-        if len(a) != len(P):
-            raise ValueError(f"extra property {name!r} has {len(a)} values for {len(P)} points")
-        fields.append((name, a.dtype.newbyteorder("<").str))
-    vert = np.empty(len(P), dtype=fields)
-    vert["x"], vert["y"], vert["z"] = P[:, 0], P[:, 1], P[:, 2]
-    if cols is not None:
-        vert["red"], vert["green"], vert["blue"] = cols[:, 0], cols[:, 1], cols[:, 2]
-    for name, arr in extra.items():
-        vert[name] = np.asarray(arr).reshape(-1)
-    ply = PlyData([PlyElement.describe(vert, "vertex")], text=False, byte_order="<",
-                  comments=[str(c) for c in comments])
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:
-            ply.write(f)
-    return path
-
-
-def read_ply(path):
-    """Read a PLY point cloud: ``(points (N, 3) float64, colours (N, 3) uint8 or None, comments)``."""
-    try:
-        from plyfile import PlyData
-    except ImportError:
-        raise ProcamError("reading PLY needs the plyfile package: pip install plyfile") from None
-    ply = PlyData.read(str(path))
-    v = ply["vertex"].data
-    pts = np.column_stack([v["x"], v["y"], v["z"]]).astype(np.float64)
-    names = v.dtype.names
-    cols = (np.column_stack([v["red"], v["green"], v["blue"]]).astype(np.uint8)
-            if all(c in names for c in ("red", "green", "blue")) else None)
-    return pts, cols, list(ply.comments)

@@ -711,7 +711,7 @@ def build_report(calib, views=None, *, decodes=None, check: CalibrationCheck | N
 
 def write_report(text: str, path) -> Path:
     """Write the page ``text`` to ``path`` (UTF-8, atomically: temporary name, then rename)."""
-    from ._files import atomic_path
+    from .io.files import atomic_path
 
     path = Path(path)
     with atomic_path(path) as tmp:

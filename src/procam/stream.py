@@ -4,10 +4,10 @@ processed, so decoding, corner detection and the checks of a multi-pose run over
 
 :class:`Prefetcher` reads the folders' images in order, at most ``ahead`` poses ahead of the one being
 processed (memory stays bounded: the pose in use plus ``ahead`` being read), and hands them over through
-:meth:`Prefetcher.read`, a drop-in for :func:`procam._files.read_images` that
+:meth:`Prefetcher.read`, a drop-in for :func:`procam.io.files.read_images` that
 :func:`procam.capture.load_capture` takes as its ``reader``. Anything unusual (a file list other than the
 folder's, images of different sizes or bit depths, a file that cannot be read) is read again by
-:func:`procam._files.read_images` itself, so errors are the same, word for word.
+:func:`procam.io.files.read_images` itself, so errors are the same, word for word.
 
 >>> from procam import stream, capture
 >>> with stream.Prefetcher(["pose1", "pose2"]) as pf:            # doctest: +SKIP
@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _files, capture
+from . import capture
+from .io import files as _files
 
 
 class _Pose:
@@ -64,7 +65,7 @@ class Prefetcher:
     threads : reader threads (OpenCV's PNG decoder releases the GIL); default ``min(2, cpu_count)``.
     ahead : poses read ahead of the one handed out last (1: the next pose is read while this one is processed;
         the first pose is read from the start).
-    gray : as :func:`procam._files.read_images`.
+    gray : as :func:`procam.io.files.read_images`.
 
     Use as a context manager (the threads stop on exit); :meth:`read` is the reader for
     :func:`procam.capture.load_capture`.
@@ -113,7 +114,7 @@ class Prefetcher:
     def read(self, files) -> np.ndarray:
         """The stack of ``files`` (K, H, W): read ahead when they are a folder's images, else read now.
 
-        Same result and same errors as :func:`procam._files.read_images`.
+        Same result and same errors as :func:`procam.io.files.read_images`.
         """
         key = tuple(str(Path(f)) for f in files)
         with self._lock:

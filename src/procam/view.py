@@ -9,6 +9,17 @@ import numpy as np
 
 from .board import Board
 
+#: Per-corner reason codes of a view (``View.diagnostics["reason"]``, uint8): why a corner has no projector point.
+#: :mod:`procam.correspond` sets them; the correspondence files write them as these words.
+CORNER_REASONS = {
+    0: "ok",
+    1: "corner not detected in the camera image",
+    2: "too few decoded pixels in the window (unlit, shadowed or low contrast)",
+    3: "window leaves the image",
+    4: "poor local homography fit (residual above max_residual)",
+    5: "homography estimation failed",
+}
+
 
 @dataclass(frozen=True)
 class Background:

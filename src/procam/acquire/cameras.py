@@ -540,7 +540,7 @@ class FolderWatchCamera(_Camera):
         self._taken: list[str] = []
 
     def _candidates(self) -> list[Path]:
-        from .._files import IMAGE_EXTS
+        from ..io.files import IMAGE_EXTS
 
         try:
             entries = list(self.folder.iterdir())
@@ -564,7 +564,7 @@ class FolderWatchCamera(_Camera):
         self._seen = {p.name for p in self._candidates()}
 
     def grab(self) -> Frame:
-        from .._files import read_image
+        from ..io.files import read_image
 
         deadline = time.monotonic() + self.timeout_s
         sizes: dict[str, tuple[int, float]] = {}

@@ -41,7 +41,7 @@ MAX_SATURATED = 0.02
 
 def full_scale(*images: np.ndarray) -> float:
     """Full-scale value: 255 for uint8, else the smallest 2^b - 1 (b = 10, 12, 14, 16) holding the maximum."""
-    from .._files import full_scale_of
+    from ..io.files import full_scale_of
 
     return full_scale_of(np.stack([np.asarray(i) for i in images]))
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import __version__, patterns
 from ..errors import ProcamError
-from .._files import record_files, to_jsonable, write_image, write_text
+from ..io.files import record_files, to_jsonable, write_image, write_text
 from . import checks
 from .cameras import to_gray
 

@@ -24,7 +24,8 @@ from rich.markup import escape
 from rich.text import Text
 from typer.core import TyperGroup
 
-from .. import _files
+from ..io import files as _files
+from ..io import folders
 from .. import board as _board
 from .. import correspond as _corr
 from .. import decode as _decode
@@ -351,7 +352,7 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         parent = parent.parent
     if not parent.is_dir():
         fail(f"{option} {path}: cannot create the folder {path.parent} ({parent} is not a folder)")
-    why = _files.why_not_writable(parent)
+    why = folders.why_not_writable(parent)
     if why is not None:
         where = f"write into {parent}" if parent == path.parent else f"create the folder {path.parent}"
         fail(f"{option} {path}: cannot {where} ({why}); choose another place")
@@ -374,7 +375,7 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
                 fail(f"{option} {path}: is also an input of this command; give another name")
     folder = path.parent
     if _capture_folder(folder, inputs):
-        own = _files.replaceable(folder)
+        own = folders.replaceable(folder)
         man = _files.read_manifest(folder)
         roles = man["files"] if man is not None else {}
         if path.exists() and (path.name not in own or roles.get(path.name) not in (None, "output")):
@@ -388,10 +389,10 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
 def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
     """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
     ``force`` any folder, where nothing procam did not write is overwritten or deleted
-    (:func:`procam._files.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
+    (:func:`procam.io.folders.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
     the writer, so an interrupted run leaves none)."""
     try:
-        return _files.prepare_output_dir(path, writer, force=force, option=option, create=create)
+        return folders.prepare_output_dir(path, writer, force=force, option=option, create=create)
     except OutputError as e:
         fail(str(e))
 

@@ -167,7 +167,7 @@ def calibrate_cmd(
         if method == "single":
             known = None
             if camera_file is not None:
-                from ..export import load_camera_intrinsics
+                from ..io import load_camera_intrinsics
 
                 known = load_camera_intrinsics(camera_file, views[0].cam_size)
             from ..single_pose.background import BackgroundOptions

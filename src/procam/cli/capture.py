@@ -205,7 +205,7 @@ def capture_cmd(
             import json
 
             from .. import simulate
-            from .._files import to_jsonable
+            from ..io.files import to_jsonable
 
             return {"truth.json": json.dumps(to_jsonable(simulate.truth(scene_for(i))), indent=1)}
 

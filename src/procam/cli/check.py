@@ -16,7 +16,7 @@ def report_check(check, png=None) -> None:
         say(line)
     say(f"({check.seconds:.1f} s)")
     if png is not None:
-        from .._files import write_image
+        from ..io.files import write_image
         from ..check import overlay
 
         write_image(png, overlay(check))

@@ -30,7 +30,8 @@ def correspond_cmd(
 
     import numpy as np
 
-    from .. import _files, capture, io, pipeline
+    from .. import capture, io, pipeline
+    from ..io import files as _files
     from .. import correspond as corr
 
     brd = parse_board(board, square)

@@ -24,10 +24,9 @@ def decode_cmd(
     contrast: ContrastOpt = 3.0,
 ):
     """Decode a pose: projector column and row per camera pixel, validity and reasons."""
-    import numpy as np
-
-    from .. import _files, capture
+    from .. import capture
     from .. import decode as dec
+    from ..io import save_decoded_maps
 
     size = optional_size(projector)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast).decode
@@ -51,10 +50,7 @@ def decode_cmd(
             if not text.startswith("decoded"):
                 say(f"  {axis}: {n} px {text}")
     if out is not None:
-        _files.write_npz(out, col=res.col, row=res.row, valid_col=res.valid_col, valid_row=res.valid_row,
-                         reason_col=res.reason_col, reason_row=res.reason_row, confidence=res.confidence,
-                         dropped_col=res.dropped_col, dropped_row=res.dropped_row,
-                         projector_size=np.array([ps.width, ps.height]), order=np.array(ps.order))
+        save_decoded_maps(out, res)
         say(f"wrote {out}")
     if png is not None:
         from ..plots import save_figure

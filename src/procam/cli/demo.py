@@ -31,7 +31,8 @@ def demo_cmd(
 ):
     """Render a procam capture at a recommended pose, calibrate it from that one pose, compare with the truth."""
     # the simulator, the solvers and matplotlib load only when the demo runs, not with every command
-    from .. import _files, io, patterns, pipeline, simulate, single_pose
+    from .. import io, patterns, pipeline, simulate, single_pose
+    from ..io import files as _files
     from ..board import Board
     from ..models import euler_deg
     from ..plots import save_figure

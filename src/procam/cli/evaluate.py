@@ -56,7 +56,8 @@ def evaluate_cmd(
     import contextlib
     import json
 
-    from .. import _files, io, pipeline
+    from .. import io, pipeline
+    from ..io import files as _files
     from ..evaluate import check_baseline, evaluate
 
     brd = parse_board(board, square)

@@ -10,8 +10,9 @@ from typing import Optional
 import numpy as np
 import typer
 
-from .. import _files, io
 from .. import export as _ex
+from .. import io
+from ..io.files import to_jsonable, write_text
 from ._app import ForceOpt, app, choice, fail, number, output_dir, output_path, say, user_errors, value
 
 Format = choice("Format", _ex.FORMATS)
@@ -61,10 +62,10 @@ def export_cmd(
     if fmt == "opengl":
         doc = _ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
         doc["calibration"] = str(calibration)
-        _files.write_text(out, json.dumps(_files.to_jsonable(doc), indent=1))
+        write_text(out, json.dumps(to_jsonable(doc), indent=1))
         say(f"wrote {out}")
     elif fmt == "kamino410":
-        _ex.save_kamino410(calib, out)
+        io.save_kamino410(calib, out)
         say(f"wrote {out}")
         if calib.camera.distortion.model == "division":
             say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
@@ -73,16 +74,16 @@ def export_cmd(
         written = []
         cam, proj = calib.camera, calib.projector
         mx, my = _ex.undistort_maps(cam)
-        written.append(_ex.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
-                                    size=np.array(cam.image_size)))
+        written.append(io.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
+                                   size=np.array(cam.image_size)))
         mx, my = _ex.predistort_maps(proj)
-        written.append(_ex.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
-                                    size=np.array(proj.image_size)))
+        written.append(io.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
+                                   size=np.array(proj.image_size)))
         if rectify:
             rect = _ex.stereo_rectify(calib, scale=scale)
             for name, dev, k in (("camera", cam, "1"), ("projector", proj, "2")):
                 mx, my = _ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
-                written.append(_ex.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
-                                            size=np.array(rect["size" + k])))
+                written.append(io.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
+                                           size=np.array(rect["size" + k])))
         for p in written:
             say(f"wrote {p}")

@@ -39,7 +39,8 @@ def reconstruct_cmd(
     step: StepOpt = None,
 ):
     """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
-    from .. import _files, capture, decode, io, pipeline
+    from .. import capture, decode, io, pipeline
+    from ..io import files as _files
     from .. import reconstruct as rc
 
     output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))
@@ -76,7 +77,7 @@ def reconstruct_cmd(
     if len(cloud) == 0:
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
              "check the decode picture (procam decode --png)")
-    rc.write_ply(out, cloud.points, cloud.colours,
+    io.write_ply(out, cloud.points, cloud.colours,
                  comments=["procam reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
                            "frame: camera (x right, y down, z forward), units of the calibration's T"])
     t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))

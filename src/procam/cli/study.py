@@ -10,7 +10,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from .. import _files
+from ..io import files as _files
 from .._fmt import fmt_number
 from ..errors import ProcamError
 from ._app import ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors

@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .. import _files
+from ..io import files as _files
 from .._fmt import fmt_number
 from .experiment import ExperimentResult
 

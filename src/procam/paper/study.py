@@ -41,7 +41,7 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from .._files import atomic_path
+from ..io.files import atomic_path
 from ..crlb import camera_bound, projector_bound
 from ..errors import ProcamError
 from ._parallel import run_chunks, single_threaded_blas

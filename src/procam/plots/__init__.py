@@ -50,7 +50,7 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
     ProcamError : the suffix is missing or not a format matplotlib can write (the figure is closed).
     """
     from ..errors import ProcamError
-    from .._files import atomic_path
+    from ..io.files import atomic_path
 
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..correspond import CORNER_REASONS
+from ..view import CORNER_REASONS
 from . import _figure
 
 

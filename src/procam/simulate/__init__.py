@@ -12,7 +12,7 @@ Two paths:
   pattern image at a time); :func:`write_capture` writes one as a capture folder.
 
 The package is independent of the solvers: it imports only numpy, scipy, cv2,
-:mod:`procam.patterns`, :mod:`procam.capture` (the capture-folder format) and :mod:`procam._files`
+:mod:`procam.patterns`, :mod:`procam.capture` (the capture-folder format) and :mod:`procam.io.files`
 (file writing), and has its own projection, division model (with its Newton inverse) and
 OpenCV-Brown distortion.  Its modules:
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import capture as _capture
 from .. import patterns as _patterns
-from .._files import to_jsonable
+from ..io.files import to_jsonable
 from .lens import undistort
 from .scene import Scene, board_extent, truth
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from .._files import to_jsonable
+from ..io.files import to_jsonable
 from .lens import _K, distort, euler_matrix, matrix_euler, project
 
 __all__ = ["Scene", "preset", "PRESETS", "RECOMMENDED_POSE", "DEFAULT_DISTANCE", "with_board_pose",

@@ -235,7 +235,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     advice_options : :class:`AdviceOptions` -- the verdict's thresholds.
     cam_size : (W, H) of the camera (default ``view.cam_size``).
     known_camera : the camera's intrinsics (:class:`~procam.calibration.Device`, any distortion model), e.g. from
-        a camera-only calibration of many photos (:func:`procam.export.load_camera_intrinsics` reads procam's,
+        a camera-only calibration of many photos (:func:`procam.io.load_camera_intrinsics` reads procam's,
         OpenCV's and kamino410's files): the camera is then fixed and the pose calibrates only its board pose,
         the projector and ``R, T`` (``camera`` options are not used).
     strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of

@@ -1,5 +1,5 @@
-"""File plumbing (the bottom floor): image reads, natural sort, JSON side files, atomic writes, and the
-manifest of the files procam wrote into a folder.
+"""File plumbing (the bottom floor): image reads, natural sort, JSON side files, atomic writes, the
+manifest of the files procam wrote into a folder, and whether an existing file is procam's.
 
 Images are read with OpenCV (PNG, JPEG, TIFF, BMP, PGM/PPM, WebP), 8- or 16-bit.
 Colour images are converted to grey with OpenCV's ``COLOR_BGR2GRAY`` (ITU-R BT.601 luma,
@@ -14,13 +14,14 @@ Every output is written under a hidden temporary name ``.NAME.tmpPID.EXT`` and r
 procam writes into that folder.  A folder procam creates for its outputs carries a manifest,
 ``.procam-manifest.json`` (:data:`MANIFEST`), that lists every file procam wrote there and its role
 (``frame`` of a sequence, ``captured`` frame of a camera, ``sidecar`` JSON, ``output``).  Writers
-refuse a non-empty folder without it (:func:`prepare_output_dir`), never overwrite a file it does not
-list, and delete only files it lists; readers ignore the outputs it lists.
+refuse a non-empty folder without it, never overwrite a file it does not list, and delete only files it
+lists (:mod:`procam.io.folders`); readers ignore the outputs it lists.
+A file no manifest lists is procam's when it carries procam's mark (:func:`procam_wrote`, the marks in
+:mod:`procam.io.formats`).
 """
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import re
@@ -31,7 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CaptureError, OutputError
+from ..errors import CaptureError
+from . import formats
 
 IMAGE_EXTS = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm", ".webp", ".jp2"}
 
@@ -110,10 +112,10 @@ def _png_texts(data: bytes) -> dict:
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
-    Yes when its folder's manifest lists it (not as a camera frame), or by its content: procam's JSON
-    (``"format": "procam-..."``), a calibration FileStorage file (``cam_K``/``cam_int`` ...), procam's
-    ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG marked ``procam`` (every figure and
-    image procam writes is), or an empty file.
+    Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
+    :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a calibration FileStorage file
+    (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG
+    marked ``procam`` (every figure and image procam writes is), or an empty file.
     """
     path = Path(path)
     man = read_manifest(path.parent)
@@ -132,10 +134,10 @@ def procam_wrote(path) -> bool:
             doc = json.loads(path.read_text())
         except (OSError, ValueError, UnicodeDecodeError):
             return False
-        return isinstance(doc, dict) and str(doc.get("format", "")).startswith("procam")
+        return isinstance(doc, dict) and str(doc.get("format", "")).startswith(formats.JSON_PREFIX)
     if suffix in (".yml", ".yaml", ".xml"):
         return (head.startswith(b"%YAML") or b"<opencv_storage>" in head) and any(
-            k in head for k in (b"cam_K", b"proj_K", b"cam_int", b"proj_int"))
+            k.encode() in head for k in formats.FILESTORAGE_MARKS)
     if suffix == ".npz":
         import zipfile
 
@@ -144,13 +146,13 @@ def procam_wrote(path) -> bool:
                 names = set(z.namelist())
         except (OSError, zipfile.BadZipFile):
             return False
-        return {"col.npy", "valid_col.npy"} <= names or {"map_x.npy", "map_y.npy"} <= names
+        return any({f"{k}.npy" for k in mark} <= names for mark in (formats.DECODED_MAPS_MARK, formats.REMAP_MARK))
     if suffix == ".ply":
-        return b"\ncomment procam" in head[:4096]
+        return f"\ncomment {formats.PLY_COMMENT}".encode() in head[:4096]
     if suffix == ".png":
-        return head[:8] == _PNG_SIGNATURE and _png_texts(head).get("Software") == "procam"
+        return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix in (".pdf", ".svg", ".ps", ".eps"):
-        return b"procam" in head
+        return formats.SOFTWARE.encode() in head
     return False
 
 
@@ -284,6 +286,14 @@ def read_sidecar(folder, name: str = "patterns.json") -> dict | None:
         raise CaptureError(f"{path}: not valid JSON ({e}); fix or delete it") from None
 
 
+def read_sidecar_quiet(folder, name: str):
+    """:func:`read_sidecar` that returns None for an unreadable file instead of raising."""
+    try:
+        return json.loads((Path(folder) / name).read_text())
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+
+
 _TEMP = re.compile(r"^\..+\.tmp(\d+)(\.[^.]*)?$")
 
 
@@ -401,7 +411,7 @@ def write_image(path, img: np.ndarray, record: bool = True) -> Path:
             raise CaptureError(f"{path}: could not encode image")
         data = buf.tobytes()
         if data[:8] == _PNG_SIGNATURE:
-            data = _png_with_text(data, "Software", "procam")
+            data = _png_with_text(data, formats.PNG_TEXT_KEY, formats.SOFTWARE)
         Path(tmp).write_bytes(data)
     return path
 
@@ -477,32 +487,35 @@ def read_manifest(folder) -> dict | None:
         doc = json.loads(path.read_text())
     except (OSError, ValueError, UnicodeDecodeError):
         return None
-    if not (isinstance(doc, dict) and doc.get("format") == "procam-manifest" and isinstance(doc.get("files"), dict)):
+    if not (isinstance(doc, dict) and doc.get("format") == formats.MANIFEST_FORMAT
+            and isinstance(doc.get("files"), dict)):
         return None
     # plain names only: a manifest never points outside its folder
-    doc["files"] = {str(k): str(v) for k, v in doc["files"].items() if _plain_name(str(k))}
+    doc["files"] = {str(k): str(v) for k, v in doc["files"].items() if plain_name(str(k))}
     return doc
 
 
-def _plain_name(name: str) -> bool:
+def plain_name(name: str) -> bool:
+    """Is ``name`` a plain file name in its folder (no path, not ``.``/``..``)?  Only such names are listed."""
     return bool(name) and name not in (".", "..") and "/" not in name and "\\" not in name and "\x00" not in name
 
 
-def _write_manifest(folder, doc: dict) -> None:
+def write_manifest(folder, doc: dict) -> None:
+    """Write ``doc`` as the manifest of ``folder`` (atomically; the manifest does not list itself)."""
     write_text(Path(folder) / MANIFEST, json.dumps(doc, indent=1, sort_keys=True), record=False)
 
 
 def record_files(folder, roles: dict, writer: str | None = None) -> dict:
     """Add ``roles`` (``{name: role}``) to the manifest of ``folder`` (created when missing, with ``writer``);
     returns the manifest."""
-    doc = read_manifest(folder) or {"format": "procam-manifest", "version": 1, "writer": writer or "procam",
+    doc = read_manifest(folder) or {"format": formats.MANIFEST_FORMAT, "version": 1, "writer": writer or "procam",
                                     "files": {}}
     for name, role in roles.items():
         if role not in ROLES:
             raise ValueError(f"role must be one of {ROLES}, got {role!r}")
         if doc["files"].get(name) != "captured":
             doc["files"][str(name)] = role
-    _write_manifest(folder, doc)
+    write_manifest(folder, doc)
     return doc
 
 
@@ -513,167 +526,4 @@ def unlist_files(folder, names) -> None:
         return
     for n in names:
         doc["files"].pop(str(n), None)
-    _write_manifest(folder, doc)
-
-
-def _visible(folder: Path) -> list[str]:
-    """Names in ``folder`` a user put there or can see: everything but hidden entries."""
-    return sorted((e.name for e in os.scandir(folder) if not e.name.startswith(".")), key=natural_key)
-
-
-def _legacy_files(folder: Path) -> set[str]:
-    """Files an older procam (before manifests) wrote: a sequence folder's ``patterns.json`` lists its
-    frames; ``truth.json`` is the simulator's.  A camera capture (``capture.json``) is not counted."""
-    meta = read_sidecar_quiet(folder, "patterns.json")
-    if not (isinstance(meta, dict) and meta.get("format") == "procam-graycode" and isinstance(meta.get("files"), list)):
-        return set()
-    if (folder / "capture.json").exists():
-        return set()
-    return {str(f) for f in meta["files"] if _plain_name(str(f))} | {"patterns.json", "truth.json"}
-
-
-def read_sidecar_quiet(folder, name: str):
-    """:func:`read_sidecar` that returns None for an unreadable file instead of raising."""
-    try:
-        return json.loads((Path(folder) / name).read_text())
-    except (OSError, ValueError, UnicodeDecodeError):
-        return None
-
-
-def _listing(names: list[str], n: int = 4) -> str:
-    return ", ".join(names[:n]) + (f", ... ({len(names)} in all)" if len(names) > n else "")
-
-
-def replaceable(folder) -> set[str]:
-    """Names in ``folder`` procam may overwrite or delete: listed in its manifest (or an older procam's
-    patterns.json), except camera frames (role ``captured``)."""
-    folder = Path(folder)
-    man = read_manifest(folder)
-    if man is None:
-        return _legacy_files(folder)
-    return {n for n, r in man["files"].items() if r != "captured"}
-
-
-def prepare_output_dir(folder, writer: str, *, force: bool = False, option: str | None = None,
-                       create: bool = True) -> Path:
-    """Make ``folder`` ready for ``writer``'s outputs (``"simulate"``, ``"patterns"``, ``"study"`` ...).
-
-    A missing or empty folder is created and gets a manifest.  A folder this writer wrote before (its
-    manifest, or an older procam's patterns.json, lists everything in it) is reused.  Anything else --
-    files procam did not write, or another command's output -- is refused with one line naming the folder
-    and what it holds, unless ``force``; even then nothing procam did not write is overwritten or deleted
-    (:func:`check_overwrite`).  Temporary files of dead processes are removed.  Without ``create`` the
-    folder is only checked (a missing one: that it can be created), not created.
-
-    Raises :class:`OutputError`.
-    """
-    folder = Path(folder)
-    label = f"{option} {folder}" if option else str(folder)
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"{label}: exists and is not a folder; give a folder for the outputs")
-    if not folder.exists() and not create:
-        parent = folder.parent
-        while not parent.exists() and parent != parent.parent:
-            parent = parent.parent
-        if not parent.is_dir():
-            raise OutputError(f"{label}: cannot create the folder ({parent} is not a folder)")
-        check_writable_dir(parent, label)
-        return folder
-    new = not folder.exists()
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise OutputError(f"{label}: cannot create the folder ({e.strerror or e}); check the path and its "
-                          "permissions") from None
-    if new and read_manifest(folder.parent) is not None:  # a folder inside procam's output folder is procam's
-        record_files(folder.parent, {folder.name: "output"})
-    check_writable_dir(folder, label)
-    remove_stale_temps(folder)
-    visible = _visible(folder)
-    man = read_manifest(folder)
-    listed = set(man["files"]) if man is not None else _legacy_files(folder)
-    foreign = [n for n in visible if n not in listed]
-    legacy = "simulate" if (folder / "truth.json").exists() else "patterns"
-    if man is not None:
-        other = man.get("writer") != writer
-        captured = any(r == "captured" for r in man["files"].values())
-    else:
-        other = bool(listed) and writer != legacy
-        captured = False
-    if captured:
-        raise OutputError(f"{label}: the folder holds a camera capture; give a new or empty folder (procam never "
-                          "writes into a capture)")
-    if visible and not force:
-        if foreign:
-            raise OutputError(
-                f"{label}: the folder holds {len(foreign)} file(s) procam did not write ({_listing(foreign)}); give "
-                "a new or empty folder, or add --force to write next to them (procam never overwrites or deletes "
-                "files it did not write)")
-        if other:
-            what = man.get("writer") if man is not None else legacy
-            raise OutputError(f"{label}: the folder holds the output of 'procam {what}'; give a new or empty folder, "
-                              "or add --force to write into it")
-    if man is None and create:
-        doc = {"format": "procam-manifest", "version": 1, "writer": legacy if listed else writer,
-               "files": {n: ("frame" if Path(n).suffix.lower() in IMAGE_EXTS and n not in ("patterns.json",)
-                             else "sidecar") for n in sorted(listed & set(visible))}}
-        _write_manifest(folder, doc)
-    return folder
-
-
-def check_overwrite(folder, names, option: str | None = None) -> None:
-    """Raise :class:`OutputError` when writing ``names`` into ``folder`` would overwrite a file procam did
-    not write (or a camera frame)."""
-    folder = Path(folder)
-    ok = replaceable(folder)
-    clash = [n for n in names if n not in ok and (folder / n).exists()]
-    if clash:
-        label = f"{option} {folder}" if option else str(folder)
-        raise OutputError(f"{label}: writing here would overwrite {len(clash)} file(s) procam did not write "
-                          f"({_listing(sorted(clash, key=natural_key))}); give a new or empty folder")
-
-
-def remove_listed(folder, names) -> list[Path]:
-    """Delete ``names`` from ``folder`` if its manifest lists them as procam's (and not as camera frames),
-    and unlist them; anything else is left alone.  Returns the deleted paths."""
-    folder = Path(folder)
-    ok = replaceable(folder)
-    gone = []
-    for n in names:
-        if n in ok and (folder / n).is_file() and not (folder / n).is_symlink():
-            (folder / n).unlink()
-            gone.append(folder / n)
-    if gone:
-        unlist_files(folder, [p.name for p in gone])
-    return gone
-
-
-def why_not_writable(folder, need_bytes: int = 1 << 20) -> str | None:
-    """Why ``folder`` (an existing folder) cannot take a new file -- read-only, no permission, less than
-    ``need_bytes`` free -- or None when it can (a probe file is created and removed)."""
-    import shutil
-    import tempfile
-
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".procam-probe-", dir=folder)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as e:
-        return {errno.EROFS: "the file system is read-only", errno.EACCES: "no permission to write there",
-                errno.EPERM: "no permission to write there", errno.ENOSPC: "the disk is full",
-                errno.EDQUOT: "the disk quota is exhausted"}.get(e.errno, e.strerror or str(e))
-    try:
-        free = shutil.disk_usage(folder).free
-    except OSError:
-        return None
-    if free < need_bytes:
-        return f"only {fmt_bytes(free)} free on the disk, about {fmt_bytes(need_bytes)} needed"
-    return None
-
-
-def check_writable_dir(folder, label: str | None = None, need_bytes: int = 1 << 20) -> None:
-    """Raise :class:`OutputError` when ``folder`` (an existing folder) cannot take a new file
-    (:func:`why_not_writable`)."""
-    why = why_not_writable(folder, need_bytes)
-    if why is not None:
-        raise OutputError(f"{label or folder}: cannot write into {folder} ({why}); choose another place")
+    write_manifest(folder, doc)

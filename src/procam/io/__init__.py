@@ -1,0 +1,53 @@
+"""procam's files: one home for every file procam reads or writes.
+
+    formats           which files are procam's: the marks its writers leave, defined once
+    files             plumbing: natural sort, image reads, atomic writes, JSON helpers, the manifest of procam's
+                      files, whether an existing file is procam's
+    folders           output folders: what procam may overwrite or delete; a folder made ready for a writer
+    validate          the one validator set every reader checks what it loads with
+    procam            procam's JSON: calibrations and correspondences (views)
+    opencv            OpenCV FileStorage YAML/XML: procam's keys written and read, other tools' camera layouts read
+    kamino410         kamino410/procam-calibration's calibration_result.xml and camera_config.json
+    calibration_file  one calibration file, whatever its format: save_calibration (by suffix), load_calibration
+                      and load_camera_intrinsics (by content)
+    maps              decoded maps (procam decode -o) and remap tables as .npz
+    ply               point clouds as binary PLY
+
+Submodules load on first use (PEP 562): ``procam.io.load_calibration`` imports the calibration readers when it
+is first named, and ``import procam.io.files`` imports no format code.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "calibration_file",
+               "maps", "ply")
+
+#: Public names handed on here: name -> submodule.
+_EXPORTS = {
+    "IMAGE_EXTS": "files", "read_image": "files", "read_images": "files", "write_image": "files",
+    "validate_calibration": "validate",
+    "CONVENTIONS": "procam", "UNCERTAINTY_NOTE": "procam", "VERDICT_MEANING": "procam",
+    "calibration_to_dict": "procam", "view_from_dict": "procam", "view_to_dict": "procam",
+    "save_opencv_yaml": "opencv",
+    "KAMINO410_KEYS": "kamino410", "load_kamino410": "kamino410", "save_kamino410": "kamino410",
+    "load_calibration": "calibration_file", "load_camera_intrinsics": "calibration_file",
+    "save_calibration": "calibration_file",
+    "load_decoded_maps": "maps", "save_decoded_maps": "maps", "save_maps": "maps",
+    "read_ply": "ply", "write_ply": "ply",
+}
+
+__all__ = [*_SUBMODULES, *_EXPORTS]
+
+
+def __getattr__(name: str):
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,192 @@
+"""One calibration file, whatever its format: :func:`save_calibration` picks the format by the file's suffix,
+:func:`load_calibration` and :func:`load_camera_intrinsics` recognise it by its content (the suffix is only a
+hint).
+
+A camera-projector calibration is read from
+
+* procam's calibration JSON (``"format": "procam-calibration"``; :mod:`procam.io.procam`), also camera-only;
+* procam's OpenCV FileStorage YAML or XML, Moreno & Taubin's keys ``cam_K, cam_kc, proj_K, proj_kc, R, T``
+  (:mod:`procam.io.opencv`);
+* kamino410/procam-calibration's ``calibration_result.xml`` (``cam_int, cam_dist, proj_int, proj_dist, rotation,
+  translation``), theirs or procam's export (:mod:`procam.io.kamino410`);
+
+one camera's intrinsics from those and from OpenCV's calibration sample (``camera_matrix``), its stereo sample
+(``M1``, ``D1``) and kamino410's ``camera_config.json``.
+
+Recognition: a file that starts with ``%YAML``, ``<?xml`` or ``<opencv_storage>`` is a FileStorage file; one that
+starts with ``{`` is JSON (procam's, kamino410's camera file, or a FileStorage JSON holding one of the layouts'
+keys); for anything else the suffix decides (``.json`` JSON; ``.yml``, ``.yaml``, ``.xml`` FileStorage), so the
+error says what is wrong with that kind of file.  In a FileStorage file procam's keys are looked for first, then
+kamino410's.  Every field is checked by the one validator set (:mod:`procam.io.validate`), and a file that
+cannot be read is refused with one line that names it and the formats read.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..calibration import Calibration, Device, Distortion
+from ..errors import CalibrationFileError
+from . import kamino410, opencv, procam
+from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV
+from .validate import check_size, validate_calibration
+
+#: What :func:`load_calibration` reads, as its errors say it.
+CALIBRATION_FORMATS = ("procam reads procam calibration JSON, OpenCV FileStorage YAML/XML with procam's keys "
+                       "(cam_K, cam_kc, proj_K, proj_kc, R, T) and kamino410's calibration_result.xml (cam_int, "
+                       "cam_dist, proj_int, proj_dist, rotation, translation)")
+#: What :func:`load_camera_intrinsics` reads, as its errors say it.
+CAMERA_FORMATS = ("procam reads a camera from procam calibration JSON, kamino410's camera_config.json and OpenCV "
+                  "FileStorage YAML/XML/JSON with " + ", ".join(f"{k}/{d}" for k, d, _ in opencv.CAMERA_LAYOUTS))
+
+#: The keys that make a JSON document a FileStorage file (``cv2.FileStorage`` writes JSON too).
+_STORAGE_KEYS = (OPENCV.cam_K, OPENCV.proj_K, KAMINO410.cam_K, KAMINO410.proj_K,
+                 *(k for k, _, _ in opencv.CAMERA_LAYOUTS))
+
+
+def save_calibration(calib: Calibration, path) -> Path:
+    """Write ``calib`` as procam's JSON (``.json`` or any other suffix) or OpenCV FileStorage (``.yml``/``.yaml``
+    YAML, ``.xml`` XML, procam's keys: :func:`procam.io.opencv.save_opencv_yaml`), atomically."""
+    path = Path(path)
+    if path.suffix.lower() in (".yml", ".yaml", ".xml"):
+        return opencv.save_opencv_yaml(calib, path)
+    return procam.save_calibration_json(calib, path)
+
+
+def _kind(path: Path) -> str | None:
+    """``"filestorage"`` or ``"json"`` by the file's first bytes, else by its suffix; None when neither tells."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(256)
+    except OSError as e:
+        raise CalibrationFileError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    text = head.lstrip(b"\xef\xbb\xbf \t\r\n")
+    if text.startswith((b"%YAML", b"<?xml", b"<opencv_storage")):
+        return "filestorage"
+    if text.startswith(b"{"):
+        return "json"
+    return {".json": "json", ".yml": "filestorage", ".yaml": "filestorage", ".xml": "filestorage"}.get(
+        path.suffix.lower())
+
+
+def _json(path: Path, what: str, hint: str):
+    try:
+        return json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise CalibrationFileError(f"{path}: {what} ({e}); {hint}") from None
+
+
+def _is_storage(doc) -> bool:
+    """Is the JSON document a ``cv2.FileStorage`` file of one of the layouts?"""
+    return isinstance(doc, dict) and any(k in doc for k in _STORAGE_KEYS)
+
+
+def _read_storage(path: Path, hint: str, read):
+    """``read(fs, path)`` of the FileStorage file ``path``; OpenCV's own errors become one line."""
+    import cv2
+
+    fs = opencv.open_storage(path, hint)
+    try:
+        return read(fs, path)
+    except (cv2.error, SystemError) as e:
+        raise CalibrationFileError(f"{path}: not a readable OpenCV calibration ({opencv.cv_message(e)})") from None
+    finally:
+        fs.release()
+
+
+def _storage_calibration(fs, path) -> Calibration:
+    if any(opencv.has(fs, k) for k in (OPENCV.cam_K, OPENCV.proj_K)):
+        return opencv.read_calibration(fs, path)
+    if any(opencv.has(fs, k) for k in (KAMINO410.cam_K, KAMINO410.proj_K)):
+        return kamino410.read_calibration(fs, path)
+    raise CalibrationFileError(f"{path}: holds no camera-projector calibration (no {OPENCV.cam_K}/{OPENCV.proj_K} "
+                               f"or {KAMINO410.cam_K}/{KAMINO410.proj_K}); {CALIBRATION_FORMATS}")
+
+
+def load_calibration(path) -> Calibration:
+    """Read a calibration in any format procam writes or reads (module docstring), recognised by content.
+
+    Every field is checked (:func:`procam.io.validate.validate_calibration`): shapes, finiteness, positive focal
+    lengths, plausible magnitudes, a rotation ``R`` and non-zero ``T``, a known distortion model (an unknown one
+    is refused, not read as none).  A procam YAML/XML without ``cam_size``/``proj_size`` gets ``2 (u0, v0)`` as
+    the image size, and ``info["image_size_assumed"]`` lists the keys that were missing; a kamino410 file from
+    their tool (no projector size) gets ``2 (u0, v0)`` for the projector and a warning
+    (:func:`procam.io.load_kamino410` takes the real size).
+
+    Raises :class:`~procam.errors.CalibrationFileError` naming the file and the field.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationFileError(f"{path}: no such file; give a calibration written by 'procam calibrate'")
+    kind = _kind(path)
+    if kind == "json":
+        doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)
+        if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:
+            return validate_calibration(procam.calibration_from_json(path, doc), path)
+        if not _is_storage(doc):
+            why = f"missing format: {CALIBRATION_FORMAT}" if isinstance(doc, dict) else "the top level is not an object"
+            raise CalibrationFileError(f"{path}: not a procam calibration JSON file ({why}); {CALIBRATION_FORMATS}")
+    elif kind is None:
+        raise CalibrationFileError(f"{path}: unknown file type {path.suffix!r}; {CALIBRATION_FORMATS}")
+    return validate_calibration(_read_storage(path, CALIBRATION_FORMATS, _storage_calibration), path)
+
+
+def load_camera_intrinsics(path, image_size=None) -> Device:
+    """One camera's intrinsics (K, distortion, image size) from the files people have: :func:`load_calibration`'s
+    reader asking for the camera only.
+
+    Reads, by content:
+
+    * procam calibration JSON (``procam calibrate``, also camera-only): the ``camera`` block, any
+      distortion model;
+    * kamino410's camera JSON (``{"camera": {"P": [9 numbers], "distortion": [...], "width", "height"}}``);
+    * ``cv2.FileStorage`` YAML/XML/JSON with ``cam_K``/``cam_kc`` (procam, Moreno-Taubin's
+      scan3d-capture; size from ``cam_size``), ``camera_matrix``/``distortion_coefficients`` (OpenCV's
+      calibration sample; size from ``image_width``/``image_height``), ``cam_int``/``cam_dist``
+      (kamino410; size from ``img_shape``) or ``M1``/``D1`` (OpenCV's stereo sample: the first camera).
+
+    Parameters
+    ----------
+    path : the file.
+    image_size : (width, height) of the images the intrinsics will be used with.  Required when the
+        file has no size; when it has one they must agree.
+
+    Raises
+    ------
+    CalibrationFileError
+        Missing file, unknown layout, a malformed matrix (naming the field), no image size, or a
+        size that differs from ``image_size``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationFileError(f"{path}: no such file; give a camera calibration file")
+    kind = _kind(path)
+    found = None
+    if kind == "json":
+        doc = _json(path, "not valid JSON", CAMERA_FORMATS)
+        if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:
+            cam = procam.device_from_json(path, doc, "camera")
+            found = cam.K, cam.distortion, cam.image_size
+        elif isinstance(doc, dict) and isinstance(doc.get("camera"), dict) and "P" in doc["camera"]:
+            found = kamino410.camera_from_config(path, doc)
+        elif not _is_storage(doc):
+            raise CalibrationFileError(f"{path}: no camera calibration found; {CAMERA_FORMATS}")
+    elif kind is None:
+        raise CalibrationFileError(f"{path}: unknown file type {path.suffix!r}; {CAMERA_FORMATS}")
+    if found is None:
+        found = _read_storage(path, CAMERA_FORMATS, opencv.read_camera)
+        if found is None:
+            keys = ", ".join(f"{k}/{d} ({what})" for k, d, what in opencv.CAMERA_LAYOUTS)
+            raise CalibrationFileError(f"{path}: no camera matrix found; expected one of {keys}")
+    K, dist, size = found
+    if image_size is not None:
+        want = check_size(path, "the image size", image_size)
+        if size is not None and size != want:
+            raise CalibrationFileError(f"{path}: the intrinsics are for {size[0]}x{size[1]} images, the images are "
+                                       f"{want[0]}x{want[1]}; use the calibration of this camera at this resolution")
+        size = want
+    if size is None:
+        raise CalibrationFileError(f"{path}: the file does not say the image size the intrinsics belong to; "
+                                   "give it (width x height)")
+    return Device(K, size, dist if dist is not None else Distortion())

@@ -1,0 +1,78 @@
+"""Which files are procam's: the marks procam's writers leave in a file, each defined once.
+
+:func:`procam.io.files.procam_wrote` recognises an existing file as procam's by these marks (so an output may
+overwrite it without losing anything of the user's); the writer that leaves a mark takes it from here, so the
+writer and the recogniser cannot drift apart.  Nothing here reads or writes a file, and this module imports
+nothing heavy (``procam.io.files`` imports it, and must stay cheap).
+
+==================  ===========================================================================================
+file                mark
+==================  ===========================================================================================
+JSON                a top-level ``"format"`` that starts with :data:`JSON_PREFIX` (``procam-calibration``, ...)
+FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) holding a device-matrix key of procam's layout
+                    (:data:`OPENCV`) or kamino410's (:data:`KAMINO410`): :data:`FILESTORAGE_MARKS`
+``.npz``            the members :data:`DECODED_MAPS_MARK` (decoded maps) or :data:`REMAP_MARK` (a remap table)
+PLY                 a header comment that starts with :data:`PLY_COMMENT`
+PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
+PDF, SVG, PS, EPS   :data:`SOFTWARE` as the figure's Creator
+==================  ===========================================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: The name procam signs its files with (PNG ``Software``, a figure's ``Creator``).
+SOFTWARE = "procam"
+
+# ------------------------------------------------------------------------------------------------
+# JSON: every document procam writes names its format, "procam-..."
+JSON_PREFIX = "procam"
+CALIBRATION_FORMAT = "procam-calibration"
+CORRESPONDENCES_FORMAT = "procam-correspondences"
+OPENGL_FORMAT = "procam-opengl"
+MANIFEST_FORMAT = "procam-manifest"
+#: ``patterns.json`` of a written Gray-code sequence (an older procam's folders are known by it).
+GRAYCODE_FORMAT = "procam-graycode"
+
+
+# ------------------------------------------------------------------------------------------------
+# OpenCV FileStorage (YAML / XML): the keys of a camera-projector calibration
+@dataclass(frozen=True)
+class FileStorageLayout:
+    """The FileStorage keys of one tool's camera-projector calibration file."""
+
+    name: str
+    cam_K: str
+    cam_dist: str
+    proj_K: str
+    proj_dist: str
+    R: str
+    T: str
+
+
+#: procam's YAML/XML: the keys of Moreno & Taubin's scan3d-capture (``procam calibrate --yaml``).
+OPENCV = FileStorageLayout("procam / Moreno-Taubin", "cam_K", "cam_kc", "proj_K", "proj_kc", "R", "T")
+#: kamino410/procam-calibration's ``calibration_result.xml`` (``procam export --format kamino410``).
+KAMINO410 = FileStorageLayout("kamino410/procam-calibration", "cam_int", "cam_dist", "proj_int", "proj_dist",
+                              "rotation", "translation")
+#: A FileStorage file holding one of these keys is a calibration procam wrote (or may overwrite).
+FILESTORAGE_MARKS = (OPENCV.cam_K, OPENCV.proj_K, KAMINO410.cam_K, KAMINO410.proj_K)
+
+
+# ------------------------------------------------------------------------------------------------
+# .npz
+#: Members of the decoded-maps file (``procam decode -o maps.npz``), in the order they are written.
+DECODED_MAPS_KEYS = ("col", "row", "valid_col", "valid_row", "reason_col", "reason_row", "confidence",
+                     "dropped_col", "dropped_row", "projector_size", "order")
+DECODED_MAPS_MARK = ("col", "valid_col")
+#: The two tables of a remap file (``procam export --format maps``); further members are its metadata.
+REMAP_MARK = ("map_x", "map_y")
+
+
+# ------------------------------------------------------------------------------------------------
+# PLY and PNG
+#: The first word of the first header comment of a PLY procam writes (``procam reconstruct``).
+PLY_COMMENT = "procam"
+#: The PNG ``tEXt`` key procam's signature stands under (value :data:`SOFTWARE`).
+PNG_TEXT_KEY = "Software"

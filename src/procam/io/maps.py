@@ -1,0 +1,77 @@
+"""Maps as NumPy ``.npz`` files: the decoded maps of a pose (``procam decode -o``) and remap tables
+(``procam export --format maps``).
+
+* :func:`save_decoded_maps` / :func:`load_decoded_maps` -- per camera pixel, the projector column and row, their
+  validity, reasons, confidence and dropped bits, with the projector's size and the sequence order
+  (members :data:`procam.io.formats.DECODED_MAPS_KEYS`; the table is in ``docs/file-formats.md``).
+* :func:`save_maps` -- ``map_x``, ``map_y`` (float32) for ``cv2.remap`` plus metadata arrays.
+
+Files are written atomically and byte for byte the same for the same arrays (:func:`procam.io.files.write_npz`).
+The reader checks the members, their common (H, W) shape and the projector size (:mod:`procam.io.validate`) and
+raises :class:`~procam.errors.CaptureError` naming the file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CaptureError
+from .files import write_npz
+from .formats import DECODED_MAPS_KEYS, REMAP_MARK
+from .validate import bad, check_size
+
+_FIX = "re-run 'procam decode -o'"
+#: The members of a decoded-maps file that are not (H, W) maps.
+_META = ("projector_size", "order")
+
+
+def save_decoded_maps(path, result) -> Path:
+    """Write a pose's decoded maps (a :class:`procam.decode.DecodeResult`) as ``.npz``, atomically."""
+    ps = result.pattern_set
+    arrays = {"col": result.col, "row": result.row, "valid_col": result.valid_col, "valid_row": result.valid_row,
+              "reason_col": result.reason_col, "reason_row": result.reason_row, "confidence": result.confidence,
+              "dropped_col": result.dropped_col, "dropped_row": result.dropped_row,
+              "projector_size": np.array([ps.width, ps.height]), "order": np.array(ps.order)}
+    return write_npz(path, **{k: arrays[k] for k in DECODED_MAPS_KEYS})
+
+
+def load_decoded_maps(path) -> dict:
+    """Read a decoded-maps file: ``{member: (H, W) array}`` for the maps, ``projector_size`` as ``(width,
+    height)`` and ``order`` as a string.
+
+    Raises :class:`~procam.errors.CaptureError` naming the file: missing, not an ``.npz``, a member missing,
+    maps of different shapes, or a projector size that is not one.
+    """
+    import zipfile
+
+    path = Path(path)
+    how = {"fix": _FIX, "error": CaptureError}
+    if not path.is_file():
+        raise CaptureError(f"{path}: no such file; {_FIX}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
+        raise CaptureError(f"{path}: not a decoded-maps .npz file ({e}); {_FIX}") from None
+    missing = [k for k in DECODED_MAPS_KEYS if k not in data]
+    if missing:
+        raise CaptureError(f"{path}: has no {', '.join(missing)} (not procam's decoded maps); {_FIX}")
+    maps = [k for k in DECODED_MAPS_KEYS if k not in _META]
+    shape = data[maps[0]].shape
+    for k in maps:
+        if data[k].ndim != 2 or data[k].shape != shape:
+            bad(path, k, f"is {'x'.join(map(str, data[k].shape))}, the maps are {'x'.join(map(str, shape))}", **how)
+    out = {k: data[k] for k in maps}
+    out["projector_size"] = check_size(path, "projector_size", data["projector_size"], **how)
+    out["order"] = str(data["order"])
+    return out
+
+
+def save_maps(path, map_x, map_y, **meta) -> Path:
+    """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically (the same
+    tables give the same bytes)."""
+    x, y = REMAP_MARK
+    return write_npz(path, **{x: np.asarray(map_x, np.float32), y: np.asarray(map_y, np.float32)},
+                     **{k: np.asarray(v) for k, v in meta.items()})
