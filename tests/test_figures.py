@@ -10,7 +10,7 @@ import pytest
 
 from procam import multi_pose, simulate, single_pose
 from procam.plots.residuals import arrow_scale, nice_length, residual_figure
-from procam.report import calibration_verdict
+from procam.verdict import calibration_verdict
 from procam.residuals import calibration_residuals, pose_residuals, rms
 from procam.view import View
 

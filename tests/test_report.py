@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from procam import multi_pose, simulate, single_pose
-from procam.report import (SECTIONS, Verdict, build_report, calibration_verdict, coverage_fractions, rig_geometry,
-                           write_report)
+from procam.report import SECTIONS, build_report, coverage_fractions, rig_geometry, write_report
 from procam.summary import PLUS_MINUS, parameter_rows
+from procam.verdict import Verdict, calibration_verdict
 from procam.verify import check_calibration
 from procam.view import View
 

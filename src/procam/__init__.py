@@ -22,6 +22,7 @@ The modules, from the captures up (each imports only those above it in this list
     uncertainty   the only Jacobian / covariance code
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
+    verdict       a calibration's verdict from its evidence; the one glossary of the verdict words
     residuals     RMS, PnP, stereo pose, per-pose residuals
     misfit        model error versus noise: a smooth field in a fit's residuals across the board
     background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
@@ -62,7 +63,7 @@ import importlib
 __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
-               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "background",
                "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
                "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check",
                "acquire")

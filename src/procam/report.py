@@ -17,13 +17,13 @@ import base64
 import html
 import io as _stdio
 import json
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .residuals import calibration_residuals, pnp
 from .summary import PLUS_MINUS, parameter_rows, pose_rows, projector_assumptions, projector_freed
+from .verdict import Verdict, calibration_verdict
 from .verify import CalibrationCheck, check_calibration
 
 __all__ = ["Verdict", "calibration_verdict", "coverage_fractions", "rig_geometry", "rig_svg", "build_report",
@@ -33,115 +33,6 @@ __all__ = ["Verdict", "calibration_verdict", "coverage_fractions", "rig_geometry
 SECTIONS = {"verdict": "Verdict", "parameters": "Parameters and assumptions", "coverage": "Coverage of the image planes",
             "residuals": "Reprojection residuals", "verification": "Metric verification", "rig": "The rig in 3-D",
             "leave-one-out": "Leave-one-pose-out verification"}
-
-#: The verdict's words, best first.
-VERDICTS = ("good", "weak", "degenerate", "failed", "unknown")
-
-_MEANING = {
-    "good": "Fit to use: every pose constrains what it must and nothing was flagged.",
-    "weak": "Usable with care: some parameters are less certain than a better pose set would make them (see why).",
-    "degenerate": "Do not trust the flagged parameters: the poses do not determine them. Re-capture as suggested.",
-    "failed": "The calibration failed: an estimate is impossible for a real device. Re-capture as suggested.",
-    "unknown": "The file holds no per-pose advice, so there is no verdict; judge from the sections below.",
-}
-
-
-# --------------------------------------------------------------------------------------------------
-# the verdict
-# --------------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Verdict:
-    """A calibration's verdict in words.
-
-    Attributes
-    ----------
-    word : one of :data:`VERDICTS` (``good``, ``weak``, ``degenerate``, ``failed``, ``unknown``).
-    reasons : the messages behind it, one line each (most important first).
-    """
-
-    word: str
-    reasons: tuple = ()
-
-    def line(self) -> str:
-        """``"word: first reason"`` (a good verdict: all its reasons), for figure titles and terminals."""
-        if not self.reasons:
-            return self.word
-        return f"{self.word}: " + ("; ".join(self.reasons) if self.word == "good" else self.reasons[0])
-
-
-def _advice_messages(calib) -> list[str]:
-    """Every device's advice message over the poses (the words of a good single-pose verdict)."""
-    return [a["message"] for p in calib.poses for k in ("camera", "projector")
-            if isinstance(a := (p.get("advice") or {}).get(k), dict) and a.get("message")]
-
-
-def _multi_pose_words(calib) -> list[str]:
-    how = "jointly refined" if calib.info.get("refined") else "without a joint refinement"
-    return [f"{len(calib.poses)} poses, {how}, no warnings"]
-
-
-def calibration_verdict(calib) -> Verdict:
-    """The verdict of a calibration in words, from what the calibration carries.
-
-    The single place the report, the figures and the CLI read a verdict from: the calibration's own
-    ``verdict`` and ``verdict_reasons``. For a file that records none (``verdict == "unknown"``) it is derived
-    from each
-    pose's advice (``calib.poses[i]["advice"]``: ``failed``, ``degenerate``, ``ok``) and the
-    calibration's ``warnings``: any failed device -> ``failed``; any degenerate one -> ``degenerate``;
-    any weak one, or any warning -> ``weak``; else ``good``.  A multi-pose calibration (no per-pose
-    advice) is ``weak`` with fewer than 3 poses or with warnings, else ``good``; a file with no poses
-    (OpenCV YAML) is ``unknown``.
-
-    Returns
-    -------
-    :class:`Verdict`
-    """
-    if calib.verdict != "unknown":  # the calibration's own verdict (procam.single_pose.advice / multi_pose)
-        reasons = list(calib.verdict_reasons)
-        if not reasons:
-            reasons = _advice_messages(calib) or (_multi_pose_words(calib) if calib.method == "multi-pose" else [])
-        return Verdict(calib.verdict, tuple(reasons))
-    word, reasons = "good", []
-    rank = {w: i for i, w in enumerate(VERDICTS)}
-
-    def worse(w):
-        nonlocal word
-        if rank[w] > rank[word] and word != "unknown":
-            word = w
-
-    advised = False
-    for p in calib.poses:
-        adv = p.get("advice") or {}
-        if not adv:
-            continue
-        advised = True
-        for key in ("camera", "projector"):
-            a = adv.get(key)
-            if not isinstance(a, dict):
-                continue
-            w = ("failed" if a.get("failed") else "degenerate" if a.get("degenerate") else
-                 "weak" if a.get("weak") else "good")
-            worse(w)
-            if w != "good" and a.get("message"):
-                name = Path(str(p.get("name", ""))).name
-                reasons.append(f"{name}: {a['message']}" if len(calib.poses) > 1 and name else a["message"])
-    if not advised and not calib.poses:
-        word = "unknown"
-    if calib.method == "multi-pose" and 0 < len(calib.poses) < 3:
-        worse("weak")
-    if word == "good":
-        if advised:
-            reasons = _advice_messages(calib)
-        elif calib.method == "multi-pose" and not calib.warnings:
-            reasons = _multi_pose_words(calib)
-    for w in calib.warnings:
-        if not any(r.split(": ", 1)[-1] in w for r in reasons):
-            reasons.append(str(w))
-            if not advised and word != "unknown":  # a multi-pose calibration's warnings are all weaknesses
-                worse("weak")
-    return Verdict(word, tuple(reasons))
-
 
 # --------------------------------------------------------------------------------------------------
 # coverage and the rig
@@ -401,7 +292,8 @@ def _section(sid: str, body: str, cls: str = "") -> str:
 # --------------------------------------------------------------------------------------------------
 
 def _verdict_section(calib, verdict: Verdict, check: CalibrationCheck | None) -> str:
-    parts = [f'<p><strong>{_e(_MEANING[verdict.word])}</strong></p>']
+    meaning = verdict.meaning
+    parts = [f'<p><strong>{_e(meaning[:1].upper() + meaning[1:])}.</strong></p>']
     if verdict.reasons:
         parts.append("<ul>" + "".join(f"<li>{_e(r)}</li>" for r in verdict.reasons) + "</ul>")
     facts = [f"camera RMS {_f(calib.cam_rms)} px"]

@@ -198,7 +198,7 @@ def calibrate_cmd(
     if png is not None:
         from ..plots import save_figure
         from ..plots.residuals import residual_figure
-        from ..report import calibration_verdict
+        from ..verdict import calibration_verdict
         from ..residuals import calibration_residuals
 
         fig = residual_figure(calibration_residuals(calib), calib.camera.image_size,
