@@ -102,12 +102,14 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
     return rows
 
 
-def pose_verdict(adv: dict) -> str:
-    """One line from a pose's advice (:func:`procam.single_pose.advice`): the devices' messages."""
-    if not adv:
+def pose_verdict(rating: dict) -> str:
+    """One line from a pose's single-pose rating (:func:`procam.single_pose.rating.rate_pose`, the pose's
+    ``"advice"`` entry): the devices' messages."""
+    if not rating:
         return ""
-    parts = [adv[k]["message"] for k in ("camera", "projector") if isinstance(adv.get(k), dict) and adv[k].get("message")]
-    return "; ".join(parts) or str(adv.get("message", ""))
+    parts = [rating[k]["message"] for k in ("camera", "projector")
+             if isinstance(rating.get(k), dict) and rating[k].get("message")]
+    return "; ".join(parts) or str(rating.get("message", ""))
 
 
 def pose_rows(calib) -> list[tuple[str, str, str, str]]:
