@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .residuals import calibration_residuals, pnp
-from .summary import PLUS_MINUS, parameter_rows, pose_rows, projector_assumptions, projector_freed
+from .summary import PLUS_MINUS, parameter_table, pose_table, projector_assumptions, verification_table
 from .verdict import Verdict, calibration_verdict
 from .verify import CalibrationCheck, check_calibration
 
@@ -265,6 +265,13 @@ def _table(headers, rows, *, left=1, row_classes=None) -> str:
     return f"<table><thead><tr>{h}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 
 
+def _text_table(table) -> str:
+    """A :class:`procam.summary.TextTable` as an HTML table, its pooled row highlighted."""
+    rows = list(table.rows) + ([table.pooled] if table.pooled is not None else [])
+    classes = [""] * len(table.rows) + (["all"] if table.pooled is not None else [])
+    return _table(table.header, rows, left=table.left, row_classes=classes)
+
+
 def _png(fig, alt: str, dpi: int = 80) -> str:
     """A matplotlib figure as an inline ``<img>`` (base64 PNG)."""
     buf = _stdio.BytesIO()
@@ -353,26 +360,12 @@ def _assumptions(calib) -> list[str]:
 
 
 def _parameters_section(calib) -> str:
-    rows = [list(r) for r in parameter_rows(calib)]
-    if calib.method == "single-pose" and calib.projector is not None:
-        freed = projector_freed(calib)
-        for r in rows:
-            if r[0].startswith("u0"):
-                r[2] += " (from the background)" if "u0p" in freed else " (assumed W/2)"
-            elif r[0].startswith("fy"):
-                r[2] += " (from the background)" if "alpha_p" in freed else " (assumed = f)"
-        rows.append(["projector distortion", "", "none (assumed)"])
-    head = ["parameter", "camera"] + (["projector"] if calib.projector is not None else [])
-    rows = [r[:len(head)] for r in rows]
-    parts = [f'<p class="note">{_e(PLUS_MINUS)}.</p>', _table(head, rows)]
+    parts = [f'<p class="note">{_e(PLUS_MINUS)}.</p>', _text_table(parameter_table(calib))]
     parts.append("<h3>Model and assumptions</h3><ul>" + "".join(f"<li>{_e(a)}</li>" for a in _assumptions(calib))
                  + "</ul>")
-    pr = pose_rows(calib)
-    if pr:
-        parts.append("<h3>Poses</h3>")
-        head = ["pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "advice"]
-        n = 4 if any(r[3] for r in pr) else 3
-        parts.append(_table(head[:n], [list(r)[:n] for r in pr], left=n))
+    poses = pose_table(calib)
+    if poses.rows:
+        parts += ["<h3>Poses</h3>", _text_table(poses)]
     return "\n".join(parts)
 
 
@@ -442,25 +435,6 @@ def _residuals_section(calib, per_pose, verdict: Verdict) -> str:
         _table(head, rows, row_classes=classes)])
 
 
-_VCOLS = ["pose", "corners", "scale error (%)", "spacing RMS", "planarity RMS", "planarity max", "rigid RMS",
-          "reproj RMS (px)", "distance"]
-
-
-def _vrow(p, name=None):
-    return [name or _short(p.name), str(p.n_corners), f"{p.scale_error_pct:+.3f}", f"{p.spacing_rms:.3f}",
-            f"{p.planarity_rms:.3f}", f"{p.planarity_max:.3f}", f"{p.rigid_rms:.3f}", f"{p.reproj_rms:.3f}",
-            f"{p.distance:.0f}"]
-
-
-def _verification_table(ver) -> str:
-    rows = [_vrow(p) for p in ver.poses]
-    classes = [""] * len(rows)
-    if len(ver.poses) > 1:
-        rows.append(_vrow(ver.overall, "all"))
-        classes.append("all")
-    return _table(_VCOLS, rows, row_classes=classes)
-
-
 def _verification_section(calib, check: CalibrationCheck | None) -> str:
     if check is None:
         return '<p class="note">Not computed.</p>'
@@ -473,9 +447,9 @@ def _verification_section(calib, check: CalibrationCheck | None) -> str:
              "noise as planarity.</p>"]
     if check.in_sample is not None:
         parts += ["<h3>On the poses the calibration was fitted to (in-sample, optimistic)</h3>",
-                  _verification_table(check.in_sample)]
+                  _text_table(verification_table(check.in_sample))]
     if check.held_out is not None:
-        parts += ["<h3>On other poses (held out: the honest figure)</h3>", _verification_table(check.held_out)]
+        parts += ["<h3>On other poses (held out: the honest figure)</h3>", _text_table(verification_table(check.held_out))]
     if check.leave_one_out is not None and check.leave_one_out.held_out is not None:
         o = check.leave_one_out.held_out.overall
         parts.append(f'<p>Leave-one-pose-out (each pose verified by a calibration fitted without it): scale error '

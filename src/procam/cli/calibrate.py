@@ -5,56 +5,17 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.table import Table
 
 from .. import multi_pose as _mp
 from .. import single_pose as _sp
-from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
-                   distinct_poses, fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors,
-                   value, warn, with_pose_options)
+                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, say, user_errors, value,
+                   warn, with_pose_options)
 
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
 BackgroundMode = choice("BackgroundMode", _sp.BACKGROUND_MODES)
-
-
-def summary_table(calib) -> Table:
-    """Rich table: parameters ± std, RMS per device (:func:`procam.summary.parameter_rows`)."""
-    t = Table(title=plain(f"procam calibration ({calib.method}); {PLUS_MINUS}"), show_lines=False)
-    t.add_column("parameter")
-    t.add_column("camera", justify="right")
-    t.add_column("projector", justify="right")
-    for r in parameter_rows(calib):
-        t.add_row(*map(plain, r))
-    return t
-
-
-def pose_table(calib) -> Table | None:
-    """Rich table: per pose the board angles in both devices and the verdict."""
-    rows = pose_rows(calib)
-    if not rows:
-        return None
-    t = Table(title="poses")
-    for c in ("pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "verdict"):
-        t.add_column(c)
-    for r in rows:
-        t.add_row(*map(plain, r))
-    return t
-
-
-def spread_table(calib, refits) -> Table:
-    """Rich table: each parameter's ± (Jacobian) next to the spread of the leave-one-out refits."""
-    from ..verify import parameter_spread
-
-    t = Table(title=f"uncertainty: ± from the fit (model, i.i.d. noise) vs the spread of {len(refits)} "
-                    "leave-one-pose-out refits (jackknife; no noise model)")
-    for c in ("parameter", "value", "± fit", "± leave-one-out"):
-        t.add_column(c, justify="right" if c != "parameter" else "left")
-    for k, (v, js, jack) in parameter_spread(calib, refits).items():
-        t.add_row(k, f"{v:.2f}", "" if js is None else f"{js:.3g}", f"{jack:.3g}")
-    return t
 
 
 def _import_solvers():
@@ -63,16 +24,6 @@ def _import_solvers():
     import scipy.special  # noqa: F401
 
     from .. import verify  # noqa: F401
-
-
-def print_summary(calib):
-    console.print(summary_table(calib))
-    pt = pose_table(calib)
-    if pt is not None:
-        console.print(pt)
-    for w in calib.warnings:
-        warn(w)
-    say(f"verdict: {calib.verdict}")
 
 
 @app.command("calibrate")
@@ -115,6 +66,7 @@ def calibrate_cmd(
     import contextlib
 
     from .. import io, pipeline
+    from . import _show
 
     brd = parse_board(board, square)
     method = value(method) or ("single" if len(poses) == 1 else "multi")
@@ -176,7 +128,7 @@ def calibrate_cmd(
                                   background=BackgroundOptions(mode=value(background)))
         else:
             calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
-    print_summary(calib)
+    _show.print_calibration(calib)
     trusted = calib.trusted
     if not trusted and not force:
         fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
@@ -186,12 +138,11 @@ def calibrate_cmd(
     check = None
     if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
         from ..verify import check_calibration
-        from .report import print_check
 
         check = check_calibration(calib)
-        print_check(check)
+        _show.print_check(check)
         if check.leave_one_out is not None and check.leave_one_out.refits:
-            console.print(spread_table(calib, check.leave_one_out.refits))
+            _show.print_spread(calib, check.leave_one_out.refits)
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")
@@ -207,9 +158,7 @@ def calibrate_cmd(
         save_figure(fig, png)
         say(f"wrote {png}")
     if report is not None:
-        from .report import write_calibration_report
-
-        write_calibration_report(calib, report, check=check, name=out.name)
+        _show.write_calibration_report(calib, report, check=check, name=out.name)
     if not trusted:
         fail(f"{calib.verdict} calibration (written because of --force): "
              f"{'; '.join(calib.verdict_reasons) or calib.verdict}", code=3, label="not trusted")

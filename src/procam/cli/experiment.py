@@ -133,8 +133,8 @@ def experiment_cmd(
         f"wrote {len(paths)} files to {out} (report.md, CSV tables, PNG figures)")
     if html_report is not None:  # Set A (all poses) with the experiment's multi-pose options
         from .. import multi_pose
-        from .report import write_calibration_report
+        from . import _show
 
         calib = multi_pose.calibrate(views, proj_size=size or views[0].proj_size, cam_dist=cam_dist,
                                      proj_dist=proj_dist, refine=joint_refine)
-        write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")
+        _show.write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")
