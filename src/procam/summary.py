@@ -41,7 +41,7 @@ class TextTable:
     left: int = 1
 
 
-def _short(name) -> str:
+def short_name(name) -> str:
     """A pose's name without its folder."""
     s = str(name or "")
     return Path(s).name or s
@@ -169,7 +169,7 @@ def pose_table(calib) -> TextTable:
 
 
 def _verification_row(p, name=None) -> tuple:
-    return (_short(p.name) if name is None else name, str(p.n_corners), str(p.n_pairs), f"{p.scale_error_pct:+.3f}",
+    return (short_name(p.name) if name is None else name, str(p.n_corners), str(p.n_pairs), f"{p.scale_error_pct:+.3f}",
             f"{p.spacing_rms:.3f}", f"{p.planarity_rms:.3f}", f"{p.planarity_max:.3f}", f"{p.rigid_rms:.3f}",
             f"{p.reproj_rms:.3f}", f"{p.distance:.0f}")
 
