@@ -29,6 +29,7 @@ The modules, from the captures up (each imports only those above it in this list
     single_pose   the seed method (camera, projector, extrinsics, advice)
     advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
+    method        which method a set of views calls for (single-pose, multi-pose, camera-only), and the calibration
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
     summary       a calibration as rows of text
     io            calibration and correspondence files (JSON, OpenCV YAML)
@@ -64,7 +65,7 @@ __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "background",
-               "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
+               "single_pose", "advisor", "multi_pose", "method", "evaluate", "summary", "io", "simulate", "paper", "plots",
                "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check",
                "acquire")
 

@@ -1,4 +1,5 @@
-"""``procam calibrate``: single-pose (one folder), multi-pose (several) or camera-only (one photo)."""
+"""``procam calibrate``: single-pose (one folder), multi-pose (several) or camera-only (photos); the method is
+:func:`procam.method.choose`'s."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
+#: The library's name of each --method.
+_METHODS = {"single": "single-pose", "multi": "multi-pose", None: None}
 BackgroundMode = choice("BackgroundMode", _sp.BACKGROUND_MODES)
 
 
@@ -66,11 +69,13 @@ def calibrate_cmd(
     import contextlib
 
     from .. import io, pipeline
+    from .. import method as calibration_method
+    from ..background import BackgroundOptions
     from . import _show
 
     brd = parse_board(board, square)
-    method = value(method) or ("single" if len(poses) == 1 else "multi")
-    multi = not camera_only and method == "multi"
+    how = calibration_method.choose(len(poses), "camera-only" if camera_only else _METHODS[value(method)])
+    multi = how == "multi-pose"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
@@ -90,19 +95,12 @@ def calibrate_cmd(
         if camera_file is not None:
             fail("--camera gives the camera's intrinsics; --camera-only estimates them: use one of the two")
         views = [pipeline.camera_only_view(p, brd, options=opts) for p in poses]
-        if len(views) == 1:
-            view = views[0]
-            calib = _sp.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name,
-                                              camera=camera)
-            calib = calib.replace(views=(view,))
-        else:
-            calib = _mp.calibrate_camera(views, dist=value(cam_dist))
     else:
-        if method == "single" and len(poses) != 1:
+        if how == "single-pose" and len(poses) != 1:
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
-        if method == "multi" and len(poses) < 2:
+        if multi and len(poses) < 2:
             fail("--method multi needs at least two pose folders (three or more recommended)")
-        if method == "multi" and camera_file is not None:
+        if multi and camera_file is not None:
             fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
         distinct_poses(poses)
         from ..stream import Prefetcher
@@ -116,18 +114,14 @@ def calibrate_cmd(
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
             for w in v.diagnostics.get("warnings", []):
                 warn(w)
-        if method == "single":
-            known = None
-            if camera_file is not None:
-                from ..export import load_camera_intrinsics
+    known = None
+    if camera_file is not None:
+        from ..export import load_camera_intrinsics
 
-                known = load_camera_intrinsics(camera_file, views[0].cam_size)
-            from ..background import BackgroundOptions
-
-            calib = _sp.calibrate(views[0], camera=camera, known_camera=known,
-                                  background=BackgroundOptions(mode=value(background)))
-        else:
-            calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
+        known = load_camera_intrinsics(camera_file, views[0].cam_size)
+    calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
+                                         background=BackgroundOptions(mode=value(background)),
+                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
     _show.print_calibration(calib)
     trusted = calib.trusted
     if not trusted and not force:
@@ -149,8 +143,8 @@ def calibrate_cmd(
     if png is not None:
         from ..plots import save_figure
         from ..plots.residuals import residual_figure
-        from ..verdict import calibration_verdict
         from ..residuals import calibration_residuals
+        from ..verdict import calibration_verdict
 
         fig = residual_figure(calibration_residuals(calib), calib.camera.image_size,
                               calib.projector.image_size if calib.projector is not None else None,
