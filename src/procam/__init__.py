@@ -26,12 +26,12 @@ The modules, from the captures up (each imports only those above it in this list
     residuals     RMS, PnP, stereo pose, per-pose residuals
     misfit        model error versus noise: a smooth field in a fit's residuals across the board
     background    the decoded background vs a single-pose calibration: epipolar check, projector refinement
-    single_pose   the seed method (camera, projector, extrinsics, advice)
+    single_pose   the seed method (camera, projector, extrinsics, the rating of the pose)
     advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
     method        which method a set of views calls for (single-pose, multi-pose, camera-only), and the calibration
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
-    summary       a calibration as rows of text
+    summary       a calibration as rows of text: the tables the CLI prints and the report shows
     io            calibration and correspondence files (JSON, OpenCV YAML)
     triangulate   camera pixel + projector column/row -> 3-D point (the geometry of a scan)
     verify        a calibration measured in millimetres: board scale, planarity, leave-one-out spread
