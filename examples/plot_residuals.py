@@ -13,7 +13,7 @@ from pathlib import Path
 from procam import multi_pose, simulate
 from procam.plots import save_figure
 from procam.plots.residuals import residual_figure
-from procam.report import calibration_verdict
+from procam.verdict import calibration_verdict
 from procam.residuals import calibration_residuals
 from procam.view import View
 

@@ -15,7 +15,7 @@ import numpy as np
 from procam import simulate, single_pose
 from procam.plots import save_figure
 from procam.plots.residuals import residual_figure
-from procam.report import calibration_verdict
+from procam.verdict import calibration_verdict
 from procam.residuals import calibration_residuals
 from procam.view import View
 

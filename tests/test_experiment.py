@@ -77,6 +77,18 @@ def test_run_tables(result, views):
     json.dumps(res.to_dict(), allow_nan=True)
 
 
+def test_set_a_calibration_is_kept(result, views):
+    """The multi-pose calibration of all poses (Set A) is kept with the tables, as a fresh one would be."""
+    res, _ = result
+    calib = res.set_a_calibration
+    assert [v.name for v in calib.views] == [v.name for v in views]
+    assert calib.cam_rms == res.set_a["cam_rms"] and calib.camera.K[0, 0] == res.set_a["f_c"]
+    again = multi_pose.calibrate(views, proj_size=(1920, 1080), cam_dist="k1k2p1p2k3", proj_dist="k1k2p1p2k3",
+                                 refine=False)
+    assert np.array_equal(calib.camera.K, again.camera.K) and np.array_equal(calib.T, again.T)
+    assert "set_a_calibration" not in res.to_dict()
+
+
 def test_write_report(result, tmp_path):
     res, _ = result
     paths = report.write_report(res, tmp_path / "rep")
@@ -140,6 +152,24 @@ def test_cli_experiment(fake_folders, tmp_path):
     r = CliRunner().invoke(app, ["experiment", *fake_folders, "-o", str(out), "--board", "10x6", "--square", "24",
                                  "--cam-dist", "fisheye"])
     assert r.exit_code == 2 and "--cam-dist must be one of" in r.output
+
+
+def test_cli_experiment_report_shows_the_experiments_own_all_pose_calibration(fake_folders, tmp_path, monkeypatch):
+    from procam.cli import app
+
+    real, sizes = multi_pose.calibrate, []
+
+    def counted(views, *a, **k):
+        sizes.append(len(views))
+        return real(views, *a, **k)
+
+    monkeypatch.setattr(multi_pose, "calibrate", counted)
+    rep = tmp_path / "exp.html"
+    r = CliRunner().invoke(app, ["experiment", *fake_folders, "-o", str(tmp_path / "exp"), "--board", "10x6",
+                                 "--square", "24", "--projector", "1920x1080", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    assert sizes.count(len(fake_folders)) == 1  # Set A, by the experiment; the report's refits leave one pose out
+    assert "all 4 poses (Set A)" in rep.read_text(encoding="utf-8")
 
 
 def test_cli_evaluate(fake_folders, views, tmp_path):

@@ -10,9 +10,9 @@ import pytest
 
 from procam import multi_pose, simulate, single_pose
 from procam.plots.residuals import arrow_scale, nice_length, residual_figure
-from procam.report import calibration_verdict
 from procam.residuals import calibration_residuals, pose_residuals
 from procam.stats import rms
+from procam.verdict import calibration_verdict
 from procam.view import View
 
 POSES = [(15, 12, 0), (-10, 20, 5), (20, -15, -5), (5, 25, 10)]

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from procam import multi_pose, simulate, single_pose
-from procam.report import (SECTIONS, Verdict, build_report, calibration_verdict, coverage_fractions, rig_geometry,
-                           write_report)
+from procam.report import SECTIONS, build_report, coverage_fractions, rig_geometry, write_report
 from procam.summary import PLUS_MINUS, parameter_rows
+from procam.verdict import Verdict, calibration_verdict
 from procam.verify import check_calibration
 from procam.view import View
 
@@ -96,8 +96,8 @@ def test_numbers_are_the_calibrations():
     assert re.search(rf"all\s+{calib.cam_rms:.3f}\s+300\s+0\s+{calib.proj_rms:.3f}\s+300\s+0", res), res
     ver = _text(_section(page, "verification"))
     o = check.in_sample.overall
-    cells = [f"{o.scale_error_pct:+.3f}", f"{o.spacing_rms:.3f}", f"{o.planarity_rms:.3f}"]
-    assert re.search(r"all\s+300\s+" + r"\s+".join(map(re.escape, cells)), ver), ver
+    cells = [str(o.n_pairs), f"{o.scale_error_pct:+.3f}", f"{o.spacing_rms:.3f}", f"{o.planarity_rms:.3f}"]
+    assert re.search(r"all\s+300\s+" + r"\s+".join(map(re.escape, cells)), ver), ver  # the CLI's columns
     loo = _text(_section(page, "leave-one-out"))
     lo = check.leave_one_out.held_out.overall
     assert f"{lo.scale_error_pct:+.3f}" in loo and f"{lo.rigid_rms:.3f}" in loo

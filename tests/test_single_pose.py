@@ -177,24 +177,24 @@ def test_near_degenerate_projector_pose_has_one_verdict_whatever_the_fit_does(pr
 
 def test_advice_flags_an_impossible_focal_length_whatever_its_std():
     """f_p = 19 px with a small reported std and |nu_p| = 1.4 deg was not called degenerate."""
-    a = sp.advice(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, projector_size=(1920, 1080))
+    a = sp.rate_pose(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, projector_size=(1920, 1080))
     assert a["projector"]["failed"] and a["projector"]["degenerate"] and a["failed"] and not a["ok"]
     assert "19 px is impossible" in a["projector"]["message"]
-    a = sp.advice((20, 20, 0), None, {"f_c": 5.0}, values={"f_c": 1.5e5}, camera_size=(1280, 800))
+    a = sp.rate_pose((20, 20, 0), None, {"f_c": 5.0}, values={"f_c": 1.5e5}, camera_size=(1280, 800))
     assert a["camera"]["failed"] and "impossible" in a["camera"]["message"]
-    a = sp.advice((20, 20, 0), (10, 20, 0), {"f_c": 5.0, "f_p": 5.0}, values={"f_c": 1500.0, "f_p": 2400.0},
+    a = sp.rate_pose((20, 20, 0), (10, 20, 0), {"f_c": 5.0, "f_p": 5.0}, values={"f_c": 1500.0, "f_p": 2400.0},
                   camera_size=(1280, 800), projector_size=(1920, 1080))
     assert a["ok"] and not a["failed"]
 
 
 def test_advice_rules():
-    a = sp.advice((15, 12, 0), (17, 26, -4))
+    a = sp.rate_pose((15, 12, 0), (17, 26, -4))
     assert a["ok"] and a["camera"]["paper_rule_ok"] and a["projector"]["paper_rule_ok"]
-    a = sp.advice((4, 4, 0), (20, 10, 0))
+    a = sp.rate_pose((4, 4, 0), (20, 10, 0))
     assert not a["camera"]["paper_rule_ok"] and a["camera"]["weak"] and not a["projector"]["paper_rule_ok"]
-    a = sp.advice((20, 0.2, 0), None, {"f_c": 1.0}, values={"f_c": 1500.0})
+    a = sp.rate_pose((20, 0.2, 0), None, {"f_c": 1.0}, values={"f_c": 1500.0})
     assert a["camera"]["degenerate"] and "projector" not in a
-    a = sp.advice((20, 20, 0), None, {"f_c": 300.0}, values={"f_c": 1500.0})
+    a = sp.rate_pose((20, 20, 0), None, {"f_c": 300.0}, values={"f_c": 1500.0})
     assert a["camera"]["degenerate"] and a["camera"]["rel_std_f"] == pytest.approx(0.2)
 
 

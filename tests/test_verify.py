@@ -206,7 +206,7 @@ def test_verify_errors():
 def test_verification_tables_render():
     from rich.console import Console
 
-    from procam.cli.verification import cross_table, verification_table
+    from procam.cli._show import cross_table, verification_table
 
     views = _views(sigma=0.1, n=4)
     cv = leave_one_out(views)

@@ -22,14 +22,16 @@ The modules, from the captures up (each imports only those above it in this list
     uncertainty   the only Jacobian / covariance code
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
+    verdict       a calibration's verdict from its evidence; the one glossary of the verdict words
     stats         RMS, robust sigma (MAD), total-least-squares plane: one definition each
     residuals     PnP, stereo pose, per-pose residuals
-    single_pose   the seed method (camera, projector, extrinsics, the pose's rating), with its background check
-                  and refinement (single_pose.background) and its misfit test (single_pose.misfit)
+    single_pose   the seed method (camera, projector, extrinsics, the rating of the pose), with its background
+                  check and refinement (single_pose.background) and its misfit test (single_pose.misfit)
     advisor       live pose advice from one camera frame: board angles, predicted stds, which way to turn
     multi_pose    Zhang / Moreno-Taubin multi-pose calibration with a joint refinement
+    method        which method a set of views calls for (single-pose, multi-pose, camera-only), and the calibration
     evaluate      reprojection, stereo and PnP-precision metrics of a calibration on poses
-    summary       a calibration as rows of text
+    summary       a calibration as rows of text: the tables the CLI prints and the report shows
     io            every file format: calibrations (procam JSON, OpenCV YAML/XML, kamino410 XML) read by one
                   reader and checked by one validator set, correspondences, decoded and remap maps, PLY
     triangulate   camera pixel + projector column/row -> 3-D point (the geometry of a scan)
@@ -63,9 +65,9 @@ import importlib
 __version__ = "0.1.0"
 
 _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "correspond", "view", "pipeline", "models",
-               "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "stats",
-               "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
-               "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
+               "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "stats",
+               "single_pose", "advisor", "multi_pose", "method", "evaluate", "summary", "io", "simulate", "paper",
+               "plots", "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
                "acquire")
 
 #: Public names re-exported here: name -> module.

@@ -59,7 +59,7 @@ from . import crlb, models
 from .board import Board, canonical_order, to_gray8
 from .calibration import Calibration, Device, Distortion
 from .errors import ProcamError
-from .single_pose.advice import AdviceOptions
+from .single_pose.rating import RatingOptions as AdviceOptions
 
 __all__ = ["AdvisorOptions", "Action", "DeviceState", "Advice", "ProjectorSide", "Advisor", "detect_board",
            "apply_move", "move_between", "guessed_camera", "STATES"]

@@ -27,7 +27,7 @@ class PoseCheck:
     Attributes
     ----------
     folder : the pose folder.
-    verdict : ``good``, ``weak``, ``degenerate`` or ``failed`` (:mod:`procam.single_pose.advice`).
+    verdict : ``good``, ``weak``, ``degenerate`` or ``failed`` (:mod:`procam.single_pose.rating`).
     reasons : the verdict's reasons, one line each.
     lines : what to print, one line each (corners, decoded area, angles, focal lengths with their ±, verdict).
     view : the pose's :class:`~procam.view.View`; maps : its :class:`~procam.decode.DecodeResult`.

@@ -1,12 +1,18 @@
-"""A calibration in rows of text: what ``procam calibrate`` prints and the report shows.
+"""A calibration in rows of text: the tables ``procam calibrate`` / ``evaluate`` print and the report shows.
 
-Plain data (lists of string tuples), no printing: the CLI renders them as tables, the HTML report as HTML.
+Plain data, no printing: each table is one :class:`TextTable` (its header and rows, every cell a string,
+built by one function here), which the CLI renders with rich and the HTML report as HTML, so the terminal
+and the page show the same cells. The tables: the parameters (:func:`parameter_table`), the poses
+(:func:`pose_table`), the metric verification (:func:`verification_table`, :func:`cross_table`) and the
+leave-one-pose-out spread of the parameters (:func:`spread_table`).
+
 Every ``±`` is 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise i.i.d.
 (:mod:`procam.uncertainty`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +21,30 @@ from . import models
 
 #: What every ``±`` in these rows means.
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
+
+
+@dataclass(frozen=True)
+class TextTable:
+    """A table as text.
+
+    Attributes
+    ----------
+    header : the column names.
+    rows : one tuple of cells per row, as long as ``header``.
+    pooled : the row over all rows (``"all"``), shown apart (bold, highlighted) after them; None without one.
+    left : how many leading columns hold words (left-aligned); the others hold numbers (right-aligned).
+    """
+
+    header: tuple
+    rows: tuple
+    pooled: tuple | None = None
+    left: int = 1
+
+
+def short_name(name) -> str:
+    """A pose's name without its folder."""
+    s = str(name or "")
+    return Path(s).name or s
 
 
 def projector_freed(calib) -> frozenset:
@@ -102,12 +132,86 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
     return rows
 
 
-def pose_verdict(adv: dict) -> str:
-    """One line from a pose's advice (:func:`procam.single_pose.advice`): the devices' messages."""
-    if not adv:
+def pose_verdict(rating: dict) -> str:
+    """One line from a pose's single-pose rating (:func:`procam.single_pose.rating.rate_pose`, the pose's
+    ``"advice"`` entry): the devices' messages."""
+    if not rating:
         return ""
-    parts = [adv[k]["message"] for k in ("camera", "projector") if isinstance(adv.get(k), dict) and adv[k].get("message")]
-    return "; ".join(parts) or str(adv.get("message", ""))
+    parts = [rating[k]["message"] for k in ("camera", "projector")
+             if isinstance(rating.get(k), dict) and rating[k].get("message")]
+    return "; ".join(parts) or str(rating.get("message", ""))
+
+
+def parameter_table(calib) -> TextTable:
+    """The parameters with their ± (:func:`parameter_rows`); for a single-pose calibration each projector number
+    the paper's model assumes says so, or that the background estimated it, and a row says the projector has
+    no lens distortion. No projector column for a camera-only calibration."""
+    rows = [list(r) for r in parameter_rows(calib)]
+    if calib.method == "single-pose" and calib.projector is not None:
+        freed = projector_freed(calib)
+        for r in rows:
+            if r[0].startswith("u0"):
+                r[2] += " (from the background)" if "u0p" in freed else " (assumed W/2)"
+            elif r[0].startswith("fy"):
+                r[2] += " (from the background)" if "alpha_p" in freed else " (assumed = f)"
+        rows.append(["projector distortion", "", "none (assumed)"])
+    header = ("parameter", "camera") + (("projector",) if calib.projector is not None else ())
+    return TextTable(header, tuple(tuple(r[:len(header)]) for r in rows))
+
+
+def pose_table(calib) -> TextTable:
+    """Per pose the board's angles in both devices and, where it has one, its single-pose verdict
+    (:func:`pose_rows`; the verdict column only when a pose has one). No rows without poses."""
+    rows = pose_rows(calib)
+    n = 4 if any(r[3] for r in rows) else 3
+    header = ("pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "verdict")[:n]
+    return TextTable(header, tuple(r[:n] for r in rows), left=n)
+
+
+def _verification_row(p, name=None) -> tuple:
+    return (short_name(p.name) if name is None else name, str(p.n_corners), str(p.n_pairs), f"{p.scale_error_pct:+.3f}",
+            f"{p.spacing_rms:.3f}", f"{p.planarity_rms:.3f}", f"{p.planarity_max:.3f}", f"{p.rigid_rms:.3f}",
+            f"{p.reproj_rms:.3f}", f"{p.distance:.0f}")
+
+
+def verification_table(ver) -> TextTable:
+    """One row per pose of a :class:`procam.verify.Verification`, and the pooled ``all`` row (several poses).
+
+    Columns: corners and adjacent pairs triangulated; scale error of the mean adjacent-corner distance
+    against the printed square (%); RMS of (distance - square); RMS / max distance of the corners to
+    their best plane; RMS after the best rigid fit of the printed board; reprojection RMS of the
+    triangulated corners; mean distance from the camera (board units).
+    """
+    header = ("pose", "corners", "pairs", "scale error (%)", "spacing RMS", "planarity RMS", "planarity max",
+              "rigid RMS", "reproj RMS (px)", "distance")
+    pooled = _verification_row(ver.overall, "all") if len(ver.poses) > 1 else None
+    return TextTable(header, tuple(_verification_row(p) for p in ver.poses), pooled)
+
+
+#: What the held-out poses of a :class:`procam.verify.CrossVerification` are, by its ``kind``.
+CROSS_LABELS = {"leave-one-out": "leave-one-pose-out", "single-pose-cross": "calibrated on another pose"}
+
+
+def cross_table(cross) -> TextTable:
+    """The overall figures in-sample next to the held-out ones (:data:`CROSS_LABELS`) of a
+    :class:`procam.verify.CrossVerification`."""
+    def row(name, ver):
+        o = ver.overall
+        return (name, f"{o.scale_error_pct:+.3f}", f"{o.spacing_rms:.3f}", f"{o.planarity_rms:.3f}",
+                f"{o.rigid_rms:.3f}", f"{o.reproj_rms:.3f}", str(len(ver.poses)))
+
+    rows = [row("in-sample", cross.in_sample)]
+    if cross.held_out is not None:
+        rows.append(row(CROSS_LABELS[cross.kind], cross.held_out))
+    header = ("", "scale error (%)", "spacing RMS", "planarity RMS", "rigid RMS", "reproj RMS (px)", "poses")
+    return TextTable(header, tuple(rows))
+
+
+def spread_table(spread: dict) -> TextTable:
+    """Each parameter's ± from the fit next to the spread of the leave-one-pose-out refits, from
+    :func:`procam.verify.parameter_spread` (``{name: (value, fit std, refit std)}``)."""
+    return TextTable(("parameter", "value", "± fit", "± leave-one-out"), tuple(
+        (k, f"{v:.2f}", "" if js is None else f"{js:.3g}", f"{jack:.3g}") for k, (v, js, jack) in spread.items()))
 
 
 def pose_rows(calib) -> list[tuple[str, str, str, str]]:

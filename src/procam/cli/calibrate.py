@@ -1,60 +1,24 @@
-"""``procam calibrate``: single-pose (one folder), multi-pose (several) or camera-only (one photo)."""
+"""``procam calibrate``: single-pose (one folder), multi-pose (several) or camera-only (photos); the method is
+:func:`procam.method.choose`'s."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import typer
-from rich.table import Table
 
 from .. import multi_pose as _mp
 from .. import single_pose as _sp
-from ..summary import PLUS_MINUS, parameter_rows, pose_rows
 from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
-                   distinct_poses, fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors,
-                   value, warn, with_pose_options)
+                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, say, user_errors, value,
+                   warn, with_pose_options)
 
 Cod = choice("Cod", _sp.COD_MODES)
 DistModel = choice("DistModel", _mp.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
+#: The library's name of each --method.
+_METHODS = {"single": "single-pose", "multi": "multi-pose", None: None}
 BackgroundMode = choice("BackgroundMode", _sp.BACKGROUND_MODES)
-
-
-def summary_table(calib) -> Table:
-    """Rich table: parameters ± std, RMS per device (:func:`procam.summary.parameter_rows`)."""
-    t = Table(title=plain(f"procam calibration ({calib.method}); {PLUS_MINUS}"), show_lines=False)
-    t.add_column("parameter")
-    t.add_column("camera", justify="right")
-    t.add_column("projector", justify="right")
-    for r in parameter_rows(calib):
-        t.add_row(*map(plain, r))
-    return t
-
-
-def pose_table(calib) -> Table | None:
-    """Rich table: per pose the board angles in both devices and the verdict."""
-    rows = pose_rows(calib)
-    if not rows:
-        return None
-    t = Table(title="poses")
-    for c in ("pose", "camera ψ, ν, φ (deg)", "projector ψ, ν, φ (deg)", "verdict"):
-        t.add_column(c)
-    for r in rows:
-        t.add_row(*map(plain, r))
-    return t
-
-
-def spread_table(calib, refits) -> Table:
-    """Rich table: each parameter's ± (Jacobian) next to the spread of the leave-one-out refits."""
-    from ..verify import parameter_spread
-
-    t = Table(title=f"uncertainty: ± from the fit (model, i.i.d. noise) vs the spread of {len(refits)} "
-                    "leave-one-pose-out refits (jackknife; no noise model)")
-    for c in ("parameter", "value", "± fit", "± leave-one-out"):
-        t.add_column(c, justify="right" if c != "parameter" else "left")
-    for k, (v, js, jack) in parameter_spread(calib, refits).items():
-        t.add_row(k, f"{v:.2f}", "" if js is None else f"{js:.3g}", f"{jack:.3g}")
-    return t
 
 
 def _import_solvers():
@@ -63,16 +27,6 @@ def _import_solvers():
     import scipy.special  # noqa: F401
 
     from .. import verify  # noqa: F401
-
-
-def print_summary(calib):
-    console.print(summary_table(calib))
-    pt = pose_table(calib)
-    if pt is not None:
-        console.print(pt)
-    for w in calib.warnings:
-        warn(w)
-    say(f"verdict: {calib.verdict}")
 
 
 @app.command("calibrate")
@@ -115,10 +69,13 @@ def calibrate_cmd(
     import contextlib
 
     from .. import io, pipeline
+    from .. import method as calibration_method
+    from ..single_pose.background import BackgroundOptions
+    from . import _show
 
     brd = parse_board(board, square)
-    method = value(method) or ("single" if len(poses) == 1 else "multi")
-    multi = not camera_only and method == "multi"
+    how = calibration_method.choose(len(poses), "camera-only" if camera_only else _METHODS[value(method)])
+    multi = how == "multi-pose"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
@@ -138,19 +95,12 @@ def calibrate_cmd(
         if camera_file is not None:
             fail("--camera gives the camera's intrinsics; --camera-only estimates them: use one of the two")
         views = [pipeline.camera_only_view(p, brd, options=opts) for p in poses]
-        if len(views) == 1:
-            view = views[0]
-            calib = _sp.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name,
-                                              camera=camera)
-            calib = calib.replace(views=(view,))
-        else:
-            calib = _mp.calibrate_camera(views, dist=value(cam_dist))
     else:
-        if method == "single" and len(poses) != 1:
+        if how == "single-pose" and len(poses) != 1:
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
-        if method == "multi" and len(poses) < 2:
+        if multi and len(poses) < 2:
             fail("--method multi needs at least two pose folders (three or more recommended)")
-        if method == "multi" and camera_file is not None:
+        if multi and camera_file is not None:
             fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
         distinct_poses(poses)
         from ..stream import Prefetcher
@@ -164,19 +114,15 @@ def calibrate_cmd(
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
             for w in v.diagnostics.get("warnings", []):
                 warn(w)
-        if method == "single":
-            known = None
-            if camera_file is not None:
-                from ..io import load_camera_intrinsics
+    known = None
+    if camera_file is not None:
+        from ..io import load_camera_intrinsics
 
-                known = load_camera_intrinsics(camera_file, views[0].cam_size)
-            from ..single_pose.background import BackgroundOptions
-
-            calib = _sp.calibrate(views[0], camera=camera, known_camera=known,
-                                  background=BackgroundOptions(mode=value(background)))
-        else:
-            calib = _mp.calibrate(views, cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
-    print_summary(calib)
+        known = load_camera_intrinsics(camera_file, views[0].cam_size)
+    calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
+                                         background=BackgroundOptions(mode=value(background)),
+                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
+    _show.print_calibration(calib)
     trusted = calib.trusted
     if not trusted and not force:
         fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
@@ -186,20 +132,19 @@ def calibrate_cmd(
     check = None
     if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
         from ..verify import check_calibration
-        from .report import print_check
 
         check = check_calibration(calib)
-        print_check(check)
+        _show.print_check(check)
         if check.leave_one_out is not None and check.leave_one_out.refits:
-            console.print(spread_table(calib, check.leave_one_out.refits))
+            _show.print_spread(calib, check.leave_one_out.refits)
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")
     if png is not None:
         from ..plots import save_figure
         from ..plots.residuals import residual_figure
-        from ..report import calibration_verdict
         from ..residuals import calibration_residuals
+        from ..verdict import calibration_verdict
 
         fig = residual_figure(calibration_residuals(calib), calib.camera.image_size,
                               calib.projector.image_size if calib.projector is not None else None,
@@ -207,9 +152,7 @@ def calibrate_cmd(
         save_figure(fig, png)
         say(f"wrote {png}")
     if report is not None:
-        from .report import write_calibration_report
-
-        write_calibration_report(calib, report, check=check, name=out.name)
+        _show.write_calibration_report(calib, report, check=check, name=out.name)
     if not trusted:
         fail(f"{calib.verdict} calibration (written because of --force): "
              f"{'; '.join(calib.verdict_reasons) or calib.verdict}", code=3, label="not trusted")

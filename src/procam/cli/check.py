@@ -7,20 +7,8 @@ from pathlib import Path
 import typer
 
 from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, fail, optional_size,
-                   output_path, parse_board, pose_options, say, user_errors, value, with_pose_options)
-
-
-def report_check(check, png=None) -> None:
-    """Print a :class:`procam.check.PoseCheck` and write its overlay picture to ``png`` (optional)."""
-    for line in check.lines:
-        say(line)
-    say(f"({check.seconds:.1f} s)")
-    if png is not None:
-        from ..io.files import write_image
-        from ..check import overlay
-
-        write_image(png, overlay(check))
-        say(f"wrote {png}")
+                   output_path, parse_board, pose_options, user_errors, value, with_pose_options)
+from ._show import print_pose_check as report_check  # noqa: F401 -- where `capture` still imports it from
 
 
 @app.command("check")
@@ -40,12 +28,13 @@ def check_cmd(
     calibrates it from this one pose and says: good, weak, degenerate or failed, and why (exit code 3 for
     degenerate or failed)."""
     from ..check import check_pose
+    from . import _show
 
     brd = parse_board(board, square)
     opts = pose_options(**pose_args)
     output_path(png, "--png", FIGURE_SUFFIXES)
     check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step)
-    report_check(check, png)
+    _show.print_pose_check(check, png)
     if check.verdict in ("degenerate", "failed"):
         fail(f"{pose_dir}: {check.verdict} pose for single-pose calibration: "
              f"{'; '.join(r.split(': ', 1)[-1] for r in check.reasons)}", code=3, label="not good")

@@ -39,7 +39,7 @@ def demo_cmd(
     from ..plots.correspond import correspond_figure
     from ..plots.decode import decode_figure
     from ..stats import rms
-    from .calibrate import print_summary
+    from . import _show
 
     if preset not in simulate.PRESETS:
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
@@ -76,7 +76,7 @@ def demo_cmd(
                   f"projector {rms(e_proj):.3f} px RMS "
                   f"({time.perf_counter() - t0:.1f} s)")
     calib = single_pose.calibrate(view)
-    print_summary(calib)
+    _show.print_calibration(calib)
     io.save_calibration(calib, out_dir / "calib.json")
     io.save_opencv_yaml(calib, out_dir / "calib.yml")
     save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), out_dir / "decode.png")

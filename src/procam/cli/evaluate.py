@@ -86,10 +86,10 @@ def evaluate_cmd(
     # the metric verification: the given poses the calibration was fitted to (in-sample) and the others (held
     # out); a multi-pose calibration that holds >= 4 poses also leave-one-pose-out
     from ..verify import check_calibration
-    from .report import print_check
+    from . import _show
 
     check = check_calibration(calib, views)
-    print_check(check)
+    _show.print_check(check)
     if out is not None:
         d = {"format": "procam-evaluation", "version": 1, "calibration": str(calibration), "method": calib.method,
              **ev.to_dict(), "verification": check.to_dict()}

@@ -131,10 +131,13 @@ def experiment_cmd(
         console.print(plain(f"failed: {f['what']}: {f['message']}"))
     say(f"reference (lowest σ_T) = set {result.reference['set']} {result.reference['poses']}; "
         f"wrote {len(paths)} files to {out} (report.md, CSV tables, PNG figures)")
-    if html_report is not None:  # Set A (all poses) with the experiment's multi-pose options
-        from .. import multi_pose
-        from .report import write_calibration_report
+    if html_report is not None:  # Set A (all poses), as the experiment calibrated it
+        from . import _show
 
-        calib = multi_pose.calibrate(views, proj_size=size or views[0].proj_size, cam_dist=cam_dist,
-                                     proj_dist=proj_dist, refine=joint_refine)
-        write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")
+        calib = result.set_a_calibration
+        if calib is None:
+            label = f"multi-pose set {result.set_a['set']} "
+            why = [f["message"] for f in result.failures if f["what"].startswith(label)]
+            fail(f"no HTML report: the multi-pose calibration of all {len(views)} poses failed"
+                 + (f": {why[0]}" if why else ""))
+        _show.write_calibration_report(calib, html_report, name=f"{Path(out).name}: all {len(views)} poses (Set A)")

@@ -13,33 +13,6 @@ from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional
 REPORT_SUFFIXES = (".html", ".htm")
 
 
-def print_check(check) -> None:
-    """Print a :class:`procam.verify.CalibrationCheck` as rich tables, and its notes."""
-    from .verification import cross_table, verification_table
-
-    if check.in_sample is not None:
-        console.print(verification_table(check.in_sample, "metric verification on the poses the calibration was "
-                                                          "fitted to (in-sample, optimistic; board units)"))
-    if check.held_out is not None:
-        console.print(verification_table(check.held_out, "metric verification on other poses (held out; board "
-                                                         "units)"))
-    if check.leave_one_out is not None:
-        console.print(cross_table(check.leave_one_out))
-    for n in check.notes:
-        say(f"note: {n}")
-
-
-def write_calibration_report(calib, path, *, views=None, decodes=None, check=None, name: str | None = None,
-                             notes=()) -> Path:
-    """Build and write the HTML report of ``calib`` (:func:`procam.report.build_report`) and say so."""
-    from ..report import build_report, write_report
-
-    text = build_report(calib, views, decodes=decodes, check=check, name=name or Path(path).stem, notes=notes)
-    write_report(text, path)
-    say(f"wrote {path} ({len(text.encode('utf-8')) / 1e6:.2f} MB)")
-    return Path(path)
-
-
 @app.command("report")
 @user_errors
 @with_pose_options
@@ -61,6 +34,7 @@ def report_cmd(
     import contextlib
 
     from .. import io, pipeline
+    from . import _show
 
     output_path(out, "-o", REPORT_SUFFIXES)
     views = decodes = None
@@ -88,4 +62,4 @@ def report_cmd(
     elif not calib.views:
         warn(f"{calibration} holds no poses: the report has no coverage, residuals or verification; give the pose "
              "folders (procam report CALIB POSE_DIR... --board ... --square ...)")
-    write_calibration_report(calib, out, views=views, decodes=decodes, name=calibration.name)
+    _show.write_calibration_report(calib, out, views=views, decodes=decodes, name=calibration.name)

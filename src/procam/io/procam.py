@@ -20,6 +20,7 @@ from ..distortion import opencv_from_division
 from ..errors import CalibrationFileError
 from ..summary import projector_assumptions
 from ..view import CORNER_REASONS, View
+from ..verdict import MEANING, VERDICTS
 from .files import to_jsonable, write_text
 from .formats import CALIBRATION_FORMAT, CORRESPONDENCES_FORMAT
 from .validate import bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, short
@@ -99,14 +100,8 @@ def _device_dict(dev, rms) -> dict | None:
             "distortion": dev.distortion.to_dict(), "rms_px": rms}
 
 
-#: What each verdict level means, written next to it.
-VERDICT_MEANING = {
-    "good": "fit to use",
-    "weak": "usable: less precise than a better pose (set) would make it; see the reasons",
-    "degenerate": "do not use: the poses do not determine some parameters, whose values may be anything",
-    "failed": "do not use: an estimate is impossible for a real device",
-    "unknown": "the file records no verdict",
-}
+#: What each verdict level means, written next to it (the one glossary, :data:`procam.verdict.MEANING`).
+VERDICT_MEANING = MEANING
 #: What every standard deviation in the file means.
 UNCERTAINTY_NOTE = ("std: 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise "
                     "independent and Gaussian; single-pose results also assume what 'assumptions' lists")
@@ -144,7 +139,7 @@ def verdict_level(v) -> str:
     """The verdict level a file records (an object with ``level``, or the level itself); ``"unknown"`` when it
     records none procam knows."""
     level = v.get("level") if isinstance(v, dict) else v
-    return level if level in VERDICT_MEANING else "unknown"
+    return level if level in VERDICTS else "unknown"
 
 
 def _verdict_reasons(path, v) -> tuple:

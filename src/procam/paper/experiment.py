@@ -30,6 +30,7 @@ import numpy as np
 from .. import evaluate as _evaluate
 from .. import models
 from .. import multi_pose
+from ..calibration import Calibration
 from ..errors import CalibrationError, DegeneratePoseError, ProcamError, ProcamWarning
 from ..view import View
 
@@ -60,6 +61,8 @@ class ExperimentResult:
     reference, set_a : the ``sets`` rows of the reference (lowest σ_T) and of all poses.
     failures : ``{"what": ..., "message": ...}`` for every calibration that raised.
     options : the options of the run.
+    set_a_calibration : the multi-pose :class:`~procam.calibration.Calibration` of all poses (Set A), or None
+        when it failed (then in ``failures``); not in the tables or :meth:`to_dict`.
     """
 
     pose_names: tuple[str, ...]
@@ -72,6 +75,7 @@ class ExperimentResult:
     set_a: dict
     failures: list = field(default_factory=list)
     options: dict = field(default_factory=dict)
+    set_a_calibration: Calibration | None = field(default=None, repr=False, compare=False)
 
     def tables(self) -> dict[str, list]:
         """``name -> rows`` of every table (the CSV files of :func:`procam.paper.report.write_report`)."""
@@ -169,11 +173,14 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
     # --- multi-pose over every set --------------------------------------------------------------
     set_rows = []
     set_evals = {}
+    set_a_calib = None
     for k, s in enumerate(sets):
         row = {"set": k + 1, "poses": _label(s), "size": len(s)}
         try:
             calib = multi_pose.calibrate([views[i] for i in s], proj_size=proj_size, cam_dist=cam_dist,
                                          proj_dist=proj_dist, refine=refine)
+            if len(s) == n:
+                set_a_calib = calib
             ev = _evaluate.evaluate(calib, views)
             set_evals[k] = ev
             row.update(_params(calib))
@@ -257,4 +264,4 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
                "single_options": {k: str(v) for k, v in (single_options or {}).items()}}
     return ExperimentResult(pose_names=names, single=single_rows, single_extrinsics=ext_rows, sets=set_rows,
                             summary=summary, params=params, reference=dict(reference), set_a=dict(set_a),
-                            failures=failures, options=options)
+                            failures=failures, options=options, set_a_calibration=set_a_calib)

@@ -6,7 +6,7 @@ Pipeline per pose -- camera, then projector, then the procam extrinsics:
    principal-axis LM, the joint refinement on the distorted corners;
 2. the projector (:mod:`.projector`): ``f_p``, ``v0p`` and the pose with ``u0p`` fixed, ``alpha_p = 1``;
 3. ``R = R_p R_c^T, T = t_p - R t_c`` (camera -> projector, as OpenCV ``stereoCalibrate``);
-4. the verdict (:mod:`.advice`): pose angles, the paper's rule and the true degeneracy conditions, the
+4. the verdict (:mod:`.rating`): pose angles, the paper's rule and the true degeneracy conditions, the
    standard deviation of every parameter from the Jacobian at the solution (:mod:`procam.uncertainty`),
    and whether a focal length is plausible at all.
 
@@ -32,17 +32,17 @@ from .. import uncertainty as unc
 from .._threads import deterministic
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
-from .misfit import misfit
 from ..residuals import pnp, stereo_pose
 from ..stats import rms, robust_sigma
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
-from .advice import AdviceOptions, Prediction, advice, judge, predict
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
+from .misfit import misfit
 from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
+from .rating import Prediction, RatingOptions, judge, predict, rate_pose
 
 __all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "known_camera_pose",
-           "extrinsics", "advice",
-           "CameraOptions", "ProjectorOptions", "RobustOptions", "AdviceOptions", "CameraSolution",
+           "extrinsics", "rate_pose",
+           "CameraOptions", "ProjectorOptions", "RobustOptions", "RatingOptions", "CameraSolution",
            "ProjectorSolution", "COD_MODES", "REFINE_MODES", "BACKGROUND_MODES", "robust_sigma"]
 
 #: The background modes of :func:`calibrate` (:data:`procam.single_pose.background.MODES`).
@@ -103,7 +103,7 @@ def _std_dict(cam: CameraSolution, proj: ProjectorSolution | None) -> dict:
 
 
 @contextlib.contextmanager
-def _degenerate_if_unsolved(name, predicted: dict, o: AdviceOptions):
+def _degenerate_if_unsolved(name, predicted: dict, o: RatingOptions):
     """A fit that finds no solution at a pose the stable prediction calls degenerate raises
     :class:`DegeneratePoseError` (the same verdict whatever the fit did), not a plain failure."""
     try:
@@ -111,7 +111,7 @@ def _degenerate_if_unsolved(name, predicted: dict, o: AdviceOptions):
     except CalibrationError as e:
         if isinstance(e, DegeneratePoseError):
             raise
-        adv = advice(predicted=predicted, options=o)
+        adv = rate_pose(predicted=predicted, options=o)
         bad = [adv[k]["message"] for k in ("camera", "projector")
                if isinstance(adv.get(k), dict) and adv[k]["level"] == "degenerate"]
         if bad:
@@ -119,7 +119,7 @@ def _degenerate_if_unsolved(name, predicted: dict, o: AdviceOptions):
         raise
 
 
-def _with_noise(pred: Prediction | None, sigma, device, o: AdviceOptions) -> Prediction | None:
+def _with_noise(pred: Prediction | None, sigma, device, o: RatingOptions) -> Prediction | None:
     """The stable prediction for the noise the fit measured, when that is larger than the typical one (the
     bound is linear in the noise)."""
     floor = o.camera_noise_px if device == "camera" else o.projector_noise_px
@@ -220,7 +220,7 @@ def _rejected_list(sol) -> list:
 @deterministic()  # one OpenCV and one BLAS thread: the same view gives the same bytes on any machine
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
-              advice_options: AdviceOptions = AdviceOptions(), cam_size=None, strict: bool = False,
+              rating_options: RatingOptions = RatingOptions(), cam_size=None, strict: bool = False,
               known_camera: Device | None = None, background: _background.BackgroundOptions | None = None
               ) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
@@ -232,7 +232,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     camera : :class:`CameraOptions` (principal point, distortion, refinement).
     projector : :class:`ProjectorOptions` (``u0``).
     robust : :class:`RobustOptions` -- minimum corners and outlier rejection, for both devices.
-    advice_options : :class:`AdviceOptions` -- the verdict's thresholds.
+    rating_options : :class:`RatingOptions` -- the verdict's thresholds.
     cam_size : (W, H) of the camera (default ``view.cam_size``).
     known_camera : the camera's intrinsics (:class:`~procam.calibration.Device`, any distortion model), e.g. from
         a camera-only calibration of many photos (:func:`procam.io.load_camera_intrinsics` reads procam's,
@@ -252,10 +252,10 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         camera -> projector; ``cam_rms, proj_rms`` (per-device PnP RMS on this pose, outliers excluded),
         ``stereo_rms`` (corners used by both devices); ``std`` with ``f_c, alpha_c, fy_c, u0c,
         v0c, k1, k2, f_p, v0p, R_euler_deg (3), T (3)`` and the board angles' std; one entry in
-        ``poses`` with the angles, :func:`advice`, ``rejected_corners`` (``{"camera": [{"index",
-        "residual_px"}, ...], "projector": [...]}``, indices into the view's corners) and
+        ``poses`` with the angles, the rating (:func:`rate_pose`, key ``"advice"``), ``rejected_corners``
+        (``{"camera": [{"index", "residual_px"}, ...], "projector": [...]}``, indices into the view's corners) and
         ``outlier_threshold_px``; ``info["camera"]``/``info["projector"]`` hold the full solutions;
-        ``verdict`` (good / weak / degenerate / failed, :mod:`.advice`) and ``verdict_reasons`` -- a weak,
+        ``verdict`` (good / weak / degenerate / failed, :mod:`.rating`) and ``verdict_reasons`` -- a weak,
         degenerate or failed pose is also a :class:`~procam.errors.ProcamWarning`.
 
     Raises
@@ -278,16 +278,16 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
 
     # the verdict's stable part comes first: it does not depend on where the fits stop
     predicted = {"camera": None if known_camera is not None else
-                 predict("camera", obj_all, only_valid(view.cam_pts), cam_size, advice_options.camera_noise_px),
+                 predict("camera", obj_all, only_valid(view.cam_pts), cam_size, rating_options.camera_noise_px),
                  "projector": predict("projector", obj_all, only_valid(view.proj_pts), proj_size,
-                                      advice_options.projector_noise_px, u0=projector.u0)}
+                                      rating_options.projector_noise_px, u0=projector.u0)}
     # NaN for corners invalid in either device, so that both fits use the same corners and the
     # rejected corners' indices are the view's
     if known_camera is not None:
         if cam_size is not None and tuple(known_camera.image_size) != tuple(cam_size):
             raise CalibrationError(f"pose {name!r}: the given camera intrinsics are for {known_camera.image_size[0]}x"
                                    f"{known_camera.image_size[1]} images, this pose's are {cam_size[0]}x{cam_size[1]}")
-    with _degenerate_if_unsolved(name, predicted, advice_options):
+    with _degenerate_if_unsolved(name, predicted, rating_options):
         if known_camera is not None:
             cam = known_camera_pose(obj_all, only_valid(view.cam_pts), known_camera, robust=robust, name=name)
         else:
@@ -296,11 +296,11 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                                    name=name)
     R, T = extrinsics(cam, proj)
     std = _std_dict(cam, proj)
-    predicted = {k: _with_noise(v, d.info.get("sigma_px"), k, advice_options)
+    predicted = {k: _with_noise(v, d.info.get("sigma_px"), k, rating_options)
                  for (k, v), d in zip(predicted.items(), (cam, proj))}
-    adv = advice(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
-                 values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, camera_size=cam.image_size,
-                 projector_size=proj.image_size, predicted=predicted, options=advice_options)
+    adv = rate_pose(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
+                    values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, camera_size=cam.image_size,
+                    projector_size=proj.image_size, predicted=predicted, options=rating_options)
     if known_camera is not None:
         adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                          "message": "camera: intrinsics given, not estimated from this pose"}
@@ -342,7 +342,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
 
 @deterministic()
 def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions = CameraOptions(),
-                          robust: RobustOptions = RobustOptions(), advice_options: AdviceOptions = AdviceOptions(),
+                          robust: RobustOptions = RobustOptions(), rating_options: RatingOptions = RatingOptions(),
                           name: str = "view", strict: bool = False) -> Calibration:
     """Camera-only single-pose calibration (one photo of a chessboard, no projector): K and division distortion.
 
@@ -353,14 +353,14 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
     obj, pts, finite = clean(obj_pts, cam_pts, name)
     # too few or collinear corners are that error, whatever the prediction (the first thing the fit checks)
     check_corners(obj, finite, robust.min_points, name, "camera corners", "check the board detection")
-    predicted = {"camera": predict("camera", obj, pts, image_size, advice_options.camera_noise_px)
+    predicted = {"camera": predict("camera", obj, pts, image_size, rating_options.camera_noise_px)
                  if image_size is not None else None}
-    with _degenerate_if_unsolved(name, predicted, advice_options):
+    with _degenerate_if_unsolved(name, predicted, rating_options):
         cam = calibrate_camera(obj_pts, cam_pts, image_size, camera, robust=robust, name=name)
     std = _std_dict(cam, None)
-    predicted["camera"] = _with_noise(predicted["camera"], cam.info.get("sigma_px"), "camera", advice_options)
-    adv = advice(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size,
-                 predicted=predicted, options=advice_options)
+    predicted["camera"] = _with_noise(predicted["camera"], cam.info.get("sigma_px"), "camera", rating_options)
+    adv = rate_pose(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size,
+                    predicted=predicted, options=rating_options)
     warnings = list(cam.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)
     fits = {"camera": _misfit(obj, cam, 0.1)}

@@ -1,8 +1,9 @@
-"""Is a pose good for single-pose calibration? One verdict per device -- good, weak, degenerate or failed --
-with the real reason in words.
+"""The single-pose rating of a pose: is it good for single-pose calibration? One level per device -- good,
+weak, degenerate or failed (:data:`procam.verdict.LEVELS`) -- with the real reason in words; the pose's
+level (the worst device's) is the single-pose calibration's verdict (:func:`judge`).
 
-The verdict must not depend on where Levenberg-Marquardt happened to stop: at a pose that determines nothing
-the fitted numbers may be anything (another CPU's BLAS kernels send LM elsewhere), but the verdict may not
+The rating must not depend on where Levenberg-Marquardt happened to stop: at a pose that determines nothing
+the fitted numbers may be anything (another CPU's BLAS kernels send LM elsewhere), but the rating may not
 flip. So it rests on **stable** quantities first (:func:`predict`): the board's angles from the
 board -> image homography with nominal intrinsics (the image diagonal as focal length unless Zhang's closed
 form gives a plausible one; the principal point at the image centre, or ``u0p``), and the Cramer-Rao
@@ -30,15 +31,13 @@ import numpy as np
 from .. import crlb, distortion, models
 from ..errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning,
                       WeakPoseWarning)
+from ..verdict import LEVELS
 from ._principal_axis import homography, zhang_camera, zhang_projector
-
-#: The verdict levels, from best to worst.
-LEVELS = ("good", "weak", "degenerate", "failed")
 
 
 @dataclass(frozen=True)
-class AdviceOptions:
-    """Thresholds of :func:`advice`.
+class RatingOptions:
+    """Thresholds of :func:`rate_pose`.
 
     Attributes
     ----------
@@ -153,8 +152,8 @@ def _pct(r) -> str:
     return "±inf" if r is None or not np.isfinite(r) else f"±{100 * r:.1f} %"
 
 
-def _device_advice(device: str, angles, prediction: Prediction | None, std_f, f, size, o: AdviceOptions) -> dict:
-    """One device's verdict (see the module docstring)."""
+def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, size, o: RatingOptions) -> dict:
+    """One device's rating (see the module docstring)."""
     key = "f_c" if device == "camera" else "f_p"
     a = prediction.angles_deg if prediction is not None else np.asarray(angles, float)
     psi, nu = abs(float(a[0])), abs(float(a[1]))
@@ -216,9 +215,9 @@ def _device_advice(device: str, angles, prediction: Prediction | None, std_f, f,
     return out
 
 
-def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, camera_size=None,
-           projector_size=None, predicted: dict | None = None, options: AdviceOptions = AdviceOptions()) -> dict:
-    """Is this pose good for single-pose calibration? A verdict per device and for the pose.
+def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, camera_size=None,
+              projector_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions()) -> dict:
+    """Is this pose good for single-pose calibration? A rating per device and for the pose.
 
     Parameters
     ----------
@@ -229,15 +228,16 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
     camera_size, projector_size : (W, H) pixels; with ``values`` a focal length outside
         ``options.plausible_f_range`` x the image diagonal is impossible for a real device.
     predicted : ``{"camera": Prediction, "projector": Prediction}`` (:func:`predict`), the stable
-        quantities; their angles replace the fitted ones in the rules. Without them the verdict rests on
+        quantities; their angles replace the fitted ones in the rules. Without them the rating rests on
         the given angles and the fit's std alone (as for angles typed in by hand).
-    options : :class:`AdviceOptions`, the thresholds.
+    options : :class:`RatingOptions`, the thresholds.
 
     Returns
     -------
     dict with ``camera`` and ``projector`` sub-dicts (``level`` one of :data:`LEVELS`, ``degenerate`` (not
     determined, or failed), ``weak``, ``failed``, ``paper_rule_ok``, ``rel_std_f`` (fit), ``predicted_rel_std_f``, ``message``) and
-    for the pose: ``level`` (the worst device's), ``ok`` (good), ``degenerate`` and ``failed``.
+    for the pose: ``level`` (the worst device's), ``ok`` (good), ``degenerate`` and ``failed``. A single-pose
+    calibration keeps it as its pose's ``"advice"`` entry (the key the file format has always used).
     """
     std = std or {}
     values = values or {}
@@ -247,8 +247,8 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
                                       ("projector", projector_angles_deg, "f_p", projector_size)):
         if angles is None and predicted.get(device) is None:
             continue
-        out[device] = _device_advice(device, angles, predicted.get(device), std.get(key), values.get(key), size,
-                                     options)
+        out[device] = _rate_device(device, angles, predicted.get(device), std.get(key), values.get(key), size,
+                                   options)
     subs = [v for v in out.values() if isinstance(v, dict)]
     level = max((s["level"] for s in subs), key=LEVELS.index, default="good")
     out["level"] = level
@@ -261,18 +261,18 @@ def advice(camera_angles_deg=None, projector_angles_deg=None, std=None, *, value
 _WARNING = {"weak": WeakPoseWarning, "degenerate": DegeneratePoseWarning, "failed": FailedEstimateWarning}
 
 
-def judge(adv: dict, name: str, strict: bool, warnings: list) -> tuple[str, tuple]:
-    """The pose's verdict from its advice: ``(level, reasons)``. Appends the reasons to ``warnings``, emits
-    them as procam warnings (:class:`~procam.errors.WeakPoseWarning`, ...), and with ``strict`` raises
-    :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose."""
-    keys = [k for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
-    bad = [k for k in keys if adv[k]["level"] != "good"]
-    reasons = tuple(f"pose {name!r}: {adv[k]['message']}" for k in bad)
-    level = adv["level"]
+def judge(rating: dict, name: str, strict: bool, warnings: list) -> tuple[str, tuple]:
+    """The pose's verdict from its rating (:func:`rate_pose`): ``(level, reasons)``. Appends the reasons to
+    ``warnings``, emits them as procam warnings (:class:`~procam.errors.WeakPoseWarning`, ...), and with ``strict``
+    raises :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose."""
+    keys = [k for k in ("camera", "projector") if isinstance(rating.get(k), dict)]
+    bad = [k for k in keys if rating[k]["level"] != "good"]
+    reasons = tuple(f"pose {name!r}: {rating[k]['message']}" for k in bad)
+    level = rating["level"]
     warnings.extend(reasons)
     if strict and level in ("degenerate", "failed"):
         raise DegeneratePoseError(f"pose {name!r}: {level} pose for single-pose calibration: "
-                               + "; ".join(adv[k]["message"] for k in keys if adv[k]["level"] == level))
+                                  + "; ".join(rating[k]["message"] for k in keys if rating[k]["level"] == level))
     for k, r in zip(bad, reasons):
-        _warnings.warn(r, _WARNING[adv[k]["level"]], stacklevel=3)
+        _warnings.warn(r, _WARNING[rating[k]["level"]], stacklevel=3)
     return level, reasons
