@@ -30,7 +30,8 @@ def test_full_scale_of_bit_depths():
 def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
     """Each writer leaves the mark of io.formats, and files.procam_wrote knows it (no manifest here)."""
     from conftest import camera_view_of_patterns
-    from sim_small import small_scene, truth_calibration
+    from procam.simulate import truth_calibration
+    from sim_small import small_scene
 
     from procam import decode, export, patterns
 
