@@ -241,7 +241,7 @@ def test_pair_and_frame_checks():
     assert checks.check_frame(1.6 * p_a, a, ps).status == "level"
     # unresolved stripes (grey) cannot be judged: kept as unverified
     assert checks.check_frame(np.full(4000, 0.5), a, ps, (a - 1, np.full(4000, 0.5))).status == "unverified"
-    assert checks.describe_frame(ps.row_start + 1, ps) == "#13 (row bit 4 inverse)"
+    assert capmod.describe_frame(ps.row_start + 1, ps) == "#13 (row bit 4 inverse)"
 
 
 # --------------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@ import numpy as np
 from .. import __version__, patterns
 from ..errors import ProcamError
 from .._files import record_files, to_jsonable, write_image, write_text
+from ..capture import describe_frame
 from . import checks
 from .cameras import to_gray
 
@@ -382,7 +383,7 @@ def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, fi
         if fc.ok:
             path = write_image(tmp / f"{k:0{digits}d}.png", img)
             files[k] = path
-            frames[k] = {"index": k, "file": path.name, "pattern": checks.describe_frame(k, ps),
+            frames[k] = {"index": k, "file": path.name, "pattern": describe_frame(k, ps),
                          "attempts": attempt + 1, "shown_s": round(t_show, 4), "grabbed_s": round(t_grab, 4),
                          "camera_timestamp": frame.timestamp, "camera": _jsonable_meta(frame.meta),
                          "check": fc.to_dict()}

@@ -4,7 +4,7 @@ capture sequence -> a folder of zero-padded PNGs plus ``patterns.json`` (:mod:`~
 :func:`write_sequence`); :mod:`~procam.capture.frames` names the frames of a sequence.
 """
 
-from .frames import describe_frame, frame_role  # noqa: F401
+from .frames import describe_frame, frame_role, pair_role  # noqa: F401
 from .read import (Capture, check_light, check_memory, check_pairs, check_white_black, diagnose,  # noqa: F401
                    exposure_warnings, foreign_frames, frame_levels, load_capture, resolve_pattern_set,
                    saturated_fraction, sequence_files)

@@ -207,7 +207,7 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
                            "look the same); check exposure and that the projector shows the sequence")
     bl, cl = b[lit], c[lit]
     for axis in ("col", "row"):
-        for j, (a, i) in enumerate(ps.pair_indices(axis)):
+        for a, i in ps.pair_indices(axis):
             p = (sub[a][lit] - bl) / cl
             q = (sub[i][lit] - bl) / cl
             sp, sq = p.std(), q.std()
@@ -218,7 +218,7 @@ def check_pairs(stack: np.ndarray, ps: patterns.PatternSet, folder, files, min_s
                 diagnose(stack, ps, folder, files, sub)
                 raise CaptureError(
                     f"{folder}: images #{a} ({Path(files[a]).name}) and #{i} ({Path(files[i]).name}) do not look "
-                    f"like a pattern and its inverse ({axis} bit {j}, correlation {corr:+.2f}); frames may be "
+                    f"like a pattern and its inverse ({frame_role(a, ps)}, correlation {corr:+.2f}); frames may be "
                     "missing, repeated or out of order — re-capture, or check that the file names sort in "
                     "capture order")
 
