@@ -8,4 +8,5 @@ from .frames import describe_frame, frame_role, pair_role  # noqa: F401
 from .read import (Capture, check_light, check_memory, check_pairs, check_white_black, diagnose,  # noqa: F401
                    exposure_warnings, foreign_frames, frame_levels, load_capture, resolve_pattern_set,
                    saturated_fraction, sequence_files)
-from .write import check_sequence_dir, remove_stale, sequence_names, write_sequence  # noqa: F401
+from .write import (SequenceWriter, check_out_dir, check_sequence_dir, remove_stale, sequence_names,  # noqa: F401
+                    write_sequence)
