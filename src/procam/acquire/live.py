@@ -21,7 +21,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import ProcamError
-from .cameras import Frame, _Camera, to_gray
+from .cameras.base import Frame, _Camera, to_gray
 
 
 class VirtualLiveCamera(_Camera):

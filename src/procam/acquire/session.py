@@ -37,7 +37,7 @@ from ..errors import ProcamError
 from .._files import to_jsonable
 from ..capture import SequenceWriter, check_out_dir, describe_frame
 from . import checks
-from .cameras import to_gray
+from .cameras.base import to_gray
 
 
 class CaptureFailed(ProcamError):

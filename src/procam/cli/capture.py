@@ -17,10 +17,6 @@ from ..errors import ProcamError
 from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors,
                    value)
 
-#: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
-VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
-
-
 def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
     """A finite number within [lo, hi] (or (lo, hi] with ``lo_open``), else a one-line error."""
     if value is None:
@@ -176,7 +172,7 @@ def capture_cmd(
 
         def scene_for(i):
             if i not in scenes:
-                from ..acquire.cameras import demo_scene
+                from ..acquire.cameras import VIRTUAL_POSES, demo_scene
 
                 scenes[i] = demo_scene(size, VIRTUAL_POSES[i % len(VIRTUAL_POSES)])
             return scenes[i]
