@@ -271,8 +271,8 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
             if given:
                 fail(f"{flag} belongs to --advise; add --advise")
         return None
-    from ._app import parse_board
-    from .advise import LiveAdvice, advisor_options, load_calibration_for
+    from ..acquire.live import advisor_options, calibration_square, load_calibration_for
+    from ._live import live_advice
 
     if not board:
         fail("--advise needs --board COLSxROWS (the advisor finds and measures the board)")
@@ -281,19 +281,13 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
     options = advisor_options(target, 0.5, 1.0)
     calib = None
     if calibration is not None and square is None:
-        from ..io import load_calibration
-
-        boards = [v.board for v in load_calibration(calibration).views if getattr(v, "board", None) is not None]
-        if not boards:
-            fail(f"--calibration {calibration}: it does not say its board's square size; give --square (T is in "
-                 "that unit)")
-        square = boards[0].square
+        square = calibration_square(calibration)
     b = parse_board(board, 1.0 if square is None else square)
     source = ""
     if calibration is not None:
         calib, source = load_calibration_for(calibration, b)
-    return LiveAdvice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
-                      max_frames=max_frames if max_frames is not None else (30 if virtual else None))
+    return live_advice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
+                       max_frames=max_frames if max_frames is not None else (30 if virtual else None))
 
 
 def _report_pose(result) -> None:

@@ -1,6 +1,15 @@
-"""The simulator as a camera (:class:`VirtualCamera`): what the camera sees of the pattern a projector shows,
-with stale frames, a dead projector, saturation and exposure changes injectable; and the scenes of
-``procam capture --virtual`` (:func:`demo_scene`, :data:`VIRTUAL_POSES`).
+"""The simulator as a camera.
+
+:class:`VirtualCamera`
+    What the camera sees of the pattern a projector shows (the pose's sequence rendered once), with stale
+    frames, a dead projector, saturation and exposure changes injectable: the capture loop's camera.
+:class:`VirtualLiveCamera`
+    What the camera sees under the projector's **white** pattern at the board's current pose (one
+    :class:`procam.simulate.Renderer` per pose, about 20 ms per frame at 1280x800 after ~0.3 s per new pose
+    with ``supersample=1``); the board is moved with :meth:`~VirtualLiveCamera.set_board` /
+    :meth:`~VirtualLiveCamera.move` (a test, or a script, plays the user): the live advisor's camera.
+:func:`demo_scene`, :data:`VIRTUAL_POSES`
+    The scenes of ``procam capture --virtual``.
 """
 
 from __future__ import annotations
@@ -137,6 +146,66 @@ class VirtualCamera(_Camera):
                 "stale_grabs": sorted(self.stale_grabs), "dead_projector": self.dead_projector,
                 "settings": {"gain": _setting(self.gain, self.gain, self.gain, True)},
                 "notes": ["frames rendered by procam.simulate"]}
+
+
+class VirtualLiveCamera(_Camera):
+    """The simulator as a live camera that sees the board under the projector's white light.
+
+    Parameters
+    ----------
+    scene : :class:`procam.simulate.Scene` (its board pose is the starting pose).
+    seed : noise seed (one generator for all frames).
+    supersample : the renderer's rays per pixel and axis (default 1: fast; the scene's own value for
+        ``None``).
+    order : pattern order (only fixes which image is the white one).
+    """
+
+    def __init__(self, scene, *, seed: int = 0, supersample: int | None = 1, order: str = "opencv"):
+        self.name = "virtual-live"
+        self.order = order
+        self.supersample = supersample
+        self._rng = np.random.default_rng(seed)
+        self.seed = int(seed)
+        self._renderer = None
+        self.grabs = 0
+        self.scene = None
+        self.set_scene(scene)
+
+    def set_scene(self, scene) -> None:
+        """Replace the whole scene (the next grab renders it)."""
+        if self.supersample is not None and scene.supersample != self.supersample:
+            scene = scene.replace(supersample=int(self.supersample))
+        if scene is not self.scene:
+            self.scene = scene
+            self._renderer = None
+
+    def set_board(self, R_board, t_board) -> None:
+        """Put the board at pose ``(R_board, t_board)`` (board -> camera)."""
+        self.set_scene(self.scene.replace(R_board=np.asarray(R_board, float), t_board=np.asarray(t_board, float)))
+
+    def move(self, turn_deg: float = 0.0, tilt_deg: float = 0.0, shift=(0.0, 0.0, 0.0)) -> None:
+        """Turn and tilt the board about its centre as :func:`procam.advisor.apply_move` defines them, then
+        shift its centre by ``shift`` (camera frame, board units)."""
+        from ...advisor import apply_move
+
+        R, t = apply_move(self.scene.R_board, self.scene.t_board, turn_deg, tilt_deg)
+        self.set_board(R, t + np.asarray(shift, float).reshape(3))
+
+    def grab(self) -> Frame:
+        from ... import simulate
+
+        if self._renderer is None:
+            self._renderer = simulate.Renderer(self.scene, self.order)
+        r = self._renderer
+        img = r.frame(r.pattern_set.white, self._rng)
+        self.grabs += 1
+        return Frame(img, time.monotonic(), {"source": self.name})
+
+    def describe(self) -> dict:
+        s = self.scene
+        return {"backend": "virtual-live", "scene": s.name, "size": list(s.cam_size),
+                "projector_size": list(s.proj_size), "seed": self.seed, "supersample": s.supersample,
+                "settings": {}, "notes": ["white frames rendered by procam.simulate at the board's current pose"]}
 
 
 #: Board angles (psi, nu, phi) of the poses ``procam capture --virtual --poses N`` renders, in turn.
