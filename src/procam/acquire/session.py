@@ -368,11 +368,7 @@ def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], 
     first one is captured.  Returns the poses' results; a failure stops the session (poses already
     captured stay).
     """
-    if n_poses < 1:
-        raise ValueError(f"n_poses must be >= 1, got {n_poses}")
-    base = Path(out_dir)
-    digits = max(2, len(str(n_poses)))
-    folders = [check_out_dir(base / f"pose{i + 1:0{digits}d}") for i in range(n_poses)]
+    folders = pose_folders(out_dir, n_poses)
     results = []
     for i, folder in enumerate(folders):
         if before_pose is not None:
@@ -384,3 +380,12 @@ def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], 
         if after_pose is not None:
             after_pose(i, results[-1])
     return results
+
+
+def pose_folders(out_dir, n_poses: int) -> list[Path]:
+    """The folders of a session of ``n_poses`` poses, ``out_dir/pose01`` ..., each checked (it must not exist, or
+    be empty: :func:`procam.capture.check_out_dir`)."""
+    if n_poses < 1:
+        raise ValueError(f"n_poses must be >= 1, got {n_poses}")
+    digits = max(2, len(str(n_poses)))
+    return [check_out_dir(Path(out_dir) / f"pose{i + 1:0{digits}d}") for i in range(n_poses)]
