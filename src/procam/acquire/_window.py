@@ -9,7 +9,7 @@ Both windows are SDL2 windows through ``pygame-ce`` (``pip install 'procam[captu
    the projector window is up), refuses SDL's ``offscreen``/``dummy`` drivers unless ``SDL_VIDEODRIVER``
    asks for them (no desktop session: nothing would be seen), opens the window (placed, borderless,
    full screen, without the mouse pointer, as asked) and takes its surface.  Whatever fails is undone and
-   reported as :class:`NoWindow` with SDL's reason, which the caller words as its one-line error;
+   reported as the caller's one-line :class:`~procam.errors.ProcamError` with SDL's reason in it;
 3. :func:`blit_grey` draws a (H, W) uint8 image as an 8-bit grey palette surface: SDL expands each value
    ``v`` to ``(v, v, v)`` exactly while blitting, with no RGB copy of the frame.
 """
@@ -27,10 +27,6 @@ INSTALL_HINT = "pip install 'procam[capture]'"
 
 #: An 8-bit grey palette: index v -> (v, v, v).
 GREY_PALETTE = [(v, v, v) for v in range(256)]
-
-
-class NoWindow(Exception):
-    """SDL could not open the window; the message is SDL's reason (the caller words the error)."""
 
 
 def need(name: str, what: str, alternative: str = ""):
@@ -76,18 +72,22 @@ class SdlWindow:
         no mouse pointer over it.
     hints : ``{environment variable: value}`` SDL reads while the window is up (a variable already set is
         left as it is).
+    refused : the error when the window cannot be opened, ``{reason}`` standing for SDL's reason.
 
-    :meth:`open` raises :class:`NoWindow`; :meth:`close` destroys the window and undoes the rest.
+    :meth:`open` returns the window or raises :class:`~procam.errors.ProcamError`; :meth:`close` destroys the
+    window and undoes the rest.  ``window`` and ``surface`` are pygame's (None while closed).
     """
 
     def __init__(self, pg, title: str, size, *, position=None, borderless: bool = False, fullscreen: bool = False,
-                 hide_mouse: bool = False, hints: dict | None = None):
+                 hide_mouse: bool = False, hints: dict | None = None,
+                 refused: str = "cannot open a window ({reason})"):
         self.pg = pg
         self.title = title
         self.size = (int(size[0]), int(size[1]))
         self.position = None if position is None else (int(position[0]), int(position[1]))
         self.borderless, self.fullscreen, self.hide_mouse = borderless, fullscreen, hide_mouse
         self.hints = dict(hints or {})
+        self.refused = refused
         self.window = self.surface = None
         self._owns_video = False
         self._env_set: list[str] = []
@@ -118,7 +118,7 @@ class SdlWindow:
             if win is not None:
                 win.destroy()
             self._undo()
-            raise NoWindow(str(e)) from None
+            raise ProcamError(self.refused.replace("{reason}", str(e))) from None
         self.window, self.surface = win, surface
         return self
 

@@ -23,7 +23,6 @@ import math
 
 import numpy as np
 
-from ..errors import ProcamError
 from . import _window
 from ._device import Device
 
@@ -203,39 +202,33 @@ class PreviewWindow(Device):
         self.size = fit_size(self.image_size, max_size)
         self.position = position
         self.title = title
-        self._pg = self._sdl = self._window = self._surface = self._fonts = None
+        self._pg = self._sdl = self._fonts = None
 
     def open(self):
-        if self._window is not None:
+        if self._sdl is not None:
             return self
         pg = _pygame()
-        sdl = _window.SdlWindow(pg, self.title, self.size, position=self.position)
-        try:
-            sdl.open()
-        except _window.NoWindow as e:
-            raise ProcamError(f"cannot open the preview window ({e}); run procam in a desktop session, or use "
-                              "--json (advice as JSON lines, no window)") from None
-        self._pg, self._sdl, self._window, self._surface = pg, sdl, sdl.window, sdl.surface
-        self._fonts = _Fonts(pg, self.size[1])
+        self._sdl = _window.SdlWindow(pg, self.title, self.size, position=self.position,
+                                      refused="cannot open the preview window ({reason}); run procam in a desktop "
+                                              "session, or use --json (advice as JSON lines, no window)").open()
+        self._pg, self._fonts = pg, _Fonts(pg, self.size[1])
         return self
 
     def close(self):
-        if self._sdl is not None:
-            try:
-                self._sdl.close()
-            finally:
-                self._sdl = self._window = self._surface = None
+        sdl, self._sdl = self._sdl, None
+        if sdl is not None:
+            sdl.close()
 
     def show(self, image: np.ndarray, advice) -> None:
         """Draw ``image`` with ``advice`` and flip."""
-        if self._window is None:
+        if self._sdl is None:
             raise RuntimeError("PreviewWindow.show() before open()")
-        draw_advice(self._surface, image, advice, self._fonts)
-        self._window.flip()
+        draw_advice(self._sdl.surface, image, advice, self._fonts)
+        self._sdl.window.flip()
 
     def poll(self) -> str | None:
         """Handle the window's events: ``"capture"`` (Space, Enter), ``"quit"`` (Esc, Q, closed) or None."""
-        if self._window is None:
+        if self._sdl is None:
             return None
         pg = self._pg
         out = None

@@ -164,12 +164,10 @@ class ProjectorWindow(_Projector):
         self.title = title
         self.display: Display | None = None
         self._sdl = None
-        self._window = None
-        self._surface = None
         self._pg = None
 
     def open(self):
-        if self._window is not None:
+        if self._sdl is not None:
             return self
         self.display = choose_display(list_displays(), self.display_index)
         d = self.display
@@ -179,18 +177,14 @@ class ProjectorWindow(_Projector):
                 f"set that display to the projector's native resolution, or pass --projector {d.width}x{d.height} "
                 "if that is the projector's native size (a scaled pattern cannot be decoded pixel-exact)")
         pg = _window.import_pygame("the projector window")
-        # keep the full-screen window up when the terminal on the other display takes the focus
-        sdl = _window.SdlWindow(pg, self.title, d.size, position=(d.x, d.y), borderless=True, fullscreen=True,
-                                hide_mouse=True, hints={"SDL_VIDEO_MINIMIZE_ON_FOCUS_LOSS": "0"})
-        try:
-            sdl.open()
-        except _window.NoWindow as e:
-            raise ProcamError(f"cannot open a window on {d.label()} ({e}); run procam in the desktop session the "
-                              "projector is connected to") from None
-        self._pg, self._sdl, self._window, self._surface = pg, sdl, sdl.window, sdl.surface
-        win, surface = sdl.window, sdl.surface
-        got = tuple(surface.get_size())
-        if got != self.size or tuple(win.size) != self.size:
+        # the hint keeps the full-screen window up when the terminal on the other display takes the focus
+        self._sdl = _window.SdlWindow(pg, self.title, d.size, position=(d.x, d.y), borderless=True, fullscreen=True,
+                                      hide_mouse=True, hints={"SDL_VIDEO_MINIMIZE_ON_FOCUS_LOSS": "0"},
+                                      refused=f"cannot open a window on {d.label()} ({{reason}}); run procam in the "
+                                              "desktop session the projector is connected to").open()
+        self._pg = pg
+        got = tuple(self._sdl.surface.get_size())
+        if got != self.size or tuple(self._sdl.window.size) != self.size:
             self.close()
             raise ProcamError(
                 f"the full-screen window on {d.label()} is {got[0]}x{got[1]} pixels, not {self.size[0]}x{self.size[1]}: "
@@ -199,11 +193,9 @@ class ProjectorWindow(_Projector):
         return self
 
     def close(self):
-        if self._sdl is not None:
-            try:
-                self._sdl.close()
-            finally:
-                self._sdl = self._window = self._surface = None
+        sdl, self._sdl = self._sdl, None
+        if sdl is not None:
+            sdl.close()
 
     def _pump(self):
         pg = self._pg
@@ -213,19 +205,19 @@ class ProjectorWindow(_Projector):
 
     def show(self, image: np.ndarray) -> None:
         """Show ``image`` (H, W) uint8 full screen, pixel for pixel; returns after the flip."""
-        if self._window is None:
+        if self._sdl is None:
             raise RuntimeError("ProjectorWindow.show() before open()")
         grey = _checked(image, self.size)
         self._pump()
-        _window.blit_grey(self._pg, self._surface, grey)  # SDL expands it exactly, v -> (v, v, v)
-        self._window.flip()
+        _window.blit_grey(self._pg, self._sdl.surface, grey)  # SDL expands it exactly, v -> (v, v, v)
+        self._sdl.window.flip()
         self._record(grey.copy())
 
     def wait(self, seconds: float) -> None:
         """Sleep ``seconds`` while handling the window's events (Esc aborts)."""
         end = time.monotonic() + max(0.0, seconds)
         while True:
-            if self._window is not None:
+            if self._sdl is not None:
                 self._pump()
             left = end - time.monotonic()
             if left <= 0:

@@ -84,6 +84,7 @@ class _Camera(Device):
 
     name = "camera"
     streaming = True
+    _settings: dict = {}  # a backend's settings, by name (:func:`_setting`): what was asked and what took effect
 
     def arm(self) -> None:
         pass
@@ -93,5 +94,7 @@ class _Camera(Device):
 
     @property
     def exposure_ms(self) -> float | None:
-        """The exposure in effect (ms) when the backend knows it, else None (for exposure advice)."""
-        return None
+        """The exposure in effect (ms) when the backend set it and it took effect, else None (for exposure
+        advice)."""
+        s = self._settings.get("exposure_ms")
+        return s["requested"] if s and s["took_effect"] else None

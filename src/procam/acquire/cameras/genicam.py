@@ -136,11 +136,6 @@ class HarvestersCamera(_Camera):
                                              None, "software" if self._trigger else "free-running",
                                              self._trigger == self.software_trigger)
 
-    @property
-    def exposure_ms(self):
-        s = self._settings.get("exposure_ms")
-        return s["requested"] if s and s["took_effect"] else None
-
     def close(self):
         if self._ia is not None:
             try:

@@ -124,11 +124,6 @@ class OpenCVCamera(_Camera):
             if not eff:
                 self._notes.append(f"gain {self.gain_request:g} not accepted (reads back {back:g})")
 
-    @property
-    def exposure_ms(self):
-        s = self._settings.get("exposure_ms")
-        return s["requested"] if s and s["took_effect"] else None
-
     def close(self):
         if self._cap is not None:
             self._cap.release()
