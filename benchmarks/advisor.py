@@ -42,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
 from procam import models, patterns, pipeline, simulate, single_pose  # noqa: E402
-from procam.acquire.live import VirtualLiveCamera  # noqa: E402
+from procam.acquire.cameras import VirtualLiveCamera  # noqa: E402
 from procam.advisor import Advisor, AdvisorOptions, apply_move  # noqa: E402
 from procam.board import Board  # noqa: E402
 from procam.calibration import Calibration, Device, Distortion  # noqa: E402

@@ -173,6 +173,58 @@ def test_moreno_order_and_a_session_of_poses(rig, tmp_path):
         assert r.record["extra"]["poses"] == 2
 
 
+class _Recorder:
+    """Hooks of a capture session that write down what they are told instead of printing it."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __getattr__(self, name):
+        if name == "busy":
+            import contextlib
+
+            return lambda text: (self.calls.append(("busy", text)), contextlib.nullcontext())[1]
+        return lambda *args: self.calls.append((name, *args))
+
+
+@pytest.mark.parametrize("board", [None, pytest.param(Board(10, 6, 1.0), marks=pytest.mark.slow)],
+                         ids=["no-board", "instant-verdict"])
+def test_capture_session_runs_a_virtual_rig_through_its_hooks(tmp_path, capsys, monkeypatch, board):
+    """The whole ``capture --virtual [--board]`` session as a library call: it prints nothing, tells its hooks
+    every step in order, writes the pose with the simulator's truth, and with a board judges it."""
+    from procam.acquire import cameras
+    from procam.acquire.orchestrate import Rig, capture_session
+
+    if board is None:  # a quarter of the camera's resolution (same field of view): the render is 16 times cheaper
+        demo = cameras.demo_scene
+
+        def small(*args, **kw):
+            s = demo(*args, **kw)
+            return s.replace(cam_size=(320, 200), K_cam=np.diag([0.25, 0.25, 1.0]) @ s.K_cam,
+                             cam_dist_coeffs=(s.cam_dist_coeffs[0] / 0.25**2, 0.0))
+        monkeypatch.setattr(cameras, "demo_scene", small)
+    hooks = _Recorder()
+    results = capture_session(tmp_path / "pose", 1, Rig(virtual=True, projector_size=(320, 200)), FAST,
+                              board=board, hooks=hooks)
+    assert capsys.readouterr() == ("", "")
+    (res,) = results
+    assert res.folder == tmp_path / "pose" and (res.folder / "truth.json").is_file()
+    steps = [c[0] for c in hooks.calls]
+    end = ["captured"] if board is None else ["captured", "verdict"]
+    assert steps[:3] == ["projector", "pose", "busy"] and steps[-len(end):] == end
+    assert hooks.calls[1] == ("pose", 0, 1, "virtual")
+    assert hooks.calls[2] == ("busy", "rendering the simulator's view of pose 1")
+    assert {"progress"} == set(steps[3:-len(end)])
+    assert hooks.calls[len(steps) - len(end)] == ("captured", res)
+    if board is not None:
+        _, result, check, png = hooks.calls[-1]
+        assert result is res and check.verdict == "good" and png == tmp_path / "pose.check.png"
+        assert not png.exists()  # the picture is the hooks' to draw
+    with pytest.raises(ProcamError, match="exists and is not empty"):  # before any device opens
+        capture_session(tmp_path / "pose", 1, Rig(virtual=True), FAST, hooks=(later := _Recorder()))
+    assert later.calls == []
+
+
 # --------------------------------------------------------------------------------------------
 # checks on synthetic arrays
 # --------------------------------------------------------------------------------------------
@@ -241,7 +293,7 @@ def test_pair_and_frame_checks():
     assert checks.check_frame(1.6 * p_a, a, ps).status == "level"
     # unresolved stripes (grey) cannot be judged: kept as unverified
     assert checks.check_frame(np.full(4000, 0.5), a, ps, (a - 1, np.full(4000, 0.5))).status == "unverified"
-    assert checks.describe_frame(ps.row_start + 1, ps) == "#13 (row bit 4 inverse)"
+    assert capmod.describe_frame(ps.row_start + 1, ps) == "#13 (row bit 4 inverse)"
 
 
 # --------------------------------------------------------------------------------------------

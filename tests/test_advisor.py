@@ -10,7 +10,8 @@ from conftest import run_cli
 from test_acquire import xvfb  # noqa: F401  (the virtual X server fixture)
 
 from procam import crlb, models, patterns, pipeline, simulate, single_pose
-from procam.acquire.live import VirtualLiveCamera, advise
+from procam.acquire.cameras import VirtualLiveCamera
+from procam.acquire.live import advise
 from procam.advisor import (Advisor, AdvisorOptions, apply_move, detect_board, guessed_camera, move_between)
 from procam.board import Board, detect_corners
 from procam.errors import ProcamError
@@ -426,7 +427,7 @@ def test_cli_capture_with_advice_learns_the_projector_side(cli, tmp_path):
 def test_quick_calibration_after_a_capture_teaches_the_advisor(ideal_capture, capsys):
     """``capture --advise`` calibrates each captured pose at once (LiveAdvice.learn): the result's K, R, T
     become the advisor's projector side. (The whole CLI session is the slow test above.)"""
-    from procam.cli.advise import LiveAdvice
+    from procam.cli._live import live_advice as LiveAdvice
 
     folder, _, truth, _ = ideal_capture
     session = LiveAdvice(Board(10, 6, 24.0), AdvisorOptions())

@@ -7,8 +7,8 @@ import pytest
 from conftest import camera_view_of_patterns, run_cli, write_stack
 
 from procam import capture, patterns
+from procam.errors import CaptureError, OutputError, ProcamError
 from procam.io import files as _files
-from procam.errors import CaptureError, OutputError
 
 W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel
 
@@ -204,3 +204,70 @@ def test_write_sequence_removes_stale_frames_of_a_longer_sequence(tmp_path):
     assert big.count > small.count and left == sorted([p.name for p in paths] + ["pattern_a.png"])
     assert (tmp_path / "notes.png").exists()
     assert capture.remove_stale(tmp_path, paths, prefix="pattern_") == []
+
+
+def test_check_pairs_names_frames_in_the_one_vocabulary(tmp_path):
+    st = camera_view_of_patterns(W, H)
+    st[[2, 4]] = st[[4, 2]]  # #2 is column bit 4 (of 6, counted from the least significant), #4 column bit 3
+    write_stack(tmp_path, st)
+    with pytest.raises(CaptureError, match=r"images #2 \(02.png\) and #3 \(03.png\) do not look like a pattern and its "
+                                           r"inverse \(column bit 4, correlation"):
+        capture.load_capture(tmp_path, (W, H))
+    ps = patterns.pattern_set(W, H)
+    assert capture.describe_frame(2, ps) == "#2 (column bit 4)" and capture.frame_role(3, ps) == "column bit 4 inverse"
+    assert capture.pair_role(3, ps) == ("inverse", 2) and capture.pair_role(ps.white, ps) == (None, None)
+    assert capture.describe_frame("pre-flight white", ps) == "pre-flight white"
+
+
+def _manifest(folder) -> dict:
+    return json.loads((folder / _files.MANIFEST).read_text())["files"]
+
+
+def test_one_writer_writes_a_camera_capture_whole_or_not_at_all(tmp_path):
+    """The capture loop's writer: frames go into a hidden partial folder that becomes the pose folder only when
+    complete, with the manifest roles 'captured' and 'sidecar'; an error leaves nothing (or, kept, says where)."""
+    ps = patterns.pattern_set(37, 19)
+    st = patterns.generate(37, 19)
+    out = tmp_path / "pose"
+    with capture.SequenceWriter(out, ps, writer="capture", captured=True, sidecars=["capture.json"]) as w:
+        for k in range(ps.count):
+            w.add(k, st[k])
+        assert w.folder.name.startswith(".pose.partial-") and not out.exists()
+        paths = w.finish({"capture.json": "{}"})
+    assert paths[0] == out / "00.png" and [p.name for p in tmp_path.iterdir()] == ["pose"]
+    roles = _manifest(out)
+    assert {roles[p.name] for p in paths} == {"captured"}
+    assert roles["patterns.json"] == roles["capture.json"] == "sidecar"
+    assert json.loads((out / "patterns.json").read_text())["files"] == [p.name for p in paths]
+    assert np.array_equal(capture.load_capture(out).stack, st)
+    # procam never writes into a capture
+    with pytest.raises(ProcamError, match="exists and is not empty"):
+        capture.SequenceWriter(out, ps, writer="capture", captured=True).open()
+    with pytest.raises(OutputError, match="holds a camera capture"):
+        capture.write_sequence(out, st, ps, force=True)
+    # an error inside: nothing is left; with keep_failed the hidden partial folder stays and the message says where
+    with pytest.raises(ProcamError, match="^boom$"):
+        with capture.SequenceWriter(tmp_path / "a", ps, writer="capture", captured=True) as w:
+            w.add(0, st[0])
+            raise ProcamError("boom")
+    with pytest.raises(ProcamError, match=r"^boom — the frames so far are in .*\.b\.partial-"):
+        with capture.SequenceWriter(tmp_path / "b", ps, writer="capture", captured=True, keep_failed=True) as w:
+            w.add(0, st[0])
+            raise ProcamError("boom")
+    assert sorted(p.name for p in tmp_path.iterdir())[0].startswith(".b.partial-")
+    assert sorted(p.name for p in tmp_path.iterdir())[1:] == ["pose"]
+
+
+def test_a_complete_capture_whose_folder_was_taken_meanwhile_is_kept(tmp_path):
+    ps = patterns.pattern_set(37, 19)
+    st = patterns.generate(37, 19)
+    w = capture.SequenceWriter(tmp_path / "pose", ps, writer="capture", captured=True)
+    with pytest.raises(ProcamError, match="something was written into it during the capture; the capture is in"):
+        with w:
+            for k in range(ps.count):
+                w.add(k, st[k])
+            (tmp_path / "pose").mkdir()
+            (tmp_path / "pose" / "mine.txt").write_text("mine")
+            w.finish()
+    assert [p.name for p in (tmp_path / "pose").iterdir()] == ["mine.txt"]
+    assert np.array_equal(capture.load_capture(w.folder).stack, st)  # complete, under its hidden name

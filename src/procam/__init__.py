@@ -8,7 +8,8 @@ The modules, from the captures up (each imports only those above it in this list
     _threads      one OpenCV / BLAS thread where results must not depend on threads
     _fmt          text of a number in a table
     patterns      Gray-code pattern sets and images (pure)
-    capture       the capture-folder format: read + validate a pose folder, write a sequence
+    capture       the capture-folder format: read + validate a pose folder, the one writer of pattern, simulator
+                  and camera folders, the names of a sequence's frames
     stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
@@ -42,7 +43,8 @@ The modules, from the captures up (each imports only those above it in this list
     simulate      synthetic procam captures with ground truth (the test oracle)
     paper         the paper's simulation study and real-data experiment
     plots         matplotlib figures (matplotlib imported only when a figure is drawn)
-    acquire       the devices: projector window, cameras, a checked capture session
+    acquire       the devices (projector window, cameras by backend), the checked capture loop, live advice,
+                  and the whole capture session of ``procam capture``
     report        a calibration as one self-contained HTML page (verdict, parameters, figures, verification)
     cli           the ``procam`` command line (thin: parse, call the API, print)
 

@@ -32,6 +32,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..capture import describe_frame, pair_role
+
 #: Smallest visible projector light: 99th percentile of white - black, in 8-bit grey levels
 #: (as :func:`procam.capture.check_light`).
 MIN_SPAN_DN = 10.0
@@ -272,35 +274,6 @@ def modulation(p: np.ndarray) -> float:
     return float(np.mean(np.abs(2.0 * p - 1.0)))
 
 
-def describe_frame(key, ps) -> str:
-    """'#12 (column bit 3)' style label of sequence frame ``key`` (an index) or 'white'/'black' text."""
-    if isinstance(key, str):
-        return key
-    k = int(key)
-    if k == ps.white:
-        return f"#{k} (white)"
-    if k == ps.black:
-        return f"#{k} (black)"
-    for axis, name in (("col", "column"), ("row", "row")):
-        pairs = ps.pair_indices(axis)
-        n = len(pairs)
-        for j, (a, b) in enumerate(pairs):
-            if k in (a, b):
-                return f"#{k} ({name} bit {n - 1 - j}{' inverse' if k == b else ''})"
-    return f"#{k}"
-
-
-def _pair_role(key, ps):
-    """``("first", partner)`` / ``("inverse", partner)`` for a pattern, ``(None, None)`` for white/black."""
-    for axis in ("col", "row"):
-        for a, b in ps.pair_indices(axis):
-            if key == a:
-                return "first", int(b)
-            if key == b:
-                return "inverse", int(a)
-    return None, None
-
-
 def check_frame(p: np.ndarray, key, ps, previous=None, partner: np.ndarray | None = None, *, level_tol: float = 0.25,
                 stale_frac: float = 0.25, min_modulation: float = 0.2) -> FrameCheck:
     """Judge one normalised frame ``p`` (:meth:`Reference.normalise`) of sequence frame ``key``.
@@ -362,7 +335,7 @@ def check_frame(p: np.ndarray, key, ps, previous=None, partner: np.ndarray | Non
         return FrameCheck(False, "level", f"frame {label} is darker than the pre-flight black (1st percentile at "
                           f"{lo:.2f} of white - black): the exposure or gain changed (switch off auto exposure and "
                           "auto gain)", stats)
-    role, other = _pair_role(key, ps)
+    role, other = pair_role(key, ps)
     if role == "inverse" and partner is not None:
         sa, sb = float(partner.std()), float(p.std())
         if modulation(partner) >= min_modulation and min(sa, sb) > 0.05:

@@ -1,87 +1,33 @@
-"""Live advice while the board is placed: a virtual live camera and the advising loop.
+"""Live advice while the board is placed: the advising loop, and the advising session over a capture's poses.
 
-:class:`VirtualLiveCamera`
-    The simulator as a live camera for the advisor: every grab renders the frame the camera sees under
-    the projector's **white** pattern at the board's current pose (one :class:`procam.simulate.Renderer`
-    per pose, about 20 ms per frame at 1280x800 after ~0.3 s per new pose with ``supersample=1``); the board
-    is moved with :meth:`~VirtualLiveCamera.set_board` / :meth:`~VirtualLiveCamera.move` (a test, or a
-    script, plays the user).
 :func:`advise`
     The loop: grab a frame, :meth:`procam.advisor.Advisor.update`, hand the advice to a callback (the
     preview window, the JSON lines), until a key asks for the capture, ``auto`` finds the pose ready, or
-    ``max_frames`` frames were seen.  Nothing is printed.
+    ``max_frames`` frames were seen.
+:class:`LiveAdvice`
+    One advising session over possibly several poses (``procam advise``, and ``procam capture --advise``
+    before each pose): one :class:`~procam.advisor.Advisor` for the camera's frame size, the preview window
+    (:class:`~procam.acquire.preview.PreviewWindow`) or a callback per frame, and after each captured pose a
+    quick single-pose calibration (:meth:`LiveAdvice.learn`) whose ``R, T`` give the projector side of the
+    next pose's advice when it is the best so far.
+:func:`advisor_options`, :func:`load_calibration_for`, :func:`calibration_square`
+    The session's options from the command line's numbers and files, checked (one-line errors naming the
+    options).
+
+Nothing is printed: what the session has to say goes to a ``notify(level, text)`` callback (level
+``"info"`` or ``"warning"``); the simulator's live camera is :class:`procam.acquire.cameras.VirtualLiveCamera`.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
 from ..errors import ProcamError
-from .cameras import Frame, _Camera, to_gray
-
-
-class VirtualLiveCamera(_Camera):
-    """The simulator as a live camera that sees the board under the projector's white light.
-
-    Parameters
-    ----------
-    scene : :class:`procam.simulate.Scene` (its board pose is the starting pose).
-    seed : noise seed (one generator for all frames).
-    supersample : the renderer's rays per pixel and axis (default 1: fast; the scene's own value for
-        ``None``).
-    order : pattern order (only fixes which image is the white one).
-    """
-
-    def __init__(self, scene, *, seed: int = 0, supersample: int | None = 1, order: str = "opencv"):
-        self.name = "virtual-live"
-        self.order = order
-        self.supersample = supersample
-        self._rng = np.random.default_rng(seed)
-        self.seed = int(seed)
-        self._renderer = None
-        self.grabs = 0
-        self.scene = None
-        self.set_scene(scene)
-
-    def set_scene(self, scene) -> None:
-        """Replace the whole scene (the next grab renders it)."""
-        if self.supersample is not None and scene.supersample != self.supersample:
-            scene = scene.replace(supersample=int(self.supersample))
-        if scene is not self.scene:
-            self.scene = scene
-            self._renderer = None
-
-    def set_board(self, R_board, t_board) -> None:
-        """Put the board at pose ``(R_board, t_board)`` (board -> camera)."""
-        self.set_scene(self.scene.replace(R_board=np.asarray(R_board, float), t_board=np.asarray(t_board, float)))
-
-    def move(self, turn_deg: float = 0.0, tilt_deg: float = 0.0, shift=(0.0, 0.0, 0.0)) -> None:
-        """Turn and tilt the board about its centre as :func:`procam.advisor.apply_move` defines them, then
-        shift its centre by ``shift`` (camera frame, board units)."""
-        from ..advisor import apply_move
-
-        R, t = apply_move(self.scene.R_board, self.scene.t_board, turn_deg, tilt_deg)
-        self.set_board(R, t + np.asarray(shift, float).reshape(3))
-
-    def grab(self) -> Frame:
-        from .. import simulate
-
-        if self._renderer is None:
-            self._renderer = simulate.Renderer(self.scene, self.order)
-        r = self._renderer
-        img = r.frame(r.pattern_set.white, self._rng)
-        self.grabs += 1
-        return Frame(img, time.monotonic(), {"source": self.name})
-
-    def describe(self) -> dict:
-        s = self.scene
-        return {"backend": "virtual-live", "scene": s.name, "size": list(s.cam_size),
-                "projector_size": list(s.proj_size), "seed": self.seed, "supersample": s.supersample,
-                "settings": {}, "notes": ["white frames rendered by procam.simulate at the board's current pose"]}
+from .cameras.base import to_gray
 
 
 @dataclass(frozen=True)
@@ -133,3 +79,150 @@ def advise(camera, advisor, *, on_advice: Callable | None = None, poll: Callable
             return AdviseResult("auto", last, n)
         if max_frames is not None and n >= max_frames:
             return AdviseResult("max-frames", last, n)
+
+
+def advisor_options(target: float, still_s: float, still_px: float):
+    """:class:`procam.advisor.AdvisorOptions` from the command line's numbers (``--target``, ``--still``,
+    ``--still-px``); a :class:`ProcamError` naming the option when one is out of range."""
+    from ..advisor import AdvisorOptions
+
+    for opt, v, lo, hi in (("--target", target, 0.0, 100.0), ("--still", still_s, 0.0, 60.0),
+                           ("--still-px", still_px, 0.0, 1000.0)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi) or (opt == "--target" and v <= 0):
+            raise ProcamError(f"{opt} must be a finite number {'> 0' if opt == '--target' else '>= 0'} and <= {hi:g}, "
+                              f"got {v}")
+    return AdvisorOptions(target_pct=float(target), still_s=float(still_s), still_px=float(still_px))
+
+
+def calibration_square(path) -> float:
+    """The square size of the board of the calibration file ``path`` (``--calibration`` without ``--square``)."""
+    from ..io import load_calibration
+
+    boards = [v.board for v in load_calibration(path).views if getattr(v, "board", None) is not None]
+    if not boards:
+        raise ProcamError(f"--calibration {path}: it does not say its board's square size; give --square (T is in "
+                          "that unit)")
+    return boards[0].square
+
+
+def load_calibration_for(path: Path, board) -> tuple:
+    """``(calibration, source)`` from ``--calibration``, checked against the board's square size (``T`` is in
+    the calibration's length unit, which must be the board's)."""
+    from ..io import load_calibration
+
+    calib = load_calibration(path)
+    boards = [v.board for v in calib.views if getattr(v, "board", None) is not None]
+    if boards and calib.T is not None and not math.isclose(boards[0].square, board.square, rel_tol=1e-6):
+        raise ProcamError(f"--calibration {path}: its board has squares of {boards[0].square:g} but --square is "
+                          f"{board.square:g}; give the same square size (T is in that unit)")
+    return calib, str(path)
+
+
+class LiveAdvice:
+    """One advising session over possibly several poses (see the module docstring).
+
+    Parameters
+    ----------
+    board : :class:`procam.board.Board`.
+    options : :class:`procam.advisor.AdvisorOptions`.
+    calibration, source : a calibration to start from (intrinsics and, with R, T, the projector side).
+    window : show each frame with its advice in the preview window, whose keys end a pose's advice
+        (Space/Enter: capture, Esc: quit); else no window.
+    on_advice : called with ``(frame image, advice)`` after each frame (e.g. to print JSON lines).
+    poll : without a window, called after each frame: ``"capture"`` ends a pose's advice (e.g. Enter on the
+        terminal), None goes on.
+    auto : end a pose's advice when it is ready (good and still).
+    max_frames : end a pose's advice after this many frames.
+    notify : called with ``(level, text)`` for what the session tells its user (``"info"``, ``"warning"``).
+    """
+
+    def __init__(self, board, options, *, calibration=None, source: str = "", window: bool = True,
+                 on_advice: Callable | None = None, poll: Callable | None = None, auto: bool = False,
+                 max_frames: int | None = None, notify: Callable[[str, str], None] | None = None):
+        self.board = board
+        self.options = options
+        self.calibration, self.source = calibration, source
+        self.window_wanted, self.on_advice, self.poll = window, on_advice, poll
+        self.auto, self.max_frames = auto, max_frames
+        self.notify = notify or (lambda level, text: None)
+        self.advisor = None
+        self.window = None
+        self.best = None   # (score, calibration, source) of the captured poses
+
+    def close(self):
+        if self.window is not None:
+            self.window.close()
+            self.window = None
+
+    def _advisor_for(self, size):
+        from ..advisor import Advisor
+
+        if self.advisor is None or self.advisor.image_size != tuple(size):
+            self.advisor = Advisor(self.board, size, self.options)
+            calib, source = (self.best[1], self.best[2]) if self.best else (self.calibration, self.source)
+            if calib is not None:
+                self.advisor.set_calibration(calib, source)
+        return self.advisor
+
+    def run(self, camera, what: str = "") -> AdviseResult:
+        """Advise on ``camera``'s frames until a key, ``auto`` or ``max_frames`` ends it; returns the
+        :class:`AdviseResult` (``reason`` ``"quit"``: Esc or the window closed)."""
+        first = to_gray(camera.grab().image)
+        advisor = self._advisor_for((first.shape[1], first.shape[0]))
+        advisor.reset_motion()
+        if self.window_wanted and self.window is None:
+            from .preview import PreviewWindow
+
+            self.window = PreviewWindow(advisor.image_size, title=f"procam advise{' - ' + what if what else ''}").open()
+        if self.window_wanted:
+            self.notify("info", f"advising{' for ' + what if what else ''}: place the board; Space or Enter in the "
+                        "preview window captures" + (", or it captures by itself when the pose is good and still"
+                                                     if self.auto else "") + "; Esc quits")
+
+        def on_advice(img, advice):
+            if self.on_advice is not None:
+                self.on_advice(img, advice)
+            if self.window is not None:
+                self.window.show(img, advice)
+
+        poll = self.window.poll if self.window is not None else self.poll
+        return advise(camera, advisor, on_advice=on_advice, poll=poll, auto=self.auto, max_frames=self.max_frames)
+
+    def learn(self, folder, name: str | None = None, checked=None):
+        """Calibrate a captured pose quickly (single-pose) and use its R, T, K for the next advice when it is the
+        best so far.  ``checked``: the pose's instant verdict (:class:`procam.check.PoseCheck`, or the
+        ProcamError that stopped it) when the caller has it, whose calibration is then used as it is.  Returns the
+        calibration or None (one warning when it fails)."""
+        from .. import pipeline, single_pose
+
+        try:
+            if isinstance(checked, ProcamError):
+                raise checked
+            if checked is not None and checked.calibration is None:
+                raise ProcamError("; ".join(checked.reasons) or checked.verdict)
+            if checked is not None:
+                calib = checked.calibration
+            else:
+                view, _ = pipeline.view_from_folder(folder, self.board)
+                calib = single_pose.calibrate(view)  # a failed or degenerate pose comes back flagged
+        except ProcamError as e:
+            self.notify("warning", f"quick calibration of {folder}: {e}; the advice keeps what it knew")
+            return None
+        adv = calib.poses[0]["advice"]
+        rel = [calib.std.get(k, float("inf")) / abs(K[0, 0]) for k, K in (("f_c", calib.camera.K),
+                                                                          ("f_p", calib.projector.K))]
+        score = max(rel) if all(math.isfinite(r) for r in rel) else float("inf")
+        verdicts = [adv[k]["message"] for k in ("camera", "projector")
+                    if isinstance(adv.get(k), dict) and (adv[k]["weak"] or adv[k]["degenerate"])]
+        self.notify("info", f"quick calibration of {Path(folder).name}: f_c = {calib.camera.K[0, 0]:.1f} ± "
+                    f"{100 * rel[0]:.2g} %, f_p = {calib.projector.K[0, 0]:.1f} ± {100 * rel[1]:.2g} %"
+                    + (f" ({'; '.join(verdicts)})" if verdicts else ""))
+        if adv.get("failed"):
+            self.notify("warning", f"{folder}: the quick calibration failed (an impossible focal length); the advice "
+                        "keeps what it knew")
+            return calib
+        if self.best is None or score < self.best[0]:
+            self.best = (score, calib, f"{name or Path(folder).name} (captured)")
+            if self.advisor is not None:
+                self.advisor.set_calibration(calib, self.best[2])
+        return calib

@@ -20,37 +20,22 @@ into commands: Space / Enter -> ``"capture"``, Esc / Q / closing the window -> `
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
-from ..errors import ProcamError
-
-INSTALL_HINT = "pip install 'procam[capture]'"
+from . import _window
+from ._device import Device
 
 #: Colours (RGB) of the states, and of the text.
 COLOURS = {"ready": (40, 220, 90), "good": (40, 220, 90), "adjust": (255, 190, 0), "no-board": (235, 60, 50)}
 TEXT = (255, 255, 255)
 ARROW = (0, 200, 255)
 PANEL = (0, 0, 0, 170)
-_GREY_PALETTE = [(v, v, v) for v in range(256)]  # a camera frame drawn as an 8-bit palette surface
 
 
 def _pygame():
-    """pygame, imported without its banner on stdout (it would break JSON lines there)."""
-    import importlib
-
-    hide = "PYGAME_HIDE_SUPPORT_PROMPT" not in os.environ
-    if hide:
-        os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
-    try:
-        return importlib.import_module("pygame")
-    except ImportError:
-        raise ProcamError(f"the preview window needs the 'pygame' package, which is not installed; install it with: "
-                          f"{INSTALL_HINT} (or use --json without a window)") from None
-    finally:
-        if hide:
-            os.environ.pop("PYGAME_HIDE_SUPPORT_PROMPT", None)
+    """pygame, or a one-line error that says how to install it (or to do without the window)."""
+    return _window.import_pygame("the preview window", " (or use --json without a window)")
 
 
 def fit_size(image_size, max_size) -> tuple[int, int]:
@@ -138,9 +123,7 @@ def draw_advice(surface, image: np.ndarray, advice, fonts: _Fonts | None = None)
     h, w = img.shape[:2]
     if (w, h) != (sw, sh):
         img = cv2.resize(img, (sw, sh), interpolation=cv2.INTER_AREA)
-    grey = pg.image.frombuffer(np.ascontiguousarray(img), (sw, sh), "P")  # 8-bit grey palette: no RGB copies
-    grey.set_palette(_GREY_PALETTE)
-    surface.blit(grey, (0, 0))
+    _window.blit_grey(pg, surface, img)  # 8-bit grey palette: no RGB copies
     sx, sy = sw / w, sh / h
 
     def px(p):
@@ -203,7 +186,7 @@ def draw_advice(surface, image: np.ndarray, advice, fonts: _Fonts | None = None)
         surface.blit(banner, (x0 + 12, y0 + 6))
 
 
-class PreviewWindow:
+class PreviewWindow(Device):
     """A window on the operator's screen showing the live frames with the advice.
 
     Parameters
@@ -219,57 +202,33 @@ class PreviewWindow:
         self.size = fit_size(self.image_size, max_size)
         self.position = position
         self.title = title
-        self._pg = self._window = self._surface = self._fonts = None
-        self._owns_display = False
-
-    def __enter__(self):
-        return self.open()
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
+        self._pg = self._sdl = self._fonts = None
 
     def open(self):
-        if self._window is not None:
+        if self._sdl is not None:
             return self
         pg = _pygame()
-        self._owns_display = not pg.display.get_init()  # the projector window may have started SDL's video
-        try:
-            pg.display.init()
-            driver = pg.display.get_driver()
-            if driver in ("offscreen", "dummy") and os.environ.get("SDL_VIDEODRIVER") != driver:
-                raise pg.error(f"no desktop session (SDL found only its '{driver}' video driver)")
-            kw = {} if self.position is None else {"position": tuple(int(v) for v in self.position)}
-            win = pg.Window(self.title, size=self.size, **kw)
-            surface = win.get_surface()
-        except Exception as e:  # pygame.error: no video device, no X server ...
-            if self._owns_display:
-                pg.display.quit()
-            raise ProcamError(f"cannot open the preview window ({e}); run procam in a desktop session, or use "
-                              "--json (advice as JSON lines, no window)") from None
-        self._pg, self._window, self._surface = pg, win, surface
-        self._fonts = _Fonts(pg, self.size[1])
+        self._sdl = _window.SdlWindow(pg, self.title, self.size, position=self.position,
+                                      refused="cannot open the preview window ({reason}); run procam in a desktop "
+                                              "session, or use --json (advice as JSON lines, no window)").open()
+        self._pg, self._fonts = pg, _Fonts(pg, self.size[1])
         return self
 
     def close(self):
-        if self._window is not None:
-            try:
-                self._window.destroy()
-            finally:
-                self._window = self._surface = None
-                if self._owns_display:
-                    self._pg.display.quit()
+        sdl, self._sdl = self._sdl, None
+        if sdl is not None:
+            sdl.close()
 
     def show(self, image: np.ndarray, advice) -> None:
         """Draw ``image`` with ``advice`` and flip."""
-        if self._window is None:
+        if self._sdl is None:
             raise RuntimeError("PreviewWindow.show() before open()")
-        draw_advice(self._surface, image, advice, self._fonts)
-        self._window.flip()
+        draw_advice(self._sdl.surface, image, advice, self._fonts)
+        self._sdl.window.flip()
 
     def poll(self) -> str | None:
         """Handle the window's events: ``"capture"`` (Space, Enter), ``"quit"`` (Esc, Q, closed) or None."""
-        if self._window is None:
+        if self._sdl is None:
             return None
         pg = self._pg
         out = None

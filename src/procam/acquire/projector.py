@@ -18,15 +18,14 @@ come with ``pip install 'procam[capture]'``.
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from ..errors import ProcamError
-
-INSTALL_HINT = "pip install 'procam[capture]'"
+from . import _window
+from ._device import Device
 
 
 class CaptureAborted(ProcamError):
@@ -56,23 +55,13 @@ class Display:
         return f"display {self.index}:{name} {self.width}x{self.height} at ({self.x}, {self.y}){role}"
 
 
-def _import(name: str):
-    import importlib
-
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        raise ProcamError(f"the projector window needs the '{name}' package, which is not installed; "
-                          f"install it with: {INSTALL_HINT}") from None
-
-
 def list_displays() -> list[Display]:
     """The desktop's monitors in ``screeninfo``'s order (``index`` is procam's ``--display``).
 
     Raises :class:`ProcamError` when ``screeninfo`` is missing or finds no display (no desktop
     session: ``DISPLAY`` unset, a remote shell).
     """
-    screeninfo = _import("screeninfo")
+    screeninfo = _window.need("screeninfo", "the projector window")
     try:
         monitors = screeninfo.get_monitors()
     except Exception as e:  # screeninfo raises its own ScreenInfoError, or ctypes errors
@@ -115,7 +104,7 @@ def _checked(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
-class _Projector:
+class _Projector(Device):
     """Shared bookkeeping: the last image shown and how many were shown."""
 
     size: tuple[int, int]
@@ -130,20 +119,6 @@ class _Projector:
         self.current = image
         self.shown += 1
         self.last_show_time = time.monotonic()
-
-    def __enter__(self):
-        self.open()
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
-
-    def open(self):
-        return self
-
-    def close(self):
-        pass
 
     def wait(self, seconds: float) -> None:
         """Sleep ``seconds`` (the window keeps handling its events meanwhile)."""
@@ -188,13 +163,11 @@ class ProjectorWindow(_Projector):
         self.display_index = display
         self.title = title
         self.display: Display | None = None
-        self._window = None
-        self._surface = None
+        self._sdl = None
         self._pg = None
-        self._env_set: list[str] = []
 
     def open(self):
-        if self._window is not None:
+        if self._sdl is not None:
             return self
         self.display = choose_display(list_displays(), self.display_index)
         d = self.display
@@ -203,31 +176,15 @@ class ProjectorWindow(_Projector):
                 f"display {d.index} is {d.width}x{d.height} but the patterns are {self.size[0]}x{self.size[1]}: "
                 f"set that display to the projector's native resolution, or pass --projector {d.width}x{d.height} "
                 "if that is the projector's native size (a scaled pattern cannot be decoded pixel-exact)")
-        # SDL reads these hints from the environment: keep the full-screen window up when the
-        # terminal on the other display takes the focus; no banner on import; a user's own setting wins.
-        for key, value in (("SDL_VIDEO_MINIMIZE_ON_FOCUS_LOSS", "0"), ("PYGAME_HIDE_SUPPORT_PROMPT", "1")):
-            if key not in os.environ:
-                os.environ[key] = value
-                self._env_set.append(key)
-        try:
-            pg = _import("pygame")
-        except ProcamError:
-            self._restore_env()
-            raise
-        try:
-            pg.display.init()
-            win = pg.Window(self.title, size=d.size, position=(d.x, d.y), borderless=True)
-            win.set_fullscreen(desktop=True)
-            pg.mouse.set_visible(False)
-            surface = win.get_surface()
-        except Exception as e:  # pygame.error: no video device, X server refused ...
-            self._restore_env()
-            raise ProcamError(f"cannot open a window on {d.label()} ({e}); run procam in the desktop session the "
-                              "projector is connected to") from None
-        self._pg, self._window, self._surface = pg, win, surface
-        self._palette = [(v, v, v) for v in range(256)]
-        got = tuple(surface.get_size())
-        if got != self.size or tuple(win.size) != self.size:
+        pg = _window.import_pygame("the projector window")
+        # the hint keeps the full-screen window up when the terminal on the other display takes the focus
+        self._sdl = _window.SdlWindow(pg, self.title, d.size, position=(d.x, d.y), borderless=True, fullscreen=True,
+                                      hide_mouse=True, hints={"SDL_VIDEO_MINIMIZE_ON_FOCUS_LOSS": "0"},
+                                      refused=f"cannot open a window on {d.label()} ({{reason}}); run procam in the "
+                                              "desktop session the projector is connected to").open()
+        self._pg = pg
+        got = tuple(self._sdl.surface.get_size())
+        if got != self.size or tuple(self._sdl.window.size) != self.size:
             self.close()
             raise ProcamError(
                 f"the full-screen window on {d.label()} is {got[0]}x{got[1]} pixels, not {self.size[0]}x{self.size[1]}: "
@@ -235,19 +192,10 @@ class ProjectorWindow(_Projector):
         self.show(np.zeros((self.size[1], self.size[0]), np.uint8))
         return self
 
-    def _restore_env(self):
-        for key in self._env_set:
-            os.environ.pop(key, None)
-        self._env_set = []
-
     def close(self):
-        if self._window is not None:
-            try:
-                self._window.destroy()
-            finally:
-                self._window = self._surface = None
-                self._pg.display.quit()
-                self._restore_env()
+        sdl, self._sdl = self._sdl, None
+        if sdl is not None:
+            sdl.close()
 
     def _pump(self):
         pg = self._pg
@@ -257,22 +205,19 @@ class ProjectorWindow(_Projector):
 
     def show(self, image: np.ndarray) -> None:
         """Show ``image`` (H, W) uint8 full screen, pixel for pixel; returns after the flip."""
-        if self._window is None:
+        if self._sdl is None:
             raise RuntimeError("ProjectorWindow.show() before open()")
         grey = _checked(image, self.size)
         self._pump()
-        # an 8-bit surface with a grey palette: SDL expands it exactly (v -> (v, v, v)) while blitting
-        src = self._pg.image.frombuffer(grey, self.size, "P")
-        src.set_palette(self._palette)
-        self._surface.blit(src, (0, 0))
-        self._window.flip()
+        _window.blit_grey(self._pg, self._sdl.surface, grey)  # SDL expands it exactly, v -> (v, v, v)
+        self._sdl.window.flip()
         self._record(grey.copy())
 
     def wait(self, seconds: float) -> None:
         """Sleep ``seconds`` while handling the window's events (Esc aborts)."""
         end = time.monotonic() + max(0.0, seconds)
         while True:
-            if self._window is not None:
+            if self._sdl is not None:
                 self._pump()
             left = end - time.monotonic()
             if left <= 0:

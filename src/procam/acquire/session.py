@@ -14,17 +14,16 @@
 4. ``patterns.json`` and ``capture.json`` (devices, settings, pre-flight, every frame's timings,
    attempts and checks).
 
-Frames are written as they come into a hidden sibling folder ``.NAME.partial-PID``, which is
-renamed to ``NAME`` only when everything is written: an interrupted or failed capture leaves no
-folder that looks complete (the partial one is removed unless ``keep_failed``).  Nothing is
-printed: progress is reported through a callback of :class:`Event`.
+Frames are written as they come by the capture-folder writer (:class:`procam.capture.SequenceWriter`,
+role ``"captured"``): into a hidden sibling folder ``.NAME.partial-PID``, renamed to ``NAME`` only when
+everything is written, so an interrupted or failed capture leaves no folder that looks complete (the
+partial one is removed unless ``keep_failed``).  Nothing is printed: progress is reported through a
+callback of :class:`Event`.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import time
 from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
@@ -35,9 +34,10 @@ import numpy as np
 
 from .. import __version__, patterns
 from ..errors import ProcamError
-from ..io.files import record_files, to_jsonable, write_image, write_text
+from ..io.files import to_jsonable
+from ..capture import SequenceWriter, check_out_dir, describe_frame
 from . import checks
-from .cameras import to_gray
+from .cameras.base import to_gray
 
 
 class CaptureFailed(ProcamError):
@@ -115,18 +115,6 @@ class CaptureResult:
     retries: int
     record: dict
     warnings: tuple = ()
-
-
-def check_out_dir(out_dir) -> Path:
-    """The pose folder must not exist, or be an empty folder (procam never writes into a capture)."""
-    out = Path(out_dir)
-    if out.exists():
-        if not out.is_dir():
-            raise ProcamError(f"{out}: exists and is not a folder; give a new folder for the capture")
-        if any(out.iterdir()):
-            raise ProcamError(f"{out}: exists and is not empty; give a new folder (procam never writes into an "
-                              "existing capture)")
-    return out
 
 
 def _units(ps) -> list[tuple[int, ...]]:
@@ -212,19 +200,15 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
     seq = patterns.generate(W, H, o.order, step=o.step)
     white_img = np.full((H, W), 255, np.uint8)
     black_img = np.zeros((H, W), np.uint8)
-    digits = max(2, len(str(ps.count - 1)))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
-    tmp.mkdir()
+    writer = SequenceWriter(out, ps, writer="capture", captured=True, keep_failed=o.keep_failed,
+                            sidecars=("capture.json", *(extra_files or {})))
     run = _Run(projector, camera, o, progress, clock)
     started = datetime.now(timezone.utc).isoformat(timespec="seconds")
-    record: dict = {}
-    try:
+    with writer:
         pre, pre_record = _preflight(run, white_img, black_img, ps)
         ref = pre.reference
         t_seq = clock()
         frames: list[dict | None] = [None] * ps.count
-        files: list[Path | None] = [None] * ps.count
         previous = ("pre-flight white", np.ones(len(ref.idx), np.float32))
         accepted: dict[int, np.ndarray] = {}
         for unit in _units(ps):
@@ -233,7 +217,7 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
                 previous = before
                 for j, k in enumerate(unit):
                     partner = accepted[unit[0]] if j == 1 else None
-                    p = _grab_frame(run, k, seq[k], ps, ref, previous, partner, frames, files, tmp, digits)
+                    p = _grab_frame(run, k, seq[k], ps, ref, previous, partner, frames, writer)
                     accepted[k] = p
                     previous = (k, p)
                 if len(unit) == 1:
@@ -263,10 +247,6 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
             if not pc.ok:
                 raise CaptureFailed(pc.reason)
         projector.show(black_img)
-        files_ = [Path(f) for f in files]
-        meta = ps.to_dict()
-        meta["files"] = [f.name for f in files_]
-        write_text(tmp / "patterns.json", json.dumps(meta, indent=2))
         total = clock() - run.t0
         record = {
             "format": "procam-capture", "version": 1, "procam": __version__, "status": "complete",
@@ -281,28 +261,9 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
                         "per_frame_s": round(seq_s / ps.count, 4)},
             "frames": frames, "warnings": warnings, "extra": extra or {},
         }
-        for name, text in (extra_files or {}).items():
-            write_text(tmp / name, text)
-        write_text(tmp / "capture.json", json.dumps(to_jsonable(record), indent=1))
-        # the manifest: these frames are a camera's data, which no procam writer replaces or deletes
-        record_files(tmp, {**{f.name: "captured" for f in files_},
-                           **{n: "sidecar" for n in ("patterns.json", "capture.json", *(extra_files or {}))}},
-                     writer="capture")
-        if out.exists():
-            if any(out.iterdir()):
-                raise ProcamError(f"{out}: something was written into it during the capture; the capture is "
-                                  f"in {tmp}")
-            out.rmdir()
-        os.replace(tmp, out)
-    except BaseException as exc:
-        if tmp.exists():
-            if o.keep_failed and isinstance(exc, ProcamError):
-                raise type(exc)(f"{exc} — the frames so far are in {tmp}") from None
-            if not o.keep_failed:
-                shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        files = writer.finish({"capture.json": json.dumps(to_jsonable(record), indent=1), **(extra_files or {})})
     run.emit("done", -1, ps.count, f"wrote {ps.count} frames to {out}", {"retries": run.retries})
-    return CaptureResult(out, tuple(out / f.name for f in files_), pre, run.retries, record, tuple(warnings))
+    return CaptureResult(out, tuple(files), pre, run.retries, record, tuple(warnings))
 
 
 def _preflight(run: _Run, white_img, black_img, ps):
@@ -360,8 +321,7 @@ def _steady(run: _Run, image) -> tuple[np.ndarray, int]:
     return img, run.opts.retries + 2
 
 
-def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, files, tmp: Path,
-                digits: int) -> np.ndarray:
+def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, writer: SequenceWriter) -> np.ndarray:
     """Show pattern ``k``, grab and check it, re-grab up to ``retries`` times; write it; return ``p``.
 
     A first-of-pair frame that keeps matching the frame before it through every re-grab (status
@@ -380,9 +340,8 @@ def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, fi
         if fc.status == "same" and (attempt == o.retries or not streaming):
             fc = checks.FrameCheck(True, "unverified", "", {**fc.stats, "note": "matches the frame before it"})
         if fc.ok:
-            path = write_image(tmp / f"{k:0{digits}d}.png", img)
-            files[k] = path
-            frames[k] = {"index": k, "file": path.name, "pattern": checks.describe_frame(k, ps),
+            path = writer.add(k, img)
+            frames[k] = {"index": k, "file": path.name, "pattern": describe_frame(k, ps),
                          "attempts": attempt + 1, "shown_s": round(t_show, 4), "grabbed_s": round(t_grab, 4),
                          "camera_timestamp": frame.timestamp, "camera": _jsonable_meta(frame.meta),
                          "check": fc.to_dict()}
@@ -409,11 +368,7 @@ def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], 
     first one is captured.  Returns the poses' results; a failure stops the session (poses already
     captured stay).
     """
-    if n_poses < 1:
-        raise ValueError(f"n_poses must be >= 1, got {n_poses}")
-    base = Path(out_dir)
-    digits = max(2, len(str(n_poses)))
-    folders = [check_out_dir(base / f"pose{i + 1:0{digits}d}") for i in range(n_poses)]
+    folders = pose_folders(out_dir, n_poses)
     results = []
     for i, folder in enumerate(folders):
         if before_pose is not None:
@@ -425,3 +380,12 @@ def capture_poses(out_dir, n_poses: int, projector, camera_for: Callable[[int], 
         if after_pose is not None:
             after_pose(i, results[-1])
     return results
+
+
+def pose_folders(out_dir, n_poses: int) -> list[Path]:
+    """The folders of a session of ``n_poses`` poses, ``out_dir/pose01`` ..., each checked (it must not exist, or
+    be empty: :func:`procam.capture.check_out_dir`)."""
+    if n_poses < 1:
+        raise ValueError(f"n_poses must be >= 1, got {n_poses}")
+    digits = max(2, len(str(n_poses)))
+    return [check_out_dir(Path(out_dir) / f"pose{i + 1:0{digits}d}") for i in range(n_poses)]

@@ -6,7 +6,6 @@ Importing this module registers the command on :data:`procam.cli._app.app`.
 from __future__ import annotations
 
 import math
-from contextlib import ExitStack
 from pathlib import Path
 from typing import Optional
 
@@ -16,9 +15,6 @@ from rich.markup import escape
 from ..errors import ProcamError
 from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors,
                    value)
-
-#: Board angles (psi, nu, phi) of the poses ``--virtual --poses N`` renders, in turn.
-VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
 
 
 def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
@@ -112,8 +108,9 @@ def capture_cmd(
 ):
     """Show the pattern sequence full screen on the projector, grab and check one camera frame per pattern,
     and write a pose folder that decode/calibrate read as is (images, patterns.json, capture.json)."""
-    from ..acquire import cameras as cams
-    from ..acquire import session
+    from ..acquire.cameras import parse_camera_spec
+    from ..acquire.orchestrate import Rig, capture_session
+    from ..acquire.session import CaptureOptions
 
     if list_devices:
         _list_devices(camera)
@@ -144,127 +141,15 @@ def capture_cmd(
     live = _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual)
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
-    kind, _ = cams.parse_camera_spec("virtual" if virtual else camera)
+    kind, _ = parse_camera_spec("virtual" if virtual else camera)
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
-    if poses == 1:
-        session.check_out_dir(out_dir)
-    else:
-        for i in range(poses):
-            session.check_out_dir(Path(out_dir) / f"pose{i + 1:02d}")
-    options = session.CaptureOptions(order=order, step=step, retries=retries, board=board_size, keep_failed=keep_failed,
-                                     settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
-
-    from ..acquire.projector import ProjectorWindow, VirtualProjector
-
-    with ExitStack() as stack:
-        if virtual:
-            size = size or (1920, 1080)
-            proj = VirtualProjector(size)
-        else:
-            if size is None:
-                from ..acquire.projector import choose_display, list_displays
-
-                size = choose_display(list_displays(), display).size
-            proj = ProjectorWindow(size, display)
-        stack.enter_context(proj)
-        console.print(plain(f"projector: {_describe_projector(proj)}"))
-
-        scenes = {}
-        shared_cam = None
-        virtual_cams = {}
-
-        def scene_for(i):
-            if i not in scenes:
-                from ..acquire.cameras import demo_scene
-
-                scenes[i] = demo_scene(size, VIRTUAL_POSES[i % len(VIRTUAL_POSES)])
-            return scenes[i]
-
-        def camera_for(i):
-            nonlocal shared_cam
-            if kind == "virtual" and i in virtual_cams:
-                return virtual_cams[i]
-            if kind == "virtual":
-                from .. import simulate
-
-                cam = cams.VirtualCamera(proj, scene_for(i), order=order, seed=seed + i, gain=1.0 if gain is None else gain)
-                with _spinner(f"rendering the simulator's view of pose {i + 1}"):
-                    cam.stack, _ = simulate.render(cam.scene, order=order, seed=seed + i)
-                virtual_cams[i] = stack.enter_context(cam)
-                return virtual_cams[i]
-            if shared_cam is None:
-                shared_cam = stack.enter_context(cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain,
-                                                                  timeout_s=timeout))
-                _print_camera(shared_cam)
-            return shared_cam
-
-        def extra_files(i):
-            if kind != "virtual":
-                return None
-            import json
-
-            from .. import simulate
-            from ..io.files import to_jsonable
-
-            return {"truth.json": json.dumps(to_jsonable(simulate.truth(scene_for(i))), indent=1)}
-
-        def before_pose(i):
-            if poses > 1:
-                console.print(f"[bold]pose {i + 1}/{poses}[/bold]", highlight=False)
-            if kind == "folder":
-                console.print("take one shot per pattern with the camera's software; procam waits for each new file",
-                              highlight=False)
-            if live is not None:
-                import numpy as np
-
-                from ..acquire.projector import CaptureAborted
-
-                proj.show(np.full((size[1], size[0]), 255, np.uint8))  # light the board while it is placed
-                res = live.run(camera_for(i), f"pose {i + 1}/{poses}")
-                if res.reason == "quit":
-                    raise CaptureAborted("capture stopped: Esc was pressed in the preview window, or it was closed")
-            elif poses > 1 and not virtual:
-                import numpy as np
-
-                proj.show(np.full((size[1], size[0]), 255, np.uint8))  # light the board while it is placed
-                typer.prompt(f"place the board for pose {i + 1} in the projector's light, then press Enter",
-                             default="", show_default=False, prompt_suffix=" ", err=True)
-
-        def after_pose(i, result):
-            """Report the pose; its instant verdict (a PoseCheck, or the error that stopped it) when --board."""
-            _report_pose(result)
-            if brd is None:
-                return None
-            from ..check import check_pose
-            from .check import report_check
-
-            png = result.folder.with_name(result.folder.name + ".check.png")
-            try:  # with --advise, on the advisor's board: its calibration (T in that unit) teaches the advisor
-                checked = check_pose(result.folder, brd if live is None else live.board)
-                report_check(checked, png)
-            except ProcamError as e:
-                console.print(f"[yellow]check:[/yellow] {escape(str(e))}", highlight=False)
-                checked = e
-            return checked
-
-        def after(i, result):
-            checked = after_pose(i, result)
-            if live is not None:
-                live.learn(result.folder, checked=checked)
-
-        if live is not None:
-            stack.callback(live.close)
-        reporter = stack.enter_context(_Reporter())
-        if poses == 1:
-            before_pose(0)
-            result = session.capture_pose(out_dir, proj, camera_for(0), options, progress=reporter.pose(0),
-                                          extra_files=extra_files(0))
-            after(0, result)
-        else:
-            session.capture_poses(out_dir, poses, proj, camera_for, options, before_pose=before_pose,
-                                  after_pose=after, progress=lambda i, e: reporter.pose(i)(e),
-                                  extra_files_for=extra_files)
+    options = CaptureOptions(order=order, step=step, retries=retries, board=board_size, keep_failed=keep_failed,
+                             settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
+    rig = Rig(camera=camera, projector_size=size, display=display, virtual=virtual, camera_size=cam_size,
+              exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
+    with _Printer() as printer:
+        capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 
 def _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual):
@@ -275,8 +160,8 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
             if given:
                 fail(f"{flag} belongs to --advise; add --advise")
         return None
-    from ._app import parse_board
-    from .advise import LiveAdvice, advisor_options, load_calibration_for
+    from ..acquire.live import advisor_options, calibration_square, load_calibration_for
+    from ._live import live_advice
 
     if not board:
         fail("--advise needs --board COLSxROWS (the advisor finds and measures the board)")
@@ -285,26 +170,13 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
     options = advisor_options(target, 0.5, 1.0)
     calib = None
     if calibration is not None and square is None:
-        from ..io import load_calibration
-
-        boards = [v.board for v in load_calibration(calibration).views if getattr(v, "board", None) is not None]
-        if not boards:
-            fail(f"--calibration {calibration}: it does not say its board's square size; give --square (T is in "
-                 "that unit)")
-        square = boards[0].square
+        square = calibration_square(calibration)
     b = parse_board(board, 1.0 if square is None else square)
     source = ""
     if calibration is not None:
         calib, source = load_calibration_for(calibration, b)
-    return LiveAdvice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
-                      max_frames=max_frames if max_frames is not None else (30 if virtual else None))
-
-
-def _report_pose(result) -> None:
-    """Report a captured pose's files."""
-    t = result.record["timings"]
-    console.print(plain(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
-                        f"({result.retries} re-grabs, {t['total_s']:.1f} s)"))
+    return live_advice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
+                       max_frames=max_frames if max_frames is not None else (30 if virtual else None))
 
 
 def _describe_projector(proj) -> str:
@@ -344,8 +216,9 @@ class _spinner:
         return False
 
 
-class _Reporter:
-    """Prints a capture's events: the pre-flight verdict, re-grabs, a progress bar per pose."""
+class _Printer:
+    """Prints a capture session (:class:`procam.acquire.orchestrate.Hooks`): the devices, each pose's pre-flight
+    verdict, re-grabs and a progress bar, the files written, the instant verdict; prompts between poses."""
 
     def __init__(self):
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -362,23 +235,55 @@ class _Reporter:
         self.bar.__exit__(*exc)
         return False
 
-    def pose(self, i):
-        def cb(e):
-            if e.kind == "preflight":
-                d = e.data
-                if d.get("ok"):
-                    console.print(f"pre-flight: white {d['white_level']:.0%} of full scale on the {d['region']} "
-                                  f"({d['white_saturated']:.1%} saturated), black {d['dark_level']:.0%}, "
-                                  f"contrast {d['contrast']:.0%}", highlight=False)
-                    for line in d.get("advice", []):
-                        console.print(f"[yellow]advice:[/yellow] {escape(str(line))}", highlight=False)
-                if i not in self.tasks:
-                    self.tasks[i] = self.bar.add_task(f"pose {i + 1}", total=e.total)
-            elif e.kind == "frame":
-                if i in self.tasks:
-                    self.bar.update(self.tasks[i], completed=e.index + 1)
-            elif e.kind == "retry":
-                console.print(f"[yellow]re-grab:[/yellow] {escape(e.message)}", highlight=False)
-            elif e.kind == "postflight" and e.message:
-                console.print(f"[yellow]post-flight:[/yellow] {escape(e.message)}", highlight=False)
-        return cb
+    def projector(self, proj):
+        console.print(plain(f"projector: {_describe_projector(proj)}"))
+
+    def camera(self, cam):
+        _print_camera(cam)
+
+    def busy(self, text):
+        return _spinner(text)
+
+    def pose(self, i, poses, kind):
+        if poses > 1:
+            console.print(f"[bold]pose {i + 1}/{poses}[/bold]", highlight=False)
+        if kind == "folder":
+            console.print("take one shot per pattern with the camera's software; procam waits for each new file",
+                          highlight=False)
+
+    def place_board(self, i):
+        typer.prompt(f"place the board for pose {i + 1} in the projector's light, then press Enter",
+                     default="", show_default=False, prompt_suffix=" ", err=True)
+
+    def captured(self, result):
+        """Report a captured pose's files."""
+        t = result.record["timings"]
+        console.print(plain(f"wrote {len(result.files)} frames, patterns.json and capture.json to {result.folder} "
+                            f"({result.retries} re-grabs, {t['total_s']:.1f} s)"))
+
+    def verdict(self, result, check, png):
+        from ._show import print_pose_check
+
+        print_pose_check(check, png)
+
+    def verdict_failed(self, result, error):
+        console.print(f"[yellow]check:[/yellow] {escape(str(error))}", highlight=False)
+
+    def progress(self, i, e):
+        if e.kind == "preflight":
+            d = e.data
+            if d.get("ok"):
+                console.print(f"pre-flight: white {d['white_level']:.0%} of full scale on the {d['region']} "
+                              f"({d['white_saturated']:.1%} saturated), black {d['dark_level']:.0%}, "
+                              f"contrast {d['contrast']:.0%}", highlight=False)
+                for line in d.get("advice", []):
+                    console.print(f"[yellow]advice:[/yellow] {escape(str(line))}", highlight=False)
+            if i not in self.tasks:
+                self.tasks[i] = self.bar.add_task(f"pose {i + 1}", total=e.total)
+        elif e.kind == "frame":
+            if i in self.tasks:
+                self.bar.update(self.tasks[i], completed=e.index + 1)
+        elif e.kind == "retry":
+            console.print(f"[yellow]re-grab:[/yellow] {escape(e.message)}", highlight=False)
+        elif e.kind == "postflight" and e.message:
+            console.print(f"[yellow]post-flight:[/yellow] {escape(e.message)}", highlight=False)

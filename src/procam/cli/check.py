@@ -8,7 +8,6 @@ import typer
 
 from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, fail, optional_size,
                    output_path, parse_board, pose_options, user_errors, value, with_pose_options)
-from ._show import print_pose_check as report_check  # noqa: F401 -- where `capture` still imports it from
 
 
 @app.command("check")
