@@ -12,7 +12,8 @@ from test_acquire import xvfb  # noqa: F401  (the virtual X server fixture)
 from procam import crlb, models, patterns, pipeline, simulate, single_pose
 from procam.acquire.live import VirtualLiveCamera, advise
 from procam.advisor import (Advisor, AdvisorOptions, apply_move, detect_board, guessed_camera, move_between)
-from procam.board import Board, detect_corners
+from procam.board import Board
+from procam.corners import detect_corners
 from procam.errors import ProcamError
 
 BOARD = Board(10, 6, 24.0)

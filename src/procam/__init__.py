@@ -12,7 +12,8 @@ The modules, from the captures up (each imports only those above it in this list
     stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
-    board         Board (inner corners, square size), object points, chessboard corner detection
+    board         Board (inner corners, square size), object points
+    corners       chessboard corner detection and refinement (the one caller of OpenCV's chessboard detector)
     correspond    camera corners -> projector corners by local homographies
     view          View: one pose's board, camera and projector points
     pipeline      folder(s) / stack / photo -> View(s)
@@ -65,7 +66,7 @@ _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "co
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "residuals", "background",
                "single_pose", "advisor", "multi_pose", "evaluate", "summary", "io", "simulate", "paper", "plots",
                "report", "plausibility", "misfit", "triangulate", "verify", "reconstruct", "export", "check",
-               "acquire")
+               "acquire", "corners")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

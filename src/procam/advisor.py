@@ -5,7 +5,7 @@ Per camera frame (:meth:`Advisor.update`):
 1. the board (:func:`detect_board`): OpenCV's chessboard detector on a downscaled copy of the frame
    (``AdvisorOptions.detect_width``, ``CALIB_CB_FAST_CHECK`` so a frame without the board costs little),
    the corners refined with ``cornerSubPix`` in the full-resolution frame, in procam's canonical order
-   (:func:`procam.board.canonical_order`);
+   (:func:`procam.corners.canonical_order`);
 2. the board's pose in the camera by PnP (``SOLVEPNP_IPPE`` on the undistorted corners) with the camera's
    intrinsics: from a calibration (an earlier capture or a calibration file) when there is one, else a
    guess (``f`` = the image diagonal, the principal point at the image centre, no distortion) -- the advice
@@ -56,7 +56,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import crlb, models
-from .board import Board, canonical_order, to_gray8
+from .board import Board
+from .corners import canonical_order, to_gray8
 from .calibration import Calibration, Device, Distortion
 from .errors import ProcamError
 from .single_pose.advice import AdviceOptions
@@ -354,7 +355,7 @@ def detect_board(image: np.ndarray, pattern_size, *, detect_width: int = 640, re
 
     Returns
     -------
-    (cols*rows, 2) float64 full-resolution corners in canonical order (:func:`procam.board.canonical_order`),
+    (cols*rows, 2) float64 full-resolution corners in canonical order (:func:`procam.corners.canonical_order`),
     or None when the board is not found.
     """
     import cv2

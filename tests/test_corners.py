@@ -1,4 +1,4 @@
-"""Corner detection and refinement (procam.board) against simulator truth and real photographs."""
+"""Corner detection and refinement (procam.corners) against simulator truth and real photographs."""
 
 import dataclasses
 import time
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conftest import rms
 
-from procam import board, correspond, decode, patterns, pipeline, simulate
+from procam import board, corners, correspond, decode, patterns, pipeline, simulate
 from procam.errors import BoardNotFoundError
 
 PS = patterns.pattern_set(1920, 1080)
@@ -32,8 +32,8 @@ def test_fit_beats_cornersubpix_on_a_steep_render(steep_capture):
     cam_t = np.array(truth["corners"]["camera_distorted"])
     proj_t = np.array(truth["corners"]["projector"])
     white = stack[PS.white]
-    old = board.detect_corners(white, (10, 6), refine="subpix", max_width=0)  # procam's earlier default
-    new = board.detect_corners(white, (10, 6))
+    old = corners.detect_corners(white, (10, 6), refine="subpix", max_width=0)  # procam's earlier default
+    new = corners.detect_corners(white, (10, 6))
     assert rms(old, cam_t) > 0.05  # cornerSubPix is pulled by the uneven light (measured 0.071)
     assert rms(new, cam_t) < 0.03  # measured 0.019
     assert rms(new, cam_t) < 0.5 * rms(old, cam_t)
@@ -48,15 +48,15 @@ def test_fit_beats_cornersubpix_on_a_steep_render(steep_capture):
 def test_downscaled_detection_equals_full_size_detection_after_refinement(paper_capture):
     _, stack, truth, _ = paper_capture
     white = stack[PS.white]
-    small = board.find_grid(white, (10, 6), max_width=640)
-    full = board.find_grid(white, (10, 6), max_width=0)
+    small = corners.find_grid(white, (10, 6), max_width=640)
+    full = corners.find_grid(white, (10, 6), max_width=0)
     assert 0.05 < np.abs(small - full).max() < 2  # the detections differ ...
-    a = board.detect_corners(white, (10, 6), max_width=640)
-    b = board.detect_corners(white, (10, 6), max_width=0)
+    a = corners.detect_corners(white, (10, 6), max_width=640)
+    b = corners.detect_corners(white, (10, 6), max_width=0)
     assert np.abs(a - b).max() < 0.002  # ... the refined corners do not
     # 16-bit input (same image x 257) and a colour copy give the same corners
-    c16 = board.detect_corners(white.astype(np.uint16) * 257, (10, 6))
-    bgr = board.detect_corners(cv2.cvtColor(white, cv2.COLOR_GRAY2BGR), (10, 6))
+    c16 = corners.detect_corners(white.astype(np.uint16) * 257, (10, 6))
+    bgr = corners.detect_corners(cv2.cvtColor(white, cv2.COLOR_GRAY2BGR), (10, 6))
     assert np.abs(c16 - a).max() < 0.002 and np.abs(bgr - a).max() < 0.002
     # canonical order: corner 0 top-left, i to the right, j down
     cam_t = np.array(truth["corners"]["camera_distorted"])
@@ -67,18 +67,18 @@ def test_refinement_options(paper_capture):
     _, stack, truth, _ = paper_capture
     cam_t = np.array(truth["corners"]["camera_distorted"])
     white = stack[PS.white]
-    raw = board.detect_corners(white, (10, 6), refine="none")
-    sub = board.detect_corners(white, (10, 6), refine="subpix")
-    fit = board.detect_corners(white, (10, 6), refine="fit")
+    raw = corners.detect_corners(white, (10, 6), refine="none")
+    sub = corners.detect_corners(white, (10, 6), refine="subpix")
+    fit = corners.detect_corners(white, (10, 6), refine="fit")
     assert rms(fit, cam_t) < rms(sub, cam_t) < rms(raw, cam_t)
-    assert np.array_equal(board.detect_corners(white, (10, 6), refine_window=0), raw)
+    assert np.array_equal(corners.detect_corners(white, (10, 6), refine_window=0), raw)
     # the pipeline passes the choice through (refine="subpix": procam's earlier refinement)
     assert np.array_equal(pipeline.find_board(stack, PS, (10, 6), refine="subpix"), sub)
     assert np.array_equal(pipeline.find_board(stack, PS, (10, 6)), fit)
     with pytest.raises(ValueError, match="refine"):
-        board.detect_corners(white, (10, 6), refine="saddle")
+        corners.detect_corners(white, (10, 6), refine="saddle")
     with pytest.raises(ValueError, match="detector"):
-        board.detect_corners(white, (10, 6), detector="fast")
+        corners.detect_corners(white, (10, 6), detector="fast")
 
 
 @pytest.mark.parametrize("given, hint", [((11, 7), "if 11x7 counts squares, use --board 10x6"),
@@ -91,15 +91,15 @@ def test_wrong_board_fails_fast_with_the_right_size(paper_capture, given, hint):
         pipeline.find_board(stack, PS, given, name="pose1")
     # not a timing test: the slow fallbacks (full-size classic + SB on three frames took ~30 s) are skipped
     assert time.perf_counter() - t < 10
-    assert board.size_hint(stack[PS.white], given) == (10, 6)
+    assert corners.size_hint(stack[PS.white], given) == (10, 6)
 
 
 def test_no_board_no_hint():
     rng = np.random.default_rng(0)
     img = cv2.GaussianBlur(rng.integers(0, 255, (240, 320), dtype=np.uint8), (0, 0), 2)
-    assert board.size_hint(img, (10, 6)) is None
-    assert board.find_corners([img, lambda: 255 - img], (10, 6)) == (None, None)
-    assert board.size_hint_text((10, 6), None) == ""
+    assert corners.size_hint(img, (10, 6)) is None
+    assert corners.find_corners([img, lambda: 255 - img], (10, 6)) == (None, None)
+    assert corners.size_hint_text((10, 6), None) == ""
 
 
 def test_real_photos_calibrate_better(shared_data):
@@ -113,7 +113,7 @@ def test_real_photos_calibrate_better(shared_data):
     obj = board.object_points(9, 6, 25.0).astype(np.float32)
 
     def calibrate(refine):
-        pts = [board.detect_corners(im, (9, 6), refine=refine) for im in imgs]
+        pts = [corners.detect_corners(im, (9, 6), refine=refine) for im in imgs]
         assert all(p is not None for p in pts)
         rms_px, K, *_ = cv2.calibrateCamera([obj] * 13, [p.astype(np.float32).reshape(-1, 1, 2) for p in pts],
                                             (640, 480), None, None, flags=cv2.CALIB_FIX_ASPECT_RATIO)
