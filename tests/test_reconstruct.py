@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from procam import io, simulate
+from procam.board import board_region
 from procam.calibration import Device, Distortion
 from procam.errors import ProcamError
-from procam.reconstruct import (PointCloud, board_region, fit_plane, read_ply, reconstruct, residual_image,
+from procam.reconstruct import (PointCloud, fit_plane, read_ply, reconstruct, residual_image,
     residual_map, write_ply)
 from procam.triangulate import triangulate_dense
 from sim_small import small_capture, small_scene, truth_calibration

@@ -12,7 +12,7 @@ The modules, from the captures up (each imports only those above it in this list
     stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
-    board         Board (inner corners, square size), object points
+    board         Board (inner corners, square size), object points, the board region of a camera image
     corners       chessboard corner detection and refinement (the one caller of OpenCV's chessboard detector)
     correspond    camera corners -> projector corners by local homographies
     view          View: one pose's board, camera and projector points

@@ -1,11 +1,13 @@
-"""The printed chessboard: its geometry.
+"""The printed chessboard: its geometry and the part of a camera image it covers.
 
 Board frame: corner ``k = j * cols + i`` (``i`` along the ``cols``
 direction, ``j`` along ``rows``) sits at ``(i s, j s, 0) - centroid``; with the canonical
 image order (corner 0 top-left in the image, ``i`` running to the right) the board's z axis
 points away from the devices, so a fronto-parallel board has ``R = I``.
 
-Finding the corners is :mod:`procam.corners`.
+:func:`board_region` is the one board-region mask: the camera pixels inside the detected corners' outer
+boundary (their convex hull, filled at 1/16 px), which every check, plot and fit that needs "the pixels on
+the board" uses.  Finding the corners is :mod:`procam.corners`.
 """
 
 from __future__ import annotations
@@ -80,3 +82,48 @@ def object_points(cols: int, rows: int, square: float) -> np.ndarray:
     pts = np.column_stack([i.ravel() * square, j.ravel() * square, np.zeros(cols * rows)])
     pts[:, :2] -= pts[:, :2].mean(axis=0)
     return pts
+
+
+def board_outline(corners) -> np.ndarray:
+    """(M, 2) float vertices of the detected corners' outer boundary (their convex hull), the outline that
+    :func:`board_region` fills; (0, 2) with fewer than 3 finite corners (NaN rows ignored)."""
+    import cv2
+
+    pts = np.asarray(corners, float).reshape(-1, 2)
+    pts = pts[np.isfinite(pts).all(1)]
+    if len(pts) < 3:
+        return np.zeros((0, 2))
+    return cv2.convexHull(pts.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+
+
+def board_region(corners, image_size, *, shrink: float = 0.0) -> np.ndarray:
+    """(H, W) bool: the camera pixels inside the detected corners' outer boundary (their convex hull).
+
+    The hull is filled at 1/16 px (OpenCV's ``fillConvexPoly`` with ``shift=4``), so the mask follows
+    the sub-pixel corners rather than their whole-pixel roundings.  Every corner lies on the printed
+    board, so the mask is on the board (it stops one square short of the board's outer edge).
+
+    Parameters
+    ----------
+    corners : (N, 2) detected (distorted) camera corners, pixels; NaN rows ignored.
+    image_size : (width, height) of the camera image.
+    shrink : pull the hull towards its centroid by this fraction (0 = the hull itself; negative grows it).
+
+    Returns
+    -------
+    (H, W) bool mask; all False with fewer than 3 finite corners.
+    """
+    import cv2
+
+    pts = np.asarray(corners, float).reshape(-1, 2)
+    pts = pts[np.isfinite(pts).all(1)]
+    W, H = (int(v) for v in image_size)
+    mask = np.zeros((H, W), np.uint8)
+    if len(pts) < 3:
+        return mask.astype(bool)
+    if shrink:
+        c = pts.mean(0)
+        pts = c + (1.0 - float(shrink)) * (pts - c)
+    hull = cv2.convexHull(np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2))
+    cv2.fillConvexPoly(mask, hull, 1, lineType=cv2.LINE_8, shift=4)
+    return mask.astype(bool)

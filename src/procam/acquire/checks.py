@@ -32,6 +32,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..board import board_region
+
 #: Smallest visible projector light: 99th percentile of white - black, in 8-bit grey levels
 #: (as :func:`procam.capture.check_light`).
 MIN_SPAN_DN = 10.0
@@ -120,18 +122,6 @@ class Preflight:
         return {k: (round(v, 5) if isinstance(v, float) else v) for k, v in d.items()}
 
 
-def _hull_mask(corners: np.ndarray, shape) -> np.ndarray:
-    import cv2
-
-    mask = np.zeros(shape, np.uint8)
-    pts = np.asarray(corners, np.float64).reshape(-1, 2)
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    if len(pts) >= 3:
-        hull = cv2.convexHull(np.round(pts).astype(np.int32))
-        cv2.fillConvexPoly(mask, hull, 1)
-    return mask.astype(bool)
-
-
 def _exposure_text(factor: float, exposure_ms: float | None) -> str:
     if exposure_ms:
         return f"about {exposure_ms * factor:.3g} ms (now {exposure_ms:.3g} ms)"
@@ -186,7 +176,7 @@ def preflight(white: np.ndarray, black: np.ndarray, white2: np.ndarray | None = 
         return Preflight(False, f"the projector lights only {lit_frac:.1%} of the camera image: aim the camera at the "
                          "projected area (and the board into it)", fs, span_dn=span_dn, black_saturated=black_sat)
     if board_corners is not None:
-        region, name = _hull_mask(board_corners, white.shape), "board"
+        region, name = board_region(board_corners, (white.shape[1], white.shape[0])), "board"
         if region.sum() < 100:
             region, name = lit, "lit area"
     else:
