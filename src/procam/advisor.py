@@ -2,7 +2,8 @@
 
 Per camera frame (:meth:`Advisor.update`):
 
-1. the board (:func:`detect_board`): OpenCV's chessboard detector on a downscaled copy of the frame
+1. the board: :func:`procam.corners.detect_corners` with its live setting (:data:`procam.corners.LIVE`,
+   :attr:`AdvisorOptions.corner_options`): OpenCV's chessboard detector on a downscaled copy of the frame
    (``AdvisorOptions.detect_width``, ``CALIB_CB_FAST_CHECK`` so a frame without the board costs little),
    the corners refined with ``cornerSubPix`` in the full-resolution frame, in procam's canonical order
    (:func:`procam.corners.canonical_order`);
@@ -51,19 +52,19 @@ import json
 import math
 import time
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from . import crlb, models
 from .board import Board
-from .corners import canonical_order, to_gray8
+from .corners import LIVE, CornerOptions, detect_corners
 from .calibration import Calibration, Device, Distortion
 from .errors import ProcamError
 from .single_pose.advice import AdviceOptions
 
-__all__ = ["AdvisorOptions", "Action", "DeviceState", "Advice", "ProjectorSide", "Advisor", "detect_board",
-           "apply_move", "move_between", "guessed_camera", "STATES"]
+__all__ = ["AdvisorOptions", "Action", "DeviceState", "Advice", "ProjectorSide", "Advisor", "apply_move",
+           "move_between", "guessed_camera", "STATES"]
 
 #: Advice states, from worst to best.
 STATES = ("no-board", "adjust", "good", "ready")
@@ -165,6 +166,12 @@ class AdvisorOptions:
     def projector_target(self) -> float:
         """The projector's target % of f."""
         return self.target_pct if self.projector_target_pct is None else self.projector_target_pct
+
+    @property
+    def corner_options(self) -> CornerOptions:
+        """The detector's settings per frame: :data:`procam.corners.LIVE` with ``detect_width`` and
+        ``refine_window``."""
+        return replace(LIVE, max_width=self.detect_width, refine_window=self.refine_window)
 
 
 @dataclass(frozen=True)
@@ -339,56 +346,8 @@ def guessed_camera(image_size) -> Device:
 
 
 # --------------------------------------------------------------------------------------------
-# detection and moves
+# moves
 # --------------------------------------------------------------------------------------------
-
-def detect_board(image: np.ndarray, pattern_size, *, detect_width: int = 640, refine_window: int = 11):
-    """The board's inner corners in one frame, fast: detection downscaled, refinement at full resolution.
-
-    Parameters
-    ----------
-    image : (H, W) uint8/uint16 grey frame.
-    pattern_size : (cols, rows) of inner corners.
-    detect_width : the frame is downscaled (``INTER_AREA``) to at most this width for
-        ``findChessboardCorners`` (adaptive threshold, normalisation, fast check); 0 = full resolution.
-    refine_window : ``cornerSubPix`` half-window (px, full resolution; clamped to half the corner spacing).
-
-    Returns
-    -------
-    (cols*rows, 2) float64 full-resolution corners in canonical order (:func:`procam.corners.canonical_order`),
-    or None when the board is not found.
-    """
-    import cv2
-
-    img = np.asarray(image)
-    if img.ndim != 2:
-        raise ValueError(f"detect_board takes a grey (H, W) frame, got shape {img.shape}")
-    cols, rows = int(pattern_size[0]), int(pattern_size[1])
-    h, w = img.shape
-    scale = 1.0
-    small = img
-    if detect_width and w > detect_width:
-        scale = detect_width / w
-        small = cv2.resize(img, (detect_width, max(1, int(round(h * scale)))), interpolation=cv2.INTER_AREA)
-    small8 = small if small.dtype == np.uint8 else to_gray8(small)
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-    ok, c = cv2.findChessboardCorners(small8, (cols, rows), flags=flags)
-    if not ok or c is None or len(c) != cols * rows:
-        return None
-    c = c.reshape(-1, 2).astype(np.float64)
-    if scale != 1.0:  # pixel centres: x_full + 0.5 = (x_small + 0.5) / scale
-        c = (c + 0.5) / scale - 0.5
-    c = c.astype(np.float32).reshape(-1, 1, 2)
-    if refine_window and refine_window > 0:
-        full = img if img.dtype == np.uint8 else img.astype(np.float32)
-        g = c.reshape(rows, cols, 2)
-        spacing = min(np.min(np.linalg.norm(np.diff(g, axis=1), axis=2)) if cols > 1 else 1e9,
-                      np.min(np.linalg.norm(np.diff(g, axis=0), axis=2)) if rows > 1 else 1e9)
-        win = int(max(2, min(refine_window, spacing / 2 - 1)))
-        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
-        c = cv2.cornerSubPix(full, c, (win, win), (-1, -1), crit)
-    return canonical_order(c.reshape(-1, 2).astype(np.float64), cols, rows)
-
 
 def _axis_rotation(turn_deg: float, tilt_deg: float) -> np.ndarray:
     """The rotation (camera frame) of a turn then a tilt (see :func:`apply_move` for the signs)."""
@@ -680,8 +639,7 @@ class Advisor:
                               f"{self.image_size[0]}x{self.image_size[1]} image")
         k = self._frame
         self._frame += 1
-        corners = detect_board(img, self.board.pattern_size, detect_width=o.detect_width,
-                               refine_window=o.refine_window)
+        corners = detect_corners(img, self.board.pattern_size, o.corner_options)
         t_det = time.perf_counter()
         phase = "target" if self.projector is not None else "first"
         common = dict(frame=k, time_s=t, phase=phase, target_pct=o.target_pct,
