@@ -81,6 +81,21 @@ def test_refinement_options(paper_capture):
         corners.detect_corners(white, (10, 6), detector="fast")
 
 
+def test_detect_options_and_the_live_setting(paper_capture):
+    _, stack, truth, _ = paper_capture
+    cam_t = np.array(truth["corners"]["camera_distorted"])
+    white = stack[PS.white]
+    live = corners.detect_corners(white, (10, 6), corners.LIVE)  # the advisor's: fast, cornerSubPix
+    assert rms(live, cam_t) < 0.1
+    # an options object and its fields as keywords are the same thing; keywords replace the object's fields
+    assert np.array_equal(corners.detect_corners(white, (10, 6), **dataclasses.asdict(corners.LIVE)), live)
+    assert np.array_equal(corners.detect_corners(white, (10, 6), corners.LIVE, refine="fit", refine_window=None,
+                                                 max_width=0, fallback=True, fast_check=False, stretch_8bit=True),
+                          corners.detect_corners(white, (10, 6), detector="classic", max_width=0))
+    with pytest.raises(ValueError, match="subpix_clamp"):
+        corners.DetectOptions(subpix_clamp="cols")
+
+
 @pytest.mark.parametrize("given, hint", [((11, 7), "if 11x7 counts squares, use --board 10x6"),
                                          ((9, 5), "use --board 10x6")])
 def test_wrong_board_fails_fast_with_the_right_size(paper_capture, given, hint):

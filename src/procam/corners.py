@@ -10,7 +10,7 @@ calibrateCamera RMS on OpenCV's sample photographs.  :func:`find_corners` tries 
 and, when a board of another size is in view, gives up at once with that size (:func:`size_hint`).
 ``benchmarks/correspond.py`` measures all of it.
 
-How a board is searched and refined is a :class:`CornerOptions`; :data:`LIVE` is the setting for live
+How a board is searched and refined is a :class:`DetectOptions`; :data:`LIVE` is the setting for live
 camera frames (the advisor's, ``benchmarks/advisor.py``): the classic detector on the downscaled copy only,
 with OpenCV's fast check (a frame without the board costs a few ms), the 8-bit frame as it is (no contrast
 stretch), ``cornerSubPix`` with a short termination at full size.  It fails more often than the default on
@@ -44,7 +44,7 @@ CLAMPS = ("rows", "grid")
 
 
 @dataclass(frozen=True)
-class CornerOptions:
+class DetectOptions:
     """How :func:`detect_corners` finds and refines a board (checked at construction: ``ValueError``).
 
     Attributes
@@ -93,22 +93,18 @@ class CornerOptions:
             raise ValueError(f"cornerSubPix needs iterations >= 1 and eps > 0, got {self.subpix_iterations!r} "
                              f"and {self.subpix_eps!r}")
 
-    def window(self) -> int:
-        """The refinement half-window in pixels (``refine_window``, or the method's default)."""
-        return REFINE_WINDOW[self.refine] if self.refine_window is None else self.refine_window
-
 
 #: Detection for calibration (every attempt, the fitted corners).
-DEFAULT = CornerOptions()
+DEFAULT = DetectOptions()
 
 #: Detection for live camera frames (the advisor's): see the module docstring.
-LIVE = CornerOptions(detector="classic", refine="subpix", refine_window=11, max_width=640, fallback=False,
+LIVE = DetectOptions(detector="classic", refine="subpix", refine_window=11, max_width=640, fallback=False,
                      fast_check=True, stretch_8bit=False, subpix_iterations=30, subpix_eps=0.01,
                      subpix_clamp="grid")
 
 
-def _options(options: CornerOptions | None, fields: dict) -> CornerOptions:
-    """``options`` (default :data:`DEFAULT`) with ``fields`` (names of :class:`CornerOptions`) replaced."""
+def _options(options: DetectOptions | None, fields: dict) -> DetectOptions:
+    """``options`` (default :data:`DEFAULT`) with ``fields`` (names of :class:`DetectOptions`) replaced."""
     o = DEFAULT if options is None else options
     return replace(o, **fields) if fields else o
 
@@ -183,7 +179,7 @@ class _Pyramid:
     """The grey image at full size (native dtype, and as the 8-bit image the detector searches) and,
     when it is wider than ``max_width``, an 8-bit copy downscaled to that width.
 
-    ``stretch_8bit`` (:class:`CornerOptions`): the 8-bit images are contrast-stretched (:func:`to_gray8`),
+    ``stretch_8bit`` (:class:`DetectOptions`): the 8-bit images are contrast-stretched (:func:`to_gray8`),
     then downscaled; without it an 8-bit image is taken as it is and any other is downscaled, then
     stretched (a live frame: no full-size stretch)."""
 
@@ -239,7 +235,7 @@ def _find(g8, size, kind, fast_check: bool = False):
     return c.reshape(-1, 2).astype(np.float64)
 
 
-def _attempts(o: CornerOptions, downscaled: bool):
+def _attempts(o: DetectOptions, downscaled: bool):
     """(kind, on the downscaled copy?) in the order tried."""
     if o.detector in ("classic", "sb"):
         out = [(o.detector, True), (o.detector, False)] if downscaled else [(o.detector, False)]
@@ -264,7 +260,7 @@ def _size(pattern_size) -> tuple[int, int]:
     return int(pattern_size[0]), int(pattern_size[1])
 
 
-def find_grid(image: np.ndarray, pattern_size, options: CornerOptions | None = None,
+def find_grid(image: np.ndarray, pattern_size, options: DetectOptions | None = None,
               **fields) -> np.ndarray | None:
     """Detect a chessboard (no sub-pixel refinement beyond the detector's own).
 
@@ -272,9 +268,9 @@ def find_grid(image: np.ndarray, pattern_size, options: CornerOptions | None = N
     ----------
     image : (H, W) or (H, W, 3) uint8/uint16.
     pattern_size : (cols, rows) inner corners.
-    options : :class:`CornerOptions` (default :data:`DEFAULT`); its ``detector``, ``max_width``,
+    options : :class:`DetectOptions` (default :data:`DEFAULT`); its ``detector``, ``max_width``,
         ``fallback``, ``fast_check`` and ``stretch_8bit`` apply.
-    **fields : fields of :class:`CornerOptions` to replace (``detector="classic"``, ``max_width=0`` ...).
+    **fields : fields of :class:`DetectOptions` to replace (``detector="classic"``, ``max_width=0`` ...).
 
     Returns
     -------
@@ -285,7 +281,7 @@ def find_grid(image: np.ndarray, pattern_size, options: CornerOptions | None = N
     return _search(pyr, _size(pattern_size), _attempts(o, pyr.small is not None), o.fast_check)
 
 
-def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], options: CornerOptions | None = None,
+def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], options: DetectOptions | None = None,
                    **fields) -> np.ndarray | None:
     """Find the inner corners of a chessboard in one image.
 
@@ -293,9 +289,9 @@ def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], options: Co
     ----------
     image : (H, W) or (H, W, 3) uint8/uint16
     pattern_size : (cols, rows) of inner corners (OpenCV's ``pattern_size``).
-    options : :class:`CornerOptions` (default :data:`DEFAULT`: every attempt, the fitted corners;
+    options : :class:`DetectOptions` (default :data:`DEFAULT`: every attempt, the fitted corners;
         :data:`LIVE` for live frames).
-    **fields : fields of :class:`CornerOptions` to replace: ``detector``, ``refine``, ``refine_window``,
+    **fields : fields of :class:`DetectOptions` to replace: ``detector``, ``refine``, ``refine_window``,
         ``max_width`` ... (e.g. ``refine="subpix"``).
 
     Returns
@@ -309,12 +305,12 @@ def detect_corners(image: np.ndarray, pattern_size: tuple[int, int], options: Co
     return None if c is None else _refine(pyr, c, size, o)
 
 
-def _refine(pyr, c, size, o: CornerOptions):
+def _refine(pyr, c, size, o: DetectOptions):
     return refine_corners(pyr.gray, c, size, method=o.refine, window=o.refine_window, start_error=1.0 / pyr.scale,
                           subpix_iterations=o.subpix_iterations, subpix_eps=o.subpix_eps, clamp=o.subpix_clamp)
 
 
-def find_corners(images, pattern_size, options: CornerOptions | None = None, **fields):
+def find_corners(images, pattern_size, options: DetectOptions | None = None, **fields):
     """Corners of the board in the first of several images of it that shows it; fails fast.
 
     For a pose's white, white - black and black frames.  Order: the quick attempt (the first of
@@ -433,7 +429,7 @@ def refine_corners(image: np.ndarray, corners: np.ndarray, pattern_size, *, meth
     start_error : rough error of ``corners`` in pixels (the detector's pixel size); widens the first
         ``cornerSubPix`` pass of ``"fit"`` when the board was found on a downscaled image.
     subpix_iterations, subpix_eps, clamp : ``"subpix"``'s ``cornerSubPix`` termination and window clamp
-        (:class:`CornerOptions`).
+        (:class:`DetectOptions`).
 
     Returns
     -------

@@ -3,7 +3,7 @@
 Per camera frame (:meth:`Advisor.update`):
 
 1. the board: :func:`procam.corners.detect_corners` with its live setting (:data:`procam.corners.LIVE`,
-   :attr:`AdvisorOptions.corner_options`): OpenCV's chessboard detector on a downscaled copy of the frame
+   :attr:`AdvisorOptions.detect_options`): OpenCV's chessboard detector on a downscaled copy of the frame
    (``AdvisorOptions.detect_width``, ``CALIB_CB_FAST_CHECK`` so a frame without the board costs little),
    the corners refined with ``cornerSubPix`` in the full-resolution frame, in procam's canonical order
    (:func:`procam.corners.canonical_order`);

@@ -328,8 +328,8 @@ class Advisor:
 
     def _find_board(self, img: np.ndarray) -> np.ndarray | None:
         """The board's (N, 2) full-resolution corners in canonical order, or None: the one detector
-        (:func:`procam.corners.detect_corners`) with the live setting (:attr:`AdvisorOptions.corner_options`)."""
-        return detect_corners(img, self.board.pattern_size, self.options.corner_options)
+        (:func:`procam.corners.detect_corners`) with the live setting (:attr:`AdvisorOptions.detect_options`)."""
+        return detect_corners(img, self.board.pattern_size, self.options.detect_options)
 
     def _common(self, frame: int, t: float, phase: str) -> dict:
         """The fields of :class:`Advice` every frame has, whatever was found."""

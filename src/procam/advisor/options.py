@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..corners import LIVE, CornerOptions
+from ..corners import LIVE, DetectOptions
 from ..errors import ProcamError
 from ..single_pose.advice import AdviceOptions
 
@@ -110,7 +110,7 @@ class AdvisorOptions:
         return self.target_pct if self.projector_target_pct is None else self.projector_target_pct
 
     @property
-    def corner_options(self) -> CornerOptions:
+    def detect_options(self) -> DetectOptions:
         """The detector's settings per frame: :data:`procam.corners.LIVE` with ``detect_width`` and
         ``refine_window``."""
         return replace(LIVE, max_width=self.detect_width, refine_window=self.refine_window)
