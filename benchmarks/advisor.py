@@ -262,7 +262,7 @@ def stds(step: float, trials: int, limit: float) -> None:
                 mc = float(np.std(f, ddof=1))
                 ratios[key].append(st.std_f / mc)
                 rule_ok[key].append(min(abs(a.camera.angles_deg[0]), abs(a.camera.angles_deg[1]))
-                                    >= adv.options.advice.weak_angle_deg)
+                                    >= adv.options.rating.weak_angle_deg)
                 cells.append(f"{st.std_f:.2f} | {mc:.2f} | {st.std_f / mc:.2f}")
             else:
                 cells.append(f"{st.std_f:.3g} | - | -")

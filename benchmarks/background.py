@@ -50,7 +50,7 @@ from _common import header  # noqa: E402
 
 from procam.single_pose import background as bg  # noqa: E402
 from procam import models, patterns, pipeline, simulate, single_pose, verify  # noqa: E402
-from procam.board import Board  # noqa: E402
+from procam.board import Board, board_region  # noqa: E402
 from procam.errors import ProcamError  # noqa: E402
 
 #: Board (psi, nu, phi) in the camera frame; the rig turns the projector by ~14 deg about y, so nu_p ~ nu_c + 14.
@@ -61,7 +61,7 @@ OFF = bg.BackgroundOptions(mode="off")
 
 def capture(preset, k, pose, cache: Path, refine: str = "fit"):
     """(scene, view) of one rendered pose (the render cached as .npz); ``refine``: the camera corners'
-    refinement (:data:`procam.board.REFINERS`; ``subpix`` is the paper's cornerSubPix)."""
+    refinement (:data:`procam.corners.REFINERS`; ``subpix`` is the paper's cornerSubPix)."""
     scene = simulate.with_board_pose(simulate.preset(preset), pose)
     fn = cache / f"{preset}_{'_'.join(str(a) for a in pose)}_seed{100 + k}.npz"
     if fn.exists():
@@ -90,8 +90,7 @@ def board_pixels(view, maps_like, shrink=0.5, max_points=3000):
     d = np.linalg.norm(c[:, None] - c[None], axis=2)
     np.fill_diagonal(d, np.inf)
     r = int(np.ceil(shrink * np.percentile(d.min(1), 10)))
-    m = np.zeros((H, W), np.uint8)
-    cv2.fillConvexPoly(m, np.round(cv2.convexHull(c.astype(np.float32))).astype(np.int32), 1)
+    m = board_region(c, (W, H)).astype(np.uint8)
     m = cv2.erode(m, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
     ok = valid & (m > 0)
     step = max(1, int(np.ceil(np.sqrt(ok.sum() / max_points))))

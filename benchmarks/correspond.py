@@ -36,7 +36,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
-from procam import board, correspond, decode, patterns, pipeline, simulate  # noqa: E402
+from procam import board, corners, correspond, decode, patterns, pipeline, simulate  # noqa: E402
 from procam.board import Board  # noqa: E402
 
 BOARD = (10, 6)
@@ -104,40 +104,40 @@ def render(name, cache):
 
 def detect_old(img, size):
     """procam < this branch: classic on the stretched full-size image."""
-    g8 = board.to_gray8(img)
+    g8 = corners.to_gray8(img)
     ok, c = cv2.findChessboardCorners(g8, size, flags=CLASSIC)
-    return board.canonical_order(c.reshape(-1, 2).astype(float), *size) if ok else None
+    return corners.canonical_order(c.reshape(-1, 2).astype(float), *size) if ok else None
 
 
 def detect_sb(flags):
     def f(img, size):
-        ok, c = cv2.findChessboardCornersSB(board.to_gray8(img), size, flags=flags)
-        return board.canonical_order(c.reshape(-1, 2).astype(float), *size) if ok else None
+        ok, c = cv2.findChessboardCornersSB(corners.to_gray8(img), size, flags=flags)
+        return corners.canonical_order(c.reshape(-1, 2).astype(float), *size) if ok else None
     return f
 
 
 def detect_small(width):
-    return lambda img, size: board.find_grid(img, size, detector="classic", max_width=width)
+    return lambda img, size: corners.find_grid(img, size, detector="classic", max_width=width)
 
 
 DETECTORS = {"classic full": detect_old, "classic 1024": detect_small(1024), "classic 640": detect_small(640),
              **{k: detect_sb(v) for k, v in SB_FLAGS.items()},
-             "default": lambda img, size: board.detect_corners(img, size)}
+             "default": lambda img, size: corners.detect_corners(img, size)}
 
 
 def refine_old(frames, c, size):
     """procam < this branch: cornerSubPix 11 (clamped) on the stretched 8-bit image."""
-    return board.refine_corners(board.to_gray8(frames["white"]), c, size, method="subpix", window=11)
+    return corners.refine_corners(corners.to_gray8(frames["white"]), c, size, method="subpix", window=11)
 
 
 def refine_subpix(win, frame="white"):
-    """cornerSubPix on the grey image, half-window clamped by board.subpix_window."""
-    return lambda frames, c, size: board.refine_corners(frames[frame], c, size, method="subpix", window=win)
+    """cornerSubPix on the grey image, half-window clamped by corners.subpix_window."""
+    return lambda frames, c, size: corners.refine_corners(frames[frame], c, size, method="subpix", window=win)
 
 
 def refine_fit(win, frame="white"):
     def f(frames, c, size):
-        return board.refine_corners(frames[frame], c, size, method="fit", window=win,
+        return corners.refine_corners(frames[frame], c, size, method="fit", window=win,
                                     start_error=frames.get("start_error", 1.0))
     return f
 
@@ -146,7 +146,7 @@ def saddle(image, corners, sigma=1.0, half=3, iterations=20):
     """Quadratic-saddle refinement (measured option, not used by procam): fit
     z = a x^2 + b xy + c y^2 + d x + e y + f to the Gaussian-smoothed image resampled around the
     estimate, move to the saddle point, repeat."""
-    f = cv2.GaussianBlur(board.gray_float(image), (0, 0), sigma)
+    f = cv2.GaussianBlur(corners.gray_float(image), (0, 0), sigma)
     u = np.arange(-half, half + 1, dtype=float)
     U, V = (a.ravel() for a in np.meshgrid(u, u))
     w = np.exp(-(U ** 2 + V ** 2) / (2 * (half / 1.5) ** 2))
@@ -172,7 +172,7 @@ def saddle(image, corners, sigma=1.0, half=3, iterations=20):
 
 def refine_saddle(frames, c, size):
     w = frames["white"]
-    return saddle(w, board.refine_corners(w, c, size, method="subpix", window=5))
+    return saddle(w, corners.refine_corners(w, c, size, method="subpix", window=5))
 
 
 #: label -> (detector, refinement or None, group)
@@ -344,7 +344,7 @@ def section_real(data):
             c0 = detect_old(img, (9, 6))
             crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
             per["cornerSubPix 11, no clamp (published reference)"].append(
-                None if c0 is None else cv2.cornerSubPix(board.to_gray8(img), c0.astype(np.float32).reshape(-1, 1, 2),
+                None if c0 is None else cv2.cornerSubPix(corners.to_gray8(img), c0.astype(np.float32).reshape(-1, 1, 2),
                                                          (11, 11), (-1, -1), crit).reshape(-1, 2).astype(float))
         sets[side] = (per, imgs[0].shape[1::-1])
     for label in sets["left"][0]:
@@ -389,12 +389,12 @@ def section_speed(cache, ps):
         _, t_full = tm(detect_old, w, BOARD)
         _, t1024 = tm(detect_small(1024), w, BOARD)
         c640, t640 = tm(detect_small(640), w, BOARD)
-        start = board.refine_corners(w, c640, BOARD, method="subpix", window=4)
-        _, tsp = tm(board.refine_corners, w, c640, BOARD, method="subpix", window=11)
-        _, tf11 = tm(board.fit_corners, w, start, BOARD, window=11)
-        _, tf15 = tm(board.fit_corners, w, start, BOARD, window=15)
+        start = corners.refine_corners(w, c640, BOARD, method="subpix", window=4)
+        _, tsp = tm(corners.refine_corners, w, c640, BOARD, method="subpix", window=11)
+        _, tf11 = tm(corners.fit_corners, w, start, BOARD, window=11)
+        _, tf15 = tm(corners.fit_corners, w, start, BOARD, window=15)
         _, told = tm(lambda img: refine_old({"white": img}, detect_old(img, BOARD), BOARD), w)
-        _, tnew = tm(board.detect_corners, w, BOARD)
+        _, tnew = tm(corners.detect_corners, w, BOARD)
         H, W = w.shape
         print(f"| {W}x{H} | {t_full} | {t1024} | {t640} | {tsp} | {tf11} | {tf15} | {told} | {tnew} |")
 

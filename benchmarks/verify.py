@@ -36,8 +36,9 @@ from _common import header  # noqa: E402
 from sim_small import small_capture, truth_calibration  # noqa: E402
 
 from procam import simulate  # noqa: E402
+from procam.board import board_region  # noqa: E402
 from procam.calibration import Device  # noqa: E402
-from procam.reconstruct import board_region, fit_plane, reconstruct  # noqa: E402
+from procam.reconstruct import fit_plane, reconstruct  # noqa: E402
 from procam.verify import leave_one_out, verify  # noqa: E402
 from procam.view import View  # noqa: E402
 

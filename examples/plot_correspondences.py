@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from procam import board, correspond, decode, patterns, simulate
+from procam import board, corners, correspond, decode, patterns, simulate
 from procam.plots import save_figure
 from procam.plots.correspond import correspond_figure
 from procam.view import View
@@ -23,7 +23,7 @@ stack, truth = simulate.render(scene, seed=0)
 ps = patterns.pattern_set(*scene.proj_size)
 maps = decode.decode(stack, ps)
 size = (scene.board_cols, scene.board_rows)                  # inner corners (10, 6)
-cam = board.detect_corners(stack[ps.white], size)            # (60, 2) camera corners
+cam = corners.detect_corners(stack[ps.white], size)          # (60, 2) camera corners
 proj, diagnostics = correspond.projector_corners(cam, maps)  # (60, 2) projector corners, NaN where one failed
 err = np.linalg.norm(proj - np.array(truth["corners"]["projector"]), axis=1)
 print(f"{np.isfinite(err).sum()} of {len(err)} corners; projector corners vs truth: "

@@ -241,7 +241,7 @@ def test_preflight_levels_and_advice():
     assert pre.ok and pre.region == "lit area" and pre.white_saturated == 0
     assert pre.region_fraction == pytest.approx(60 * 100 / 16000)
     assert pre.white_level == pytest.approx(200 / 255) and pre.contrast == pytest.approx(180 / 255)
-    assert pre.repeat == 0 and pre.advice == ()
+    assert pre.repeat == 0 and pre.suggestions == ()
     assert np.allclose(pre.reference.normalise(W), 1) and np.allclose(pre.reference.normalise(B), 0)
 
     sat = W.copy()
@@ -253,7 +253,7 @@ def test_preflight_levels_and_advice():
     dim, _ = _synthetic(white=60)
     pre = checks.preflight(dim, B)
     assert pre.ok and pre.exposure_factor == pytest.approx(0.8 / (60 / 255))
-    assert "raise the exposure to about 340% of the current exposure" in pre.advice[0]
+    assert "raise the exposure to about 340% of the current exposure" in pre.suggestions[0]
 
     assert "not visible" in checks.preflight(B, B).reason
     assert "stale frame" in checks.preflight(W, B, B).reason  # the second white is not white

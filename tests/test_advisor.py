@@ -12,8 +12,9 @@ from test_acquire import xvfb  # noqa: F401  (the virtual X server fixture)
 from procam import crlb, models, patterns, pipeline, simulate, single_pose
 from procam.acquire.cameras import VirtualLiveCamera
 from procam.acquire.live import advise
-from procam.advisor import (Advisor, AdvisorOptions, apply_move, detect_board, guessed_camera, move_between)
-from procam.board import Board, detect_corners
+from procam.advisor import (Advisor, AdvisorOptions, apply_move, guessed_camera, move_between)
+from procam.board import Board
+from procam.corners import LIVE, detect_corners
 from procam.errors import ProcamError
 
 BOARD = Board(10, 6, 24.0)
@@ -70,7 +71,7 @@ def test_fast_detection_finds_the_corners_like_the_full_resolution_detector(scen
     cam = VirtualLiveCamera(scene, seed=2)
     img = cam.grab().image
     truth = simulate.corner_truth(scene)["camera_distorted"]
-    fast = detect_board(img, BOARD.pattern_size, detect_width=640)
+    fast = detect_corners(img, BOARD.pattern_size, LIVE)  # the advisor's: downscaled to 640 px
     # the advisor refines with cornerSubPix (fast; its 0.05 px are far below the 0.1 px noise its bounds
     # assume); calibration uses the slower saddle fit (board.REFINERS "fit", ~0.01 px here)
     full = detect_corners(img, BOARD.pattern_size, refine="subpix")
@@ -79,9 +80,9 @@ def test_fast_detection_finds_the_corners_like_the_full_resolution_detector(scen
     err_full = np.sqrt(np.mean(np.sum((full - truth) ** 2, axis=1)))
     assert err_fast < 0.1 and err_fast < 1.5 * err_full  # px; the refinement at full resolution does the work
     # no board: nothing (and quickly rejected); uint16 frames work too
-    assert detect_board(np.full((800, 1280), 128, np.uint8), (10, 6)) is None
-    assert detect_board(np.random.default_rng(0).integers(0, 255, (800, 1280), dtype=np.uint8), (10, 6)) is None
-    fast16 = detect_board(img.astype(np.uint16) * 257, BOARD.pattern_size)
+    assert detect_corners(np.full((800, 1280), 128, np.uint8), (10, 6), LIVE) is None
+    assert detect_corners(np.random.default_rng(0).integers(0, 255, (800, 1280), dtype=np.uint8), (10, 6), LIVE) is None
+    fast16 = detect_corners(img.astype(np.uint16) * 257, BOARD.pattern_size, LIVE)
     np.testing.assert_allclose(fast16, fast, atol=0.02)
 
 

@@ -711,9 +711,9 @@ def test_every_distortion_model(model, poses, tmp_path):
 
 @pytest.mark.parametrize("opt", ["--decode", "--detector", "--estimator"])
 def test_every_pose_option_choice(opt, poses, tmp_path):
-    from procam import board, correspond, decode
+    from procam import corners, correspond, decode
 
-    allowed = {"--decode": decode.METHODS, "--detector": board.DETECTORS, "--estimator": correspond.ESTIMATORS}[opt]
+    allowed = {"--decode": decode.METHODS, "--detector": corners.DETECTORS, "--estimator": correspond.ESTIMATORS}[opt]
     for v in allowed:
         rc, _, err = run_cli(["correspond", poses[0], *BOARD, opt, v, "-o", tmp_path / "c.json"])
         assert rc == 0, (v, err)

@@ -1,127 +1,44 @@
-"""Corner detection and refinement (procam.board) against simulator truth and real photographs."""
+"""The board's geometry (procam.board): Board, object points and the one board-region mask."""
 
-import dataclasses
-import time
-
-import cv2
 import numpy as np
 import pytest
-from conftest import rms
 
-from procam import board, correspond, decode, patterns, pipeline, simulate
-from procam.errors import BoardNotFoundError
-
-PS = patterns.pattern_set(1920, 1080)
+from procam.board import Board, board_outline, board_region, object_points
+from procam.errors import ProcamError
 
 
-@pytest.fixture(scope="module")
-def steep_capture():
-    """Paper rig with a smaller camera (800x500, same field of view), board turned 30 deg about the
-    vertical axis, camera blur 0.8 px: (stack, truth)."""
-    s = 800 / 1280
-    base = simulate.preset("paper")
-    K = base.K_cam.copy()
-    K[:2] *= s
-    K[:2, 2] = [674 * s, 512 * s]
-    scene = dataclasses.replace(base, cam_size=(800, 500), K_cam=K, cam_blur=0.8)
-    return simulate.render(simulate.with_board_pose(scene, (0, 30, 0)), seed=3)
+def test_board_and_object_points():
+    b = Board(10, 6, 24.0)
+    obj = b.object_points()
+    assert obj.shape == (60, 3) and np.allclose(obj.mean(0), 0)
+    assert np.allclose(obj[1] - obj[0], [24.0, 0, 0]) and np.allclose(obj[10] - obj[0], [0, 24.0, 0])
+    assert np.array_equal(obj, object_points(10, 6, 24.0))
+    with pytest.raises(ProcamError, match="inner corners"):
+        Board(2, 6, 24.0)
 
 
-def test_fit_beats_cornersubpix_on_a_steep_render(steep_capture):
-    stack, truth = steep_capture
-    cam_t = np.array(truth["corners"]["camera_distorted"])
-    proj_t = np.array(truth["corners"]["projector"])
-    white = stack[PS.white]
-    old = board.detect_corners(white, (10, 6), refine="subpix", max_width=0)  # procam's earlier default
-    new = board.detect_corners(white, (10, 6))
-    assert rms(old, cam_t) > 0.05  # cornerSubPix is pulled by the uneven light (measured 0.071)
-    assert rms(new, cam_t) < 0.03  # measured 0.019
-    assert rms(new, cam_t) < 0.5 * rms(old, cam_t)
-    # and it carries over to the projector corners
-    maps = decode.decode(stack, PS)
-    p_old, _ = correspond.projector_corners(old, maps)
-    p_new, _ = correspond.projector_corners(new, maps)
-    assert np.isfinite(p_new).all()
-    assert rms(p_new, proj_t) < 0.8 * rms(p_old, proj_t)
+def test_board_region_follows_the_sub_pixel_corners():
+    # a 4 x 3 grid of corners at quarter pixels (a 30 x 20 px rectangle)
+    x, y = np.meshgrid(np.linspace(10.25, 40.25, 4), np.linspace(5.75, 25.75, 3))
+    c = np.column_stack([x.ravel(), y.ravel()])
+    m = board_region(c, (64, 32))
+    assert m.shape == (32, 64) and m.dtype == bool
+    ys, xs = np.nonzero(m)
+    assert (xs.min(), xs.max(), ys.min(), ys.max()) == (10, 40, 6, 26) and m.sum() == 31 * 21
+    # moved by a quarter pixel (corners that round to the same whole pixels), the region moves by one pixel
+    moved = board_region(c + [0.25, 0.0], (64, 32))
+    assert np.array_equal(np.round(c + [0.25, 0.0]), np.round(c))
+    assert np.array_equal(moved[:, 1:], m[:, :-1]) and moved.sum() == m.sum()
+    # NaN rows are ignored, fewer than 3 corners give nothing, shrink pulls towards the centroid
+    assert np.array_equal(board_region(np.vstack([c, [np.nan, np.nan]]), (64, 32)), m)
+    assert not board_region(c[:2], (64, 32)).any()
+    assert board_region(c, (64, 32), shrink=0.5).sum() < 0.3 * m.sum()
+    assert board_region(c, (64, 32), shrink=-0.2).sum() > m.sum()
 
 
-def test_downscaled_detection_equals_full_size_detection_after_refinement(paper_capture):
-    _, stack, truth, _ = paper_capture
-    white = stack[PS.white]
-    small = board.find_grid(white, (10, 6), max_width=640)
-    full = board.find_grid(white, (10, 6), max_width=0)
-    assert 0.05 < np.abs(small - full).max() < 2  # the detections differ ...
-    a = board.detect_corners(white, (10, 6), max_width=640)
-    b = board.detect_corners(white, (10, 6), max_width=0)
-    assert np.abs(a - b).max() < 0.002  # ... the refined corners do not
-    # 16-bit input (same image x 257) and a colour copy give the same corners
-    c16 = board.detect_corners(white.astype(np.uint16) * 257, (10, 6))
-    bgr = board.detect_corners(cv2.cvtColor(white, cv2.COLOR_GRAY2BGR), (10, 6))
-    assert np.abs(c16 - a).max() < 0.002 and np.abs(bgr - a).max() < 0.002
-    # canonical order: corner 0 top-left, i to the right, j down
-    cam_t = np.array(truth["corners"]["camera_distorted"])
-    assert rms(a, cam_t) < 0.03
-
-
-def test_refinement_options(paper_capture):
-    _, stack, truth, _ = paper_capture
-    cam_t = np.array(truth["corners"]["camera_distorted"])
-    white = stack[PS.white]
-    raw = board.detect_corners(white, (10, 6), refine="none")
-    sub = board.detect_corners(white, (10, 6), refine="subpix")
-    fit = board.detect_corners(white, (10, 6), refine="fit")
-    assert rms(fit, cam_t) < rms(sub, cam_t) < rms(raw, cam_t)
-    assert np.array_equal(board.detect_corners(white, (10, 6), refine_window=0), raw)
-    # the pipeline passes the choice through (refine="subpix": procam's earlier refinement)
-    assert np.array_equal(pipeline.find_board(stack, PS, (10, 6), refine="subpix"), sub)
-    assert np.array_equal(pipeline.find_board(stack, PS, (10, 6)), fit)
-    with pytest.raises(ValueError, match="refine"):
-        board.detect_corners(white, (10, 6), refine="saddle")
-    with pytest.raises(ValueError, match="detector"):
-        board.detect_corners(white, (10, 6), detector="fast")
-
-
-@pytest.mark.parametrize("given, hint", [((11, 7), "if 11x7 counts squares, use --board 10x6"),
-                                         ((9, 5), "use --board 10x6")])
-def test_wrong_board_fails_fast_with_the_right_size(paper_capture, given, hint):
-    _, stack, _, _ = paper_capture
-    t = time.perf_counter()
-    with pytest.raises(BoardNotFoundError, match=f"pose1: chessboard with {given[0]}x{given[1]} inner corners not "
-                                                 f"found.*{hint}"):
-        pipeline.find_board(stack, PS, given, name="pose1")
-    # not a timing test: the slow fallbacks (full-size classic + SB on three frames took ~30 s) are skipped
-    assert time.perf_counter() - t < 10
-    assert board.size_hint(stack[PS.white], given) == (10, 6)
-
-
-def test_no_board_no_hint():
-    rng = np.random.default_rng(0)
-    img = cv2.GaussianBlur(rng.integers(0, 255, (240, 320), dtype=np.uint8), (0, 0), 2)
-    assert board.size_hint(img, (10, 6)) is None
-    assert board.find_corners([img, lambda: 255 - img], (10, 6)) == (None, None)
-    assert board.size_hint_text((10, 6), None) == ""
-
-
-def test_real_photos_calibrate_better(shared_data):
-    """OpenCV's 13 left photographs: the fitted corners lower calibrateCamera's RMS below procam's
-    earlier corners (classic + cornerSubPix 11, clamped), and f agrees with the published 536.1."""
-    from procam.io import files as _files
-
-    files = sorted((shared_data / "opencv-left-right").glob("left*.jpg"))
-    assert len(files) == 13
-    imgs = [_files.read_image(f) for f in files]
-    obj = board.object_points(9, 6, 25.0).astype(np.float32)
-
-    def calibrate(refine):
-        pts = [board.detect_corners(im, (9, 6), refine=refine) for im in imgs]
-        assert all(p is not None for p in pts)
-        rms_px, K, *_ = cv2.calibrateCamera([obj] * 13, [p.astype(np.float32).reshape(-1, 1, 2) for p in pts],
-                                            (640, 480), None, None, flags=cv2.CALIB_FIX_ASPECT_RATIO)
-        return rms_px, K[0, 0]
-
-    rms_old, _ = calibrate("subpix")
-    rms_new, f_new = calibrate("fit")
-    assert rms_new < 0.2 < rms_old  # measured 0.158 and 0.245 (0.409 with OpenCV's unclamped 11x11)
-    # measured 533.4 (-0.50 %); the published 536.1 comes from 11x11 cornerSubPix corners that are off by up
-    # to 5.7 px on left02.jpg (without that image they give 534.1 +- 0.6)
-    assert abs(f_new / 536.1 - 1) < 0.01
+def test_board_outline_is_the_convex_hull():
+    c = np.array([[0, 0], [10, 0], [10, 5], [0, 5], [5, 2], [np.nan, 1]], float)
+    out = board_outline(c)
+    assert out.shape == (4, 2)
+    assert {tuple(p) for p in out} == {(0, 0), (10, 0), (10, 5), (0, 5)}
+    assert board_outline(c[:2]).shape == (0, 2)

@@ -6,7 +6,7 @@ import pytest
 from conftest import rms, run_cli
 
 from procam.board import Board
-from procam import board, correspond, decode, patterns, pipeline
+from procam import board, corners, correspond, decode, patterns, pipeline
 from procam.errors import BoardNotFoundError, CorrespondenceError
 
 PS = patterns.pattern_set(1920, 1080)
@@ -26,7 +26,7 @@ def test_object_points_and_canonical_order():
     canon = np.column_stack([gx.ravel(), gy.ravel()])
     for shuffled in (canon[::-1], canon.reshape(6, 10, 2)[::-1].reshape(-1, 2),
                      canon.reshape(6, 10, 2)[:, ::-1].reshape(-1, 2)):
-        assert np.array_equal(board.canonical_order(shuffled, 10, 6), canon)
+        assert np.array_equal(corners.canonical_order(shuffled, 10, 6), canon)
 
 
 def test_corners_and_projector_points_against_truth(paper_capture):

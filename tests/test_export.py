@@ -8,8 +8,8 @@ import pytest
 from scipy.ndimage import map_coordinates
 
 from procam import io, models, simulate
-from procam.board import detect_corners
 from procam.calibration import Device, Distortion
+from procam.corners import detect_corners
 from procam.errors import CalibrationError, CalibrationFileError
 from procam import export as ex
 from procam.simulate import truth_calibration

@@ -8,8 +8,9 @@ import pytest
 from procam import io, simulate
 from procam.calibration import Device, Distortion
 from procam.errors import ProcamError
+from procam.board import board_region
 from procam.io import read_ply, write_ply
-from procam.reconstruct import PointCloud, board_region, fit_plane, reconstruct, residual_image, residual_map
+from procam.reconstruct import PointCloud, fit_plane, reconstruct, residual_image, residual_map
 from procam.triangulate import triangulate_dense
 from procam.simulate import truth_calibration
 from sim_small import small_capture, small_scene

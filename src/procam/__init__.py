@@ -13,7 +13,8 @@ The modules, from the captures up (each imports only those above it in this list
     stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
     plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
-    board         Board (inner corners, square size), object points, chessboard corner detection
+    board         Board (inner corners, square size), object points, the board region of a camera image
+    corners       chessboard corner detection and refinement (the one caller of OpenCV's chessboard detector)
     correspond    camera corners -> projector corners by local homographies
     view          View: one pose's board, camera and projector points; the per-corner reasons
     pipeline      folder(s) / stack / photo -> View(s)
@@ -70,7 +71,7 @@ _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "co
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "stats",
                "single_pose", "advisor", "multi_pose", "method", "evaluate", "summary", "io", "simulate", "paper",
                "plots", "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
-               "acquire")
+               "acquire", "corners")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

@@ -14,6 +14,7 @@ import numpy as np
 
 from ._threads import single_threaded_blas
 from .stats import rms
+from .board import board_region
 from .decode import DecodeResult
 from .view import CORNER_REASONS
 
@@ -355,8 +356,7 @@ def background_points(maps: DecodeResult, board_cam_pts: np.ndarray, *, margin: 
     d = np.linalg.norm(c[:, None, :] - c[None, :, :], axis=2)
     np.fill_diagonal(d, np.inf)
     square = float(np.percentile(d.min(axis=1), 90))
-    outside = np.ones((H, W), np.uint8)
-    cv2.fillConvexPoly(outside, np.round(cv2.convexHull(c.astype(np.float32))).astype(np.int32), 0)
+    outside = (~board_region(c, (W, H))).astype(np.uint8)
     # distance (px) of every pixel outside the hull to the hull
     dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     ok = maps.valid_col & maps.valid_row & (dist > margin * square)

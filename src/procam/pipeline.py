@@ -16,8 +16,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .io import files as _files
-from . import board as _board
 from . import capture as _capture
+from . import corners as _corners
 from . import correspond as _corr
 from . import decode as _decode
 from . import plausibility as _plausible
@@ -34,10 +34,10 @@ class PoseOptions:
     Attributes
     ----------
     decode : :class:`procam.decode.DecodeOptions` (classifier and thresholds).
-    detector : chessboard detector, one of :data:`procam.board.DETECTORS`.
+    detector : chessboard detector, one of :data:`procam.corners.DETECTORS`.
     refine_window : half-window of the corner refinement in camera pixels (0 = none; None = the method's
-        default, :data:`procam.board.REFINE_WINDOW`).
-    refine : corner refinement, one of :data:`procam.board.REFINERS`.
+        default, :data:`procam.corners.REFINE_WINDOW`).
+    refine : corner refinement, one of :data:`procam.corners.REFINERS`.
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
     background : keep the decoded points off the board (:func:`procam.correspond.background_points`) in
@@ -46,19 +46,19 @@ class PoseOptions:
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
     detector: str = "auto"
-    refine_window: int | None = None  # None: procam.board.REFINE_WINDOW of the method
+    refine_window: int | None = None  # None: procam.corners.REFINE_WINDOW of the method
     refine: str = "fit"
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
     background: bool = True
 
     def __post_init__(self):
-        if self.detector not in _board.DETECTORS:
-            raise ValueError(f"detector must be one of {', '.join(_board.DETECTORS)}, got {self.detector!r}")
+        if self.detector not in _corners.DETECTORS:
+            raise ValueError(f"detector must be one of {', '.join(_corners.DETECTORS)}, got {self.detector!r}")
         if self.refine_window is not None and not 0 <= int(self.refine_window) <= 100:
             raise ValueError(f"refine window must be from 0 to 100 px, got {self.refine_window!r}")
-        if self.refine not in _board.REFINERS:
-            raise ValueError(f"refine must be one of {', '.join(_board.REFINERS)}, got {self.refine!r}")
+        if self.refine not in _corners.REFINERS:
+            raise ValueError(f"refine must be one of {', '.join(_corners.REFINERS)}, got {self.refine!r}")
 
 
 def as_board(board) -> Board:
@@ -87,14 +87,14 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
     candidates = (white,  # the white - black image is only built when the white frame fails
                   lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
                   black)
-    c, hint = _board.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
-                                  refine=refine)
+    c, hint = _corners.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
+                                    refine=refine)
     if c is not None:
         return c
     cols, rows = pattern_size
     if hint is not None:
         raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
-                                 f"(#{ps.white}); {_board.size_hint_text(pattern_size, hint)}")
+                                 f"(#{ps.white}); {_corners.size_hint_text(pattern_size, hint)}")
     raise BoardNotFoundError(
         f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
         f"(#{ps.white}); check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "
@@ -202,11 +202,11 @@ def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOpt
     """
     board = as_board(board)
     img = _files.read_image(image_path)
-    c, hint = _board.find_corners([img], board.pattern_size, detector=options.detector,
-                                  refine_window=options.refine_window, refine=options.refine)
+    c, hint = _corners.find_corners([img], board.pattern_size, detector=options.detector,
+                                    refine_window=options.refine_window, refine=options.refine)
     if hint is not None:
         raise BoardNotFoundError(f"{image_path}: chessboard with {board.cols}x{board.rows} inner corners not found; "
-                                 f"{_board.size_hint_text(board.pattern_size, hint)}")
+                                 f"{_corners.size_hint_text(board.pattern_size, hint)}")
     if c is None:
         cols, rows = board.pattern_size
         raise BoardNotFoundError(f"{image_path}: chessboard with {cols}x{rows} inner corners not found; check --board "

@@ -3,8 +3,6 @@
 * :func:`reconstruct` -- decoded maps (:class:`procam.decode.DecodeResult`) + calibration (+ the white
   frame for colour) -> :class:`PointCloud` (camera frame, board units), by
   :func:`procam.triangulate.triangulate_dense`.
-* :func:`board_region` -- the camera pixels inside the convex hull of the detected board corners
-  (all of them lie on the printed board).
 * :func:`fit_plane` -- robust plane (least median of squares, then a least-squares refit on the
   inliers); :func:`residual_map` -- the signed distances as an image, the visual check of a
   calibration (a correct one leaves noise; wrong intrinsics bend or tilt the board).
@@ -128,31 +126,6 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
             raise ProcamError(f"the colour image is {rgb.shape[1]}x{rgb.shape[0]}, the maps {W}x{H}")
         cols = rgb[pix[:, 1], pix[:, 0]]
     return PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H))
-
-
-def board_region(cam_corners, image_size, *, shrink: float = 0.0) -> np.ndarray:
-    """(H, W) bool: camera pixels inside the convex hull of the board's corners.
-
-    Parameters
-    ----------
-    cam_corners : (N, 2) detected (distorted) camera corners; NaN rows ignored.
-    image_size : (width, height).
-    shrink : pull the hull towards its centroid by this fraction (0 = the hull itself).
-    """
-    import cv2
-
-    pts = np.asarray(cam_corners, float).reshape(-1, 2)
-    pts = pts[np.isfinite(pts).all(1)]
-    W, H = (int(v) for v in image_size)
-    mask = np.zeros((H, W), np.uint8)
-    if len(pts) < 3:
-        return mask.astype(bool)
-    if shrink:
-        c = pts.mean(0)
-        pts = c + (1.0 - float(shrink)) * (pts - c)
-    hull = cv2.convexHull(np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2))
-    cv2.fillConvexPoly(mask, hull, 1, lineType=cv2.LINE_8, shift=4)
-    return mask.astype(bool)
 
 
 @dataclass(frozen=True)

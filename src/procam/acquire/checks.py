@@ -6,7 +6,7 @@ Plain functions on arrays, so each can be tested on its own; the capture loop
 Pre-flight (:func:`preflight`)
     From a white, a black and a second white frame: is the projector's light visible, how much of
     the white frame is saturated on the board (or on the lit area when the board is not known), the
-    dark level, the contrast, whether the two white frames agree, and exposure advice.  Its
+    dark level, the contrast, whether the two white frames agree, and exposure suggestions.  Its
     :class:`Reference` holds a fixed sample of lit pixels with their white and black values, so
     every later frame is judged normalised, ``p = (I - black) / (white - black)`` (0 where the
     projector is black, 1 where it is white, whatever the albedo or vignetting).
@@ -33,6 +33,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..capture import describe_frame, pair_role
+from ..board import board_region
 
 #: Smallest visible projector light: 99th percentile of white - black, in 8-bit grey levels
 #: (as :func:`procam.capture.check_light`).
@@ -93,7 +94,7 @@ class Preflight:
     repeat : median ``|white1 - white2| / (white - black)`` on the lit area (None with one white).
     noise : noise of ``p`` (see :class:`Reference`).
     exposure_factor : suggested exposure multiplier (None when the exposure is fine).
-    advice : warnings and suggestions, one line each.
+    suggestions : warnings and suggestions, one line each.
     reference : for the per-frame checks (None when refused before it could be built).
     """
 
@@ -112,26 +113,14 @@ class Preflight:
     repeat: float | None = None
     noise: float = 0.0
     exposure_factor: float | None = None
-    advice: tuple = ()
+    suggestions: tuple = ()
     reference: Reference | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         d = asdict(self)
         d.pop("reference")
-        d["advice"] = list(self.advice)
+        d["suggestions"] = list(self.suggestions)
         return {k: (round(v, 5) if isinstance(v, float) else v) for k, v in d.items()}
-
-
-def _hull_mask(corners: np.ndarray, shape) -> np.ndarray:
-    import cv2
-
-    mask = np.zeros(shape, np.uint8)
-    pts = np.asarray(corners, np.float64).reshape(-1, 2)
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    if len(pts) >= 3:
-        hull = cv2.convexHull(np.round(pts).astype(np.int32))
-        cv2.fillConvexPoly(mask, hull, 1)
-    return mask.astype(bool)
 
 
 def _exposure_text(factor: float, exposure_ms: float | None) -> str:
@@ -153,11 +142,11 @@ def preflight(white: np.ndarray, black: np.ndarray, white2: np.ndarray | None = 
         exposure; gives the noise), or None.
     board_corners : (N, 2) camera pixels of the board's corners, to measure on the board; None =
         on the area the projector lights.
-    exposure_ms : the camera's exposure, to word the advice in milliseconds.
+    exposure_ms : the camera's exposure, to word the suggestions in milliseconds.
     max_saturated : refuse when more of the region than this is saturated in the white frame.
     min_span : refuse when the 99th percentile of white - black is below this (8-bit grey levels).
     max_repeat : refuse when the two white frames differ by more than this (fraction of white - black).
-    target : the white level (fraction of full scale) the exposure advice aims at.
+    target : the white level (fraction of full scale) the exposure suggestions aim at.
     sample, seed : size and seed of the pixel sample kept in the :class:`Reference`.
     """
     white = np.asarray(white)
@@ -188,7 +177,7 @@ def preflight(white: np.ndarray, black: np.ndarray, white2: np.ndarray | None = 
         return Preflight(False, f"the projector lights only {lit_frac:.1%} of the camera image: aim the camera at the "
                          "projected area (and the board into it)", fs, span_dn=span_dn, black_saturated=black_sat)
     if board_corners is not None:
-        region, name = _hull_mask(board_corners, white.shape), "board"
+        region, name = board_region(board_corners, (white.shape[1], white.shape[0])), "board"
         if region.sum() < 100:
             region, name = lit, "lit area"
     else:
@@ -212,7 +201,7 @@ def preflight(white: np.ndarray, black: np.ndarray, white2: np.ndarray | None = 
         return Preflight(False, f"the two white pre-flight frames differ by {repeat:.0%} of white - black: the camera "
                          "delivered a stale frame or its exposure is changing — switch off auto exposure and auto gain, "
                          "or raise --settle-ms", **common)
-    advice = []
+    suggestions = []
     factor = None
     if sat > max_saturated:
         factor = 0.5 if sat < 0.25 else 0.25
@@ -220,20 +209,20 @@ def preflight(white: np.ndarray, black: np.ndarray, white2: np.ndarray | None = 
                          f"lower the exposure to {_exposure_text(factor, exposure_ms)}, or lower the gain or the "
                          "projector's brightness", exposure_factor=factor, **common)
     if sat > 0:
-        advice.append(f"the white frame is {sat:.1%} saturated on the {name}: corners there lose accuracy; "
+        suggestions.append(f"the white frame is {sat:.1%} saturated on the {name}: corners there lose accuracy; "
                       f"consider lowering the exposure to {_exposure_text(0.8, exposure_ms)}")
     if white_level < 0.35:
         factor = min(8.0, target / max(white_level, 1e-3))
-        advice.append(f"the white frame reaches only {white_level:.0%} of full scale on the {name}: raise the exposure "
+        suggestions.append(f"the white frame reaches only {white_level:.0%} of full scale on the {name}: raise the exposure "
                       f"to {_exposure_text(factor, exposure_ms)} for more contrast")
     if contrast_low * 255.0 < 3.0 and name == "board":
-        advice.append(f"the darkest parts of the board differ by only {contrast_low * 255:.1f} grey levels between the "
+        suggestions.append(f"the darkest parts of the board differ by only {contrast_low * 255:.1f} grey levels between the "
                       "white and black frames: they will not decode; raise the exposure or the projector's brightness")
     if dark > 0.25:
-        advice.append(f"the black frame is at {dark:.0%} of full scale on the {name}: ambient light or the projector's "
+        suggestions.append(f"the black frame is at {dark:.0%} of full scale on the {name}: ambient light or the projector's "
                       "black level is high; darken the room")
     ref = _reference(W, B, lit, fs, noise or 0.0, sample, seed)
-    return Preflight(True, "", exposure_factor=factor, advice=tuple(advice), reference=ref, **common)
+    return Preflight(True, "", exposure_factor=factor, suggestions=tuple(suggestions), reference=ref, **common)
 
 
 def _reference(W, B, lit, fs, noise, n, seed) -> Reference:

@@ -233,7 +233,7 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
                 run.retries += 1
                 run.emit("retry", b, ps.count, pc.reason, pc.to_dict())
         seq_s = clock() - t_seq
-        warnings = list(pre.advice)
+        warnings = list(pre.suggestions)
         post = None
         if o.postflight:
             img, _ = _steady(run, white_img)
@@ -279,7 +279,7 @@ def _preflight(run: _Run, white_img, black_img, ps):
                                 f"({w1.shape[1]}x{w1.shape[0]}, {b.shape[1]}x{b.shape[0]})")
         corners = None
         if o.board is not None:
-            from ..board import detect_corners
+            from ..corners import detect_corners
 
             corners = detect_corners(w1, tuple(o.board))
             if corners is None:
@@ -290,7 +290,7 @@ def _preflight(run: _Run, white_img, black_img, ps):
         pre = checks.preflight(w1, b, w2, board_corners=corners, exposure_ms=exposure,
                                max_saturated=o.max_saturated, min_span=o.min_span)
         d = pre.to_dict()
-        run.emit("preflight", -1, ps.count, pre.reason or "; ".join(pre.advice), d)
+        run.emit("preflight", -1, ps.count, pre.reason or "; ".join(pre.suggestions), d)
         if pre.ok:
             d["attempts"] = attempt + 1
             d["grabs"] = [g1, g2, g3]

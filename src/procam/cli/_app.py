@@ -1,6 +1,6 @@
 """The typer application object, consoles, one-line errors and the options every command shares.
 
-Choice lists come from the library (``patterns.ORDERS``, ``decode.METHODS``, ``board.DETECTORS``,
+Choice lists come from the library (``patterns.ORDERS``, ``decode.METHODS``, ``corners.DETECTORS``,
 ``correspond.ESTIMATORS``, ...), so the CLI cannot drift from it; those modules are cheap to import.
 Commands import everything heavy (scipy, matplotlib, the solvers, the simulator) inside their function.
 """
@@ -27,6 +27,7 @@ from typer.core import TyperGroup
 from ..io import files as _files
 from ..io import folders
 from .. import board as _board
+from .. import corners as _corners
 from .. import correspond as _corr
 from .. import decode as _decode
 from .. import patterns as _patterns
@@ -153,8 +154,8 @@ def value(x):
 
 Order = choice("Order", _patterns.ORDERS)
 DecodeMethod = choice("DecodeMethod", _decode.METHODS)
-Detector = choice("Detector", _board.DETECTORS)
-Refiner = choice("Refiner", _board.REFINERS)
+Detector = choice("Detector", _corners.DETECTORS)
+Refiner = choice("Refiner", _corners.REFINERS)
 Estimator = choice("Estimator", _corr.ESTIMATORS)
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")

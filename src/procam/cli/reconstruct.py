@@ -88,7 +88,7 @@ def reconstruct_cmd(
     t.add_row("median depth z", f"{np.median(cloud.points[:, 2]):.1f}")
     if pattern is not None:
         corners = pipeline.find_board(cap.stack, ps, pattern, name=str(pose_dir))
-        on_board = cloud.image_mask(rc.board_region(corners, (W, H)))
+        on_board = cloud.image_mask(_board.board_region(corners, (W, H)))
         if on_board.sum() < 3:
             fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
         plane = rc.fit_plane(cloud.points[on_board])

@@ -28,6 +28,7 @@ import numpy as np
 from .. import models
 from .. import uncertainty as unc
 from .._threads import deterministic
+from ..board import board_region
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, WeakPoseWarning
 from ..stats import rms
@@ -446,10 +447,9 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
         if np.isfinite(r) and r > max(max_view_rms_ratio * med, 0.3):
             warnings.append(f"photo {n}: RMS {r:.2f} px against a median of {med:.2f}: blurred, moved during the "
                             "exposure, or a wrong detection? Leave it out and calibrate again")
-    hull = np.zeros((size[1], size[0]), np.uint8)
+    hull = np.zeros((size[1], size[0]), bool)
     for m in imgs:
-        h = cv2.convexHull(np.round(m).astype(np.int32).reshape(-1, 1, 2))
-        cv2.fillConvexPoly(hull, h, 1)
+        hull |= board_region(m, size)
     coverage = float(hull.mean())
     if coverage < min_coverage:
         warnings.append(f"the boards cover only {coverage:.0%} of the image: the lens distortion near the edges and "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..board import board_outline
 from . import _figure
 from .residuals import short_name
 
@@ -62,8 +63,7 @@ def coverage_figure(views, cam_size, proj_size=None, decodes=None, coverage=None
             if len(pts) < 3:
                 continue
             c = colors(i % 10)
-            hull = cv2.convexHull(pts.astype(np.float32)).reshape(-1, 2)
-            ax.add_patch(Polygon(hull, closed=True, facecolor=(*c[:3], 0.15), edgecolor=c, lw=1.2))
+            ax.add_patch(Polygon(board_outline(pts), closed=True, facecolor=(*c[:3], 0.15), edgecolor=c, lw=1.2))
             ax.plot(pts[:, 0], pts[:, 1], ".", ms=2.5, color=c, label=short_name(v.name))
         ax.add_patch(Rectangle((-0.5, -0.5), W, H, fill=False, color="k"))
         ax.set_xlim(-0.04 * W, 1.04 * W)

@@ -23,7 +23,7 @@ def coverage_fractions(views, cam_size, proj_size=None) -> dict:
     -------
     ``{"camera": fraction, "projector": fraction}`` (0..1; the projector only with ``proj_size``).
     """
-    from ..reconstruct import board_region
+    from ..board import board_region
 
     out = {}
     for label, key, size in (("camera", "cam_pts", cam_size), ("projector", "proj_pts", proj_size)):
