@@ -27,9 +27,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._xjunction import level_and_contrast, levenberg_marquardt, window_samples
+from . import choices
 
-DETECTORS = ("auto", "classic", "sb")
-REFINERS = ("fit", "subpix", "none")
+DETECTORS = choices.DETECTORS
+REFINERS = choices.REFINERS
 
 #: Images wider than this are searched for the board on a downscaled copy first (pixels).
 DETECT_MAX_WIDTH = 640

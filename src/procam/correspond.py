@@ -17,8 +17,9 @@ from .stats import rms
 from .board import board_region
 from .decode import DecodeResult
 from .view import CORNER_REASONS
+from . import choices
 
-ESTIMATORS = ("trimmed", "lsq", "ransac", "lmeds")
+ESTIMATORS = choices.ESTIMATORS
 
 
 @dataclass(frozen=True)

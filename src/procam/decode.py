@@ -44,6 +44,7 @@ import numpy as np
 
 from .io import files as _files
 from .patterns import PatternSet
+from .choices import DECODE_METHODS
 
 #: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.
 REASONS = {
@@ -132,7 +133,7 @@ def _hf_pairs(ps: PatternSet) -> list:
 
 
 #: Bit classifiers: ``robust`` (direct/global separation, Moreno & Taubin) or ``simple`` (pattern > inverse).
-METHODS = ("robust", "simple")
+METHODS = DECODE_METHODS
 
 
 @dataclass(frozen=True)

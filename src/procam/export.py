@@ -23,11 +23,12 @@ import numpy as np
 from .calibration import Calibration, Device
 from .errors import CalibrationError
 from .io.formats import OPENGL_FORMAT
+from . import choices
 
 #: The formats ``procam export --format`` writes.
-FORMATS = ("opengl", "maps", "kamino410")
+FORMATS = choices.EXPORT_FORMATS
 #: The world frames of the OpenGL export (``world=``).
-WORLDS = ("camera", "projector")
+WORLDS = choices.WORLDS
 
 #: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])

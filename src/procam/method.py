@@ -25,11 +25,12 @@ from __future__ import annotations
 from typing import Sequence
 
 from .errors import CalibrationError
+from . import choices
 
 __all__ = ["METHODS", "choose", "calibrate"]
 
 #: The calibration methods.
-METHODS = ("single-pose", "multi-pose", "camera-only")
+METHODS = choices.METHODS
 
 
 def choose(n_views: int, method: str | None = None) -> str:

@@ -28,9 +28,10 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from .choices import PATTERN_ORDERS
 
 
-ORDERS = ("opencv", "moreno")
+ORDERS = PATTERN_ORDERS
 
 
 def gray_encode(x: np.ndarray) -> np.ndarray:

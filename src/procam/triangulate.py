@@ -23,10 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import choices
 from .errors import CalibrationError
 
 #: Which projector coordinates a dense triangulation uses (``use=``).
-USES = ("both", "col", "row")
+USES = choices.TRIANGULATION_USES
 
 
 def _require_stereo(calib):

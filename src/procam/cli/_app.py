@@ -1,8 +1,8 @@
 """The typer application object, consoles, one-line errors and the options every command shares.
 
-Choice lists come from the library (``patterns.ORDERS``, ``decode.METHODS``, ``corners.DETECTORS``,
-``correspond.ESTIMATORS``, ...), so the CLI cannot drift from it; those modules are cheap to import.
-Commands import everything heavy (scipy, matplotlib, the solvers, the simulator) inside their function.
+Choice lists come from the library's one list of them (:mod:`procam.choices`), so the CLI cannot drift from
+it. Nothing here or at the top of a command module imports numpy, OpenCV, scipy or matplotlib: commands import
+everything heavy inside their function, so ``procam --help`` and ``--version`` start in a fraction of a second.
 """
 
 from __future__ import annotations
@@ -19,18 +19,9 @@ from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
-from rich.console import Console
-from rich.markup import escape
-from rich.text import Text
 from typer.core import TyperGroup
 
-from ..io import files as _files
-from ..io import folders
-from .. import board as _board
-from .. import corners as _corners
-from .. import correspond as _corr
-from .. import decode as _decode
-from .. import patterns as _patterns
+from .. import choices
 from ..errors import OutputError, ProcamError, ProcamWarning
 
 
@@ -62,10 +53,46 @@ class _OneLineErrors(TyperGroup):
 
 
 app = typer.Typer(cls=_OneLineErrors, add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  rich_markup_mode=None,
                   help="Projector-camera calibration from Gray-code captures of a chessboard.")
-# Not a terminal (pipes, CI, logs): wide enough that tables don't wrap.
-console = Console(soft_wrap=True, width=None if sys.stdout.isatty() else 160)
-err_console = Console(stderr=True, soft_wrap=True, width=None if sys.stderr.isatty() else 160)
+class _LazyConsole:
+    """A rich Console made on first use: importing rich's console is a tenth of the start-up, and ``procam
+    --version`` or ``--help`` prints nothing through it. Not a terminal (pipes, CI, logs): wide enough that
+    tables don't wrap."""
+
+    def __init__(self, stderr: bool = False):
+        self._stderr = stderr
+        self._console = None
+
+    @property
+    def real(self):
+        """The rich Console itself (made now if not yet)."""
+        if self._console is None:
+            from rich.console import Console
+
+            stream = sys.stderr if self._stderr else sys.stdout
+            self._console = Console(stderr=self._stderr, soft_wrap=True, width=None if stream.isatty() else 160)
+        return self._console
+
+    def __getattr__(self, name):
+        return getattr(self.real, name)
+
+    def __enter__(self):
+        return self.real.__enter__()
+
+    def __exit__(self, *exc):
+        return self.real.__exit__(*exc)
+
+
+console = _LazyConsole()
+err_console = _LazyConsole(stderr=True)
+
+
+def escape(text: str) -> str:
+    """``text`` with rich markup escaped (:func:`rich.markup.escape`)."""
+    from rich.markup import escape as _escape
+
+    return _escape(text)
 
 
 def fail(message: str, code: int = 2, label: str = "error"):
@@ -105,8 +132,10 @@ def os_error_message(e: OSError) -> str:
     return f"{e.filename}: {hint}" if e.filename else hint
 
 
-def plain(text) -> Text:
+def plain(text):
     """``text`` as rich Text: printed as is, never read as markup (file names like ``cap[red]``, table cells)."""
+    from rich.text import Text
+
     return Text(str(text))
 
 
@@ -152,11 +181,11 @@ def value(x):
     return getattr(x, "value", x)
 
 
-Order = choice("Order", _patterns.ORDERS)
-DecodeMethod = choice("DecodeMethod", _decode.METHODS)
-Detector = choice("Detector", _corners.DETECTORS)
-Refiner = choice("Refiner", _corners.REFINERS)
-Estimator = choice("Estimator", _corr.ESTIMATORS)
+Order = choice("Order", choices.PATTERN_ORDERS)
+DecodeMethod = choice("DecodeMethod", choices.DECODE_METHODS)
+Detector = choice("Detector", choices.DETECTORS)
+Refiner = choice("Refiner", choices.REFINERS)
+Estimator = choice("Estimator", choices.ESTIMATORS)
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
 
@@ -178,8 +207,10 @@ def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int
     return parse_size(text, what) if text else None
 
 
-def parse_board(text: str, square: float) -> _board.Board:
+def parse_board(text: str, square: float):
     """``--board COLSxROWS`` and ``--square`` -> a :class:`procam.board.Board` (one-line errors)."""
+    from .. import board as _board
+
     lo, hi = _board.CORNERS_PER_SIDE
     m = _SIZE.match(text or "")
     if not m:
@@ -200,6 +231,8 @@ def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 
                  refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
                  min_corners: int = 10, background: bool = True):
     """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
+    from .. import correspond as _corr
+    from .. import decode as _decode
     from .. import pipeline
 
     for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
@@ -298,6 +331,8 @@ def number(value, option: str, *, lo: float | None = None, hi: float | None = No
 
 def _capture_folder(folder: Path, inputs) -> bool:
     """Does ``folder`` hold a capture sequence (a pose folder given to this command, or a sequence folder)?"""
+    from ..io import files as _files
+
     try:
         folder = folder.resolve()
     except OSError:
@@ -342,6 +377,9 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     has no manifest (it would be read as a frame of the sequence)."""
     if path is None:
         return None
+    from ..io import files as _files
+    from ..io import folders
+
     path = Path(path)
     if path.suffix.lower() not in suffixes:
         fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
@@ -392,6 +430,8 @@ def output_dir(path, option: str, writer: str, force: bool = False, create: bool
     ``force`` any folder, where nothing procam did not write is overwritten or deleted
     (:func:`procam.io.folders.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
     the writer, so an interrupted run leaves none)."""
+    from ..io import folders
+
     try:
         return folders.prepare_output_dir(path, writer, force=force, option=option, create=create)
     except OutputError as e:
@@ -415,6 +455,23 @@ def _print_version(flag: bool):
 def _root(version: bool = typer.Option(False, "--version", help="Print the version and exit.", is_eager=True,
                                        callback=_print_version)):
     """Projector-camera calibration from Gray-code captures of a chessboard."""
+
+
+def preload(modules) -> None:
+    """Import ``modules`` (dotted names) in a daemon thread: a command that will need a heavy module later (scipy's
+    optimizer for a calibration) starts its import while it reads and decodes its captures. A later import of the
+    same module waits for that one (Python's per-module import lock), so nothing is imported twice or half."""
+    import importlib
+    import threading
+
+    def run():
+        for name in modules:
+            try:
+                importlib.import_module(name)
+            except ImportError:  # the command's own import will raise it where it is needed
+                return
+
+    threading.Thread(target=run, name="procam-preload", daemon=True).start()
 
 
 def is_tty() -> bool:

@@ -8,16 +8,20 @@ shows the same ones); here they only become rich tables with their titles.
 from __future__ import annotations
 
 from pathlib import Path
-
-from rich.table import Table
+from typing import TYPE_CHECKING
 
 from .. import summary
 from ._app import console, plain, say, warn
+
+if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
+    from rich.table import Table
 
 
 def rich_table(table: summary.TextTable, title=None) -> Table:
     """A :class:`procam.summary.TextTable` as a rich table: its word columns left-aligned, its numbers right, the
     pooled row bold; every cell printed as is (never read as markup)."""
+    from rich.table import Table
+
     t = Table(title=title)
     for i, c in enumerate(table.header):
         t.add_column(c, justify="left" if i < table.left else "right")
@@ -30,12 +34,14 @@ def rich_table(table: summary.TextTable, title=None) -> Table:
 
 def verification_table(ver, title: str = "metric verification (board units)") -> Table:
     """A :class:`procam.verify.Verification` as a rich table (:func:`procam.summary.verification_table`)."""
+
     return rich_table(summary.verification_table(ver), title)
 
 
 def cross_table(cross) -> Table:
     """In-sample next to held-out figures of a :class:`procam.verify.CrossVerification`
     (:func:`procam.summary.cross_table`)."""
+
     return rich_table(summary.cross_table(cross),
                       f"metric verification: in-sample vs {summary.CROSS_LABELS[cross.kind]} (board units)")
 

@@ -7,26 +7,22 @@ from pathlib import Path
 
 import typer
 
-from .. import multi_pose as _mp
-from .. import single_pose as _sp
+from .. import choices
 from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
-                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, say, user_errors, value,
-                   warn, with_pose_options)
+                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, preload, say, user_errors,
+                   value, warn, with_pose_options)
 
-Cod = choice("Cod", _sp.COD_MODES)
-DistModel = choice("DistModel", _mp.DIST_CHOICES)
+Cod = choice("Cod", choices.COD_MODES)
+DistModel = choice("DistModel", choices.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
 #: The library's name of each --method.
 _METHODS = {"single": "single-pose", "multi": "multi-pose", None: None}
-BackgroundMode = choice("BackgroundMode", _sp.BACKGROUND_MODES)
+BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
 
 
-def _import_solvers():
-    """Import what the corner fit and the calibration use (scipy.special, scipy.optimize, the verification)."""
-    import scipy.optimize  # noqa: F401
-    import scipy.special  # noqa: F401
-
-    from .. import verify  # noqa: F401
+#: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
+#: imported in a thread while the poses are read and decoded, so the import costs no wall time.
+SOLVER_MODULES = ("scipy.special", "scipy.optimize", "procam.verify")
 
 
 @app.command("calibrate")
@@ -70,6 +66,8 @@ def calibrate_cmd(
 
     from .. import io, pipeline
     from .. import method as calibration_method
+    from .. import multi_pose as _mp
+    from .. import single_pose as _sp
     from ..single_pose.background import BackgroundOptions
     from . import _show
 
@@ -107,7 +105,7 @@ def calibrate_cmd(
 
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext(), \
                 Prefetcher(poses) as pf:
-            _import_solvers()  # while the first pose is read (0.3 s CPU that otherwise waits for the last pose)
+            preload(SOLVER_MODULES)
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
                                                 step=step, prefetcher=pf)
         for v in views:

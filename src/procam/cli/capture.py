@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.markup import escape
 
 from ..errors import ProcamError
 from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors,
@@ -189,6 +188,8 @@ def _describe_projector(proj) -> str:
 
 
 def _print_camera(cam) -> None:
+    from rich.markup import escape
+
     d = cam.describe()
     size = d.get("size")
     console.print(plain(f"camera: {cam.name} ({d.get('api', d['backend'])}" + (f", {size[0]}x{size[1]}" if size else "")
@@ -224,7 +225,7 @@ class _Printer:
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
         self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                            console=console, transient=True, disable=not is_tty())
+                            console=console.real, transient=True, disable=not is_tty())
         self.tasks = {}
 
     def __enter__(self):
@@ -267,9 +268,13 @@ class _Printer:
         print_pose_check(check, png)
 
     def verdict_failed(self, result, error):
+        from rich.markup import escape
+
         console.print(f"[yellow]check:[/yellow] {escape(str(error))}", highlight=False)
 
     def progress(self, i, e):
+        from rich.markup import escape
+
         if e.kind == "preflight":
             d = e.data
             if d.get("ok"):

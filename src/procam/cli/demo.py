@@ -3,20 +3,18 @@
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
-import numpy as np
 import typer
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from ._app import ForceOpt, app, console, fail, number, output_dir, say, user_errors
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
     err = est - true
-    t.add_row(name, f"{true:{fmt}}", f"{est:{fmt}}", f"{err:+{fmt}}", "" if std is None or not np.isfinite(std)
+    t.add_row(name, f"{true:{fmt}}", f"{est:{fmt}}", f"{err:+{fmt}}", "" if std is None or not math.isfinite(std)
               else f"{std:{fmt}}")
 
 
@@ -30,6 +28,11 @@ def demo_cmd(
     force: ForceOpt = False,
 ):
     """Render a procam capture at a recommended pose, calibrate it from that one pose, compare with the truth."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.table import Table
+
+    import numpy as np
+
     # the simulator, the solvers and matplotlib load only when the demo runs, not with every command
     from .. import io, patterns, pipeline, simulate, single_pose
     from ..io import files as _files
@@ -52,7 +55,7 @@ def demo_cmd(
     cap_dir = out_dir / "capture"
     t0 = time.perf_counter()
     with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                  TimeElapsedColumn(), console=console, transient=not console.is_terminal) as prog:
+                  TimeElapsedColumn(), console=console.real, transient=not console.is_terminal) as prog:
         task = prog.add_task(f"rendering '{preset}' scene", total=1)
 
         def cb(done, total):

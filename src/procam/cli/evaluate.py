@@ -3,17 +3,22 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
-from rich.table import Table
 
 from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, assumed_size, console, distinct_poses,
                    fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value,
                    with_pose_options)
 
+if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
+    from rich.table import Table
+
 
 def evaluation_tables(ev) -> tuple[Table, Table]:
     """Rich tables: one row per pose, and the summary (RMS, σ_T, σ_|T|)."""
+    from rich.table import Table
+
     t = Table(title="per pose (errors in px; T in board units; angles in degrees)")
     for c in ("pose", "n", "cam RMS", "proj RMS", "stereo RMS", "camera ψ, ν, φ", "projector ψ, ν, φ",
               "T_j = (X, Y, Z)"):

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from .._fmt import fmt_number
 from ._app import (BoardOpt, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
                    err_console, fail, is_tty, optional_size, output_dir, parse_board, plain, pose_options, say,
                    user_errors, value, with_pose_options)
+
+if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
+    from rich.table import Table
 
 #: Most pose sets the experiment calibrates (every subset of at least --min-set poses).
 MAX_SETS = 2000
@@ -19,6 +21,8 @@ MAX_SETS = 2000
 
 def summary_tables(result) -> list[Table]:
     """Rich versions of the paper's Tables 3 + 4 and the single-pose focal errors."""
+    from rich.table import Table
+
     t = Table(title="multi-pose sets: RMS on the set (px) and PnP precision on all poses")
     for c in ("", "cam", "proj", "stereo", "σ_X", "σ_Y", "σ_Z", "σ_T", "σ_|T|"):
         t.add_column(c, justify="left" if c == "" else "right", overflow="fold")
@@ -85,6 +89,8 @@ def experiment_cmd(
 ):
     """Single-pose calibration of every pose against multi-pose calibration of every pose set: the paper's
     tables (markdown + CSV), σ_T per set, focal errors against the pose angles (PNG)."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     from .. import pipeline
     from ..multi_pose import DIST_CHOICES
     from ..paper import experiment, report
@@ -112,7 +118,7 @@ def experiment_cmd(
 
         output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
     bar = (Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    TextColumn("{task.fields[label]}", markup=False), console=err_console, transient=True)
+                    TextColumn("{task.fields[label]}", markup=False), console=err_console.real, transient=True)
            if is_tty() else _LineProgress())
     with bar:
         t_dec = bar.add_task("decoding", total=len(poses), label="")

@@ -7,16 +7,13 @@ import math
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
 
-from .. import export as _ex
-from .. import io
-from ..io.files import to_jsonable, write_text
+from .. import choices
 from ._app import ForceOpt, app, choice, fail, number, output_dir, output_path, say, user_errors, value
 
-Format = choice("Format", _ex.FORMATS)
-World = choice("World", _ex.WORLDS)
+Format = choice("Format", choices.EXPORT_FORMATS)
+World = choice("World", choices.WORLDS)
 
 
 @app.command("export")
@@ -37,7 +34,11 @@ def export_cmd(
     force: ForceOpt = False,
 ):
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
+    import numpy as np
 
+    from .. import export as _ex
+    from .. import io
+    from ..io.files import to_jsonable, write_text
 
     fmt, world = value(fmt), value(world)
     if fmt == "opengl":

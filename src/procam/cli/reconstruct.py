@@ -6,16 +6,13 @@ import math
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
-from rich.table import Table
 
-from .. import board as _board
-from .. import triangulate as _tri
+from .. import choices
 from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, optional_size,
                    output_path, parse_size, plain, say, user_errors, value, warn)
 
-Use = choice("Use", _tri.USES)
+Use = choice("Use", choices.TRIANGULATION_USES)
 
 
 @app.command("reconstruct")
@@ -39,6 +36,11 @@ def reconstruct_cmd(
     step: StepOpt = None,
 ):
     """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
+    from rich.table import Table
+
+    import numpy as np
+
+    from .. import board as _board
     from .. import capture, decode, io, pipeline
     from ..io import files as _files
     from .. import reconstruct as rc

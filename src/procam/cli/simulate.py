@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from ..errors import OutputError
-from ..patterns import ORDERS
+from ..choices import PATTERN_ORDERS as ORDERS
 from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
@@ -89,7 +89,7 @@ def simulate_cmd(
 
     with Progress(TextColumn("[progress.description]{task.description}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  console=console, transient=True, disable=not is_tty()) as bar:
+                  console=console.real, transient=True, disable=not is_tty()) as bar:
         task = bar.add_task("rendering", total=1)
 
         def progress(done, total):

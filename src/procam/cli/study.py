@@ -7,10 +7,7 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
 
-from ..io import files as _files
 from .._fmt import fmt_number
 from ..errors import ProcamError
 from ._app import ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors
@@ -45,6 +42,9 @@ def study(
 
     Reproduces the paper's simulation study and draws the single-pose Cramér–Rao bound into it.
     """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    from rich.table import Table
+
     from ..paper.study import StudyConfig, parse_grid, run_study
 
     device = device.lower()
@@ -91,7 +91,7 @@ def study(
     total = len(study_cells(cfg))
     try:
         with Progress(TextColumn("[bold]study[/bold] {task.description}"), BarColumn(), MofNCompleteColumn(),
-                      TimeElapsedColumn(), TimeRemainingColumn(), console=err_console, transient=True) as bar:
+                      TimeElapsedColumn(), TimeRemainingColumn(), console=err_console.real, transient=True) as bar:
             tid = bar.add_task(f"{device}, model error {model_error}", total=total)
             result = run_study(cfg, n_jobs=jobs, backend=backend,
                                progress=lambda done, tot: bar.update(tid, completed=done))
@@ -112,6 +112,8 @@ def study(
 
         paths = save_study_figures(result, output, prefix=stem)
         summary["figures"] = [p.name for p in paths]
+    from ..io import files as _files
+
     _files.write_text(output / f"{stem}.json", json.dumps(_files.to_jsonable(summary), indent=2))
 
     s = result.summary()

@@ -25,7 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .. import models
+from .. import choices, models
 from .. import uncertainty as unc
 from .._threads import deterministic
 from ..board import board_region
@@ -110,7 +110,7 @@ def _std_dict(ref: StereoRefinement, n_cam_dist: int, n_proj_dist: int) -> dict:
 #: determine all its terms (:func:`undetermined_distortion`).
 AUTO_MODELS = ("k1k2p1p2k3", "k1k2p1p2", "k1k2", "k1", "none")
 #: The choices of ``cam_dist`` / ``proj_dist``.
-DIST_CHOICES = ("auto", *DIST_MODELS)
+DIST_CHOICES = choices.DIST_CHOICES
 
 
 @deterministic()

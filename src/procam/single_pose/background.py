@@ -66,6 +66,7 @@ from ..correspond import background_points
 from ..errors import CalibrationError, ModelErrorWarning
 from ..stats import robust_sigma
 from ._joint import _N_CAM, _PROJ, BackgroundFit, _epipolar, _Joint, _single_pose_parts
+from .. import choices
 
 __all__ = ["FREEABLE", "MODES", "BackgroundCheck", "BackgroundFit", "BackgroundOptions", "apply", "background_points",
            "epipolar_check", "epipolar_distances", "parallax", "refine_projector"]
@@ -75,7 +76,7 @@ __all__ = ["FREEABLE", "MODES", "BackgroundCheck", "BackgroundFit", "BackgroundO
 #: informative), ``auto`` (the warning; the assumptions kept, with the background, when the check finds them
 #: consistent, lifted when it does not -- more precise when they hold, but a weak background then keeps a
 #: wrong assumption with a too small +-; see ``benchmarks/background.py``).
-MODES = ("off", "check", "auto", "free")
+MODES = choices.BACKGROUND_MODES
 #: Projector parameters the background can free.
 FREEABLE = ("u0p", "alpha_p")
 

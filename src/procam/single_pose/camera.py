@@ -26,13 +26,14 @@ from ..stats import rms
 from ._principal_axis import _LM, device_side, solve_camera_lm, valid_pose
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from ._solution import DeviceSolution
+from .. import choices
 
 #: How the principal point is found: ``auto`` (the COD when reliable, else the image centre as a prior),
 #: ``paper`` (always the COD), ``image-center`` (always the image centre).
-COD_MODES = ("auto", "paper", "image-center")
+COD_MODES = choices.COD_MODES
 #: ``joint`` (ML refinement of every camera parameter on the distorted corners) or ``none`` (the paper's
 #: staged estimate).
-REFINE_MODES = ("joint", "none")
+REFINE_MODES = choices.CAMERA_REFINE_MODES
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,31 @@
+"""The closed sets of words a user can choose from: one definition each, importing nothing.
+
+The library modules take their choices from here (``decode.METHODS is choices.DECODE_METHODS`` ...) and the
+command line lists the same tuples in ``--help``, so the two cannot drift; because this module imports nothing,
+``procam --help`` and ``procam --version`` start without loading numpy, OpenCV or scipy.
+"""
+
+#: Gray-code frame orders (:mod:`procam.patterns`): OpenCV's GrayCodePattern order, Moreno-Taubin's.
+PATTERN_ORDERS = ("opencv", "moreno")
+#: Bit classifiers of the decoder (:mod:`procam.decode`).
+DECODE_METHODS = ("robust", "simple")
+#: Chessboard detectors and corner refinements (:mod:`procam.corners`).
+DETECTORS = ("auto", "classic", "sb")
+REFINERS = ("fit", "subpix", "none")
+#: Local-homography estimators (:mod:`procam.correspond`).
+ESTIMATORS = ("trimmed", "lsq", "ransac", "lmeds")
+#: Single-pose camera: where its principal point comes from, and its final refinement (:mod:`procam.single_pose`).
+COD_MODES = ("auto", "paper", "image-center")
+CAMERA_REFINE_MODES = ("joint", "none")
+#: What the single-pose fit does with the scene behind the board (:mod:`procam.single_pose.background`).
+BACKGROUND_MODES = ("off", "check", "auto", "free")
+#: OpenCV distortion models of the multi-pose fit (:mod:`procam.multi_pose`), and ``auto``.
+DIST_MODELS = ("none", "k1", "k1k2", "k1k2p1p2", "k1k2p1p2k3", "rational")
+DIST_CHOICES = ("auto", *DIST_MODELS)
+#: Calibration methods (:mod:`procam.method`).
+METHODS = ("single-pose", "multi-pose", "camera-only")
+#: Export formats and the world frame of engine exports (:mod:`procam.export`).
+EXPORT_FORMATS = ("opengl", "maps", "kamino410")
+WORLDS = ("camera", "projector")
+#: Which projector coordinates a triangulation uses (:mod:`procam.triangulate`).
+TRIANGULATION_USES = ("both", "col", "row")
