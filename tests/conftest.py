@@ -5,6 +5,8 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+import contextlib  # noqa: E402
+import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -124,3 +126,25 @@ def fake_pose_folders(monkeypatch, root, *, check_board=None, pass_board=False):
 def rms(a, b):
     d = np.asarray(a, float) - np.asarray(b, float)
     return float(np.sqrt(np.nanmean(np.sum(d * d, axis=1))))
+
+
+@contextlib.contextmanager
+def verdict_warnings():
+    """Collect procam's verdict warnings (weak, degenerate, failed, model error) raised inside instead of failing
+    on them (the suite turns every warning into an error): for helpers and tests whose subject is not the verdict
+    -- the result carries it, and the test checks it where it matters. Any other warning still fails. Yields the
+    list of ``warnings.WarningMessage``."""
+    from procam.errors import ProcamWarning
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("error")
+        warnings.simplefilter("always", ProcamWarning)
+        yield seen
+
+
+@contextlib.contextmanager
+def expect_warning(category, match=None):
+    """``pytest.warns(category, match=match)`` for the one verdict warning a test is about; procam's other verdict
+    warnings of the same calls (pytest re-emits what does not match) are recorded, not failures."""
+    with verdict_warnings(), pytest.warns(category, match=match) as record:
+        yield record

@@ -21,10 +21,19 @@ from procam.single_pose import background as bg
 from procam import correspond, patterns, pipeline, simulate
 from procam import single_pose as sp
 from procam.board import Board
+from procam.errors import ModelErrorWarning
 from procam.decode import DecodeResult
 from procam.view import Background, View
+from conftest import expect_warning, verdict_warnings
 
 OFF = bg.BackgroundOptions(mode="off")
+
+
+def _calibrate(view, **kw):
+    """:func:`procam.single_pose.calibrate`, its verdict warnings recorded (the result's ``warnings`` and verdict
+    carry them: these tests check those)."""
+    with verdict_warnings():
+        return sp.calibrate(view, **kw)
 
 
 def wall_maps(scene) -> DecodeResult:
@@ -72,7 +81,7 @@ def standin(preset, pose, seed=0):
     obj, cam, proj = simulate.correspondences(scene, 0.05, 0.08, seed=seed)
     back = Background(*correspond.background_points(wall_maps(scene), cam))
     view = View(obj, cam, proj, f"{preset}{pose}", scene.cam_size, scene.proj_size, background=back)
-    return scene, view, sp.calibrate(view, background=OFF)
+    return scene, view, _calibrate(view, background=OFF)
 
 
 # poses (camera frame) where the paper rig's error is visible in the background, and others for the ideal rig
@@ -290,17 +299,17 @@ def test_a_background_that_follows_no_single_geometry_is_no_check(ideal_standins
 
 def test_calibrate_applies_the_background_only_when_the_view_has_one(paper_standins):
     scene, view, base = paper_standins[PAPER_POSES[0]]
-    plain = sp.calibrate(View(view.obj_pts, view.cam_pts, view.proj_pts, view.name, view.cam_size, view.proj_size))
+    plain = _calibrate(View(view.obj_pts, view.cam_pts, view.proj_pts, view.name, view.cam_size, view.proj_size))
     np.testing.assert_array_equal(plain.projector.K, base.projector.K)
     assert "background" not in plain.info
-    checked = sp.calibrate(view, background=bg.BackgroundOptions(mode="check"))
+    checked = _calibrate(view, background=bg.BackgroundOptions(mode="check"))
     np.testing.assert_array_equal(checked.projector.K, base.projector.K)
     assert checked.info["background"].model_error and checked.info["background_model"] == "single-pose"
     assert any(w.startswith("model error") for w in checked.warnings)
     assert checked.poses[0]["background"]["status"] == "model error"
     # kept assumptions that the background refutes: the verdict says so (a weak pose at best)
     assert checked.verdict != "good" and any("model error" in r for r in checked.verdict_reasons)
-    auto = sp.calibrate(view)
+    auto = _calibrate(view)
     assert auto.info["background_model"] == "u0p" and auto.info["background"].model_error
     assert abs(auto.projector.K[0, 2] - auto.projector.image_size[0] / 2) > 20
     assert "refined with u0p" in auto.warnings[-1]
@@ -310,11 +319,11 @@ def test_calibrate_applies_the_background_only_when_the_view_has_one(paper_stand
 
 def test_calibrate_on_the_ideal_rig(ideal_standins):
     scene, view, base = ideal_standins[IDEAL_POSES[0]]
-    cal = sp.calibrate(view)            # default: the assumptions lifted, and found right
+    cal = _calibrate(view)            # default: the assumptions lifted, and found right
     assert cal.info["background"].status == "consistent" and cal.info["background_model"] == "u0p"
     assert abs(cal.projector.K[0, 2] - 960.0) < 4 * cal.std["u0p"]
     assert not any("model error" in w for w in cal.warnings)
-    auto = sp.calibrate(view, background=bg.BackgroundOptions(mode="auto"))   # consistent: kept, with the background
+    auto = _calibrate(view, background=bg.BackgroundOptions(mode="auto"))   # consistent: kept, with the background
     assert auto.info["background_model"] == "assumed" and auto.projector.K[0, 2] == 960.0
     # the background pins the camera's weakest parameter too
     f_c = scene.K_cam[0, 0]
@@ -344,7 +353,7 @@ def test_rendered_captures_end_to_end(paper_capture, ideal_capture):
     board = Board(10, 6, 24.0)
     folder, _, truth, _ = paper_capture
     view, _ = pipeline.view_from_folder(folder, board)
-    cal = sp.calibrate(view)
+    cal = _calibrate(view)
     c = cal.info["background"]
     assert c.model_error and any(w.startswith("model error") for w in cal.warnings)
     f_true = truth["projector"]["f"]
@@ -352,7 +361,7 @@ def test_rendered_captures_end_to_end(paper_capture, ideal_capture):
     assert abs(cal.projector.K[0, 2] - truth["projector"]["u0"]) < 4 * cal.std["u0p"] + 2
     folder, _, truth, _ = ideal_capture
     view, _ = pipeline.view_from_folder(folder, board)
-    cal = sp.calibrate(view)
+    cal = _calibrate(view)
     assert cal.info["background"].status == "consistent"
     assert not any("model error" in w for w in cal.warnings)
 
@@ -371,9 +380,9 @@ def test_known_camera_with_the_background(paper_standins, model):
         fit = distortion.opencv_from_division(K, scene.cam_center, *scene.cam_dist_coeffs, scene.cam_size)
         dist = Distortion("opencv", coeffs=tuple(float(c) for c in fit[0]))
     dev = Device(K, scene.cam_size, dist)
-    with pytest.warns(Warning):
+    with expect_warning(ModelErrorWarning):
         kept = sp.calibrate(view, known_camera=dev, background=bg.BackgroundOptions(mode="check"))
-    lifted = sp.calibrate(view, known_camera=dev)
+    lifted = _calibrate(view, known_camera=dev)
     assert kept.info["background"].model_error and lifted.info["background_model"].startswith("u0p")
     assert lifted.camera is dev and np.array_equal(lifted.camera.K, K)
     f_true, u0_true = scene.K_proj[0, 0], scene.K_proj[0, 2]
@@ -394,8 +403,8 @@ def test_every_output_says_what_the_background_estimated(paper_standins):
     _, view, _ = paper_standins[PAPER_POSES[0]]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ProcamWarning)
-        lifted = sp.calibrate(view)
-        kept = sp.calibrate(view, background=bg.BackgroundOptions(mode="check"))
+        lifted = _calibrate(view)
+        kept = _calibrate(view, background=bg.BackgroundOptions(mode="check"))
     assert lifted.info["background_model"].startswith("u0p")
     assert kept.info["background_model"] in ("single-pose", "assumed")
     u0, s = lifted.projector.K[0, 2], lifted.std["u0p"]

@@ -14,6 +14,8 @@ from procam.residuals import calibration_residuals, pose_residuals
 from procam.stats import rms
 from procam.verdict import calibration_verdict
 from procam.view import View
+from procam.errors import DegeneratePoseWarning, WeakPoseWarning
+from conftest import expect_warning
 
 POSES = [(15, 12, 0), (-10, 20, 5), (20, -15, -5), (5, 25, 10)]
 
@@ -25,7 +27,8 @@ def _single_with_outliers():
     cam[5] += 3.0   # one camera and one projector corner far off: the solver rejects them
     proj[7] += 5.0
     view = View(obj, cam, proj, "/some/long/path/pose1", sc.cam_size, sc.proj_size)
-    return single_pose.calibrate(view), view
+    with expect_warning(WeakPoseWarning):          # the rejected corners leave f_c weakly determined
+        return single_pose.calibrate(view), view
 
 
 @functools.lru_cache(maxsize=None)
@@ -93,7 +96,8 @@ def test_residual_figure_title_rms_is_the_tables_and_rejected_corners_are_marked
 def test_degenerate_pose_figure_does_not_look_clean():
     sc = simulate.with_board_pose(simulate.preset("paper"), (20, 0.3, 0))
     obj, cam, proj = simulate.correspondences(sc, 0.1, 0.2, seed=0)
-    calib = single_pose.calibrate(View(obj, cam, proj, "flat", sc.cam_size, sc.proj_size))
+    with expect_warning(DegeneratePoseWarning):
+        calib = single_pose.calibrate(View(obj, cam, proj, "flat", sc.cam_size, sc.proj_size))
     fig = residual_figure(calibration_residuals(calib), calib.camera.image_size, calib.projector.image_size,
                           title="flat.json", verdict=calibration_verdict(calib).line())
     t = fig._suptitle

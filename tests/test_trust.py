@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import fake_pose_folders, run_cli
+from conftest import expect_warning, fake_pose_folders, run_cli
 
 from procam import evaluate, io, multi_pose, simulate, single_pose
 from procam.board import Board
@@ -70,10 +70,10 @@ def test_good_and_weak_poses_are_written_with_their_verdict(fake_folders, tmp_pa
 
 
 def test_python_api_warns_with_procam_warning_classes():
-    with pytest.warns(DegeneratePoseWarning, match="degenerate pose"):
+    with expect_warning(DegeneratePoseWarning, match="degenerate pose"):
         cal = single_pose.calibrate(_view("ideal", (20.0, 0.0, 0.0), frame="projector"))
     assert cal.verdict == "degenerate" and not cal.trusted and cal.verdict_reasons
-    with pytest.warns(WeakPoseWarning):
+    with expect_warning(WeakPoseWarning):
         cal = single_pose.calibrate(_view("ideal", (4.0, 12.0, 0.0)))
     assert cal.verdict == "weak" and cal.trusted
     with warnings.catch_warnings():
@@ -164,7 +164,7 @@ def test_multi_pose_distortion_terms_the_poses_cannot_determine():
         sc = simulate.with_board_pose(base, a, distance=1800.0)
         obj, cam, proj = simulate.correspondences(sc, 0.1, 0.2, k)
         views.append(View(obj, cam, proj, f"p{k}", sc.cam_size, sc.proj_size))
-    with pytest.warns(WeakPoseWarning, match="the poses do not determine"):
+    with expect_warning(WeakPoseWarning, match="the poses do not determine"):
         rich = multi_pose.calibrate(views, cam_dist="k1k2p1p2k3", proj_dist="k1k2p1p2k3")
     assert rich.verdict == "weak" and any("camera: the poses do not determine" in w and "k3 = " in w
                                           for w in rich.warnings)
@@ -203,7 +203,7 @@ def test_no_model_error_when_the_model_holds(seed):
 def test_a_board_that_is_not_flat_is_a_model_error_not_noise():
     from procam.errors import ModelErrorWarning
 
-    with pytest.warns(ModelErrorWarning, match="projector: model error: its residuals form a smooth pattern"):
+    with expect_warning(ModelErrorWarning, match="projector: model error: its residuals form a smooth pattern"):
         cal = single_pose.calibrate(_bent(1.0))
     m = cal.poses[0]["misfit"]
     assert m["projector"]["model_error"] and m["projector"]["explained"] > 0.5
