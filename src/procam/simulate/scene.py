@@ -218,6 +218,36 @@ class Scene:
         """``dataclasses.replace`` shortcut."""
         return dataclasses.replace(self, **changes)
 
+    def scaled(self, factor: float) -> "Scene":
+        """The same rig with both devices' pixel grids scaled by ``factor`` (the same angles of view; e.g. 0.25
+        for a render 16 times cheaper).  Sizes are rounded to whole pixels; focal lengths scale, principal points
+        and lens centres scale about the pixel-centre convention (``u' = (u + 0.5) factor - 0.5``); the division
+        model's k1, k2 scale by ``factor^-2``, ``factor^-4``; OpenCV coefficients (normalised coordinates) do not
+        change.  The board pose is kept (re-place it with :func:`~procam.simulate.with_board_pose` if the
+        smaller margins matter)."""
+        f = float(factor)
+        if not f > 0:
+            raise ValueError(f"factor must be positive, got {factor}")
+
+        def K(M):
+            M = np.array(M, float)
+            M[0, 0] *= f
+            M[1, 1] *= f
+            M[0, 1] *= f
+            M[:2, 2] = (M[:2, 2] + 0.5) * f - 0.5
+            return M
+
+        changes = {"cam_size": (round(self.cam_size[0] * f), round(self.cam_size[1] * f)), "K_cam": K(self.K_cam),
+                   "proj_size": (round(self.proj_size[0] * f), round(self.proj_size[1] * f)), "K_proj": K(self.K_proj)}
+        for dev in ("cam", "proj"):
+            center = getattr(self, f"{dev}_dist_center")
+            if center is not None:
+                changes[f"{dev}_dist_center"] = tuple((np.array(center) + 0.5) * f - 0.5)
+            if getattr(self, f"{dev}_distortion") == "division":
+                k1, k2 = getattr(self, f"{dev}_dist_coeffs")
+                changes[f"{dev}_dist_coeffs"] = (k1 / f ** 2, k2 / f ** 4)
+        return self.replace(**changes)
+
 
 def board_corners(scene: Scene) -> np.ndarray:
     """(cols*rows, 3) board-frame corners, ``k = j*cols + i`` at ``(i s, j s, 0)`` minus the centroid."""
