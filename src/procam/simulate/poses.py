@@ -45,15 +45,18 @@ def _margins(scene: Scene, R_b: np.ndarray, t_b: np.ndarray) -> np.ndarray:
         mc = distort(scene, project(scene.K_cam, P.reshape(-1, 3))).reshape(P.shape[0], -1, 2)
         mp = scene.proj_lens.project(scene.K_proj, Pp.reshape(-1, 3)).reshape(P.shape[0], -1, 2)
     bad |= ~np.all(np.isfinite(mc), axis=(1, 2)) | ~np.all(np.isfinite(mp), axis=(1, 2))
-    if scene.background is not None:
-        bad |= _hidden(scene, R_b, t_b)
     (wc, hc), (wp, hp) = scene.cam_size, scene.proj_size
     dc = np.minimum(np.minimum(mc[..., 0] + 0.5, wc - 0.5 - mc[..., 0]),
                     np.minimum(mc[..., 1] + 0.5, hc - 0.5 - mc[..., 1])).min(axis=1)
     dp = np.minimum(np.minimum(mp[..., 0] + 0.5, wp - 0.5 - mp[..., 0]),
                     np.minimum(mp[..., 1] + 0.5, hp - 0.5 - mp[..., 1])).min(axis=1)
     m = np.minimum(dc, dp * scene.K_cam[0, 0] / scene.K_proj[0, 0])
-    return np.where(bad | ~np.isfinite(m), BAD, m)
+    m = np.where(bad | ~np.isfinite(m), BAD, m)
+    if scene.background is not None:  # only where the board fits (the costly part): hidden there is unusable
+        fits = np.flatnonzero(m >= 0)
+        if fits.size:
+            m[fits[_hidden(scene, R_b, t_b[fits])]] = BAD
+    return m
 
 
 def _hidden(scene: Scene, R_b: np.ndarray, t_b: np.ndarray) -> np.ndarray:
@@ -70,8 +73,8 @@ def fit_margin(scene: Scene, R_board=None, t_board=None) -> float:
     """Smallest distance (camera px) of the printed board's outline to the border of either image.
 
     Negative when part of the board (with its margin) is outside the camera image or the projector
-    image (through the lenses), or behind a device, or (a background fixed in the room) hidden from
-    the camera or shadowed from the projector by it.  Projector pixels are scaled by ``f_c / f_p`` to
+    image (through the lenses), or behind a device, or (a background fixed in the room; checked where
+    the board fits the images) hidden from the camera or shadowed from the projector by it.  Projector pixels are scaled by ``f_c / f_p`` to
     camera pixels.
     """
     R_b = scene.R_board if R_board is None else np.asarray(R_board, float)
