@@ -49,6 +49,7 @@ from .lens import Lens, distort, euler_matrix, matrix_euler, project, project_po
 from .poses import fit_margin, with_board_pose
 from .presets import PRESETS, RECOMMENDED_POSE, preset
 from .renderer import Renderer, render, write_capture
+from .rig import RIG_PRESETS, Device, Rig, rig_preset
 from .scene import DEFAULT_DISTANCE, Scene, board_corners, board_extent
 from .truth import corner_truth, correspondences, truth, truth_calibration
 
@@ -57,4 +58,5 @@ __all__ = [
     "truth", "truth_calibration", "correspondences", "true_projector_maps", "ProjectorMaps", "render", "Renderer",
     "write_capture", "board_corners", "board_extent", "corner_truth", "fit_margin", "project", "project_points",
     "distort", "undistort", "euler_matrix", "matrix_euler", "Lens", "Background", "Plane", "Box", "Sphere",
+    "Rig", "Device", "rig_preset", "RIG_PRESETS",
 ]
