@@ -277,12 +277,17 @@ class Background:
         return {"surfaces": [k.to_dict() for k in self.surfaces]}
 
     # ray casting for the geometry oracle --------------------------------------------------------
-    def nearest(self, o, d):
-        """(s (...), index (...) int, -1 where none) of the nearest surface along rays o + s d."""
-        best = None
-        idx = None
+    def camera_hits(self, dx, dy):
+        """The nearest surface along camera rays ``s (dx, dy, 1)`` from the frame's origin: (depth s, inf where
+        none; index of the surface, -1 where none), arrays shaped as ``dx``."""
+        best = idx = d = None
         for i, k in enumerate(self.surfaces):
-            s = k.hit(o, d)
+            if isinstance(k, Plane):
+                s = k.camera_depth(dx, dy)
+            else:
+                if d is None:
+                    d = np.stack([dx, dy, np.ones_like(dx)], axis=-1)
+                s = k.hit(np.zeros(3), d)
             if best is None:
                 best, idx = s, np.where(np.isfinite(s), 0, -1)
             else:

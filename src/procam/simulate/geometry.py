@@ -68,26 +68,6 @@ def _board_albedo(scene: Scene, bx, by, wx, wy):
     return scene.albedo_white + (scene.albedo_black - scene.albedo_white) * 0.5 * (inside + checker)
 
 
-def _background_hits(bg, dx, dy):
-    """Nearest background surface along camera rays ``s (dx, dy, 1)``: depth (inf where none), index (-1)."""
-    best = idx = None
-    d = None
-    for i, k in enumerate(bg.surfaces):
-        if isinstance(k, Plane):
-            s = k.camera_depth(dx, dy)
-        else:
-            if d is None:
-                d = np.stack([dx, dy, np.ones_like(dx)], axis=-1)
-            s = k.hit(np.zeros(3), d)
-        if best is None:
-            best, idx = s, np.where(np.isfinite(s), 0, -1)
-        else:
-            closer = s < best
-            best = np.where(closer, s, best)
-            idx = np.where(closer, i, idx)
-    return best, idx
-
-
 def _background_normals(bg, on, idx, X, Y, Z):
     """Unit normals (nx, ny, nz) of the background surface ``idx`` at the points (X, Y, Z) (where ``on``)."""
     if len(bg.surfaces) == 1 and isinstance(bg.surfaces[0], Plane):
@@ -154,7 +134,7 @@ def _geometry_band(scene: Scene, ys, xs, detail: bool = False):
         del rx, ry, rz
         on_board = (sb > 0) & (bx >= x0) & (bx <= x1) & (by >= y0) & (by <= y1)
         # the background: nearest surface (the default wall: one plane)
-        sw, idx = _background_hits(bg, dx, dy)
+        sw, idx = bg.camera_hits(dx, dy)
         on_wall = np.isfinite(sw)
         board = on_board & (~on_wall | (sb < sw))
         wall = on_wall & ~board

@@ -29,17 +29,11 @@ from .background import Background
 from .lens import _K, Lens, euler_matrix, matrix_euler
 from .poses import _margins, _place
 from .presets import RECOMMENDED_POSE
-from .scene import Scene, board_extent
+from .scene import Scene, _frozen, board_extent
 
 __all__ = ["Device", "Rig", "RIG_PRESETS", "rig_preset"]
 
 RIG_PRESETS = ("two_projectors", "two_cameras")
-
-
-def _frozen(a, shape):
-    a = np.array(a, dtype=float).reshape(shape)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)

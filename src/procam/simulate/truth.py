@@ -37,9 +37,9 @@ def corner_truth(scene: Scene) -> dict[str, np.ndarray]:
     dict with ``board`` (N, 3) board frame, mm; ``camera_undistorted``, ``camera_distorted`` (N, 2) px
     (ideal pinhole, and as the camera records it); ``projector_undistorted`` (N, 2) (the projector's ideal
     pinhole) and ``projector`` (N, 2), the panel pixel that lights the corner (through the projector's
-    lens; the two are equal for an ideal projector); ``visible`` (N,) bool: the corner is seen by the camera
-    and lit by the projector (no surface of the background in between; always for the default wall
-    behind the board).
+    lens; the two are equal for an ideal projector); ``hidden`` (N,) bool: a surface of the background lies
+    between the corner and the camera; ``shadowed`` (N,) bool: one lies between it and the projector's
+    centre; ``visible`` = neither (always, for the default wall behind the board).
     """
     B = board_corners(scene)
     Xc = B @ scene.R_board.T + scene.t_board
@@ -49,9 +49,10 @@ def corner_truth(scene: Scene) -> dict[str, np.ndarray]:
     proj_u = project(scene.K_proj, Xp)
     proj = proj_u if scene.proj_distortion == "none" else scene.proj_lens.project(scene.K_proj, Xp)
     bg = scene.surfaces()
-    visible = ~(bg.blocks(np.zeros(3), Xc) | bg.blocks(Xc, scene.proj_center_cam - Xc))
+    hidden = bg.blocks(np.zeros(3), Xc)
+    shadowed = bg.blocks(Xc, scene.proj_center_cam - Xc)
     return {"board": B, "camera_distorted": cam_d, "camera_undistorted": cam_u, "projector": proj,
-            "projector_undistorted": proj_u, "visible": visible}
+            "projector_undistorted": proj_u, "hidden": hidden, "shadowed": shadowed, "visible": ~(hidden | shadowed)}
 
 
 def _background_dict(scene: Scene) -> dict:
@@ -162,15 +163,19 @@ def correspondences(scene: Scene, sigma_cam: float = 0.1, sigma_proj: float = 0.
     Returns
     -------
     obj : (N, 3) board corners (board frame, mm).
-    cam : (N, 2) distorted camera corners + N(0, sigma_cam^2) per coordinate.
+    cam : (N, 2) distorted camera corners + N(0, sigma_cam^2) per coordinate; NaN for a corner the
+        background hides from the camera (:func:`corner_truth`'s ``hidden``: not detected).
     proj : (N, 2) projector corners (the panel pixels that light them, through the projector's lens)
-        + N(0, sigma_proj^2) per coordinate.
+        + N(0, sigma_proj^2) per coordinate; NaN for a hidden corner and for one in a shadow (``shadowed``:
+        no code to decode there).
 
-    Every corner is returned, also one the background hides or shadows (``corner_truth(scene)["visible"]``).
+    Every corner keeps its row (order ``k = j*cols + i``); a placed preset hides none.
     """
     c = corner_truth(scene)
     rng = np.random.default_rng(seed)
     n = len(c["board"])
     cam = c["camera_distorted"] + sigma_cam * rng.standard_normal((n, 2))
     proj = c["projector"] + sigma_proj * rng.standard_normal((n, 2))
+    cam[c["hidden"]] = np.nan
+    proj[c["hidden"] | c["shadowed"]] = np.nan
     return c["board"], cam, proj
