@@ -144,7 +144,7 @@ def test_background_points_without_corners_or_background():
 
 
 def test_epipolar_distances_vanish_for_the_true_calibration():
-    from sim_small import truth_calibration
+    from procam.simulate import truth_calibration
 
     scene = simulate.preset("paper")
     maps = wall_maps(scene)

@@ -104,7 +104,9 @@ def poses(tmp_path_factory):
 @pytest.fixture(scope="module")
 def calib_file(tmp_path_factory):
     """The small rig's true calibration as procam JSON."""
-    from sim_small import small_scene, truth_calibration
+    from sim_small import small_scene
+
+    from procam.simulate import truth_calibration
 
     path = tmp_path_factory.mktemp("calib") / "calib.json"
     io.save_calibration(truth_calibration(small_scene()), path)

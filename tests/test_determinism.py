@@ -25,7 +25,9 @@ BOARD = ["--board", "10x6", "--square", "24"]
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
     """Three small rendered poses and their true calibration."""
-    from sim_small import small_scene, truth_calibration
+    from sim_small import small_scene
+
+    from procam.simulate import truth_calibration
 
     root = tmp_path_factory.mktemp("rig")
     poses = render_poses(root)

@@ -11,8 +11,9 @@ from procam import io, models, simulate
 from procam.board import detect_corners
 from procam.calibration import Device, Distortion
 from procam.errors import CalibrationError, CalibrationFileError
+from procam.simulate import truth_calibration
 from procam import export as ex
-from sim_small import small_capture, small_scene, truth_calibration
+from sim_small import small_capture, small_scene
 
 
 def _paper():
