@@ -95,7 +95,7 @@ class Lens:
             raise ValueError(f"distortion coefficients must be finite, got {coeffs + higher}")
 
     # --------------------------------------------------------------------------------------------
-    def centre(self, K) -> np.ndarray:
+    def center_px(self, K) -> np.ndarray:
         """The distortion centre (2,) px: ``center``, or the principal point of ``K``."""
         if self.center is None:
             return np.asarray(K, float)[:2, 2].copy()
@@ -113,7 +113,7 @@ class Lens:
         if any(h != 0.0 for h in self.higher):
             terms = ", ".join(f"r^{2 * (4 + i)} {h:g}" for i, h in enumerate(self.higher) if h != 0.0)
             out.append(f"radial terms beyond k3 ({terms})")
-        off = self.centre(K) - np.asarray(K, float)[:2, 2]
+        off = self.center_px(K) - np.asarray(K, float)[:2, 2]
         if np.any(off != 0.0):
             out.append(f"radial centre ({off[0]:+.6g}, {off[1]:+.6g}) px from the principal point")
         return out
@@ -146,7 +146,7 @@ class Lens:
         if self.model == "none":
             return pts.copy()
         if self.model == "division":
-            return _division_distort(pts, self.centre(K), *self.coeffs)
+            return _division_distort(pts, self.center_px(K), *self.coeffs)
         return _to_pix(K, self.distort_normalized(K, _to_norm(K, pts)))
 
     def undistort(self, K, pts) -> np.ndarray:
@@ -156,7 +156,7 @@ class Lens:
         if self.model == "none":
             return pts.copy()
         if self.model == "division":
-            return _division_undistort(pts, self.centre(K), *self.coeffs)
+            return _division_undistort(pts, self.center_px(K), *self.coeffs)
         return _to_pix(K, self.undistort_normalized(K, _to_norm(K, pts)))
 
     def distort_normalized(self, K, xn) -> np.ndarray:
@@ -202,7 +202,7 @@ class Lens:
         d = {"model": self.model, "coeffs": list(self.coeffs)}
         if self.model == "none":
             return d
-        d["center"] = self.centre(K).tolist()
+        d["center"] = self.center_px(K).tolist()
         if self.model == "division":
             d.update({"k1": self.coeffs[0], "k2": self.coeffs[1],
                       "definition": "m = c + (m_hat - c) / (1 + k1 r^2 + k2 r^4), r = |m_hat - c| in distorted pixels"})

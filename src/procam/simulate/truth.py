@@ -117,7 +117,7 @@ def _distortion(lens, K, device: str, approximate: bool, left: dict):
     from ..calibration import Distortion
 
     if lens.model == "division":
-        return Distortion("division", tuple(float(v) for v in lens.centre(K)), *lens.coeffs)
+        return Distortion("division", tuple(float(v) for v in lens.center_px(K)), *lens.coeffs)
     if lens.model == "none":
         return Distortion()
     out = lens.left_out(K)
