@@ -150,8 +150,9 @@ class Box:
         with np.errstate(divide="ignore", invalid="ignore"):
             a = (-h - o) / d
             b = (h - o) / d
-        t0 = np.fmax.reduce(np.fmin(a, b), axis=-1)
-        t1 = np.fmin.reduce(np.fmax(a, b), axis=-1)
+        lo, hi = np.fmin(a, b), np.fmax(a, b)   # (fmin/fmax: a NaN of a ray along a slab's face is ignored)
+        t0 = np.fmax(np.fmax(lo[..., 0], lo[..., 1]), lo[..., 2])
+        t1 = np.fmin(np.fmin(hi[..., 0], hi[..., 1]), hi[..., 2])
         return t0, t1
 
     def hit(self, o, d):

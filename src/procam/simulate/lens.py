@@ -367,14 +367,17 @@ def _brown_undistort_norm(xd, radial, p1, p2, delta=None, iterations=30, newton=
     x = xd[..., 0].copy()
     y = xd[..., 1].copy()
     cx, cy = (0.0, 0.0) if delta is None else (float(delta[0]), float(delta[1]))
+    tangential = p1 != 0.0 or p2 != 0.0
+    dx = dy = 0.0
     for _ in range(iterations):
         r2 = x * x + y * y
         if delta is None:
             radial_v = _radial_poly(r2, radial)
         else:
             radial_v = _radial_poly((x - cx) ** 2 + (y - cy) ** 2, radial)
-        dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-        dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        if tangential:
+            dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+            dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             x = (xd[..., 0] - cx - dx) / radial_v + cx
             y = (xd[..., 1] - cy - dy) / radial_v + cy
