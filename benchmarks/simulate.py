@@ -1,6 +1,7 @@
 """Benchmark: render one 46-image 1280x800 pose with procam.simulate (goals: <= 10 s, <= 2 GB on 2 cores).
 
-Renders the ``paper`` preset at the recommended pose (supersampling 3x3 by default) and reports,
+Renders the ``paper`` preset (``--preset``: any of procam.simulate.PRESETS, e.g. ``hard``: lenses beyond OpenCV's
+model and a room corner with a box and a ball) at the recommended pose (supersampling 3x3 by default) and reports,
 per run: wall and CPU seconds for the geometry pass (once per scene) and for the 46 images, and
 the whole ``render`` call; optionally ``write_capture`` to a temporary folder.  Peak memory is the
 process's maximum resident set size (it includes the interpreter and libraries, ~150 MB), and the
@@ -39,7 +40,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--supersample", type=int, default=None, help="rays per pixel per axis (default: the preset's)")
-    ap.add_argument("--preset", default="paper")
+    ap.add_argument("--preset", default="paper", choices=sim.PRESETS)
     ap.add_argument("--write", action="store_true", help="also time write_capture (PNG encoding)")
     args = ap.parse_args()
     scene = sim.preset(args.preset)

@@ -11,8 +11,8 @@ from procam import io, models, simulate
 from procam.calibration import Device, Distortion
 from procam.corners import detect_corners
 from procam.errors import CalibrationError, CalibrationFileError
-from procam import export as ex
 from procam.simulate import truth_calibration
+from procam import export as ex
 from sim_small import small_capture, small_scene
 
 

@@ -266,7 +266,7 @@ def test_true_maps_and_shadow_physics(paper_capture, paper_maps):
     assert unlit.sum() > 1000
     assert np.median(white[unlit] - black[unlit]) < 2
     # the board's shadow exists: wall pixels inside the projector's image region but unlit
-    from procam.simulate.renderer import _geometry
+    from procam.simulate.geometry import _geometry
 
     g = _geometry(s, s=1)
     shadow = (~g["board"]) & np.isfinite(g["xp"]) & (g["xp"] > 0) & (g["xp"] < 1919) & (g["yp"] > 0) \

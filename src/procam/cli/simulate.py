@@ -38,8 +38,11 @@ def _parse_pose(text: str) -> tuple[float, float, float]:
 @user_errors
 def simulate_cmd(
     out_dir: Path = typer.Argument(..., help="Output folder for the images, truth.json and patterns.json."),
-    preset: str = typer.Option("paper", "--preset", help="Rig: paper (the paper's simulated procam) or ideal "
-                               "(u0p = W/2, alpha_p = 1, stronger lens distortion)."),
+    preset: str = typer.Option("paper", "--preset", help="Rig: paper (the paper's simulated procam), ideal "
+                               "(u0p = W/2, alpha_p = 1, stronger lens distortion), lensshift (v0p beyond the "
+                               "panel, projector lens distortion, a wall), hard (lenses OpenCV does not describe, "
+                               "a room corner with objects), vertical (projector 0.6 m below the camera) or "
+                               "ceiling (upside-down projector)."),
     pose: str = typer.Option(None, "--pose", help="Board angles PSI,NU,PHI in degrees (XYZ Euler, board -> "
                              "device; default: the recommended pose)."),
     frame: str = typer.Option("camera", "--frame", help="Device frame of --pose: camera or projector."),

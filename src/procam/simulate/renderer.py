@@ -1,15 +1,16 @@
 """The renderer: physically plausible Gray-code captures of a :class:`~procam.simulate.Scene`.
 
-Per camera pixel a ray (supersampled), board / wall albedo, projector illumination with defocus and
-black level, the board's shadow on the wall, ambient light, gain, vignetting, optical blur, shot and
-read noise, gamma, 8/16-bit output.  The geometry is computed once per scene (:class:`Renderer`);
-each pattern image is then a cheap 1-D profile lookup, because Gray-code stripes depend on one
-projector coordinate only.
+Per camera pixel a ray (supersampled, :mod:`~procam.simulate.geometry`): board / background albedo,
+projector illumination through the projector's lens with defocus, black level and the projector's
+response (``proj_gamma``), cast shadows (the board's, the background solids'), occlusion, ambient
+light, gain, vignetting, optical blur, shot and read noise, the camera's gamma, 8/16-bit output.
+The geometry is computed once per scene (:class:`Renderer`); each pattern image is then a cheap 1-D
+profile lookup, because Gray-code stripes (and any other 1-D pattern,
+:meth:`Renderer.linear_stripes`) depend on one projector coordinate only.
 
 * :func:`render` - the whole sequence at once, with its ground truth.
 * :class:`Renderer` - one pattern image at a time (:meth:`Renderer.frame`), e.g. for a simulated
   camera that is triggered per projected pattern.
-* :func:`true_projector_maps` - the exact projector coordinates seen at every camera pixel.
 * :func:`write_capture` - a rendered capture in procam's capture-folder layout (thin over
   :func:`procam.capture.write_sequence`).
 """
@@ -26,214 +27,15 @@ import numpy as np
 from .. import capture as _capture
 from .. import patterns as _patterns
 from ..io.files import to_jsonable
-from .lens import undistort
-from .scene import Scene, board_extent, truth
+from .geometry import GEOMETRY_BAND, _geometry_bands
+from .scene import Scene
+from .truth import truth
 
-__all__ = ["Renderer", "render", "true_projector_maps", "write_capture"]
+__all__ = ["Renderer", "render", "write_capture"]
 
-
-# --------------------------------------------------------------------------------------------
-# rendering: geometry once per scene
-# --------------------------------------------------------------------------------------------
-
-#: Rows of the supersampled grid per band of the geometry pass. A band's float64 temporaries are then over 4 MB,
-#: which NumPy asks the kernel to back with huge pages: bands of 16-64 rows page-faulted 4 times as often (up to
-#: 2 s of system time for a 1280x800 camera at 3x3 supersamples, measured in a fresh process). Nothing else
-#: depends on the band size.
-GEOMETRY_BAND = 288
 
 #: Samples per projector pixel of the 1-D stripe profiles looked up by ``cv2.remap``.
 PROFILE_UPSAMPLE = 8
-
-
-def _box_filtered_step(u, w, n):
-    """Box filter (width w) of the indicator of [0, n], evaluated at u (all in square units)."""
-    return (np.clip(u + 0.5 * w, 0, n) - np.clip(u - 0.5 * w, 0, n)) / w
-
-
-def _box_filtered_square_wave(u, w, n):
-    """Box filter (width w) of sq(u) * [0 <= u <= n], sq = +1 on [2k, 2k+1), -1 on [2k+1, 2k+2)."""
-
-    def F(x):  # integral of sq from 0 to x (a triangle wave), for x clipped to [0, n]
-        fr = np.mod(np.clip(x, 0, n), 2.0)
-        return np.where(fr < 1.0, fr, 2.0 - fr)
-
-    return (F(u + 0.5 * w) - F(u - 0.5 * w)) / w
-
-
-def _board_albedo(scene: Scene, bx, by, wx, wy):
-    """Albedo of the printed board at board coords (bx, by) mm, box-filtered over (wx, wy) mm.
-
-    The top-left square (smallest x, y) is black; squares alternate; a white margin surrounds them.
-    """
-    s = scene.square
-    nx, ny = scene.board_cols + 1, scene.board_rows + 1  # printed squares
-    u = (bx + 0.5 * nx * s) / s
-    v = (by + 0.5 * ny * s) / s
-    wu = np.maximum(wx / s, 1e-6)
-    wv = np.maximum(wy / s, 1e-6)
-    inside = _box_filtered_step(u, wu, nx) * _box_filtered_step(v, wv, ny)
-    checker = _box_filtered_square_wave(u, wu, nx) * _box_filtered_square_wave(v, wv, ny)
-    return scene.albedo_white + (scene.albedo_black - scene.albedo_white) * 0.5 * (inside + checker)
-
-
-def _geometry_band(scene: Scene, ys, xs):
-    """Per-sample geometry for the sample grid ``ys`` x ``xs`` (camera pixel coordinates).
-
-    Returns dict of (len(ys), len(xs)) arrays: ``xp``, ``yp`` projector coords (NaN where no
-    surface), ``coef`` = gain * albedo * irradiance factor where lit by the projector (0 elsewhere),
-    ``amb`` = gain * albedo * ambient, ``board`` (bool, the ray hits the board), ``lit`` (bool).
-    Irradiance factor: cosine of incidence times the inverse-square fall-off, relative to the
-    projector's distance to the board centre (Lambertian surfaces, so no view dependence).
-    """
-    X_pix, Y_pix = np.meshgrid(np.asarray(xs, float), np.asarray(ys, float))
-    und = undistort(scene, np.stack([X_pix, Y_pix], axis=-1))
-    Kc = scene.K_cam
-    # camera rays with z = 1 (zero skew)
-    dx = (und[..., 0] - Kc[0, 2]) / Kc[0, 0]
-    dy = (und[..., 1] - Kc[1, 2]) / Kc[1, 1]
-    del und
-    Rb, tb = scene.R_board, scene.t_board
-    nb = Rb[:, 2]
-    x0, x1, y0, y1 = board_extent(scene)
-    err = np.errstate(divide="ignore", invalid="ignore")
-    err.__enter__()
-    try:
-        # board plane
-        sb = (nb @ tb) / (dx * nb[0] + dy * nb[1] + nb[2])
-        rx, ry, rz = dx * sb - tb[0], dy * sb - tb[1], sb - tb[2]
-        bx = rx * Rb[0, 0] + ry * Rb[1, 0] + rz * Rb[2, 0]
-        by = rx * Rb[0, 1] + ry * Rb[1, 1] + rz * Rb[2, 1]
-        del rx, ry, rz
-        on_board = (sb > 0) & (bx >= x0) & (bx <= x1) & (by >= y0) & (by <= y1)
-        # wall plane
-        nw = scene.wall_normal
-        pw = tb + scene.wall_offset * np.array([0.0, 0.0, 1.0])
-        sw = (nw @ pw) / (dx * nw[0] + dy * nw[1] + nw[2])
-        on_wall = np.isfinite(sw) & (sw > 0)
-        board = on_board & (~on_wall | (sb < sw))
-        wall = on_wall & ~board
-        surf = board | wall
-        depth = np.where(board, sb, np.where(wall, sw, np.nan))
-        del sb, sw
-        X, Y, Z = dx * depth, dy * depth, depth
-        cam_vig = (1.0 + dx * dx + dy * dy) ** (-0.5 * scene.cam_vignetting)  # cos(field angle) ** n
-        del dx, dy
-
-        # albedo; the board's is box-filtered over each sample's footprint (anti-aliasing)
-        def footprint(a):
-            g0 = np.abs(np.gradient(a, axis=0)) if a.shape[0] > 1 else 0.0
-            g1 = np.abs(np.gradient(a, axis=1)) if a.shape[1] > 1 else 0.0
-            return np.nan_to_num(g0 + g1, nan=1.0)
-
-        albedo = np.where(wall, scene.albedo_wall, 0.0)
-        albedo[board] = _board_albedo(scene, bx[board], by[board], footprint(bx)[board], footprint(by)[board])
-        del bx, by
-
-        # projector coordinates
-        R, T, Kp = scene.R, scene.T, scene.K_proj
-        Xp = R[0, 0] * X + R[0, 1] * Y + R[0, 2] * Z + T[0]
-        Yp = R[1, 0] * X + R[1, 1] * Y + R[1, 2] * Z + T[1]
-        Zp = R[2, 0] * X + R[2, 1] * Y + R[2, 2] * Z + T[2]
-        xp = Kp[0, 0] * Xp / Zp + Kp[0, 1] * Yp / Zp + Kp[0, 2]
-        yp = Kp[1, 1] * Yp / Zp + Kp[1, 2]
-        Wp, Hp = scene.proj_size
-        front = Zp > 0
-        in_panel = front & (xp >= -0.5) & (xp <= Wp - 0.5) & (yp >= -0.5) & (yp <= Hp - 0.5)
-
-        # shading
-        Cp = scene.proj_center_cam
-        Lx, Ly, Lz = Cp[0] - X, Cp[1] - Y, Cp[2] - Z
-        dist2 = Lx * Lx + Ly * Ly + Lz * Lz
-        cos_p = Zp / np.sqrt(Xp * Xp + Yp * Yp + Zp * Zp)  # projector field angle
-        nx = np.where(board, nb[0], nw[0])
-        ny = np.where(board, nb[1], nw[1])
-        nz = np.where(board, nb[2], nw[2])
-        ndotl = nx * Lx + ny * Ly + nz * Lz
-        ndotv = -(nx * X + ny * Y + nz * Z)
-        facing = (ndotl * ndotv) > 0
-        d_ref2 = float(np.sum((Cp - tb) ** 2))
-        irr = np.abs(ndotl) / np.sqrt(dist2) * (d_ref2 / dist2) * np.abs(cos_p) ** scene.proj_vignetting
-        del nx, ny, nz, ndotv, ndotl, dist2, Xp, Yp, Zp, cos_p
-
-        # the board's shadow on the wall, as the projector sees it
-        uu = (nb @ tb - (X * nb[0] + Y * nb[1] + Z * nb[2])) / (Lx * nb[0] + Ly * nb[1] + Lz * nb[2])
-        qx, qy, qz = X + uu * Lx - tb[0], Y + uu * Ly - tb[1], Z + uu * Lz - tb[2]
-        sx = qx * Rb[0, 0] + qy * Rb[1, 0] + qz * Rb[2, 0]
-        sy = qx * Rb[0, 1] + qy * Rb[1, 1] + qz * Rb[2, 1]
-        shadow = wall & (uu > 1e-9) & (uu < 1) & (sx >= x0) & (sx <= x1) & (sy >= y0) & (sy <= y1)
-    finally:
-        err.__exit__(None, None, None)
-
-    # the panel's edges are left to the (defocused) panel masks of the renderer; `lit` is the truth mask
-    illuminated = surf & front & facing & ~shadow
-    lit = illuminated & in_panel
-    coef = np.where(illuminated, scene.gain * albedo * irr * cam_vig, 0.0)
-    amb = scene.gain * scene.ambient * albedo * cam_vig
-    xp = np.where(surf, xp, np.nan)
-    yp = np.where(surf, yp, np.nan)
-    return {"xp": xp, "yp": yp, "coef": coef, "amb": amb, "board": board, "lit": lit}
-
-
-def _sample_grid(n_pix: int, s: int) -> np.ndarray:
-    """Sample positions (pixel coordinates) of ``s`` supersamples per pixel: pixel i covers [i-.5, i+.5]."""
-    return (np.arange(n_pix * s) + 0.5) / s - 0.5
-
-
-def _geometry_bands(scene: Scene, s: int, work: Callable, band_rows: int = 288) -> None:
-    """Call ``work(r0, r1, g)`` for each band ``r0:r1`` of rows of the supersampled grid (H*s, W*s), ``g`` the
-    band's :func:`_geometry_band` (float64); ``band_rows`` see :data:`GEOMETRY_BAND`."""
-    W, H = scene.cam_size
-    xs, ys = _sample_grid(W, s), _sample_grid(H, s)
-
-    def band(r0):
-        r1 = min(len(ys), r0 + band_rows)
-        # one extra row on each side so footprint gradients are central everywhere
-        e0, e1 = max(0, r0 - 1), min(len(ys), r1 + 1)
-        g = _geometry_band(scene, ys[e0:e1], xs)
-        work(r0, r1, {k: v[r0 - e0: r0 - e0 + (r1 - r0)] for k, v in g.items()})
-
-    for r0 in range(0, len(ys), band_rows):
-        band(r0)
-
-
-def _geometry(scene: Scene, s: int | None = None, band_rows: int = GEOMETRY_BAND):
-    """Geometry on the supersampled grid (H*s, W*s): :func:`_geometry_band` in row bands, stored as float32
-    (``xp``, ``yp``, ``coef``, ``amb``) and bool (``board``, ``lit``)."""
-    s = scene.supersample if s is None else int(s)
-    W, H = scene.cam_size
-    shape = (H * s, W * s)
-    out = {k: np.empty(shape, dtype=np.float32) for k in ("xp", "yp", "coef", "amb")}
-    out.update({k: np.empty(shape, dtype=bool) for k in ("board", "lit")})
-
-    def work(r0, r1, g):
-        for k, v in g.items():
-            out[k][r0:r1] = v
-
-    _geometry_bands(scene, s, work, band_rows)
-    return out
-
-
-def true_projector_maps(scene: Scene):
-    """Exact projector coordinates seen at every camera pixel centre.
-
-    Returns
-    -------
-    col, row : (H, W) float64, projector x / y (pixels) of the surface (board or wall) seen at the
-        pixel centre where it is lit by the projector, NaN elsewhere (outside the projector image,
-        in the board's shadow, or no surface).
-    lit_board : (H, W) bool, pixels lying entirely on the board (every supersample of the pixel)
-        and entirely lit by the projector.
-    """
-    s = scene.supersample
-    W, H = scene.cam_size
-    g = _geometry(scene, s=s)
-    ok = (g["board"] & g["lit"]).reshape(H, s, W, s).all(axis=(1, 3))
-    del g
-    exact = _geometry_band(scene, np.arange(H, dtype=float), np.arange(W, dtype=float))
-    col = np.where(exact["lit"], exact["xp"], np.nan)
-    row = np.where(exact["lit"], exact["yp"], np.nan)
-    return col, row, ok
 
 
 # --------------------------------------------------------------------------------------------
@@ -266,7 +68,9 @@ class Renderer:
 
     The geometry (camera rays, surfaces, shading, projector coordinates per supersample) is computed
     here, once: it is most of the cost of a capture.  Each :meth:`frame` is then a 1-D profile
-    lookup, the camera's blur and noise, gamma and quantisation.
+    lookup, the camera's blur and noise, gamma and quantisation.  A pattern value becomes light through
+    the projector's response (:meth:`emitted`); Gray-code patterns are binary, so ``proj_gamma`` does
+    not change them.
 
     Parameters
     ----------
@@ -351,19 +155,44 @@ class Renderer:
         """
         return self.finish(self.linear(k), rng)
 
+    def emitted(self, values) -> np.ndarray:
+        """Light (fraction of the projector's white) of a line of pattern values: a bool line is a binary pattern
+        (True = white), any other is 0-255 levels; ``proj_black + (1 - proj_black) * (v / 255) ** proj_gamma``."""
+        sc = self.scene
+        values = np.asarray(values)
+        level = values if values.dtype == bool else (values.astype(np.float64) / 255.0) ** sc.proj_gamma
+        return sc.proj_black + (1.0 - sc.proj_black) * level
+
     def linear(self, k: int) -> np.ndarray:
         """Noise-free linear camera image k (H, W) float32 (fraction of full scale), before blur."""
         if not 0 <= k < self.pattern_set.count:
             raise IndexError(f"frame {k} is outside the sequence of {self.pattern_set.count} images")
+        if k == self.pattern_set.white:
+            return self._linear("white")
+        if k == self.pattern_set.black:
+            return self._linear("black")
+        axis, j, inv = self.index[k]
+        plane = self.col_planes[j] if axis == "col" else self.row_planes[j]
+        if inv:
+            plane = ~plane
+        return self._linear(axis, _profile(self.emitted(plane), self.sigma, self.pad))
+
+    def linear_stripes(self, values, axis: str) -> np.ndarray:
+        """Noise-free linear camera image (H, W) float32 of any 1-D pattern: ``values`` (projector width,) for
+        ``axis="col"`` (the pattern varies along the panel's x) or (projector height,) for ``"row"``; 0-255 levels
+        (through ``proj_gamma``, :meth:`emitted`) or bool.  :meth:`finish` adds the camera's blur and noise."""
+        if axis not in ("col", "row"):
+            raise ValueError(f"axis must be 'col' or 'row', got {axis!r}")
+        n = self.scene.proj_size[0 if axis == "col" else 1]
+        values = np.asarray(values)
+        if values.shape != (n,):
+            raise ValueError(f"a {axis} pattern of this projector has {n} values, got shape {values.shape}")
+        return self._linear(axis, _profile(self.emitted(values), self.sigma, self.pad))
+
+    def _linear(self, what: str, prof=None) -> np.ndarray:
+        """The linear image of the white or black panel, or of a column or row profile (:func:`_profile`)."""
         sc = self.scene
         black = sc.proj_black
-        prof = axis = None
-        if k not in (self.pattern_set.white, self.pattern_set.black):
-            axis, j, inv = self.index[k]
-            plane = self.col_planes[j] if axis == "col" else self.row_planes[j]
-            if inv:
-                plane = ~plane
-            prof = _profile(black + (1.0 - black) * plane, self.sigma, self.pad)
         W, H = sc.cam_size
         s = self.mapx.shape[0] // H  # supersamples per pixel and axis
         out = np.empty((H, W), np.float32)
@@ -375,14 +204,14 @@ class Renderer:
             y1 = min(H, y0 + self.BAND)
             b = slice(y0 * s, y1 * s)
             hi = buf[:(y1 - y0) * s]
-            if k == self.pattern_set.white:
+            if what == "white":
                 np.add(self.full[b], self.amb[b], out=hi)
-            elif k == self.pattern_set.black:
+            elif what == "black":
                 np.multiply(self.full[b], black, out=hi)
                 hi += self.amb[b]
             else:
-                self._lookup(prof, "x" if axis == "col" else "y", b, out=hi)
-                hi *= self.coef_cols[b] if axis == "col" else self.coef_rows[b]
+                self._lookup(prof, "x" if what == "col" else "y", b, out=hi)
+                hi *= self.coef_cols[b] if what == "col" else self.coef_rows[b]
                 hi += self.amb[b]
             cv2.resize(hi, (W, y1 - y0), dst=out[y0:y1], interpolation=cv2.INTER_AREA)
         return out
