@@ -174,10 +174,10 @@ STAGES = [
     ("plausibility checks", "procam.plausibility", "check_swapped_bits"),
     ("plausibility checks", "procam.plausibility", "check_orientation"),
     ("calibration (multi_pose)", "procam.multi_pose", "calibrate"),
-    ("verification (leave-one-out)", "procam.verify", "check_calibration"),
+    ("verification (leave-one-out)", "procam.verify", "verify_calibration"),
     ("summary + JSON", "procam.cli._show", "print_calibration"),
     ("summary + JSON", "procam.io", "save_calibration"),
-    ("summary + JSON", "procam.cli._show", "print_check"),
+    ("summary + JSON", "procam.cli._show", "print_verification"),
     ("summary + JSON", "procam.cli._show", "print_spread"),
     ("imports during the run (solvers)", "procam.cli.calibrate", "_import_solvers"),
 ]

@@ -32,7 +32,7 @@ from browser import Browser, find_chromium  # noqa: E402
 
 from procam import multi_pose, simulate  # noqa: E402
 from procam.report import build_report, write_report  # noqa: E402
-from procam.verify import check_calibration  # noqa: E402
+from procam.verify import verify_calibration  # noqa: E402
 from procam.view import View  # noqa: E402
 
 POSES = [(15, 12, 0), (-10, 20, 5), (20, -15, -5), (5, 25, 10), (-20, -10, 0)]
@@ -53,7 +53,7 @@ def main():
         views.append(View(obj, cam, proj, f"pose{k + 1}", s.cam_size, s.proj_size))
     calib = multi_pose.calibrate(views)
     t0 = time.perf_counter()
-    check = check_calibration(calib)
+    check = verify_calibration(calib)
     t1 = time.perf_counter()
     page = build_report(calib, check=check, name="benchmark")
     t2 = time.perf_counter()

@@ -204,7 +204,7 @@ def test_capture_session_runs_a_virtual_rig_through_its_hooks(tmp_path, capsys, 
                              cam_dist_coeffs=(s.cam_dist_coeffs[0] / 0.25**2, 0.0))
         monkeypatch.setattr(cameras, "demo_scene", small)
     hooks = _Recorder()
-    results = capture_session(tmp_path / "pose", 1, Rig(virtual=True, projector_size=(320, 200)), FAST,
+    results = capture_session(tmp_path / "pose", 1, Rig(virtual=True, proj_size=(320, 200)), FAST,
                               board=board, hooks=hooks)
     assert capsys.readouterr() == ("", "")
     (res,) = results

@@ -125,9 +125,10 @@ def test_cli_decode_writes_maps_and_picture(pose, tmp_path):
     code, out, err = run_cli(["decode", pose, "--projector", f"{W}x{H}", "-o", tmp_path / "maps.npz",
                               "--png", tmp_path / "d.png"])
     assert code == 0, err
-    m = np.load(tmp_path / "maps.npz")
+    with np.load(tmp_path / "maps.npz") as m:
+        col, row = m["col"], m["row"]
     yy, xx = np.mgrid[:H, :W]
-    assert np.array_equal(m["col"], xx) and np.array_equal(m["row"], yy)
+    assert np.array_equal(col, xx) and np.array_equal(row, yy)
     img = cv2.imread(str(tmp_path / "d.png"))
     assert img is not None and img.shape[1] > 500
     assert not list(tmp_path.glob(".*tmp*"))

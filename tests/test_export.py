@@ -298,8 +298,8 @@ def test_cli_export(tmp_path):
     names = sorted(p.name for p in (tmp_path / "maps").iterdir() if not p.name.startswith("."))
     assert names == ["camera_rectify.npz", "camera_undistort.npz", "projector_predistort.npz",
                      "projector_rectify.npz"]
-    m = np.load(tmp_path / "maps" / "camera_undistort.npz")
-    assert m["map_x"].shape == (400, 640) and m["map_x"].dtype == np.float32
+    with np.load(tmp_path / "maps" / "camera_undistort.npz") as m:
+        assert m["map_x"].shape == (400, 640) and m["map_x"].dtype == np.float32
     code, out, err = run_cli(["export", calib_path, "--format", "opengl", "-o", tmp_path / "g.json"])
     assert code == 2 and "--near and --far" in err
     code, out, err = run_cli(["export", calib_path, "--format", "opengl", "-o", tmp_path / "g.json",

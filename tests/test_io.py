@@ -224,7 +224,8 @@ def test_decoded_maps_round_trip_and_are_checked(tmp_path):
     assert np.array_equal(m["col"], xx) and np.array_equal(m["row"], yy) and m["valid_col"].all()
     assert m["projector_size"] == (64, 32) and m["order"] == ps.order
     assert io.save_decoded_maps(tmp_path / "again.npz", res).read_bytes() == path.read_bytes()
-    z = dict(np.load(path))
+    with np.load(path) as f:
+        z = dict(f)
     del z["row"]
     np.savez(tmp_path / "short.npz", **z)
     with pytest.raises(CaptureError, match="short.npz: has no row"):

@@ -15,7 +15,7 @@ from procam import multi_pose, simulate, single_pose
 from procam.report import SECTIONS, build_report, coverage_fractions, rig_geometry, write_report
 from procam.summary import PLUS_MINUS, parameter_rows
 from procam.verdict import Verdict, calibration_verdict
-from procam.verify import check_calibration
+from procam.verify import verify_calibration
 from procam.view import View
 from procam.errors import WeakPoseWarning
 from conftest import expect_warning, verdict_warnings
@@ -38,7 +38,7 @@ def _views(prefix="/data/run 3/pose"):
 @functools.lru_cache(maxsize=None)
 def _multi():
     calib = multi_pose.calibrate(list(_views()))
-    return calib, check_calibration(calib)
+    return calib, verify_calibration(calib)
 
 
 @functools.lru_cache(maxsize=None)
@@ -131,7 +131,7 @@ def test_held_out_poses_are_verified_separately():
     page = build_report(calib, [view, *_views()[:2]], name="s.json")
     ver = _text(_section(page, "verification"))
     assert "in-sample" in ver and "held out" in ver
-    check = check_calibration(calib, [view, *_views()[:2]])
+    check = verify_calibration(calib, [view, *_views()[:2]])
     assert [p.name for p in check.in_sample.poses] == [view.name]
     assert [p.name for p in check.held_out.poses] == [v.name for v in _views()[:2]]
     assert f"{check.held_out.overall.scale_error_pct:+.3f}" in ver

@@ -180,13 +180,13 @@ def test_near_degenerate_projector_pose_has_one_verdict_whatever_the_fit_does(pr
 
 def test_advice_flags_an_impossible_focal_length_whatever_its_std():
     """f_p = 19 px with a small reported std and |nu_p| = 1.4 deg was not called degenerate."""
-    a = sp.rate_pose(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, projector_size=(1920, 1080))
+    a = sp.rate_pose(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, proj_size=(1920, 1080))
     assert a["projector"]["failed"] and a["projector"]["degenerate"] and a["failed"] and not a["ok"]
     assert "19 px is impossible" in a["projector"]["message"]
-    a = sp.rate_pose((20, 20, 0), None, {"f_c": 5.0}, values={"f_c": 1.5e5}, camera_size=(1280, 800))
+    a = sp.rate_pose((20, 20, 0), None, {"f_c": 5.0}, values={"f_c": 1.5e5}, cam_size=(1280, 800))
     assert a["camera"]["failed"] and "impossible" in a["camera"]["message"]
     a = sp.rate_pose((20, 20, 0), (10, 20, 0), {"f_c": 5.0, "f_p": 5.0}, values={"f_c": 1500.0, "f_p": 2400.0},
-                  camera_size=(1280, 800), projector_size=(1920, 1080))
+                  cam_size=(1280, 800), proj_size=(1920, 1080))
     assert a["ok"] and not a["failed"]
 
 

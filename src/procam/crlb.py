@@ -332,8 +332,8 @@ def _pack(cov, names, cond, model, scalar_keys, prior_used=False) -> Bound:
                  prior_used=prior_used)
 
 
-def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
-    """Delta-method bound of the procam extrinsics ``R = R_p R_c^T``, ``T = t_p - R t_c``.
+def extrinsics_bound(cam, proj, R_cb, t_cb, R_pb, t_pb, *, rel_step=1e-7):
+    """Delta-method bound of the procam extrinsics ``R = R_pb R_cb^T``, ``T = t_pb - R t_cb``.
 
     The camera and projector observations are independent, so the pose covariances of the
     two device bounds (their ``omega``/``t`` blocks, marginalised over the intrinsics) are
@@ -343,7 +343,7 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
     ----------
     cam, proj : :class:`Bound`
         Results of :func:`camera_bound` and :func:`projector_bound` at the true poses.
-    R_c, t_c, R_p, t_p : array_like
+    R_cb, t_cb, R_pb, t_pb : array_like
         True board -> camera and board -> projector poses.
     rel_step : float
         Finite-difference step (rad or board units, relative to ``max(1, |x|)``).
@@ -352,8 +352,8 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
     -------
     :class:`ExtrinsicsBound`
     """
-    R_c, R_p = np.asarray(R_c, float), np.asarray(R_p, float)
-    t_c, t_p = np.asarray(t_c, float).reshape(3), np.asarray(t_p, float).reshape(3)
+    R_cb, R_pb = np.asarray(R_cb, float), np.asarray(R_pb, float)
+    t_cb, t_pb = np.asarray(t_cb, float).reshape(3), np.asarray(t_pb, float).reshape(3)
     blocks = []
     for b in (cam, proj):
         idx = [b.params.index(k) for k in ("wx", "wy", "wz", "tx", "ty", "tz")]
@@ -366,10 +366,10 @@ def extrinsics_bound(cam, proj, R_c, t_c, R_p, t_p, *, rel_step=1e-7):
     C[:6, :6], C[6:, 6:] = blocks
 
     def fun(q):
-        Rc, tc = _perturb(R_c, q[0:3]), t_c + q[3:6]
-        Rp, tp = _perturb(R_p, q[6:9]), t_p + q[9:12]
-        Rx = Rp @ Rc.T
-        T = tp - Rx @ tc
+        Rcq, tcq = _perturb(R_cb, q[0:3]), t_cb + q[3:6]
+        Rpq, tpq = _perturb(R_pb, q[6:9]), t_pb + q[9:12]
+        Rx = Rpq @ Rcq.T
+        T = tpq - Rx @ tcq
         return np.r_[models.matrix_to_euler(Rx), T, np.linalg.norm(T)]
 
     q0 = np.zeros(12)

@@ -203,22 +203,22 @@ def evaluate(calib: Calibration, views: Sequence[View], *, min_points: int = 6) 
                                    "is the calibration for this camera?")
         obj, cam_u, proj_u = obj[ok], cam_u[ok], proj_u[ok]
         try:
-            Rc, tc, ec = pnp(obj, cam_u, Kc)
-            Rp, tp, ep = pnp(obj, proj_u, Kp)
+            R_cb, t_cb, ec = pnp(obj, cam_u, Kc)
+            R_pb, t_pb, ep = pnp(obj, proj_u, Kp)
         except CalibrationError as e:
             raise CalibrationError(f"pose {name!r}: {e}") from None
-        _, _, sc, sp = stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, Rc, tc)
-        Rj = Rp @ Rc.T
-        Tj = tp - Rj @ tc
+        _, _, sc, sp = stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R_cb, t_cb)
+        Rj = R_pb @ R_cb.T
+        Tj = t_pb - Rj @ t_cb
         cam_all.append(ec)
         proj_all.append(ep)
         st_all += [sc, sp]
         poses.append(PoseEvaluation(
             name=name, n_points=int(len(obj)), cam_rms=rms(ec), proj_rms=rms(ep),
-            stereo_rms=rms(np.vstack([sc, sp])), cam_angles=_angles(models.board_angles_deg(Rc, tc)),
-            proj_angles=_angles(models.board_angles_deg(Rp, tp)), R=Rj, T=Tj,
+            stereo_rms=rms(np.vstack([sc, sp])), cam_angles=_angles(models.board_angles_deg(R_cb, t_cb)),
+            proj_angles=_angles(models.board_angles_deg(R_pb, t_pb)), R=Rj, T=Tj,
             R_angles=_angles(models.euler_deg(Rj)),
-            R_cam=Rc, t_cam=tc, R_proj=Rp, t_proj=tp))
+            R_cam=R_cb, t_cam=t_cb, R_proj=R_pb, t_proj=t_pb))
     Ts = np.array([p.T for p in poses])
     sx1, sT1, sA1 = _spread(Ts, 1)
     _, sT0, sA0 = _spread(Ts, 0)

@@ -88,7 +88,7 @@ def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12)
 
     Returns
     -------
-    R_b (3, 3), t_b (3,), cam residuals (N, 2), proj residuals (N, 2) (observed - predicted, pixels)
+    R_cb (3, 3), t_cb (3,), cam residuals (N, 2), proj residuals (N, 2) (observed - predicted, pixels)
     """
     from scipy.optimize import least_squares
 
@@ -99,8 +99,8 @@ def stereo_pose(obj, cam_u, proj_u, Kc, Kp, R, T, R0, t0, *, tol: float = 1e-12)
     T = np.asarray(T, float).reshape(3)
 
     def res(x):
-        Rb = models.rvec_to_matrix(x[:3])
-        Xc = obj @ Rb.T + x[3:]
+        R_cb = models.rvec_to_matrix(x[:3])
+        Xc = obj @ R_cb.T + x[3:]
         rc = cam_u - models.project(Kc, np.eye(3), np.zeros(3), Xc)
         rp = proj_u - models.project(Kp, R, T, Xc)
         return np.concatenate([rc.ravel(), rp.ravel()])
@@ -249,12 +249,12 @@ def calibration_residuals(calib, views=None) -> list[dict]:
     if multi:
         for p, v in zip(poses, views):
             m = v.valid
-            Rc, tc = np.asarray(p["R_cam"], float), np.asarray(p["t_cam"], float)
-            Rp, tp = models.compose(calib.R, calib.T, Rc, tc)
+            R_cb, t_cb = np.asarray(p["R_cam"], float), np.asarray(p["t_cam"], float)
+            R_pb, t_pb = models.compose(calib.R, calib.T, R_cb, t_cb)
             cam_res = np.full_like(v.cam_pts, np.nan)
             proj_res = np.full_like(v.proj_pts, np.nan)
-            cam_res[m] = v.cam_pts[m] - calib.camera.project(Rc, tc, v.obj_pts[m])
-            proj_res[m] = v.proj_pts[m] - calib.projector.project(Rp, tp, v.obj_pts[m])
+            cam_res[m] = v.cam_pts[m] - calib.camera.project(R_cb, t_cb, v.obj_pts[m])
+            proj_res[m] = v.proj_pts[m] - calib.projector.project(R_pb, t_pb, v.obj_pts[m])
             out.append({"name": v.name, "cam_pts": v.cam_pts, "cam_res": cam_res, "cam_used": m.copy(),
                         "proj_pts": v.proj_pts, "proj_res": proj_res, "proj_used": m.copy(), "source": "multi-pose"})
         return out

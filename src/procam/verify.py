@@ -401,7 +401,7 @@ def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_p
 # --------------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class CalibrationCheck:
+class CalibrationVerification:
     """The metric verification of one calibration, as ``procam calibrate`` / ``evaluate`` / ``report`` show it.
 
     Attributes
@@ -458,7 +458,7 @@ def _verify_each(calib, views, min_corners, notes) -> Verification | None:
     return verify(calib, ok, min_corners=min_corners) if ok else None
 
 
-def check_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_corners: int = 6) -> CalibrationCheck:
+def verify_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_corners: int = 6) -> CalibrationVerification:
     """The metric verification a calibration's summaries show.
 
     * the given poses (default: the calibration's own ``views``) split into those the calibration
@@ -472,11 +472,11 @@ def check_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_co
 
     Returns
     -------
-    :class:`CalibrationCheck`
+    :class:`CalibrationVerification`
     """
     notes: list[str] = []
     if calib.projector is None or calib.R is None:
-        return CalibrationCheck(None, None, None, ("a camera-only calibration has no metric verification "
+        return CalibrationVerification(None, None, None, ("a camera-only calibration has no metric verification "
                                                    "(it needs the projector to triangulate the board)",))
     own = list(calib.views)
     views = own if views is None else list(views)
@@ -506,4 +506,4 @@ def check_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_co
     elif calib.method == "single-pose" and held_out is None:
         notes.append("a single-pose calibration verified on its own pose only (optimistic); give other poses "
                      "(procam evaluate CALIB POSES..., procam report CALIB POSES...) for a held-out figure")
-    return CalibrationCheck(in_sample, held_out, loo, tuple(notes))
+    return CalibrationVerification(in_sample, held_out, loo, tuple(notes))

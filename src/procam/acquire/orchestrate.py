@@ -44,20 +44,20 @@ class Rig:
     """The devices of a capture session.
 
     camera : a ``--camera`` spec (:func:`~procam.acquire.cameras.parse_camera_spec`).
-    projector_size : (width, height) of the patterns; None = the display's size (1920x1080 when virtual).
+    proj_size : (width, height) of the patterns; None = the display's size (1920x1080 when virtual).
     display : the projector's display (:func:`~procam.acquire.projector.choose_display`); None = the one
         that is not the primary.
     virtual : a virtual projector, and the simulator as the camera.
-    camera_size, exposure_ms, gain, timeout_s : the camera's settings
+    cam_size, exposure_ms, gain, timeout_s : the camera's settings
         (:func:`~procam.acquire.cameras.open_camera`; the simulator takes the gain only).
     seed : the simulator's noise seed (pose ``i`` is rendered with ``seed + i``).
     """
 
     camera: str = "opencv:0"
-    projector_size: tuple | None = None
+    proj_size: tuple | None = None
     display: int | None = None
     virtual: bool = False
-    camera_size: tuple | None = None
+    cam_size: tuple | None = None
     exposure_ms: float | None = None
     gain: float | None = None
     timeout_s: float = 60.0
@@ -149,7 +149,7 @@ def _open_projector(rig: Rig):
     """The (not yet open) projector of ``rig`` and its pattern size."""
     from .projector import ProjectorWindow, VirtualProjector
 
-    size = rig.projector_size
+    size = rig.proj_size
     if rig.virtual:
         size = size or (1920, 1080)
         return VirtualProjector(size), size
@@ -199,7 +199,7 @@ class _Session:
         if self._shared is None:
             from .cameras import open_camera
 
-            self._shared = self.stack.enter_context(open_camera(rig.camera, size=rig.camera_size,
+            self._shared = self.stack.enter_context(open_camera(rig.camera, size=rig.cam_size,
                                                                 exposure_ms=rig.exposure_ms, gain=rig.gain,
                                                                 timeout_s=rig.timeout_s))
             self.hooks.camera(self._shared)

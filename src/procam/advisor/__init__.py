@@ -18,7 +18,7 @@ Per camera frame (:meth:`Advisor.update`):
    the solver's prior, 2.5 % of the larger image side), the bound is the one with the solver's Gaussian
    prior on it (the image centre), as :func:`procam.single_pose.calibrate` then does;
 4. with an earlier capture's calibration (its ``R, T, K_p``), the board in the projector frame
-   (``R_p = R R_c, t_p = R t_c + T``), ``(psi_p, nu_p)`` and the bound of ``f_p, v0p``
+   (``R_pb = R R_cb, t_pb = R t_cb + T``), ``(psi_p, nu_p)`` and the bound of ``f_p, v0p``
    (:func:`procam.crlb.projector_bound`: ``u0p`` and ``alpha_p`` held, corner noise ``sigma_projector``);
    the printed board's footprint in the projector image tells whether it is all in the projector's light;
 5. the advice (:class:`Action` s): move into view / closer / into the light first, then which way to turn

@@ -120,21 +120,21 @@ class Advisor:
         return self._camera
 
     # -- per-pose quantities ------------------------------------------------------------------
-    def _camera_bound(self, R_c, t_c, prior: bool | None = None):
-        """(std_f, std dict, used_prior) of the camera's single-pose bound at pose (R_c, t_c)."""
+    def _camera_bound(self, R_cb, t_cb, prior: bool | None = None):
+        """(std_f, std dict, used_prior) of the camera's single-pose bound at pose (R_cb, t_cb)."""
         o = self.options
         dev = self._camera
         c, k1, k2, _ = distortion_for_bound(dev)
         K = np.asarray(dev.K, float)
         sig_pp = o.pp_prior_fraction * max(self.image_size)
         # prior None: the solver's rule (the prior only where the corners do not pin the principal point)
-        b = crlb.camera_bound(K, c, k1, k2, R_c, t_c, self.obj, o.sigma_camera, jacobian="central",
+        b = crlb.camera_bound(K, c, k1, k2, R_cb, t_cb, self.obj, o.sigma_camera, jacobian="central",
                               pp_prior_std=None if prior is False else sig_pp,
                               pp_prior_when="needed" if prior is None else "always")
         return b.std["f_c"], b.std, b.prior_used
 
-    def _projector_bound(self, R_p, t_p):
-        b = crlb.projector_bound(self.projector.K, R_p, t_p, self.obj, self.options.sigma_projector)
+    def _projector_bound(self, R_pb, t_pb):
+        b = crlb.projector_bound(self.projector.K, R_pb, t_pb, self.obj, self.options.sigma_projector)
         return b.std["f_p"], b.std["v0p"]
 
     def _terms(self, ang_c, rel_c, ang_p, rel_p) -> dict:
@@ -159,32 +159,32 @@ class Advisor:
                 terms["projector rule"] = ratio(a.projector_rule_deg, abs(ang_p[1]))
         return terms
 
-    def _score(self, R_c, t_c, prior, stop_above: float | None = None) -> float:
-        """The score (max of :meth:`_terms`) of the board at pose (R_c, t_c).
+    def _score(self, R_cb, t_cb, prior, stop_above: float | None = None) -> float:
+        """The score (max of :meth:`_terms`) of the board at pose (R_cb, t_cb).
 
         The cheap terms (the rules, the projector's bound) come first: when they already exceed
         ``stop_above``, their maximum is returned without the camera's bound (the score is at least that).
         """
-        ang_c = models.board_angles_deg(R_c, t_c)
+        ang_c = models.board_angles_deg(R_cb, t_cb)
         ang_p = rel_p = None
         if self.projector is not None:
-            R_p, t_p = projector_pose(self.projector, R_c, t_c)
-            rel_p = self._projector_bound(R_p, t_p)[0] / float(self.projector.K[0, 0])
-            ang_p = models.board_angles_deg(R_p, t_p)
+            R_pb, t_pb = projector_pose(self.projector, R_cb, t_cb)
+            rel_p = self._projector_bound(R_pb, t_pb)[0] / float(self.projector.K[0, 0])
+            ang_p = models.board_angles_deg(R_pb, t_pb)
         terms = self._terms(ang_c, 0.0, ang_p, rel_p)
         cheap = max(terms.values()) if terms else 0.0
         if not self.known_intrinsics or (stop_above is not None and cheap > stop_above):
             return cheap
-        std_c, _, _ = self._camera_bound(R_c, t_c, prior)
+        std_c, _, _ = self._camera_bound(R_cb, t_cb, prior)
         rel_c = std_c / float(self._camera.K[0, 0])
         return max(cheap, rel_c / (self.options.target_pct / 100.0) if math.isfinite(rel_c) else float("inf"))
 
-    def _within_limits(self, R_c, t_c) -> bool:
-        a = models.board_angles_deg(R_c, t_c)
+    def _within_limits(self, R_cb, t_cb) -> bool:
+        a = models.board_angles_deg(R_cb, t_cb)
         return abs(a[0]) <= self.options.max_angle_deg and abs(a[1]) <= self.options.max_angle_deg
 
-    def search_move(self, R_c, t_c, prior=True, rounds: int = 2):
-        """The move (turn_deg, tilt_deg) towards a good pose from (R_c, t_c), and the score it reaches.
+    def search_move(self, R_cb, t_cb, prior=True, rounds: int = 2):
+        """The move (turn_deg, tilt_deg) towards a good pose from (R_cb, t_cb), and the score it reaches.
 
         Per round: probe a turn and a tilt of ``probe_deg`` each way; the candidate directions are the four
         pure turns/tilts and their combination weighted by how much each probe lowers the log score.  Along
@@ -202,14 +202,14 @@ class Advisor:
         o = self.options
 
         def score_of(R, stop_above=None):
-            return self._score(R, t_c, prior, stop_above) if self._within_limits(R, t_c) else float("inf")
+            return self._score(R, t_cb, prior, stop_above) if self._within_limits(R, t_cb) else float("inf")
 
         def log(v):
             return math.log(v) if 0 < v < float("inf") else (700.0 if v == float("inf") else -700.0)
 
         d = o.probe_deg
-        R_now = R_c
-        s_now = self._score(R_c, t_c, prior)
+        R_now = R_cb
+        s_now = self._score(R_cb, t_cb, prior)
         for _ in range(rounds):
             if s_now <= o.aim:
                 break
@@ -248,7 +248,7 @@ class Advisor:
             if best[1] is None:
                 break
             s_now, R_now = best
-        turn, tilt = move_between(R_c, R_now)
+        turn, tilt = move_between(R_cb, R_now)
         return turn, tilt, s_now, s_now <= 1.0
 
     # -- the frame ----------------------------------------------------------------------------
@@ -285,10 +285,10 @@ class Advisor:
                           still=still, motion_px=motion,
                           timings_ms={"detect": 1000 * (t_det - t_start),
                                       "total": 1000 * (time.perf_counter() - t_start)}, **common)
-        R_c, t_c = pose
-        outline, fraction, edges = self._placement(corners, R_c, t_c)
-        cam_state = self._camera_state(R_c, t_c)
-        proj_state, outside = self._projector_state(R_c, t_c)
+        R_cb, t_cb = pose
+        outline, fraction, edges = self._placement(corners, R_cb, t_cb)
+        cam_state = self._camera_state(R_cb, t_cb)
+        proj_state, outside = self._projector_state(R_cb, t_cb)
         terms = self._terms(cam_state.angles_deg, cam_state.rel_std_f,
                             None if proj_state is None else proj_state.angles_deg,
                             None if proj_state is None else proj_state.rel_std_f)
@@ -302,7 +302,7 @@ class Advisor:
         good_pose = score <= 1.0
         if not good_pose:
             t0 = time.perf_counter()
-            acts, more = self._move_actions(R_c, t_c, t, phase)
+            acts, more = self._move_actions(R_cb, t_cb, t, phase)
             actions.extend(acts)
             notes = notes + tuple(more)
             search_ms = 1000 * (time.perf_counter() - t0)
@@ -358,42 +358,42 @@ class Advisor:
         return motion <= o.still_px and span >= o.still_s - 1e-9, motion
 
     def _camera_pose(self, corners: np.ndarray):
-        """``(R_c, t_c)`` board -> camera by PnP on the undistorted corners with the camera's intrinsics,
+        """``(R_cb, t_cb)`` board -> camera by PnP on the undistorted corners with the camera's intrinsics,
         or None."""
         dev = self._camera
         return pose_pnp(self.obj, dev.undistort(corners), dev.K)
 
-    def _placement(self, corners: np.ndarray, R_c, t_c):
+    def _placement(self, corners: np.ndarray, R_cb, t_cb):
         """Where the board is in the image: ``(outline, fraction, edges)`` -- the printed squares' outer
         corners (4, 2) projected, the area of the inner corners' quadrilateral / the image area, and the
         outline's distance (px) to each image border (``{"left": .., "right": .., "top": .., "bottom": ..}``)."""
         W, H = self.image_size
         b = self.board
-        outline = self._camera.project(R_c, t_c, self.outer)
+        outline = self._camera.project(R_cb, t_cb, self.outer)
         quad = corners[[0, b.cols - 1, b.n_corners - 1, b.n_corners - b.cols]]
         fraction = polygon_area(quad) / (W * H)
         edges = {"left": float(np.min(outline[:, 0]) + 0.5), "right": float(W - 0.5 - np.max(outline[:, 0])),
                  "top": float(np.min(outline[:, 1]) + 0.5), "bottom": float(H - 0.5 - np.max(outline[:, 1]))}
         return outline, fraction, edges
 
-    def _camera_state(self, R_c, t_c) -> DeviceState:
+    def _camera_state(self, R_cb, t_cb) -> DeviceState:
         """The board's angles in the camera and the camera's bound there (the solver's principal-point rule),
         with what the bound assumes in words."""
         o = self.options
         W, H = self.image_size
         dev = self._camera
-        std_c, _, prior = self._camera_bound(R_c, t_c)
+        std_c, _, prior = self._camera_bound(R_cb, t_cb)
         f_c = float(dev.K[0, 0])
-        ang_c = tuple(float(a) for a in models.board_angles_deg(R_c, t_c))
+        ang_c = tuple(float(a) for a in models.board_angles_deg(R_cb, t_cb))
         dist_note = distortion_for_bound(dev)[3]
         assumes_c = (f"corner noise {o.sigma_camera:g} px; f, alpha, k1, k2 and the pose fitted; "
                      + ("principal point assumed at the image centre ± "
                         f"{o.pp_prior_fraction * max(W, H):.0f} px (the corners do not pin it)" if prior
                         else "principal point = centre of distortion, from the corners")
                      + (f"; {dist_note}" if dist_note else ""))
-        return DeviceState(ang_c, f_c, std_c, std_c / f_c, float(np.linalg.norm(t_c)), None, assumes_c)
+        return DeviceState(ang_c, f_c, std_c, std_c / f_c, float(np.linalg.norm(t_cb)), None, assumes_c)
 
-    def _projector_state(self, R_c, t_c):
+    def _projector_state(self, R_cb, t_cb):
         """``(state, outside)``: the board's angles in the projector and the projector's bound there
         (:class:`DeviceState`), and the projector-image sides the printed board crosses (``()`` when it is all
         in the light); ``(None, None)`` while the projector side is unknown."""
@@ -401,14 +401,14 @@ class Advisor:
             return None, None
         o = self.options
         p = self.projector
-        R_p, t_p = projector_pose(p, R_c, t_c)
-        std_p, std_v = self._projector_bound(R_p, t_p)
+        R_pb, t_pb = projector_pose(p, R_cb, t_cb)
+        std_p, std_v = self._projector_bound(R_pb, t_pb)
         f_p = float(p.K[0, 0])
-        ang_p = tuple(float(a) for a in models.board_angles_deg(R_p, t_p))
-        state = DeviceState(ang_p, f_p, std_p, std_p / f_p, float(np.linalg.norm(t_p)), std_v,
+        ang_p = tuple(float(a) for a in models.board_angles_deg(R_pb, t_pb))
+        state = DeviceState(ang_p, f_p, std_p, std_p / f_p, float(np.linalg.norm(t_pb)), std_v,
                             f"corner noise {o.sigma_projector:g} px; f_p, v0p and the pose fitted, "
                             f"u0p and alpha_p held (R, T from {p.source or 'an earlier capture'})")
-        footprint = models.project(p.K, R_p, t_p, self.outer)
+        footprint = models.project(p.K, R_pb, t_pb, self.outer)
         Wp, Hp = p.size
         outside = tuple(side for side, bad in (
             ("left", np.min(footprint[:, 0]) < -0.5), ("right", np.max(footprint[:, 0]) > Wp - 0.5),
@@ -490,7 +490,7 @@ class Advisor:
         return Action("tilt", f"tilt the board ~{amount} deg about the horizontal axis, {_TILT_WORDS[sgn]}",
                       degrees=deg)
 
-    def _stale(self, plan, R_c, t_c, t, phase) -> bool:
+    def _stale(self, plan, R_cb, t_cb, t, phase) -> bool:
         """Does the move search have to run again?  Not while the user follows the proposed move (the remaining
         move to its pose is updated every frame): only without a plan, in another phase, after
         ``search_refresh_s``, or -- at most every ``search_interval_s`` -- when the board went the other way
@@ -500,26 +500,26 @@ class Advisor:
             return True
         if t - plan["t"] < o.search_interval_s:
             return False
-        remaining = math.hypot(*move_between(R_c, plan["R"]))
-        moved = np.linalg.norm(np.asarray(t_c) - plan["t_c"]) > 0.15 * np.linalg.norm(plan["t_c"])
+        remaining = math.hypot(*move_between(R_cb, plan["R"]))
+        moved = np.linalg.norm(np.asarray(t_cb) - plan["t_c"]) > 0.15 * np.linalg.norm(plan["t_c"])
         return remaining > plan["size"] + 5.0 or moved
 
-    def _move_actions(self, R_c, t_c, t, phase):
+    def _move_actions(self, R_cb, t_cb, t, phase):
         """Turn/tilt actions from the move search (:meth:`_stale` says when it runs), and notes."""
         o = self.options
         plan = self._plan
         for attempt in (0, 1):
-            if attempt == 1 or self._stale(plan, R_c, t_c, t, phase):
-                turn, tilt, after, reached = self.search_move(R_c, t_c)
+            if attempt == 1 or self._stale(plan, R_cb, t_cb, t, phase):
+                turn, tilt, after, reached = self.search_move(R_cb, t_cb)
                 if turn == 0.0 and tilt == 0.0:
                     self._plan = None
                     return [Action("closer", f"no turn or tilt within {o.max_move_deg:g} deg improves this pose: move "
                                              "the board closer, or place it anew")], []
-                plan = self._plan = {"t": t, "R": axis_rotation(turn, tilt) @ R_c, "t_c": np.array(t_c, float),
+                plan = self._plan = {"t": t, "R": axis_rotation(turn, tilt) @ R_cb, "t_c": np.array(t_cb, float),
                                      "size": math.hypot(turn, tilt), "after": after, "phase": phase,
                                      "reached": reached}
                 attempt = 1
-            turn, tilt = move_between(R_c, plan["R"])
+            turn, tilt = move_between(R_cb, plan["R"])
             acts = [self._action(name, deg) for name, deg in sorted((("turn", turn), ("tilt", tilt)),
                                                                    key=lambda v: -abs(v[1])) if abs(deg) >= 1.5]
             if acts or attempt == 1:

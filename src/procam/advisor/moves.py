@@ -30,9 +30,9 @@ class ProjectorSide:
     source: str = ""
 
 
-def projector_pose(side: ProjectorSide, R_c, t_c):
-    """The board's pose in the projector, ``(R_p, t_p) = (R R_c, R t_c + T)``, from its pose in the camera."""
-    return side.R @ R_c, side.R @ t_c + side.T
+def projector_pose(side: ProjectorSide, R_cb, t_cb):
+    """The board's pose in the projector, ``(R_pb, t_pb) = (R R_cb, R t_cb + T)``, from its pose in the camera."""
+    return side.R @ R_cb, side.R @ t_cb + side.T
 
 
 def axis_rotation(turn_deg: float, tilt_deg: float) -> np.ndarray:
@@ -42,19 +42,19 @@ def axis_rotation(turn_deg: float, tilt_deg: float) -> np.ndarray:
     return rx @ ry
 
 
-def apply_move(R_b, t_b, turn_deg: float = 0.0, tilt_deg: float = 0.0):
+def apply_move(R_cb, t_cb, turn_deg: float = 0.0, tilt_deg: float = 0.0):
     """The board pose after a move: a turn about the camera's vertical axis and a tilt about its
-    horizontal axis, both through the board's centre (the corners' centroid, ``t_b``).
+    horizontal axis, both through the board's centre (the corners' centroid, ``t_cb``).
 
     ``turn_deg > 0``: the board's right edge (larger image x) goes away from the camera;
-    ``tilt_deg > 0``: its top edge (smaller image y) goes away.  Returns ``(R_b', t_b)`` (board -> camera).
+    ``tilt_deg > 0``: its top edge (smaller image y) goes away.  Returns ``(R_b', t_cb)`` (board -> camera).
 
     >>> R, t = apply_move(np.eye(3), [0.0, 0.0, 500.0], turn_deg=10.0)
     >>> bool((R @ [100.0, 0, 0] + t)[2] > 500.0)   # the right edge is farther
     True
     """
-    R_b = np.asarray(R_b, float)
-    return axis_rotation(turn_deg, tilt_deg) @ R_b, np.asarray(t_b, float).reshape(3).copy()
+    R_cb = np.asarray(R_cb, float)
+    return axis_rotation(turn_deg, tilt_deg) @ R_cb, np.asarray(t_cb, float).reshape(3).copy()
 
 
 def move_between(R_from, R_to) -> tuple[float, float]:

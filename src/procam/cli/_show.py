@@ -58,8 +58,8 @@ def print_calibration(calib) -> None:
     say(f"verdict: {calib.verdict}")
 
 
-def print_check(check) -> None:
-    """Print a :class:`procam.verify.CalibrationCheck` as rich tables, and its notes."""
+def print_verification(check) -> None:
+    """Print a :class:`procam.verify.CalibrationVerification` as rich tables, and its notes."""
     if check.in_sample is not None:
         console.print(verification_table(check.in_sample, "metric verification on the poses the calibration was "
                                                           "fitted to (in-sample, optimistic; board units)"))

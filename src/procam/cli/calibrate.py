@@ -129,10 +129,10 @@ def calibrate_cmd(
     say(f"wrote {out}" + ("" if trusted else f" (marked {calib.verdict})"))
     check = None
     if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
-        from ..verify import check_calibration
+        from ..verify import verify_calibration
 
-        check = check_calibration(calib)
-        _show.print_check(check)
+        check = verify_calibration(calib)
+        _show.print_verification(check)
         if check.leave_one_out is not None and check.leave_one_out.refits:
             _show.print_spread(calib, check.leave_one_out.refits)
     if yaml is not None:

@@ -145,7 +145,7 @@ def capture_cmd(
         fail("the virtual camera renders step-1 sequences only; leave out --step")
     options = CaptureOptions(order=order, step=step, retries=retries, board=board_size, keep_failed=keep_failed,
                              settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
-    rig = Rig(camera=camera, projector_size=size, display=display, virtual=virtual, camera_size=cam_size,
+    rig = Rig(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
               exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
     with _Printer() as printer:
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)

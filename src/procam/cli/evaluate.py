@@ -90,11 +90,11 @@ def evaluate_cmd(
     console.print(s)
     # the metric verification: the given poses the calibration was fitted to (in-sample) and the others (held
     # out); a multi-pose calibration that holds >= 4 poses also leave-one-pose-out
-    from ..verify import check_calibration
+    from ..verify import verify_calibration
     from . import _show
 
-    check = check_calibration(calib, views)
-    _show.print_check(check)
+    check = verify_calibration(calib, views)
+    _show.print_verification(check)
     if out is not None:
         d = {"format": "procam-evaluation", "version": 1, "calibration": str(calibration), "method": calib.method,
              **ev.to_dict(), "verification": check.to_dict()}

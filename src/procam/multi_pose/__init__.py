@@ -273,19 +273,19 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
         for j in range(len(objs)):
             pc = models.project(Kc, models.rvec_to_matrix(rvc[j]), tvc[j], objs[j])
             cam_res.append(cams[j] - Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc))
-            Rp, tp = models.compose(R, T, models.rvec_to_matrix(rvc[j]), tvc[j])
-            pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, Rp, tp, objs[j]), Kp)
+            R_pb, t_pb = models.compose(R, T, models.rvec_to_matrix(rvc[j]), tvc[j])
+            pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, R_pb, t_pb, objs[j]), Kp)
             proj_res.append(projs[j] - pp)
         cam_rms, proj_rms, stereo_rms = rms_c, rms_p, rms_s
 
     poses = []
     for j in range(len(objs)):
-        Rc = models.rvec_to_matrix(rv_board[j])
-        Rp, tp = models.compose(R, T, Rc, tv_board[j])
+        R_cb = models.rvec_to_matrix(rv_board[j])
+        R_pb, t_pb = models.compose(R, T, R_cb, tv_board[j])
         poses.append({"name": names[j], "n_corners": int(len(objs[j])),
-                      "camera_angles_deg": models.board_angles_deg(Rc, tv_board[j]).tolist(),
-                      "projector_angles_deg": models.board_angles_deg(Rp, tp).tolist(),
-                      "R_cam": Rc.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
+                      "camera_angles_deg": models.board_angles_deg(R_cb, tv_board[j]).tolist(),
+                      "projector_angles_deg": models.board_angles_deg(R_pb, t_pb).tolist(),
+                      "R_cam": R_cb.tolist(), "t_cam": np.asarray(tv_board[j], float).tolist(),
                       "cam_rms": rms([cam_res[j]]), "proj_rms": rms([proj_res[j]]),
                       "stereo_rms": rms([cam_res[j], proj_res[j]])})
     if len(views) < 3:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..residuals import calibration_residuals
 from ..verdict import calibration_verdict
-from ..verify import CalibrationCheck, check_calibration
+from ..verify import CalibrationVerification, verify_calibration
 from .elements import CSP, CSS
 from .sections import (coverage_section, loo_section, parameters_section, residuals_section, rig_section, section,
                        verdict_section, verification_section)
@@ -16,7 +16,7 @@ from .sections import (coverage_section, loo_section, parameters_section, residu
 __all__ = ["build_report", "write_report"]
 
 
-def build_report(calib, views=None, *, decodes=None, check: CalibrationCheck | None = None, verify: bool = True,
+def build_report(calib, views=None, *, decodes=None, check: CalibrationVerification | None = None, verify: bool = True,
                  name: str = "calibration", notes=()) -> str:
     """The HTML page of a calibration.
 
@@ -27,7 +27,7 @@ def build_report(calib, views=None, *, decodes=None, check: CalibrationCheck | N
         those of the calibration's own poses when it holds them (:func:`procam.residuals.calibration_residuals`),
         else of ``views``.
     decodes : optional :class:`procam.decode.DecodeResult` per view (coverage of the decoded pixels).
-    check : the metric verification (:func:`procam.verify.check_calibration`); computed here when None
+    check : the metric verification (:func:`procam.verify.verify_calibration`); computed here when None
         and ``verify`` (leave-one-pose-out refits included for a multi-pose calibration of >= 4 poses).
     name : the calibration's name in the title (e.g. its file name).
     notes : extra lines for the top of the page (e.g. what was decoded).
@@ -40,7 +40,7 @@ def build_report(calib, views=None, *, decodes=None, check: CalibrationCheck | N
 
     views = list(calib.views) if views is None else list(views)
     if check is None and verify and calib.projector is not None:
-        check = check_calibration(calib, views)
+        check = verify_calibration(calib, views)
     verdict = calibration_verdict(calib)
     own = list(calib.views)
     per_pose = calibration_residuals(calib) if own else (calibration_residuals(calib, views) if views else [])

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..summary import PLUS_MINUS, parameter_table, pose_table, projector_assumptions, short_name, verification_table
 from ..verdict import Verdict
-from ..verify import CalibrationCheck
+from ..verify import CalibrationVerification
 from .coverage import coverage_fractions
 from .elements import fmt, png, table, text_table
 from .rig import rig_geometry, rig_svg
@@ -32,7 +32,7 @@ def section(sid: str, body: str, cls: str = "") -> str:
     return f'<section id="{sid}"{c}>\n<h2>{escape(SECTIONS[sid])}</h2>\n{body}\n</section>'
 
 
-def verdict_section(calib, verdict: Verdict, check: CalibrationCheck | None) -> str:
+def verdict_section(calib, verdict: Verdict, check: CalibrationVerification | None) -> str:
     meaning = verdict.meaning
     parts = [f'<p><strong>{escape(meaning[:1].upper() + meaning[1:])}.</strong></p>']
     if verdict.reasons:
@@ -170,7 +170,7 @@ def residuals_section(calib, per_pose, verdict: Verdict) -> str:
         table(head, rows, row_classes=classes)])
 
 
-def verification_section(calib, check: CalibrationCheck | None) -> str:
+def verification_section(calib, check: CalibrationVerification | None) -> str:
     if check is None:
         return '<p class="note">Not computed.</p>'
     parts = ['<p>The chessboard corners of every pose triangulated from the camera and the projector with this '
@@ -196,7 +196,7 @@ def verification_section(calib, check: CalibrationCheck | None) -> str:
     return "\n".join(parts)
 
 
-def loo_section(check: CalibrationCheck | None) -> str:
+def loo_section(check: CalibrationVerification | None) -> str:
     loo = check.leave_one_out if check is not None else None
     if loo is None or loo.held_out is None:
         why = [n for n in (check.notes if check is not None else ()) if "leave-one" in n]

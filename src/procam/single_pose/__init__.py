@@ -5,7 +5,7 @@ Pipeline per pose -- camera, then projector, then the procam extrinsics:
 1. the camera (:mod:`.camera`): centre of distortion and division model, the principal point, the
    principal-axis LM, the joint refinement on the distorted corners;
 2. the projector (:mod:`.projector`): ``f_p``, ``v0p`` and the pose with ``u0p`` fixed, ``alpha_p = 1``;
-3. ``R = R_p R_c^T, T = t_p - R t_c`` (camera -> projector, as OpenCV ``stereoCalibrate``);
+3. ``R = R_pb R_cb^T, T = t_pb - R t_cb`` (camera -> projector, as OpenCV ``stereoCalibrate``);
 4. the verdict (:mod:`.rating`): pose angles, the paper's rule and the true degeneracy conditions, the
    standard deviation of every parameter from the Jacobian at the solution (:mod:`procam.uncertainty`),
    and whether a focal length is plausible at all.
@@ -65,7 +65,7 @@ def _stereo_rms(obj, cam_und, proj, Kc, Kp, R, T, R0, t0) -> float:
 
 
 def extrinsics(cam: CameraSolution, proj: ProjectorSolution):
-    """Camera -> projector ``(R, T)`` from the two board poses: ``R = R_p R_c^T, T = t_p - R t_c``."""
+    """Camera -> projector ``(R, T)`` from the two board poses: ``R = R_pb R_cb^T, T = t_pb - R t_cb``."""
     R = proj.R @ cam.R.T
     return R, proj.t - R @ cam.t
 
@@ -79,10 +79,10 @@ def _extrinsics_std(cam: CameraSolution, proj: ProjectorSolution):
     cov[n:, n:] = proj.covariance
 
     def g(q):
-        Rc, tc = models.rvec_to_matrix(q[6:9]), q[9:12]
-        Rp, tp = models.rvec_to_matrix(q[n + 2:n + 5]), q[n + 5:n + 8]
-        R = Rp @ Rc.T
-        return np.concatenate([models.euler_deg(R), tp - R @ tc])
+        R_cb, t_cb = models.rvec_to_matrix(q[6:9]), q[9:12]
+        R_pb, t_pb = models.rvec_to_matrix(q[n + 2:n + 5]), q[n + 5:n + 8]
+        R = R_pb @ R_cb.T
+        return np.concatenate([models.euler_deg(R), t_pb - R @ t_cb])
 
     C = unc.propagate(cov, g, np.concatenate([pc, pp]), typical=np.r_[np.ones(n), np.ones(len(pp))])
     s = np.sqrt(np.abs(np.diag(C)))
@@ -299,8 +299,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     predicted = {k: _with_noise(v, d.info.get("sigma_px"), k, rating_options)
                  for (k, v), d in zip(predicted.items(), (cam, proj))}
     adv = rate_pose(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
-                    values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, camera_size=cam.image_size,
-                    projector_size=proj.image_size, predicted=predicted, options=rating_options)
+                    values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, cam_size=cam.image_size,
+                    proj_size=proj.image_size, predicted=predicted, options=rating_options)
     if known_camera is not None:
         adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                          "message": "camera: intrinsics given, not estimated from this pose"}
@@ -359,7 +359,7 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
         cam = calibrate_camera(obj_pts, cam_pts, image_size, camera, robust=robust, name=name)
     std = _std_dict(cam, None)
     predicted["camera"] = _with_noise(predicted["camera"], cam.info.get("sigma_px"), "camera", rating_options)
-    adv = rate_pose(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, camera_size=cam.image_size,
+    adv = rate_pose(cam.angles_deg, None, std, values={"f_c": cam.K[0, 0]}, cam_size=cam.image_size,
                     predicted=predicted, options=rating_options)
     warnings = list(cam.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)

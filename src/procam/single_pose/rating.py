@@ -215,8 +215,8 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
     return out
 
 
-def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, camera_size=None,
-              projector_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions()) -> dict:
+def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, cam_size=None,
+              proj_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions()) -> dict:
     """Is this pose good for single-pose calibration? A rating per device and for the pose.
 
     Parameters
@@ -225,7 +225,7 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
         frame (the fitted pose), or None when the device is absent.
     std : dict with ``f_c`` and/or ``f_p`` (px), optional; with ``values`` (dict with ``f_c``, ``f_p``)
         the fit's relative uncertainty is judged too.
-    camera_size, projector_size : (W, H) pixels; with ``values`` a focal length outside
+    cam_size, proj_size : (W, H) pixels; with ``values`` a focal length outside
         ``options.plausible_f_range`` x the image diagonal is impossible for a real device.
     predicted : ``{"camera": Prediction, "projector": Prediction}`` (:func:`predict`), the stable
         quantities; their angles replace the fitted ones in the rules. Without them the rating rests on
@@ -243,8 +243,8 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
     values = values or {}
     predicted = predicted or {}
     out: dict = {}
-    for device, angles, key, size in (("camera", camera_angles_deg, "f_c", camera_size),
-                                      ("projector", projector_angles_deg, "f_p", projector_size)):
+    for device, angles, key, size in (("camera", camera_angles_deg, "f_c", cam_size),
+                                      ("projector", projector_angles_deg, "f_p", proj_size)):
         if angles is None and predicted.get(device) is None:
             continue
         out[device] = _rate_device(device, angles, predicted.get(device), std.get(key), values.get(key), size,

@@ -212,17 +212,17 @@ class VirtualLiveCamera(_Camera):
 VIRTUAL_POSES = ((15.0, 12.0, 0.0), (-12.0, 15.0, 5.0), (14.0, -12.0, -5.0), (-15.0, -11.0, 3.0), (10.0, 16.0, -4.0))
 
 
-def demo_scene(projector_size=None, pose=None, preset: str = "ideal"):
+def demo_scene(proj_size=None, pose=None, preset: str = "ideal"):
     """A simulator scene for ``procam capture --virtual``: the ``preset`` rig with its projector
-    resized to ``projector_size`` (same horizontal field of view, intrinsics scaled by W / 1920) and
+    resized to ``proj_size`` (same horizontal field of view, intrinsics scaled by W / 1920) and
     the board at ``pose`` (psi, nu, phi) degrees in the camera frame (default: the recommended pose)."""
     from ... import simulate
 
     scene = simulate.preset(preset)
-    if projector_size is not None and tuple(projector_size) != tuple(scene.proj_size):
-        w, h = int(projector_size[0]), int(projector_size[1])
+    if proj_size is not None and tuple(proj_size) != tuple(scene.proj_size):
+        w, h = int(proj_size[0]), int(proj_size[1])
         s = w / scene.proj_size[0]
         scene = scene.replace(proj_size=(w, h), K_proj=np.diag([s, s, 1.0]) @ scene.K_proj)
-    if pose is not None or projector_size is not None:
+    if pose is not None or proj_size is not None:
         scene = simulate.with_board_pose(scene, simulate.RECOMMENDED_POSE if pose is None else pose)
     return scene
