@@ -46,6 +46,9 @@ def reconstruct_cmd(
     from .. import reconstruct as rc
 
     output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))
+    from ..io.ply import require_plyfile
+
+    require_plyfile()          # before the decoding, not after it
     output_path(residuals, "--residuals", (".png",), inputs=(calibration, pose_dir))
     use = value(use)
     if not (math.isfinite(max_residual) and 0 < max_residual <= 10000):

@@ -1,5 +1,5 @@
-"""Point clouds as binary little-endian PLY, through the ``plyfile`` library (``pip install plyfile``; imported
-only when a cloud is written or read).
+"""Point clouds as binary little-endian PLY, through the ``plyfile`` library (an extra: ``pip install
+'procam[ply]'``; imported only when a cloud is written or read).
 
 Vertices carry ``x, y, z`` (float32), optionally ``red, green, blue`` (uchar) and further properties; the header's
 comment lines say what the numbers are.  A cloud procam writes starts its comments with a line that begins with
@@ -16,6 +16,18 @@ import numpy as np
 
 from ..errors import ProcamError
 from .files import atomic_path
+
+
+#: The one line said when the optional ``plyfile`` package is missing.
+PLY_MISSING = "{what} PLY needs the plyfile package: pip install 'procam[ply]' (or pip install plyfile)"
+
+
+def require_plyfile() -> None:
+    """Raise :class:`~procam.errors.ProcamError` now, before any work, when ``plyfile`` is not installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("plyfile") is None:
+        raise ProcamError(PLY_MISSING.format(what="writing"))
 
 
 def write_ply(path, points, colours=None, *, extra: dict | None = None, comments=()) -> Path:
@@ -37,7 +49,7 @@ def write_ply(path, points, colours=None, *, extra: dict | None = None, comments
     try:
         from plyfile import PlyData, PlyElement
     except ImportError:
-        raise ProcamError("writing PLY needs the plyfile package: pip install plyfile") from None
+        raise ProcamError(PLY_MISSING.format(what="writing")) from None
     P = np.asarray(points, float).reshape(-1, 3)
     fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
     cols = None
@@ -72,7 +84,7 @@ def read_ply(path):
     try:
         from plyfile import PlyData
     except ImportError:
-        raise ProcamError("reading PLY needs the plyfile package: pip install plyfile") from None
+        raise ProcamError(PLY_MISSING.format(what="reading")) from None
     ply = PlyData.read(str(path))
     v = ply["vertex"].data
     pts = np.column_stack([v["x"], v["y"], v["z"]]).astype(np.float64)
