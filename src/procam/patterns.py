@@ -29,6 +29,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from .choices import PATTERN_ORDERS
+from .io.formats import GRAYCODE_FORMAT
 
 
 ORDERS = PATTERN_ORDERS
@@ -111,7 +112,7 @@ class PatternSet:
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        d["format"] = "procam-graycode"
+        d["format"] = GRAYCODE_FORMAT
         d["version"] = 1
         d["col_pairs"] = self.pair_indices("col").tolist()
         d["row_pairs"] = self.pair_indices("row").tolist()

@@ -35,6 +35,7 @@ import numpy as np
 from .. import __version__, patterns
 from ..errors import ProcamError
 from ..io.files import to_jsonable
+from ..io.formats import CAPTURE_FORMAT
 from ..capture import SequenceWriter, check_out_dir, describe_frame
 from . import checks
 from .cameras.base import to_gray
@@ -249,7 +250,7 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
         projector.show(black_img)
         total = clock() - run.t0
         record = {
-            "format": "procam-capture", "version": 1, "procam": __version__, "status": "complete",
+            "format": CAPTURE_FORMAT, "version": 1, "procam": __version__, "status": "complete",
             "started": started, "finished": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "projector": projector.describe(), "camera": camera.describe(),
             "pattern_set": {"width": W, "height": H, "order": o.order, "step": o.step, "count": ps.count,

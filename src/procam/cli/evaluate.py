@@ -96,7 +96,9 @@ def evaluate_cmd(
     check = verify_calibration(calib, views)
     _show.print_verification(check)
     if out is not None:
-        d = {"format": "procam-evaluation", "version": 1, "calibration": str(calibration), "method": calib.method,
+        from ..io.formats import EVALUATION_FORMAT
+
+        d = {"format": EVALUATION_FORMAT, "version": 1, "calibration": str(calibration), "method": calib.method,
              **ev.to_dict(), "verification": check.to_dict()}
         _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
         say(f"wrote {out}")

@@ -42,6 +42,7 @@ def reconstruct_cmd(
 
     from .. import board as _board
     from .. import capture, decode, io, pipeline
+    from ..io.formats import PLY_COMMENT
     from ..io import files as _files
     from .. import reconstruct as rc
 
@@ -83,7 +84,7 @@ def reconstruct_cmd(
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
              "check the decode picture (procam decode --png)")
     io.write_ply(out, cloud.points, cloud.colours,
-                 comments=["procam reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
+                 comments=[f"{PLY_COMMENT} reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
                            "frame: camera (x right, y down, z forward), units of the calibration's T"])
     t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))
     t.add_column("quantity")

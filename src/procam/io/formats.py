@@ -34,6 +34,13 @@ OPENGL_FORMAT = "procam-opengl"
 MANIFEST_FORMAT = "procam-manifest"
 #: ``patterns.json`` of a written Gray-code sequence (an older procam's folders are known by it).
 GRAYCODE_FORMAT = "procam-graycode"
+#: ``capture.json`` of a pose a camera captured (``procam capture``).
+CAPTURE_FORMAT = "procam-capture"
+#: ``procam evaluate -o``.
+EVALUATION_FORMAT = "procam-evaluation"
+#: The simulator's ``truth.json`` of one scene, and of a rig.
+SIM_TRUTH_FORMAT = "procam-sim-truth"
+SIM_RIG_TRUTH_FORMAT = "procam-sim-rig-truth"
 
 
 # ------------------------------------------------------------------------------------------------

@@ -51,6 +51,7 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
     """
     from ..errors import ProcamError
     from ..io.files import atomic_path
+    from ..io.formats import PNG_TEXT_KEY, SOFTWARE
 
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower()
@@ -62,9 +63,9 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
                           f"{', '.join('.' + k for k in sorted(supported))}")
     try:
         # procam's mark (so a later run knows it may overwrite the file) and no dates: the same figure, the same bytes
-        meta = {"png": {"Software": "procam"}, "pdf": {"Creator": "procam", "CreationDate": None},
-                "svg": {"Creator": "procam", "Date": None}, "ps": {"Creator": "procam"},
-                "eps": {"Creator": "procam"}}.get(fmt)
+        meta = {"png": {PNG_TEXT_KEY: SOFTWARE}, "pdf": {"Creator": SOFTWARE, "CreationDate": None},
+                "svg": {"Creator": SOFTWARE, "Date": None}, "ps": {"Creator": SOFTWARE},
+                "eps": {"Creator": SOFTWARE}}.get(fmt)
         import matplotlib
 
         # SVG element ids come from a random salt unless one is given

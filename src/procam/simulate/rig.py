@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..io.files import to_jsonable
+from ..io.formats import SIM_RIG_TRUTH_FORMAT
 from .background import Background
 from .lens import _K, Lens, euler_matrix, matrix_euler
 from .poses import _margins, _place
@@ -222,7 +223,7 @@ class Rig:
             R = d.R @ t.R_board
             pose[d.name] = {"R": R.tolist(), "t": (d.R @ t.t_board + d.T).tolist(),
                             "angles_deg": matrix_euler(R).tolist()}
-        out = {"format": "procam-sim-rig-truth", "version": 1, "name": self.name, "reference": self.cameras[0].name,
+        out = {"format": SIM_RIG_TRUTH_FORMAT, "version": 1, "name": self.name, "reference": self.cameras[0].name,
                "devices": {d.name: d.to_dict() for d in self.devices}, "relative": rel,
                "board": {"cols": t.board_cols, "rows": t.board_rows, "square": t.square, "margin": t.margin,
                          "extent": list(board_extent(t))},

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.files import to_jsonable
+from ..io.formats import SIM_TRUTH_FORMAT
 from .lens import matrix_euler, project
 from .poses import fit_margin
 from .scene import Scene, board_corners, board_extent
@@ -99,7 +100,7 @@ def truth(scene: Scene) -> dict:
     (True when corner 0 is the top-left corner in the camera image and the index runs right then down,
     the order a detector canonicalises to; False e.g. for |phi| near 180 deg).
     """
-    d = {"format": "procam-sim-truth", "version": 1, "name": scene.name}
+    d = {"format": SIM_TRUTH_FORMAT, "version": 1, "name": scene.name}
     d.update(_scene_params(scene))
     d["corners"] = corner_truth(scene)
     d["pose"] = {"camera": _pose_dict(scene.R_board, scene.t_board),
