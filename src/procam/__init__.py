@@ -24,6 +24,7 @@ The modules, from the captures up (each imports only those above it in this list
     uncertainty   the only Jacobian / covariance code
     crlb          Cramer-Rao bounds of single-pose calibration, on the solvers' own model
     calibration   Calibration, Device, Distortion (results)
+    datasheet     a projector's intrinsics as its datasheet words them: throw ratio, lens shift, field of view
     verdict       a calibration's verdict from its evidence; the one glossary of the verdict words
     stats         RMS, robust sigma (MAD), total-least-squares plane: one definition each
     residuals     PnP, stereo pose, per-pose residuals
@@ -71,7 +72,7 @@ _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "co
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "stats",
                "single_pose", "advisor", "multi_pose", "method", "evaluate", "summary", "io", "simulate", "paper",
                "plots", "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
-               "acquire", "corners")
+               "acquire", "corners", "datasheet")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",
