@@ -7,6 +7,11 @@ command line lists the same tuples in ``--help``, so the two cannot drift; becau
 
 #: Gray-code frame orders (:mod:`procam.patterns`): OpenCV's GrayCodePattern order, Moreno-Taubin's.
 PATTERN_ORDERS = ("opencv", "moreno")
+#: Pattern families (:mod:`procam.patterns`): Gray codes with inverses; N-step phase shifting unwrapped by a
+#: unit-frequency cue, by three-frequency heterodyne, or by a Gray code.
+PATTERN_FAMILIES = ("gray", "phase", "heterodyne", "gray-phase")
+#: What the phase decoder does about the projector's response (:mod:`procam.phase`).
+GAMMA_MODES = ("auto", "none")
 #: Bit classifiers of the decoder (:mod:`procam.decode`).
 DECODE_METHODS = ("robust", "simple")
 #: Chessboard detectors and corner refinements (:mod:`procam.corners`).

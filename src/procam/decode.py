@@ -42,78 +42,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import decoded as _decoded
 from .io import files as _files
 from .patterns import PatternSet
 from .choices import DECODE_METHODS
 
-#: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.
-REASONS = {
-    0: "decoded",
-    1: "shadow: white - black below shadow_threshold (not lit by the projector)",
-    2: "low contrast: some bit's pattern and inverse differ by less than contrast_threshold",
-    3: "ambiguous bit: direct light too weak against global light (robust classifier)",
-    4: "code outside the projector's columns/rows",
-}
+#: Reason codes and the decoded maps' type live in :mod:`procam.decoded` (shared with the phase decoder).
+REASONS, DecodeResult = _decoded.REASONS, _decoded.DecodeResult
 OK, SHADOW, LOW_CONTRAST, AMBIGUOUS, OUT_OF_RANGE = range(5)
-
-
-@dataclass(frozen=True)
-class DecodeResult:
-    """Decoded maps of one pose, all (H, W).
-
-    Attributes
-    ----------
-    col, row : float32
-        Projector column / row (pixels, centre of projector pixel = integer) of each camera
-        pixel; NaN where invalid.  With ``pattern_set.step > 1`` the centre of the code's block.
-    valid_col, valid_row : bool
-    reason_col, reason_row : uint8
-        Codes of :data:`REASONS` (0 = decoded).
-    confidence : float32 or None
-        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1] (None when
-        decoded with ``extras=False``).
-    direct, global_ : float32 or None
-        The robust classifier's direct and global light estimates (DN at the input scale; None for the simple
-        classifier or ``extras=False``).
-    pattern_set : the decoded sequence's :class:`PatternSet`.
-    dropped_col, dropped_row : uint8
-        Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
-        value is then the centre of the block of ``2^dropped`` codes the certain bits leave.
-    codes_col, codes_row : int64 (n,) or None
-        How many camera pixels decoded to each projector column / row (index = the projector pixel of
-        the code's block start), **including codes outside the projector** (index >= width/height): the
-        extent of the codes tells the projector's real size when the given one is wrong.
-    """
-
-    col: np.ndarray
-    row: np.ndarray
-    valid_col: np.ndarray
-    valid_row: np.ndarray
-    reason_col: np.ndarray
-    reason_row: np.ndarray
-    confidence: np.ndarray
-    direct: np.ndarray | None
-    global_: np.ndarray | None
-    pattern_set: PatternSet
-    dropped_col: np.ndarray | None = None
-    dropped_row: np.ndarray | None = None
-    codes_col: np.ndarray | None = None
-    codes_row: np.ndarray | None = None
-
-    @property
-    def valid(self) -> np.ndarray:
-        """(H, W) bool: both column and row decoded."""
-        return self.valid_col & self.valid_row
-
-    def reason_counts(self) -> dict:
-        """``{axis: {reason text: pixel count}}`` for the non-zero counts."""
-        out = {}
-        for axis, r in (("col", self.reason_col), ("row", self.reason_row)):
-            counts = np.bincount(r.ravel(), minlength=len(REASONS))
-            out[axis] = {REASONS[k]: int(c) for k, c in enumerate(counts) if c}
-        return out
-
-
 
 
 def _hf_bits(ps: PatternSet) -> list:
@@ -149,6 +85,8 @@ class DecodeOptions:
     method: str = "robust"
     shadow_threshold: float = 10.0
     contrast_threshold: float = 3.0
+    gamma: str | float = "auto"
+    camera_noise: float | None = None
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -156,6 +94,26 @@ class DecodeOptions:
         for what, v in (("shadow threshold", self.shadow_threshold), ("contrast threshold", self.contrast_threshold)):
             if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and 0 <= v <= 255):
                 raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
+        self.phase_options()  # validates gamma and camera_noise
+
+    def phase_options(self):
+        """The :class:`procam.phase.PhaseOptions` of these options (for the phase families)."""
+        from .phase import PhaseOptions
+
+        return PhaseOptions(gamma=self.gamma, camera_noise=self.camera_noise, shadow_threshold=self.shadow_threshold,
+                            contrast_threshold=self.contrast_threshold)
+
+
+def decode_with(stack: np.ndarray, pattern_set, options: DecodeOptions = DecodeOptions(), *,
+                extras: bool = True) -> DecodeResult:
+    """Decode ``stack`` with the user's ``options``, whatever the family: :func:`decode` for a Gray code,
+    :func:`procam.phase.decode_phase` for the phase families."""
+    if isinstance(pattern_set, PatternSet):
+        return decode(stack, pattern_set, options.method, shadow_threshold=options.shadow_threshold,
+                      contrast_threshold=options.contrast_threshold, extras=extras)
+    from .phase import decode_phase
+
+    return decode_phase(stack, pattern_set, options.phase_options(), extras=extras)
 
 
 def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *,
@@ -163,7 +121,8 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
            full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 64,
            threads: int | None = None, extras: bool = True) -> DecodeResult:
-    """Decode a Gray-code image stack.
+    """Decode a Gray-code image stack (a phase family's goes to :func:`procam.phase.decode_phase`, with
+    ``shadow_threshold`` and ``contrast_threshold``; see :func:`decode_with` for its other options).
 
     Parameters
     ----------
@@ -201,6 +160,9 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     -------
     DecodeResult
     """
+    if not isinstance(pattern_set, PatternSet):  # a phase family: its own decoder, with the default options
+        return decode_with(stack, pattern_set, DecodeOptions(method, shadow_threshold, contrast_threshold),
+                           extras=extras)
     stack = np.asarray(stack)
     ps = pattern_set
     if stack.ndim != 3 or stack.shape[0] != ps.count:

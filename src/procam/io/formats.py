@@ -34,6 +34,8 @@ OPENGL_FORMAT = "procam-opengl"
 MANIFEST_FORMAT = "procam-manifest"
 #: ``patterns.json`` of a written Gray-code sequence (an older procam's folders are known by it).
 GRAYCODE_FORMAT = "procam-graycode"
+#: ``patterns.json`` of a written phase-family sequence (phase, heterodyne, gray-phase).
+PATTERNS_FORMAT = "procam-patterns"
 #: ``capture.json`` of a pose a camera captured (``procam capture``).
 CAPTURE_FORMAT = "procam-capture"
 #: ``procam evaluate -o``.

@@ -27,12 +27,12 @@ def decode_figure(result, white=None, title: str = ""):
         ax.set_title(f"{name} (black = invalid)")
         fig.colorbar(im, ax=ax, shrink=0.8)
     reason = np.maximum(result.reason_col, result.reason_row)
-    colors = ["#2ca02c", "#404040", "#ff7f0e", "#d62728", "#9467bd"]
+    colors = ["#2ca02c", "#404040", "#ff7f0e", "#d62728", "#9467bd", "#e377c2", "#bcbd22", "#17becf"]
     rcmap = ListedColormap(colors)
     axes[2].imshow(reason, cmap=rcmap, vmin=-0.5, vmax=len(REASONS) - 0.5, interpolation="nearest")
     counts = np.bincount(reason.ravel(), minlength=len(REASONS)) / reason.size * 100
     handles = [Patch(color=colors[k], label=f"{REASONS[k].split(':')[0]} {counts[k]:.1f}%")
-               for k in range(len(REASONS))]
+               for k in range(len(REASONS)) if k < 5 or counts[k] > 0]  # the phase decoder's reasons where they occur
     axes[2].legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.8)
     axes[2].set_title(f"validity ({result.valid.mean() * 100:.1f}% decoded)")
     if white is not None:

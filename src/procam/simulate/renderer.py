@@ -1,11 +1,12 @@
-"""The renderer: physically plausible Gray-code captures of a :class:`~procam.simulate.Scene`.
+"""The renderer: physically plausible captures of a :class:`~procam.simulate.Scene`, in every pattern family
+(Gray codes, and the phase families' fringes through the projector's response ``proj_gamma``).
 
 Per camera pixel a ray (supersampled, :mod:`~procam.simulate.geometry`): board / background albedo,
 projector illumination through the projector's lens with defocus, black level and the projector's
 response (``proj_gamma``), cast shadows (the board's, the background solids'), occlusion, ambient
 light, gain, vignetting, optical blur, shot and read noise, the camera's gamma, 8/16-bit output.
 The geometry is computed once per scene (:class:`Renderer`); each pattern image is then a cheap 1-D
-profile lookup, because Gray-code stripes (and any other 1-D pattern,
+profile lookup, because Gray-code stripes, fringes (and any other 1-D pattern,
 :meth:`Renderer.linear_stripes`) depend on one projector coordinate only.
 
 * :func:`render` - the whole sequence at once, with its ground truth.
@@ -75,7 +76,8 @@ class Renderer:
     Parameters
     ----------
     scene : the set-up (board pose, photometry, bit depth, supersampling).
-    order : pattern sequence order, ``"opencv"`` or ``"moreno"`` (see :mod:`procam.patterns`).
+    order : the sequence: a Gray-code order, ``"opencv"`` or ``"moreno"`` (see :mod:`procam.patterns`), or a pattern
+        set of the scene's projector (a :class:`~procam.patterns.PhaseSet` renders a phase family).
 
     Attributes
     ----------
@@ -93,9 +95,9 @@ class Renderer:
         images = [r.frame(k, rng) for k in range(r.pattern_set.count)]  # == render(scene, seed=seed)[0]
     """
 
-    def __init__(self, scene: Scene, order: str = "opencv"):
+    def __init__(self, scene: Scene, order="opencv"):
         self.scene = scene
-        self.pattern_set = _patterns.pattern_set(*scene.proj_size, order)
+        self.pattern_set = _sequence(scene, order)
         Wp, Hp = scene.proj_size
         self.pad = int(np.ceil(4 * max(scene.proj_defocus, 0.25) * PROFILE_UPSAMPLE)) + PROFILE_UPSAMPLE
         s = scene.supersample
@@ -124,13 +126,32 @@ class Renderer:
 
         # band by band: no full-size intermediates (the float64 maps, the masks, the products)
         _geometry_bands(scene, s, work, GEOMETRY_BAND)
+        self.index = {}
+        if _patterns.is_phase(self.pattern_set):
+            return
         self.col_planes = _patterns.bit_planes(Wp, self.pattern_set.col_bits, self.pattern_set.col_offset)
         self.row_planes = _patterns.bit_planes(Hp, self.pattern_set.row_bits, self.pattern_set.row_offset)
-        self.index = {}
         for j, (a, b) in enumerate(self.pattern_set.pair_indices("col")):
             self.index[int(a)], self.index[int(b)] = ("col", j, False), ("col", j, True)
         for j, (a, b) in enumerate(self.pattern_set.pair_indices("row")):
             self.index[int(a)], self.index[int(b)] = ("row", j, False), ("row", j, True)
+
+    #: Scene fields :meth:`photometry` may change: they act after the geometry (the projector's response and
+    #: black level, the camera's blur, noise, gamma and bit depth).
+    PHOTOMETRY = ("proj_gamma", "proj_black", "cam_blur", "read_noise", "full_well", "gamma", "bits")
+
+    def photometry(self, **changes) -> "Renderer":
+        """This renderer for the scene with other :data:`PHOTOMETRY` (the geometry, most of the cost, is shared):
+        ``r.photometry(proj_gamma=2.2, read_noise=1.5)`` renders what ``Renderer(scene.replace(...))`` would."""
+        bad = sorted(set(changes) - set(self.PHOTOMETRY))
+        if bad:
+            raise ValueError(f"photometry() changes only {', '.join(self.PHOTOMETRY)}; {', '.join(bad)} change the "
+                             "geometry: make a new Renderer")
+        import copy
+
+        other = copy.copy(self)
+        other.scene = self.scene.replace(**changes)
+        return other
 
     #: camera rows per band of :meth:`linear` (its buffer is then over 4 MB: huge pages, few page faults)
     BAND = 96
@@ -171,6 +192,9 @@ class Renderer:
             return self._linear("white")
         if k == self.pattern_set.black:
             return self._linear("black")
+        if _patterns.is_phase(self.pattern_set):  # a fringe or a Gray stripe of a phase family: its 1-D line
+            axis, line = self.pattern_set.line(k)
+            return self.linear_stripes(line, axis)
         axis, j, inv = self.index[k]
         plane = self.col_planes[j] if axis == "col" else self.row_planes[j]
         if inv:
@@ -233,14 +257,26 @@ class Renderer:
         return np.rint(noisy * top).astype(np.uint8 if sc.bits == 8 else np.uint16)
 
 
-def render(scene: Scene, order: str = "opencv", seed: int = 0,
+def _sequence(scene: Scene, order):
+    """The pattern set of ``order``: a Gray-code order (str) for the scene's projector, or a pattern set itself
+    (:class:`procam.patterns.PatternSet` or :class:`~procam.patterns.PhaseSet`) of its size."""
+    if isinstance(order, str):
+        return _patterns.pattern_set(*scene.proj_size, order)
+    if (order.width, order.height) != tuple(scene.proj_size):
+        raise ValueError(f"the pattern set is for a {order.width}x{order.height} projector, the scene's is "
+                         f"{scene.proj_size[0]}x{scene.proj_size[1]}")
+    return order
+
+
+def render(scene: Scene, order="opencv", seed: int = 0,
            progress: Callable[[int, int], None] | None = None):
     """Render the full Gray-code capture of ``scene``.
 
     Parameters
     ----------
     scene : the set-up (board pose, photometry, bit depth, supersampling).
-    order : pattern sequence order, ``"opencv"`` (default) or ``"moreno"`` (see :mod:`procam.patterns`).
+    order : the sequence: ``"opencv"`` (default) or ``"moreno"`` (Gray codes, see :mod:`procam.patterns`), or a
+        pattern set (:class:`~procam.patterns.PhaseSet` for the phase families).
     seed : noise seed; the same seed gives bit-identical images.
     progress : optional ``callable(done, total)`` called after the geometry and after each image.
 
@@ -263,7 +299,7 @@ def render(scene: Scene, order: str = "opencv", seed: int = 0,
         if progress is not None:
             progress(k + 2, total)
     t = truth(scene)
-    t["render"] = {"order": order, "seed": int(seed), "count": int(ps.count),
+    t["render"] = {"order": ps.order, "seed": int(seed), "count": int(ps.count),
                    "white": int(ps.white), "black": int(ps.black),
                    "pattern_set": ps.to_dict()}
     return stack, to_jsonable(t)
@@ -273,7 +309,7 @@ def render(scene: Scene, order: str = "opencv", seed: int = 0,
 # output
 # --------------------------------------------------------------------------------------------
 
-def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv", *, force: bool = False) -> list[Path]:
+def write_capture(out_dir, stack: np.ndarray, truth: dict, order="opencv", *, force: bool = False) -> list[Path]:
     """Write a rendered capture in procam's default capture-folder layout.
 
     Files: ``00.png`` ... ``45.png`` (zero-padded index, sequence order), ``truth.json`` (``truth``),
@@ -289,7 +325,7 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
     out_dir : folder (created if missing).
     stack : (K, H, W) uint8 or uint16 images from :func:`render`.
     truth : the truth dict from :func:`render` (its projector size names the pattern set).
-    order : the sequence order the stack was rendered in.
+    order : the sequence the stack was rendered in (a Gray-code order or the pattern set).
     force : write into a folder that holds other files.
 
     Returns
@@ -298,7 +334,7 @@ def write_capture(out_dir, stack: np.ndarray, truth: dict, order: str = "opencv"
     folder is refused.
     """
     wp, hp = truth["projector"]["size"]
-    ps = _patterns.pattern_set(int(wp), int(hp), order)
+    ps = _patterns.pattern_set(int(wp), int(hp), order) if isinstance(order, str) else order
     stack = np.asarray(stack)
     if stack.ndim != 3 or stack.shape[0] != ps.count:
         raise ValueError(f"stack must be ({ps.count}, H, W) for a {wp}x{hp} projector, got {stack.shape}")

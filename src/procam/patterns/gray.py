@@ -28,8 +28,8 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from .choices import PATTERN_ORDERS
-from .io.formats import GRAYCODE_FORMAT
+from ..choices import PATTERN_ORDERS
+from ..io.formats import GRAYCODE_FORMAT
 
 
 ORDERS = PATTERN_ORDERS

@@ -1,0 +1,118 @@
+"""The decoded maps of one pose (:class:`DecodeResult`) and the reason codes of a pixel that did not decode
+(:data:`REASONS`), shared by the Gray-code decoder (:mod:`procam.decode`) and the phase decoder
+(:mod:`procam.phase`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+#: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.
+REASONS = {
+    0: "decoded",
+    1: "shadow: white - black below shadow_threshold (not lit by the projector)",
+    2: "low contrast: some bit's pattern and inverse differ by less than contrast_threshold",
+    3: "ambiguous bit: direct light too weak against global light (robust classifier)",
+    4: "code outside the projector's columns/rows",
+    5: "saturated: a phase frame is at full scale (the fringes are clipped)",
+    6: "low modulation: the fringes are too faint to tell their periods apart (the coarser level's predicted "
+       "error is above max_order_sigma of the finer period)",
+    7: "orders disagree: the frequencies (or the Gray code and the phase) give different fringe periods",
+}
+OK, SHADOW, LOW_CONTRAST, AMBIGUOUS, OUT_OF_RANGE, SATURATED, LOW_MODULATION, ORDER_DISAGREE = range(8)
+
+
+@dataclass(frozen=True)
+class DecodeResult:
+    """Decoded maps of one pose, all (H, W).
+
+    Attributes
+    ----------
+    col, row : float32
+        Projector column / row (pixels, centre of projector pixel = integer) of each camera
+        pixel; NaN where invalid.  With ``pattern_set.step > 1`` the centre of the code's block.
+    valid_col, valid_row : bool
+    reason_col, reason_row : uint8
+        Codes of :data:`REASONS` (0 = decoded).
+    confidence : float32 or None
+        Smallest ``|pattern - inverse|`` over all bits divided by ``white - black``, in [0, 1] (None when
+        decoded with ``extras=False``).
+    direct, global_ : float32 or None
+        The robust classifier's direct and global light estimates (DN at the input scale; None for the simple
+        classifier or ``extras=False``).
+    pattern_set : the decoded sequence's :class:`PatternSet`.
+    dropped_col, dropped_row : uint8
+        Number of trailing (finest) bits that were uncertain and left out (0 = full precision); the
+        value is then the centre of the block of ``2^dropped`` codes the certain bits leave.
+    codes_col, codes_row : int64 (n,) or None
+        How many camera pixels decoded to each projector column / row (index = the projector pixel of
+        the code's block start), **including codes outside the projector** (index >= width/height): the
+        extent of the codes tells the projector's real size when the given one is wrong.  A phase decode counts
+        its coordinates rounded to whole pixels.
+    sigma_col, sigma_row : float32 or None
+        Phase families: the predicted standard deviation of ``col`` / ``row`` (projector pixels) from the
+        fringes' modulation and the camera's noise, ``sigma_I sqrt(2 / N) / B * P / (2 pi)`` of the finest fringes
+        (:mod:`procam.phase`); NaN where invalid.  None for a Gray code (:meth:`coordinate_sigma` has its
+        quantisation instead).
+    modulation_col, modulation_row : float32 or None
+        Phase families: the finest fringes' modulation ``B`` (half their peak-to-peak, DN at the input scale).
+    phase : :class:`procam.phase.PhaseInfo` or None
+        Phase families: what the decoder measured and assumed (projector gamma, camera noise, per-block
+        statistics, warnings).
+    """
+
+    col: np.ndarray
+    row: np.ndarray
+    valid_col: np.ndarray
+    valid_row: np.ndarray
+    reason_col: np.ndarray
+    reason_row: np.ndarray
+    confidence: np.ndarray
+    direct: np.ndarray | None
+    global_: np.ndarray | None
+    pattern_set: PatternSet
+    dropped_col: np.ndarray | None = None
+    dropped_row: np.ndarray | None = None
+    codes_col: np.ndarray | None = None
+    codes_row: np.ndarray | None = None
+    sigma_col: np.ndarray | None = None
+    sigma_row: np.ndarray | None = None
+    modulation_col: np.ndarray | None = None
+    modulation_row: np.ndarray | None = None
+    phase: object | None = None
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(H, W) bool: both column and row decoded."""
+        return self.valid_col & self.valid_row
+
+    @property
+    def subpixel(self) -> bool:
+        """True when the maps hold sub-pixel coordinates with a noise estimate (a phase family)."""
+        return self.sigma_col is not None
+
+    def coordinate_sigma(self, axis: str) -> np.ndarray:
+        """(H, W) float32: the standard deviation of ``col`` (``axis="col"``) or ``row`` in projector pixels, NaN
+        where invalid: the phase decode's noise estimate, or for a Gray code the quantisation of its value, the
+        width of the block of codes it stands for over sqrt(12) (``step 2^dropped / sqrt(12)``)."""
+        if axis not in ("col", "row"):
+            raise ValueError(f"axis must be 'col' or 'row', got {axis!r}")
+        sigma = self.sigma_col if axis == "col" else self.sigma_row
+        if sigma is not None:
+            return sigma
+        valid = self.valid_col if axis == "col" else self.valid_row
+        dropped = self.dropped_col if axis == "col" else self.dropped_row
+        width = np.float32(getattr(self.pattern_set, "step", 1)) * (
+            np.float32(1.0) if dropped is None else np.left_shift(1, dropped.astype(np.int32)).astype(np.float32))
+        return np.where(valid, width / np.float32(np.sqrt(12.0)), np.float32(np.nan)).astype(np.float32)
+
+    def reason_counts(self) -> dict:
+        """``{axis: {reason text: pixel count}}`` for the non-zero counts."""
+        out = {}
+        for axis, r in (("col", self.reason_col), ("row", self.reason_row)):
+            counts = np.bincount(r.ravel(), minlength=len(REASONS))
+            out[axis] = {REASONS[k]: int(c) for k, c in enumerate(counts) if c}
+        return out

@@ -1,0 +1,199 @@
+"""Temporal phase unwrapping: from the fringe fractions of several blocks to an absolute projector coordinate, per
+pixel, marking (never guessing) a pixel whose orders disagree.
+
+Every block gives the fraction ``u`` in [0, 1) of its period ``P`` the pixel is at: ``(x - x0) / P = m + u`` with
+an unknown order ``m`` (``x0`` where the block's phase is 0).  ``su`` is the fraction's standard deviation.
+
+:func:`hierarchical` (family ``phase``)
+    The coarsest block spans the panel (period >= its size): ``x = x0 + P u`` outright.  Each finer block takes the
+    order that puts it nearest: ``t = (x - x0) / P - u``, ``m = round(t)``; the residual ``t - m`` (cycles) is the
+    orders' disagreement.  When the coarsest period is a whole number of the finest, the result is taken modulo it
+    (a pixel at the panel's edge whose coarse estimate wrapped to the other edge keeps its place).  Marked: a residual beyond ``tolerance`` (ORDER_DISAGREE), a coarser estimate too noisy
+    to order the finer periods, ``sd(t) > max_sigma`` (LOW_MODULATION).
+:func:`heterodyne` (three periods ``p1 < p2 < p3``)
+    The beats ``u12 = frac(u1 - u2)`` (period ``l12 = p1 p2 / (p2 - p1)``), ``u23 = frac(u2 - u3)`` (``l23``) and
+    ``u123 = frac(u12 - u23)`` (``l123 >= panel``): absolute ``x123``; it orders ``u12``, which orders each of
+    ``u1``, ``u2``, ``u3``; the result is their inverse-variance mean, and the three must agree to ``tolerance`` of
+    the smallest period (ORDER_DISAGREE otherwise), as must each level with the one above it.
+:func:`gray_orders` (family ``gray-phase``)
+    The Gray code gives the order ``m1`` of the period the pixel is in.  Near a period boundary the phase's noise
+    can carry the fraction across the wrap while the Gray code stays (or the Gray bit that changes there reads the
+    other side): where the fraction is within a quarter period of 0 (of 1) and the bit that changes at the Gray
+    interval's end (start) is partway through its blurred edge while the other boundary bit is not, the pixel is
+    at that boundary and takes the order on the phase's side of it.  An unsure bit other than the two boundary
+    bits, or any unsure bit mid-period, marks LOW_CONTRAST.  With the complementary bit, ``k2 = (V2 + 1) >> 1`` from all ``n + 1``
+    bits is right near the boundaries whatever the boundary bit reads (Zhang et al. 2018): the order is ``k2``
+    for ``u < 1/4``, ``k2 - 1`` for ``u > 3/4``, ``m1`` between; and where both are sure (``u`` within 0.1-0.4
+    or 0.6-0.9) they must agree (ORDER_DISAGREE).  Plain Gray codes have no second order to compare: their
+    stripe-edge errors are what the complementary bit removes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..decoded import LOW_CONTRAST, LOW_MODULATION, OK, ORDER_DISAGREE
+
+#: Largest orders' disagreement (cycles of the finer period) a pixel may have.
+TOLERANCE = 0.25
+#: Largest standard deviation (cycles of the finer period) of the coarser estimate that orders it.
+MAX_SIGMA = 0.1
+
+
+def hierarchical(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, max_sigma: float = MAX_SIGMA):
+    """``(x, sigma_x)`` from ``levels`` = ``[(u, su, period, x0), ...]`` coarsest first (the first spans the panel);
+    ``reason`` (uint8) is updated in place (see the module docstring)."""
+    u, su, span, x0 = levels[0]
+    x = x0 + span * u.astype(np.float64)
+    sx = span * su
+    period = span
+    for u, su, period, x0 in levels[1:]:
+        t = (x - x0) / period - u
+        m = np.rint(t)
+        r = np.abs(t - m)
+        reason[(sx / period > max_sigma) & (reason == OK)] = LOW_MODULATION
+        reason[(r > tolerance) & (reason == OK)] = ORDER_DISAGREE
+        x = x0 + period * (m + u)
+        sx = period * su
+    return _seam(x, levels[0][3], span, period), sx
+
+
+def _seam(x, x0: float, span: float, period: float):
+    """Coordinates modulo the absolute level's ``span`` when it is a whole number of the finest ``period`` s (the
+    finest fringes repeat with it): a pixel whose coarse estimate wrapped across the panel's edge keeps its place
+    (the fine phase is exact to a multiple of the span)."""
+    k = span / period
+    if abs(k - round(k)) > 1e-6:
+        return x
+    return x0 + np.mod(x - x0, span)
+
+
+def _frac(v):
+    return v - np.floor(v)
+
+
+def heterodyne(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, max_sigma: float = MAX_SIGMA):
+    """``(x, sigma_x)`` from three ``levels`` ``(u, su, period, x0)`` (any order; one ``x0``); ``reason`` updated in
+    place (see the module docstring)."""
+    (u1, s1, p1, x0), (u2, s2, p2, _), (u3, s3, p3, _) = sorted(levels, key=lambda lv: lv[2])
+    l12 = p1 * p2 / (p2 - p1)
+    l23 = p2 * p3 / (p3 - p2)
+    l123 = l12 * l23 / (l23 - l12)
+    u1, u2, u3 = (np.asarray(u, np.float64) for u in (u1, u2, u3))
+    u12 = _frac(u1 - u2)
+    u23 = _frac(u2 - u3)
+    u123 = _frac(u12 - u23)
+    x = x0 + l123 * u123
+    s123 = l123 * np.sqrt(s1 ** 2 + 4.0 * s2 ** 2 + s3 ** 2)
+    s12 = np.sqrt(s1 ** 2 + s2 ** 2)
+    # level 1: the beat of the beats orders the first beat
+    t = (x - x0) / l12 - u12
+    m = np.rint(t)
+    bad_sigma = s123 / l12 > max_sigma
+    bad_order = np.abs(t - m) > tolerance
+    x12 = x0 + l12 * (m + u12)
+    sx12 = l12 * s12
+    # level 2: the first beat orders each fringe
+    xs, ws = [], []
+    bad_sigma |= sx12 / p3 > max_sigma
+    for u, s, p in ((u1, s1, p1), (u2, s2, p2), (u3, s3, p3)):
+        t = (x12 - x0) / p - u
+        m = np.rint(t)
+        bad_order |= np.abs(t - m) > tolerance
+        xs.append(x0 + p * (m + u))
+        ws.append(1.0 / np.maximum((p * s) ** 2, 1e-12))
+    # the three fringes must land on one coordinate
+    for a in range(3):
+        for b in range(a + 1, 3):
+            bad_order |= np.abs(xs[a] - xs[b]) > tolerance * p1
+    wsum = ws[0] + ws[1] + ws[2]
+    x = (xs[0] * ws[0] + xs[1] * ws[1] + xs[2] * ws[2]) / wsum
+    if all(abs(l123 / p - round(l123 / p)) < 1e-6 for p in (p1, p2, p3)):
+        x = _seam(x, x0, l123, p1)
+    reason[bad_sigma & (reason == OK)] = LOW_MODULATION
+    reason[bad_order & (reason == OK)] = ORDER_DISAGREE
+    return x, 1.0 / np.sqrt(wsum)
+
+
+def gray_value(bits: np.ndarray) -> np.ndarray:
+    """Binary value of Gray-code bits ``bits`` (n, ...) bool, most significant first."""
+    out = np.zeros(bits.shape[1:], np.int64)
+    prev = np.zeros(bits.shape[1:], bool)
+    for b in bits:
+        prev = prev ^ b
+        out = (out << 1) | prev
+    return out
+
+
+def _low_bit(m: np.ndarray) -> np.ndarray:
+    """Index (0 = least significant) of the lowest set bit of ``m`` (> 0): the Gray bit that changes between
+    ``m - 1`` and ``m``; -1 where ``m <= 0``."""
+    m = np.asarray(m, np.int64)
+    low = m & -m
+    out = np.full(m.shape, -1, np.int64)
+    pos = low > 0
+    out[pos] = np.log2(low[pos].astype(np.float64)).round().astype(np.int64)
+    return out
+
+
+def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: np.ndarray, reason: np.ndarray,
+                comp=None, comp_certain=None, margin=0.0) -> np.ndarray:
+    """The fringe order ``m`` (int64) of every pixel from its Gray bits (see the module docstring).
+
+    Parameters
+    ----------
+    bits, contrast, certain : (n_bits, ...) most significant first: the bits read (bool), their contrast (the
+        pattern's distance from its inverse or threshold, >= 0, any unit) and whether each is sure.
+    u : (...) the fringe fraction.
+    reason : (...) uint8, updated in place.
+    comp, comp_certain : (...) bool, the complementary bit and its certainty, or None.
+    margin : (...) or scalar, how much lower (units of ``contrast``) a boundary bit's contrast must be than the
+        other's for the pixel to be at that boundary (a few standard deviations of the contrast's noise).
+    """
+    n = len(bits)
+    m1 = gray_value(bits)
+    near = (u < 0.25) | (u > 0.75)
+    if comp is not None:
+        unsure = ~certain
+        n_unsure = unsure.sum(axis=0)
+        which = np.argmax(unsure, axis=0)  # the first unsure bit, most significant first
+        m1_alt = m1 ^ ((np.int64(1) << (n - which).astype(np.int64)) - 1)  # that bit read the other way round
+        v2 = (m1 << 1) | (comp ^ _parity(m1))
+        v2_alt = (m1_alt << 1) | (comp ^ _parity(m1_alt))
+        k2, k2_alt = (v2 + 1) >> 1, (v2_alt + 1) >> 1
+        m = np.where(u < 0.25, k2, np.where(u > 0.75, k2 - 1, m1))
+        # near a boundary k2 must not depend on an unsure bit and the complementary bit must be sure; mid-period
+        # every ordinary bit must be sure
+        unsure_near = near & ((n_unsure > 1) | ((n_unsure == 1) & (k2 != k2_alt)) | ~comp_certain)
+        reason[(unsure_near | (~near & (n_unsure > 0))) & (reason == OK)] = LOW_CONTRAST
+        both = (n_unsure == 0) & comp_certain & (((u > 0.1) & (u < 0.4)) | ((u > 0.6) & (u < 0.9)))
+        reason[both & (m1 != np.where(u < 0.5, k2, k2 - 1)) & (reason == OK)] = ORDER_DISAGREE
+        return m
+    # plain Gray code: which of the interval's two boundaries is the pixel at? The bit that changes there is
+    # partway through its blurred edge: its contrast under 0.7 of the pixel's typical one and clearly (by
+    # `margin`) below that of the other boundary's bit
+    start_bit, end_bit = _low_bit(m1), _low_bit(m1 + 1)
+    idx = np.arange(n)
+
+    def contrast_of(bit):
+        row = np.clip(n - 1 - bit, 0, n - 1)
+        c = np.take_along_axis(contrast, row[None], axis=0)[0]
+        return np.where((bit >= 0) & (bit < n), c, np.inf), row
+
+    c_start, start_row = contrast_of(start_bit)
+    c_end, end_row = contrast_of(end_bit)
+    full = np.median(contrast, axis=0)  # most bits are far from their edges
+    up = (u < 0.25) & (c_end < 0.7 * full) & (c_end < c_start - margin)   # the phase wrapped past the interval's end
+    down = (u > 0.75) & (c_start < 0.7 * full) & (c_start < c_end - margin)  # ... or back past its start
+    m = m1 + up.astype(np.int64) - down.astype(np.int64)
+    # an unsure bit is allowed only where it is one of the two boundary bits
+    boundary = (idx.reshape((-1,) + (1,) * u.ndim) == start_row) & (start_bit >= 0)
+    boundary |= (idx.reshape((-1,) + (1,) * u.ndim) == end_row) & (end_bit >= 0) & (end_bit < n)
+    other_unsure = (~certain & ~boundary).any(axis=0)
+    reason[(other_unsure | (~near & ~certain.all(axis=0))) & (reason == OK)] = LOW_CONTRAST
+    return m
+
+
+def _parity(v: np.ndarray) -> np.ndarray:
+    """The parity of the bits of ``gray(v) = v ^ (v >> 1)``, which is the lowest bit of ``v`` (bool)."""
+    return (v & 1).astype(bool)
