@@ -313,6 +313,85 @@ def _solve_normal(S: np.ndarray) -> np.ndarray:
     return out
 
 
+#: :func:`dense_projector_corners`: full width of the local fit's window (camera pixels), the polynomial's degree,
+#: the smallest noise a pixel is weighted by (projector pixels), and the largest distance (projector pixels) between
+#: the fit and the local homography before the corner is refused.
+DENSE_WINDOW, DENSE_DEGREE, DENSE_SIGMA_FLOOR, DENSE_TOLERANCE = 80, 2, 0.02, 1.0
+
+
+def dense_projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOptions = CornerOptions(), *,
+                            window: int = DENSE_WINDOW, degree: int = DENSE_DEGREE,
+                            tolerance: float = DENSE_TOLERANCE):
+    """Projector coordinates of camera corners from a sub-pixel map (a phase family's decode) by a local fit,
+    with the local homography as the check.
+
+    Per corner and per projector axis, a polynomial of ``degree`` in the camera offsets from the corner is fitted
+    by weighted least squares to the decoded pixels of a ``window`` x ``window`` window (weights ``1 / sigma^2``
+    from the decode's per-pixel noise, ``maps.coordinate_sigma``, floored at :data:`DENSE_SIGMA_FLOOR`; pixels
+    beyond 4 standard deviations of the fit are dropped and it is refitted); the corner's coordinate is the
+    polynomial's value at the corner.  A quadratic follows the camera -> projector map's curvature (perspective,
+    lens distortion) that a homography cannot, and the weights leave out the board's dark squares, where the
+    fringes' noise is several times larger.  :func:`projector_corners` (the local homography, ``options``) is the
+    check: a corner whose two estimates are more than ``tolerance`` projector pixels apart fails (reason 6), as
+    does one the homography fails.
+
+    Returns
+    -------
+    proj_pts : (N, 2) float64, NaN where a corner failed.
+    diagnostics : the homography's (:func:`projector_corners`) plus ``fit_sigma_px`` (N, 2), the fit's standard
+        deviation at the corner from its covariance (it assumes independent pixels: the camera's blur correlates
+        neighbours, so it is a lower bound), ``fit_pixels`` (N,) and ``homography_px`` (N,), the distance between
+        the two estimates.
+    """
+    cam_pts = np.asarray(cam_pts, float).reshape(-1, 2)
+    hom, diag = projector_corners(cam_pts, maps, options)
+    n = len(cam_pts)
+    H, W = maps.col.shape
+    half = int(window) // 2
+    proj = np.full((n, 2), np.nan)
+    fit_sigma = np.full((n, 2), np.nan)
+    fit_pixels = np.zeros(n, np.int32)
+    reason = diag["reason"].copy()
+    sig = [np.maximum(maps.coordinate_sigma(a), np.float32(DENSE_SIGMA_FLOOR)) for a in ("col", "row")]
+    valid = maps.valid
+    powers = [(i, d - i) for d in range(int(degree) + 1) for i in range(d, -1, -1)]
+    for k in np.flatnonzero(np.isfinite(hom).all(axis=1)):
+        x, y = cam_pts[k]
+        cx, cy = int(round(x)), int(round(y))
+        x0, x1, y0, y1 = max(0, cx - half), min(W, cx + half + 1), max(0, cy - half), min(H, cy + half + 1)
+        v = valid[y0:y1, x0:x1]
+        yy, xx = np.nonzero(v)
+        if len(xx) < max(3 * len(powers), 30):
+            reason[k] = 2
+            continue
+        dx, dy = (xx + x0 - x) / half, (yy + y0 - y) / half
+        X = np.column_stack([dx ** i * dy ** j for i, j in powers])
+        for a, m in enumerate((maps.col, maps.row)):
+            z = m[y0:y1, x0:x1][v].astype(np.float64)
+            w = 1.0 / sig[a][y0:y1, x0:x1][v].astype(np.float64)
+            keep = np.ones(len(z), bool)
+            for _ in range(2):
+                A = X[keep] * w[keep, None]
+                c, *_ = np.linalg.lstsq(A, z[keep] * w[keep], rcond=None)
+                r = (X @ c - z) * w
+                chi = float(np.sqrt(np.mean(r[keep] ** 2)))
+                keep = np.abs(r) <= 4.0 * max(chi, 1.0)
+            A = X[keep] * w[keep, None]
+            c, *_ = np.linalg.lstsq(A, z[keep] * w[keep], rcond=None)
+            r = (X[keep] @ c - z[keep]) * w[keep]
+            dof = max(int(keep.sum()) - len(powers), 1)
+            cov = np.linalg.pinv(A.T @ A) * max(float(r @ r) / dof, 1.0)
+            proj[k, a] = c[0]
+            fit_sigma[k, a] = float(np.sqrt(max(cov[0, 0], 0.0)))
+        fit_pixels[k] = int(v.sum())
+    dist = np.linalg.norm(proj - hom, axis=1)
+    bad = ~(dist <= tolerance) & np.isfinite(proj).all(axis=1)
+    reason[bad] = 6
+    proj[reason != 0] = np.nan
+    return proj, {**diag, "reason": reason, "fit_sigma_px": fit_sigma, "fit_pixels": fit_pixels,
+                  "homography_px": dist}
+
+
 def reason_summary(reason: np.ndarray) -> str:
     """``"3 too few decoded pixels ..., 1 window leaves the image"`` for the failed corners."""
     counts = np.bincount(np.asarray(reason, int), minlength=len(CORNER_REASONS))

@@ -82,22 +82,21 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
     Raises :class:`BoardNotFoundError` with what to check (at once, naming the right ``--board``,
     when a board of another size is in view).
     """
-    white = stack[ps.white]
-    black = stack[ps.black]
-    candidates = (white,  # the white - black image is only built when the white frame fails
-                  lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None),
-                  black)
+    white = _capture.board_image(stack, ps)  # the white frame, or the mean of a phase family's fringes
+    black = stack[ps.black] if ps.black is not None and ps.white is not None else None
+    candidates = (white,) if black is None else (  # the white - black image is only built when the white fails
+        white, lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None), black)
+    frame = f"the white frame (#{ps.white})" if ps.white is not None else "the mean of the phase frames"
     c, hint = _corners.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
                                     refine=refine)
     if c is not None:
         return c
     cols, rows = pattern_size
     if hint is not None:
-        raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
-                                 f"(#{ps.white}); {_corners.size_hint_text(pattern_size, hint)}")
+        raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in {frame}; "
+                                 f"{_corners.size_hint_text(pattern_size, hint)}")
     raise BoardNotFoundError(
-        f"{name}: chessboard with {cols}x{rows} inner corners not found in the white frame "
-        f"(#{ps.white}); check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "
+        f"{name}: chessboard with {cols}x{rows} inner corners not found in {frame}; check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "
         f"{cols}x{rows} inner corners), the exposure of the white frame, and that the whole board is in view")
 
 
@@ -130,13 +129,12 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
         corners = None if cam_pts is not None else ex.submit(
             find_board, stack, pattern_set, board.pattern_size, options.detector, options.refine_window, name,
             options.refine)
-        maps = _decode.decode(stack, pattern_set, d.method, shadow_threshold=d.shadow_threshold,
-                              contrast_threshold=d.contrast_threshold, extras=keep_maps)
+        maps = _decode.decode_with(stack, pattern_set, d, extras=keep_maps)  # the family's decoder
         if corners is not None:
             cam_pts = corners.result()
-    proj, diag = _corr.projector_corners(cam_pts, maps, options.corners)
-    warnings = list(warnings) + _plausible.check_projector_size(maps, name, files)
-    _plausible.check_swapped_bits(maps, name, files)
+    proj, diag = (_corr.dense_projector_corners if maps.subpixel else _corr.projector_corners)(
+        cam_pts, maps, options.corners)
+    warnings = list(warnings) + _plausible.check_decoded(maps, name, files)
     _plausible.check_orientation(cam_pts, proj, board.cols, board.rows, name, maps, files)
     H, W = stack.shape[1:]
     background = Background(*_corr.background_points(maps, cam_pts)) if options.background else None

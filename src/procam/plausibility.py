@@ -14,7 +14,8 @@ the decoded maps or the corners:
   onto each other preserving orientation; a mirrored camera image, a mirroring projector setting, or the most
   significant pattern swapped with its inverse (which mirrors the codes) reverses it.
 
-The checks raise :class:`~procam.errors.CaptureError` naming the frames or the setting to check.
+The checks raise :class:`~procam.errors.CaptureError` naming the frames or the setting to check;
+:func:`check_decoded` runs those of the capture's family (a phase family's: :func:`check_phase_maps`).
 """
 
 from __future__ import annotations
@@ -99,13 +100,20 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
         raise CaptureError(f"{name}: the projector is larger than {ps.width}x{ps.height}: {what}; the codes point to "
                            f"a projector of about {real[0]}x{real[1]} — check --projector (or the folder's "
                            "patterns.json)")
-    for label, axis, hist, size, nbits, offset in _axes(maps):
+    return warnings + _extent_warnings(maps, name)
+
+
+def _extent_warnings(maps: DecodeResult, name: str) -> list[str]:
+    """Warnings when the decoded coordinates use only part of the given projector size."""
+    out = []
+    ps = maps.pattern_set
+    for label, hist, size in (("column", maps.codes_col, ps.width), ("row", maps.codes_row, ps.height)):
         e = code_extent(hist)
         if 0 < e < 0.8 * size:
-            warnings.append(f"{name}: the decoded projector {label}s span only 0-{e - 1} of the given {size}: if the "
-                            f"projector has {e} {label}s (not {size}), pass the right --projector; otherwise part of "
-                            "the projection is outside the camera's view")
-    return warnings
+            out.append(f"{name}: the decoded projector {label}s span only 0-{e - 1} of the given {size}: if the "
+                       f"projector has {e} {label}s (not {size}), pass the right --projector; otherwise part of "
+                       "the projection is outside the camera's view")
+    return out
 
 
 def _median_of_hist(h: np.ndarray, lo: int) -> float:
@@ -196,6 +204,47 @@ def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     return out
 
 
+def check_decoded(maps: DecodeResult, name: str, files=None) -> list[str]:
+    """The checks of a decoded capture for its family; raises :class:`CaptureError`, returns warnings.
+
+    Gray codes: :func:`check_projector_size` and :func:`check_swapped_bits`.  Phase families (the description
+    itself is judged against the frames when the folder is read, :func:`procam.capture.check_phase_capture`):
+    :func:`check_phase_maps` and the decoder's own warnings (an uncorrected projector gamma).
+    """
+    if not maps.subpixel:
+        warnings = check_projector_size(maps, name, files)
+        check_swapped_bits(maps, name, files)
+        return warnings
+    return check_phase_maps(maps, name) + list(maps.phase.warnings if maps.phase is not None else ())
+
+
+#: Largest fraction of a phase decode's lit pixels whose orders disagree or that fall off the panel.
+MAX_PHASE_DISAGREEMENT = 0.2
+
+
+def check_phase_maps(maps: DecodeResult, name: str) -> list[str]:
+    """Raise when a phase decode's frequencies disagree (or its coordinates fall off the panel) at more than
+    :data:`MAX_PHASE_DISAGREEMENT` of the pixels the projector lights: the sequence's description does not match
+    its frames.  Returns a warning when the decoded coordinates use only part of the panel."""
+    from .decoded import LOW_CONTRAST, ORDER_DISAGREE
+
+    ps = maps.pattern_set
+    out = []
+    for label, r in (("column", maps.reason_col), ("row", maps.reason_row)):
+        judged = np.isin(r, (0, 4, LOW_CONTRAST, ORDER_DISAGREE))
+        n = int(judged.sum())
+        if n < 1000:
+            continue
+        bad = float(np.isin(r[judged], (4, ORDER_DISAGREE)).mean())
+        if bad > MAX_PHASE_DISAGREEMENT:
+            raise CaptureError(
+                f"{name}: {bad:.0%} of the decoded pixels' fringe orders disagree or fall off the panel along the "
+                f"{label}s: the sequence's description ({ps.describe()}) does not match the frames — "
+                "'procam decode' on the pose folder names the frames that disagree; fix patterns.json "
+                "(docs/patterns.md)")
+    return out + _extent_warnings(maps, name)
+
+
 def check_swapped_bits(maps: DecodeResult, name: str, files=None, *, sample: int = 4) -> None:
     """Raise when decoding one Gray-code bit the other way round makes the decoded map clearly continuous:
     that bit's pattern and inverse were swapped in the capture (or one of them comes from another sequence).
@@ -253,7 +302,7 @@ def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows
     if len(s) < 4 or np.count_nonzero(s < 0) <= 0.75 * len(s):
         return
     hint = ""
-    if maps is not None:
+    if maps is not None and not maps.subpixel:
         fc, fr = beyond_fraction(maps)
         ps = maps.pattern_set
         if max(fc, fr) > 0.005:

@@ -18,6 +18,7 @@ CORNER_REASONS = {
     3: "window leaves the image",
     4: "poor local homography fit (residual above max_residual)",
     5: "homography estimation failed",
+    6: "the local fit of the sub-pixel map and the local homography disagree (phase families)",
 }
 
 

@@ -20,7 +20,6 @@ folder or file and says what to do:
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,19 +43,38 @@ class Capture:
 
     @property
     def white(self) -> np.ndarray:
-        return self.stack[self.pattern_set.white]
+        """The board image: the white frame, or without one the mean of the phase frames
+        (:func:`procam.capture.phase.board_image`)."""
+        if self.pattern_set.white is not None:
+            return self.stack[self.pattern_set.white]
+        from .phase import board_image
+
+        return board_image(self.stack, self.pattern_set)
 
     @property
-    def black(self) -> np.ndarray:
-        return self.stack[self.pattern_set.black]
+    def black(self) -> np.ndarray | None:
+        """The black frame, or None when the sequence has none."""
+        return None if self.pattern_set.black is None else self.stack[self.pattern_set.black]
 
 
-def resolve_pattern_set(folder, projector=None, order=None, step=None) -> patterns.PatternSet:
-    """The PatternSet for ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
-    patterns.json, else the defaults (opencv order, step 1)."""
+def resolve_pattern_set(folder, projector=None, order=None, step=None):
+    """The sequence of ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
+    patterns.json, else the defaults (opencv order, step 1).  A patterns.json of a phase family
+    (:func:`procam.patterns.from_dict`) gives a :class:`~procam.patterns.PhaseSet` (``projector`` overrides its
+    size; ``order`` and ``step`` are the Gray family's)."""
     meta = _files.read_sidecar(folder, "patterns.json")
     if meta is not None and not isinstance(meta, dict):
         meta = {}
+    family = patterns.family_of(meta)
+    if family != "gray":
+        where = Path(folder) / "patterns.json"
+        if order is not None or step is not None:
+            raise CaptureError(f"{where} describes a {family} sequence: --order and --step apply to Gray codes only; "
+                               "drop them")
+        try:
+            return patterns.from_dict(meta, *(projector if projector is not None else (None, None)))
+        except ValueError as e:
+            raise CaptureError(f"{where}: {e} — see docs/patterns.md for how to describe a sequence") from None
     if projector is None:
         if meta is None:
             raise CaptureError(f"{folder}: the projector size is unknown; pass --projector WIDTHxHEIGHT "
@@ -110,14 +128,15 @@ def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
     flat = stack.reshape(len(stack), -1)
     if flat.shape[1] <= n:
         return flat.astype(np.float32)
-    return np.take(flat, _sample_index(flat.shape[1], n), axis=1).astype(np.float32)
+    return np.take(flat, sample_index(flat.shape[1], n), axis=1).astype(np.float32)
 
 
-@functools.lru_cache(maxsize=8)
-def _sample_index(size: int, n: int) -> np.ndarray:
-    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
-    idx.flags.writeable = False
-    return idx
+def sample_index(size: int, n: int) -> np.ndarray:
+    """The fixed pseudo-random set of ``n`` pixel indices (sorted) out of ``size`` every check and the phase
+    decoder's measurements use (all of them when ``size <= n``)."""
+    from ..phase.decoder import sample_index as _index
+
+    return _index(size, n)
 
 
 def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -485,7 +504,7 @@ def check_memory(folder, n_images: int, shape, itemsize: int) -> None:
 
 
 def load_capture(folder, projector=None, order=None, check: bool = True, step=None, reader=None) -> Capture:
-    """Read and validate a pose folder.
+    """Read and validate a pose folder (a phase family's checks: :func:`procam.capture.phase.check_phase_capture`).
 
     Parameters
     ----------
@@ -501,6 +520,10 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     images = _files.list_images(folder)
     ps = resolve_pattern_set(folder, projector, order, step)
     files, notes = sequence_files(folder, images)
+    if len(files) != ps.count and patterns.is_phase(ps):
+        from .phase import count_error
+
+        raise CaptureError(count_error(folder, files, ps, _missing_listed(folder, files)))
     if len(files) != ps.count:
         gone = _missing_listed(folder, files)
         why = ""
@@ -521,7 +544,13 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     check_memory(folder, len(files), head[:2], head[2])
     stack = (reader or _files.read_images)(files)
     warnings = notes
-    if check:
+    if check and patterns.is_phase(ps):
+        from .phase import check_phase_capture
+
+        sub = _sample(stack)
+        check_light(stack, folder, sub=sub)
+        warnings = notes + check_phase_capture(stack, ps, folder, files, sub)
+    elif check:
         sub = _sample(stack)  # one pixel sample serves every check
         check_light(stack, folder, sub=sub)
         check_white_black(stack, ps, folder, files, sub=sub)

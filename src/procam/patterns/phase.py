@@ -40,8 +40,11 @@ KINDS = ("phase", "gray", "white", "black")
 AXES = ("col", "row")
 #: The phase families (every family but ``gray``).
 PHASE_FAMILIES = tuple(f for f in PATTERN_FAMILIES if f != "gray")
-#: Default fringe periods (projector pixels) of procam's own sequences, and the heterodyne's period counts.
-DEFAULT_PERIOD = {"phase": 32.0, "gray-phase": 32.0}
+#: procam's own sequences' defaults (measured in ``benchmarks/phase.py`` at the paper's rig): fringe periods
+#: (projector pixels), steps, and the heterodyne's counts of periods across the panel.  The two-frequency scheme
+#: needs the cue's noise times the ratio of the periods below a tenth of a period: coarser fringes and more steps.
+DEFAULT_PERIOD = {"phase": 64.0, "gray-phase": 16.0}
+DEFAULT_STEPS = {"phase": 8, "heterodyne": 4, "gray-phase": 4}
 DEFAULT_HETERODYNE_COUNTS = (70, 64, 59)
 
 
@@ -239,6 +242,23 @@ class PhaseSet:
         first = g.first + 2 * np.arange(g.bits + int(g.complementary))
         return np.stack([first, first + 1], axis=1)
 
+    def role(self, k: int) -> str:
+        """What frame ``k`` shows, in the words of every message (:mod:`procam.capture.frames`): ``'white'``,
+        ``'column phase 2 of 4, period 32 px'`` (steps counted from 1), ``'row Gray bit 3 inverse'``,
+        ``'column complementary Gray bit'``, or ``'not in the sequence'``."""
+        b, j = self.block_of(int(k))
+        if b is None:
+            return "not in the sequence"
+        if b.kind in ("white", "black"):
+            return b.kind
+        name = "column" if b.axis == "col" else "row"
+        if b.kind == "phase":
+            cue = ", the unit-frequency cue" if b.period >= self.size(b.axis) else ""
+            return f"{name} phase {j + 1} of {b.steps}, period {b.period:.4g} px{cue}"
+        bit, inverse, comp = b.gray_frame(j)
+        what = "complementary Gray bit" if comp else f"Gray bit {bit}"
+        return f"{name} {what}{' inverse' if inverse else ''}"
+
     def line(self, k: int) -> tuple[str | None, np.ndarray | None]:
         """``(axis, values)`` of frame ``k``: the 1-D pattern (uint8, projector width or height values) of a
         phase or Gray frame; ``(None, None)`` for the white and black frames."""
@@ -380,9 +400,9 @@ def _check_set(ps: PhaseSet) -> None:
                                  f"fringes have {_num(phase[0].period)} px (or another origin)")
 
 
-def phase_set(width: int, height: int, family: str = "phase", *, steps: int = 4, period: float | None = None,
-              periods=None, inverse: bool = True, complementary: bool = False, white_black: bool = True,
-              fringe: Fringe = Fringe()) -> PhaseSet:
+def phase_set(width: int, height: int, family: str = "phase", *, steps: int | None = None,
+              period: float | None = None, periods=None, inverse: bool = True, complementary: bool = True,
+              white_black: bool = True, fringe: Fringe = Fringe()) -> PhaseSet:
     """procam's own sequence of ``family`` for a ``width`` x ``height`` projector.
 
     Columns first, then rows; per axis the Gray block (gray-phase) and the phase blocks finest first, the
@@ -391,18 +411,20 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int = 4,
     Parameters
     ----------
     family : ``"phase"``, ``"heterodyne"`` or ``"gray-phase"``.
-    steps : phase shifts per block, ``N >= 3``.
-    period : fringe period in projector pixels (phase, gray-phase; default 32).
+    steps : phase shifts per block, ``N >= 3`` (default :data:`DEFAULT_STEPS`: 8, 4, 4).
+    period : fringe period in projector pixels (phase, gray-phase; default :data:`DEFAULT_PERIOD`: 64, 16).
     periods : family ``phase``: the fringe periods of every level but the cue (default ``(period,)``);
         ``heterodyne``: three counts of periods across the panel (default ``(70, 64, 59)``; the periods are the
         panel's size over them, so rows get finer fringes than columns).
-    inverse, complementary : gray-phase: every Gray bit followed by its inverse; one complementary bit.
+    inverse, complementary : gray-phase: every Gray bit followed by its inverse; one complementary bit (default
+        both: the complementary bit removes the stripe-edge errors of the plain hybrid).
     white_black : end with a white and a black frame.
     fringe : the conventions (default procam's).
     """
-    width, height, steps = int(width), int(height), int(steps)
     if family not in PHASE_FAMILIES:
         raise ValueError(f"family must be one of {', '.join(PHASE_FAMILIES)}, got {family!r}")
+    width, height = int(width), int(height)
+    steps = int(DEFAULT_STEPS[family] if steps is None else steps)
     blocks = []
     first = 0
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -39,7 +40,6 @@ from ..io import files as _files
 from ..patterns.phase import PhaseSet
 from . import response as _resp
 from . import unwrap as _unwrap
-from .wrapped import block_band
 
 #: Pixels of the sample the response and the noise are measured on (and :mod:`procam.phase.diagnose` judges).
 SAMPLE = 20000
@@ -125,10 +125,19 @@ class PhaseInfo:
     sample: dict = field(default_factory=dict, compare=False, repr=False)
 
 
-def _sample_index(size: int, n: int) -> np.ndarray:
+def sample_index(size: int, n: int) -> np.ndarray:
+    """The sample's pixels: ``n`` of ``size`` (flat indices, sorted), the same fixed pseudo-random set as the
+    capture checks' (:func:`procam.capture.sample_index`)."""
     if size <= n:
         return np.arange(size)
-    return np.sort(np.random.default_rng(0).choice(size, n, replace=False))
+    return _sample_index(size, n)
+
+
+@lru_cache(maxsize=8)
+def _sample_index(size: int, n: int) -> np.ndarray:
+    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
+    idx.flags.writeable = False
+    return idx
 
 
 def _lut_px(lut, period: float) -> float:
@@ -225,10 +234,10 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape
-    idx = _sample_index(H * W, SAMPLE)
+    idx = sample_index(H * W, SAMPLE)
     sub = stack.reshape(K, -1)[:, idx].astype(np.float64)
     resp, measured, used, err_px, noise, luts, notes, lit = _response(sub, ps, options, fs, scale)
-    ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts)
+    ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts, plan=_plan(ps, luts, noise))
     out = {k: np.empty((H, W), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
     out["rcol"], out["rrow"] = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
     out["conf"] = np.empty((H, W), np.float32) if extras else None
@@ -268,63 +277,118 @@ def _block_stats(sub, ps: PhaseSet, lit) -> tuple:
     return tuple(out)
 
 
-def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, noise, luts):
+def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
+    """What every band reuses: per phase block the groups of its sums ``sum I cos d`` and ``-sum I sin d``
+    (:func:`procam.phase.wrapped.sum_plan`), the constant of its noise, its lookup table; per axis its blocks
+    coarsest first."""
+    from .wrapped import sum_plan, weights
+
+    blocks = {}
+    for b in ps.blocks:
+        if b.kind != "phase":
+            continue
+        c, s = weights(b.shifts())
+        blocks[b.first] = {"C": sum_plan(c), "S": sum_plan(-s),
+                           "k": np.float32(math.sqrt(2.0 / b.steps) / (2.0 * math.pi)),
+                           "turn": np.float32(b.fringe.sign / (2.0 * math.pi)), "lut": luts.get(b.first)}
+    return {"blocks": blocks, "axes": {a: ps.phase_blocks(a) for a in ("col", "row")},
+            "a": np.float32(noise[0]), "b": np.float32(noise[1]), "sd0": np.float32(math.sqrt(noise[0]))}
+
+
+def _phase_of(blk, bl, pb, wide):
+    """``(B, u, slope)`` float32 of one phase block's frames in the band ``blk`` (``slope`` None without a
+    lookup table)."""
+    import cv2
+
+    from .wrapped import weighted_sum
+
+    frames = [blk[k] for k in bl.frames]
+    C = weighted_sum(frames, pb["C"], wide)
+    S = weighted_sum(frames, pb["S"], wide)
+    psi = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
+    B = cv2.magnitude(C, S)
+    B *= np.float32(2.0 / bl.steps)
+    slope = None
+    if pb["lut"] is not None:
+        psi, slope = pb["lut"].apply(psi)
+    u = psi * pb["turn"]
+    u -= np.floor(u)
+    return B, u, slope
+
+
+def _noise_of(B, A, slope, pb, plan):
+    """float32 standard deviation of a block's fringe fraction (cycles) from its modulation ``B`` and the
+    camera's noise at level ``A``."""
+    if plan["b"] > 0:
+        su = np.sqrt(plan["a"] + plan["b"] * np.maximum(A, 0.0))
+        su *= pb["k"]
+        su /= B
+    else:
+        su = (plan["sd0"] * pb["k"]) / B
+    if slope is not None:
+        su *= slope
+    return su
+
+
+def _mean_of(blk, bl, wide) -> np.ndarray:
+    acc = np.zeros(blk.shape[1:], wide)
+    for k in bl.frames:
+        acc += blk[k]
+    return acc.astype(np.float32) * np.float32(1.0 / bl.steps)
+
+
+def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, noise, luts, plan):
     """Decode the rows ``sl`` (frames ``blk`` (K, h, W)) into ``out`` (see :func:`decode_phase`)."""
-    a, b = noise
     h, w = blk.shape[1:]
-    buf = np.empty((4, h, w), np.float32)
+    wide = np.int16 if blk.dtype == np.uint8 and max(b.steps for b in ps.blocks if b.kind == "phase") <= 128 \
+        else np.int32
     span = None
     if ps.white is not None and ps.black is not None:
-        span = blk[ps.white].astype(np.float32) - blk[ps.black].astype(np.float32)
+        span = blk[ps.white].astype(np.float32) - blk[ps.black]
+    shadow_t = np.float32(opts.shadow_threshold * scale / 2.0)
     conf = None
-    for axis, key, rkey, skey, mkey in (("col", "col", "rcol", "scol", "mcol"), ("row", "row", "rrow", "srow", "mrow")):
-        n = ps.size(axis)
-        blocks = ps.phase_blocks(axis)  # coarsest first
-        levels, finest = [], None
-        reason = np.zeros((h, w), np.uint8)
-        sat = np.zeros((h, w), bool)
-        Bc = None
-        for bl in blocks:
-            frames = blk[bl.first:bl.first + bl.count]
-            for f in frames:
-                sat |= f >= fs
-            A, B, psi = block_band(frames, bl.shifts(), buf)
-            if Bc is None:
-                Bc = B.copy()
-            slope = 1.0
-            lut = luts.get(bl.first)
-            if lut is not None:
-                psi, slope = lut(psi.astype(np.float64))
-            u = (bl.fringe.sign * np.asarray(psi, np.float64)) / (2.0 * np.pi)
-            u -= np.floor(u)
-            var = np.maximum(a + b * A, 1e-6)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                su = np.sqrt(var * (2.0 / bl.steps)) / np.maximum(B, 1e-6) / (2.0 * np.pi) * slope
-            levels.append((u, su.astype(np.float64), bl.period, bl.fringe.x0))
-            finest = (A, B, u)
-        reason[2.0 * Bc < opts.shadow_threshold * scale] = _d.SHADOW
-        if span is not None:
-            reason[span < opts.shadow_threshold * scale] = _d.SHADOW
-        reason[sat & (reason == _d.OK)] = _d.SATURATED
-        if ps.family == "phase":
-            x, sx = _unwrap.hierarchical(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
-        elif ps.family == "heterodyne":
-            x, sx = _unwrap.heterodyne(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
-        else:
-            x, sx = _gray_phase(blk, ps, axis, levels[0], finest, span, reason, opts, scale, noise)
-        reason[((x < -0.5) | (x > n - 0.5)) & (reason == _d.OK)] = _d.OUT_OF_RANGE
-        fin = np.isfinite(x) & (reason != _d.SHADOW) & (reason != _d.SATURATED)
-        hists[axis] += np.bincount(np.clip(np.rint(x[fin]), 0, len(hists[axis]) - 1).astype(np.int64),
-                                   minlength=len(hists[axis]))
-        ok = reason == _d.OK
-        out[key][sl] = np.where(ok, x, np.nan)
-        out[skey][sl] = np.where(ok, sx, np.nan)
-        out[mkey][sl] = finest[1]
-        out[rkey][sl] = reason
-        if out["conf"] is not None:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                c = np.clip(finest[1] / np.maximum(finest[0], 1e-6), 0.0, 1.0)
-            conf = c if conf is None else np.minimum(conf, c)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for axis, key, rkey, skey, mkey in (("col", "col", "rcol", "scol", "mcol"),
+                                            ("row", "row", "rrow", "srow", "mrow")):
+            n = ps.size(axis)
+            blocks = plan["axes"][axis]  # coarsest first
+            peak = blk[blocks[0].first].copy()
+            A = _mean_of(blk, blocks[-1], wide)  # the pixel's level (the finest fringes' mean)
+            levels = []
+            for bl in blocks:
+                for k in bl.frames:
+                    np.maximum(peak, blk[k], out=peak)
+                pb = plan["blocks"][bl.first]
+                B, u, slope = _phase_of(blk, bl, pb, wide)
+                if not levels:
+                    shadow = B < shadow_t
+                levels.append((u, _noise_of(B, A, slope, pb, plan), bl.period, bl.fringe.x0))
+            reason = np.zeros((h, w), np.uint8)
+            reason[shadow] = _d.SHADOW
+            if span is not None:
+                reason[span < 2.0 * shadow_t] = _d.SHADOW
+            reason[(peak >= fs) & (reason == _d.OK)] = _d.SATURATED
+            if ps.family == "phase":
+                x, sx = _unwrap.hierarchical(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
+            elif ps.family == "heterodyne":
+                x, sx = _unwrap.heterodyne(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
+            else:
+                x, sx = _gray_phase(blk, ps, axis, levels[0], (A, B), span, reason, opts, scale, noise)
+            reason[((x < -0.5) | (x > n - 0.5)) & (reason == _d.OK)] = _d.OUT_OF_RANGE
+            fin = (reason == _d.OK) | (reason == _d.OUT_OF_RANGE) | (reason == _d.ORDER_DISAGREE)
+            hists[axis] += np.bincount(np.clip(np.rint(x[fin]), 0, len(hists[axis]) - 1).astype(np.intp),
+                                       minlength=len(hists[axis]))
+            bad = reason != _d.OK
+            xo, so = out[key][sl], out[skey][sl]
+            np.copyto(xo, x, casting="unsafe")
+            np.copyto(so, sx, casting="unsafe")
+            xo[bad] = np.nan
+            so[bad] = np.nan
+            out[mkey][sl] = B
+            out[rkey][sl] = reason
+            if out["conf"] is not None:
+                c = np.clip(B / np.maximum(A, np.float32(1e-6)), 0.0, 1.0)
+                conf = c if conf is None else np.minimum(conf, c)
     if out["conf"] is not None:
         out["conf"][sl] = conf
 
@@ -333,28 +397,34 @@ def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
     """The gray-phase coordinate of one axis: Gray bits, their orders, the fringe fraction (see
     :func:`procam.phase.unwrap.gray_orders`)."""
     u, su, period, x0 = level
-    A, B, _ = finest
+    A, B = finest
     g = ps.gray_block(axis)
     t = opts.contrast_threshold * scale
     nb = g.bits + int(g.complementary)
-    var = noise[0] + noise[1] * np.maximum(A, 0.0)  # the camera's noise variance at the pixel's level
+    # the camera's noise at the pixel's level: sure bits differ by more than 3 of its standard deviations
+    if noise[1] > 0:
+        sd = np.sqrt(np.float32(noise[0]) + np.float32(noise[1]) * np.maximum(A, 0.0))
+    else:
+        sd = np.float32(math.sqrt(noise[0]))
     if g.inverse:
-        p = blk[g.first:g.first + 2 * nb:2].astype(np.float32)
-        q = blk[g.first + 1:g.first + 2 * nb:2].astype(np.float32)
-        diff = p - q
-        sd = np.sqrt(2.0 * var)  # noise of pattern - inverse
+        p = blk[g.first:g.first + 2 * nb:2]
+        q = blk[g.first + 1:g.first + 2 * nb:2]
+        bits = p > q
+        contrast = np.abs(p.astype(np.float32) - q)
+        sd = sd * np.float32(math.sqrt(2.0))
+        need = np.maximum(np.float32(t), 3.0 * sd)
     else:
         p = blk[g.first:g.first + nb].astype(np.float32)
         if span is not None:
-            thr = (blk[ps.white].astype(np.float32) + blk[ps.black].astype(np.float32)) / 2.0
+            thr = (blk[ps.white].astype(np.float32) + blk[ps.black]) / 2.0
         else:
             # midway between the pixel's dark and lit levels, from the fringes' mean and modulation
             c = _resp.harmonics(ps.phase_blocks(axis)[-1].fringe, 1.0)
-            thr = A + B * (0.5 - c[0]) / max(c[1], 1e-6)
+            thr = A + B * np.float32((0.5 - c[0]) / max(c[1], 1e-6))
         diff = p - thr
-        sd = np.sqrt(var)
-    bits, contrast = diff > 0, np.abs(diff)
-    certain = contrast >= np.maximum(t if g.inverse else t / 2.0, 3.0 * sd)
+        bits, contrast = diff > 0, np.abs(diff)
+        need = np.maximum(np.float32(t / 2.0), 3.0 * sd)
+    certain = contrast >= need
     comp = comp_c = None
     if g.complementary:
         comp, comp_c = bits[-1], certain[-1]

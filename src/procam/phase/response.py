@@ -16,15 +16,16 @@ Phase error and its correction
     estimate is not monotonic in the phase -- 3 steps and gamma above about 2.4 -- it cannot be undone: pre-correct
     the patterns, or use more steps.)
 Measurement (:func:`fit_response`)
-    On a sample of well-lit pixels, for candidate ``(gamma, s)``: every phase block's phase from its lookup table,
+    On a sample of well-lit pixels, for candidate ``(gamma, s)``: every phase block's phase from its lookup table
+    (blocks of the same steps and conventions whose periods are within 10 % share one waveform),
     then ``alpha`` and ``beta`` per pixel by linear least squares over every phase frame and the white and black
     frames (pattern values 1 and 0, blur-free); the cost is the trimmed mean of the residual sum of squares over
     ``beta^2``.  ``gamma`` is what makes the frames one projector's response to the described patterns: within a
     block the harmonics (N >= 4), across blocks the shared ``alpha`` and ``beta`` (the modulation's ripple at N
-    times the fringe frequency for 3 steps), and the white and black frames (the fringes' mean level).  Its
-    standard deviation is the spread over four disjoint quarters of the sample divided by 2.  A sequence that
+    times the fringe frequency for 3 steps), and the white and black frames (the fringes' mean level).  A sequence that
     determines it in none of these ways (3 steps, one block per period, no white or black frame) leaves it
-    unmeasured (``measurable = False``).
+    unmeasured (``measurable = False``).  Its standard deviation is the sandwich estimate from the per-pixel
+    costs' first and second derivatives (pixels taken as independent).
     The residuals at the optimum give the camera's noise: per pixel the residual variance (over ``frames - 2 -
     blocks`` degrees of freedom), as a function of the pixel's level, ``var = a + b * level`` (read and
     quantisation noise plus shot noise) fitted to binned medians.
@@ -44,13 +45,12 @@ import numpy as np
 
 #: Harmonics of the fringe waveform kept in the model.
 HARMONICS = 8
-#: Entries of a phase lookup table over [0, 2 pi].
-LUT_SIZE = 2048
+#: Entries of a phase lookup table over [0, 2 pi] (linear interpolation errs by under 1e-4 rad).
+LUT_SIZE = 1024
 #: Pixels of the sample the response is measured on.
-FIT_PIXELS = 2000
-#: Candidate gammas and blurs (projector pixels) of the coarse search.
-GAMMA_GRID = np.round(np.arange(0.4, 3.61, 0.2), 2)
-BLUR_GRID = (0.0, 1.0, 2.0)
+FIT_PIXELS = 1200
+#: Candidate gammas of the coarse search (at a blur of 1 projector pixel), refined by golden sections.
+GAMMA_GRID = (0.6, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5)
 
 
 @lru_cache(maxsize=64)
@@ -74,14 +74,16 @@ def waveform(fringe, gamma: float, period: float, blur: float) -> np.ndarray:
 
 
 def samples(c: np.ndarray, phase: np.ndarray, shifts: np.ndarray) -> np.ndarray:
-    """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift."""
+    """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift (Chebyshev's recurrence
+    ``cos h t = 2 cos t cos (h-1) t - cos (h-2) t``)."""
     t = np.asarray(phase)[None] + np.asarray(shifts).reshape((-1,) + (1,) * np.ndim(phase))
-    z = np.exp(1j * t)
-    out = np.full(t.shape, c[0])
-    zh = np.ones_like(z)
-    for h in range(1, len(c)):
-        zh = zh * z
-        out = out + c[h] * zh.real
+    c1 = np.cos(t)
+    out = c[0] + c[1] * c1
+    prev, cur = np.ones_like(c1), c1
+    two = 2.0 * c1
+    for h in range(2, len(c)):
+        prev, cur = cur, two * cur - prev
+        out += c[h] * cur
     return out
 
 
@@ -110,31 +112,66 @@ class PhaseLUT:
     slope: np.ndarray
     max_error: float
 
-    def __call__(self, psi: np.ndarray):
-        """``(phase, slope)`` at estimates ``psi`` (radians in [0, 2 pi))."""
-        q = np.asarray(psi) * (LUT_SIZE / (2.0 * np.pi))
-        return (psi + np.interp(q, np.arange(LUT_SIZE + 1), self.correction),
-                np.interp(q, np.arange(LUT_SIZE + 1), self.slope))
+    def apply(self, psi: np.ndarray):
+        """``(phase, slope)`` float32 at float32 estimates ``psi`` (any shape), by a linear lookup (fast)."""
+        import cv2
+
+        psi = np.asarray(psi, np.float32)
+        table = getattr(self, "_table", None)
+        if table is None:
+            table = np.stack([self.correction, self.slope]).astype(np.float32)  # rows: correction, slope
+            object.__setattr__(self, "_table", table)
+        shape = psi.shape
+        flat = psi.reshape(1, -1) if psi.ndim != 2 else psi
+        q = flat * np.float32(LUT_SIZE / (2.0 * np.pi))
+        zeros = np.zeros_like(q)
+        corr = cv2.remap(table[:1], q, zeros, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        slope = cv2.remap(table[1:], q, zeros, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return (flat + corr).reshape(shape), slope.reshape(shape)
+
+    def __call__(self, psi: np.ndarray, slope: bool = True):
+        """``(phase, slope)`` at estimates ``psi`` (radians in [0, 2 pi)); ``slope`` None unless asked."""
+        size = len(self.correction) - 1
+        q = np.asarray(psi) * (size / (2.0 * np.pi))
+        grid = np.arange(size + 1)
+        return psi + np.interp(q, grid, self.correction), (np.interp(q, grid, self.slope) if slope else None)
 
 
-def phase_lut(c: np.ndarray, shifts: np.ndarray) -> PhaseLUT | None:
-    """The :class:`PhaseLUT` of waveform ``c`` sampled at ``shifts``; None when the N-step estimate is not
-    monotonic in the phase (the waveform cannot be corrected)."""
-    m = 4 * LUT_SIZE
+def phase_lut(c: np.ndarray, shifts: np.ndarray, size: int = LUT_SIZE) -> PhaseLUT | None:
+    """The :class:`PhaseLUT` (``size`` entries) of waveform ``c`` sampled at ``shifts``; None when the N-step
+    estimate is not monotonic in the phase (the waveform cannot be corrected)."""
+    m = 2 * size
     phi = np.arange(m) * (2.0 * np.pi / m)
-    vals = samples(c, phi, shifts)
-    _, _, psi = nstep(vals, shifts)
-    err = np.angle(np.exp(1j * (psi - phi)))
+    # sum_k w(phi + d_k) exp(-i d_k), harmonic by harmonic: cos h(phi + d) exp(-i d) sums to
+    # (exp(i h phi) sum_k exp(i (h-1) d_k) + exp(-i h phi) sum_k exp(-i (h+1) d_k)) / 2
+    d = np.asarray(shifts, np.float64)
+    z = np.zeros(m, complex)
+    e1 = np.exp(1j * phi)
+    eh = np.ones(m, complex)
+    for h in range(1, len(c)):
+        eh = eh * e1
+        a = np.exp(1j * (h - 1) * d).sum()
+        b = np.exp(-1j * (h + 1) * d).sum()
+        z += c[h] * (a * eh + b * np.conj(eh))
+    z += c[0] * np.exp(-1j * d).sum()
+    err = np.angle(z * np.conj(e1))  # estimate - phase, wrapped
     est = phi + err
     if not np.all(np.diff(est) > 0):
         return None
-    grid = np.arange(LUT_SIZE + 1) * (2.0 * np.pi / LUT_SIZE)
-    # extend one period either side so the interpolation covers [0, 2 pi] whatever the offset
-    ext_est = np.concatenate([est - 2 * np.pi, est, est + 2 * np.pi])
-    ext_phi = np.concatenate([phi - 2 * np.pi, phi, phi + 2 * np.pi])
+    grid = np.arange(size + 1) * (2.0 * np.pi / size)
+    # a few samples of the neighbouring periods either side, so the interpolation covers [0, 2 pi]
+    k = 8
+    ext_est = np.concatenate([est[-k:] - 2 * np.pi, est, est[:k] + 2 * np.pi])
+    ext_phi = np.concatenate([phi[-k:] - 2 * np.pi, phi, phi[:k] + 2 * np.pi])
     true = np.interp(grid, ext_est, ext_phi)
-    slope = np.gradient(true, grid)
+    slope = np.empty_like(true)
+    slope[1:-1] = (true[2:] - true[:-2]) / (grid[2:] - grid[:-2])
+    slope[0] = slope[-1] = 0.5 * (slope[1] + slope[-2])
     return PhaseLUT(true - grid, slope, float(np.max(np.abs(err))))
+
+
+#: Entries of the lookup tables the fit uses (coarser: the fit needs the phase to about 1e-3 rad).
+FIT_LUT_SIZE = 256
 
 
 @dataclass(frozen=True)
@@ -158,21 +195,42 @@ class Response:
     note: str = ""
 
 
+def _groups(blocks) -> list:
+    """Blocks that share one waveform in the fit: the same shifts and conventions and periods within 10 %
+    (their harmonics blur alike); ``[(period, [indices]), ...]``."""
+    out: list = []
+    for i, b in enumerate(blocks):
+        for g in out:
+            ref = blocks[g[1][0]]
+            if (ref.steps == b.steps and ref.fringe == b.fringe and np.allclose(ref.shifts(), b.shifts())
+                    and abs(math.log(b.period / ref.period)) < 0.1):
+                g[1].append(i)
+                break
+        else:
+            out.append([b.period, [i]])
+    for g in out:
+        g[0] = float(np.exp(np.mean([math.log(blocks[i].period) for i in g[1]])))
+    return out
+
+
 def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     """The cost of ``(gamma, blur)`` on ``data`` (see :func:`fit_response`); with ``per_pixel``, the residual sums
     of squares, the fitted beta and the pixels' levels as well."""
     Y = data["Y"]
     G = np.empty_like(Y)
-    row = 0
-    for blk, psi in data["blocks"]:
-        c = waveform(blk.fringe, gamma, blk.period, blur)
-        lut = phase_lut(c, blk.shifts())
+    blocks = [b for b, _ in data["blocks"]]
+    for period, members in data["groups"]:
+        ref = blocks[members[0]]
+        c = waveform(ref.fringe, gamma, period, blur)
+        lut = phase_lut(c, ref.shifts(), FIT_LUT_SIZE)
         if lut is None:
             return (np.inf, None, None, None) if per_pixel else np.inf
-        phi, _ = lut(psi)
-        G[row:row + blk.steps] = samples(c, phi, blk.shifts())
-        row += blk.steps
-    G[row:] = data["fixed"]
+        for i in members:
+            blk, psi = data["blocks"][i]
+            phi, _ = lut(psi, slope=False)
+            row = data["rows"][i]
+            G[row:row + blk.steps] = samples(c, phi, blk.shifts())
+    G[data["nphase"]:] = data["fixed"]
     Gm, Ym = G.mean(0), Y.mean(0)
     dG, dY = G - Gm, Y - Ym
     sgg = np.einsum("sn,sn->n", dG, dG)
@@ -182,6 +240,22 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     keep = np.sort(r)[: max(1, int(0.9 * len(r)))]
     cost = float(np.mean(keep))
     return (cost, rss, beta, Ym) if per_pixel else cost
+
+
+def _sandwich_std(data, gamma: float, blur: float, step: float = 0.02) -> float:
+    """Standard deviation of the gamma minimising the summed per-pixel costs ``r_p``: ``sqrt(sum r_p'^2) /
+    |sum r_p''|`` (the pixels independent), from ``r_p`` at ``gamma`` and ``gamma +- step``."""
+    r = []
+    for g in (gamma - step, gamma, gamma + step):
+        _, rss, beta, _ = _fit_cost(data, g, blur, per_pixel=True)
+        if rss is None:
+            return float("inf")
+        r.append(rss / np.maximum(beta ** 2, 1e-12))
+    d1 = (r[2] - r[0]) / (2 * step)
+    d2 = (r[2] - 2 * r[1] + r[0]) / step ** 2
+    keep = r[1] <= np.quantile(r[1], 0.9)
+    curv = abs(float(np.sum(d2[keep])))
+    return float(np.sqrt(np.sum(d1[keep] ** 2)) / curv) if curv > 0 else float("inf")
 
 
 def _golden(f, lo: float, hi: float, iters: int = 14) -> float:
@@ -246,38 +320,35 @@ def fit_response(blocks, white=None, black=None, *, gamma: float | None = None, 
     fixed = [np.ones(len(take)) for v in (white,) if v is not None] + [np.zeros(len(take)) for v in (black,)
                                                                           if v is not None]
     ys = [np.asarray(v, np.float64)[:, take] for _, v in blocks]
+    rows = list(np.cumsum([0] + [b.steps for b, _ in blocks])[:-1])
     ys += [np.asarray(v, np.float64)[take][None] for v in (white, black) if v is not None]
-
-    def data_of(idx):
-        return {"Y": np.concatenate(ys, axis=0)[:, idx],
-                "blocks": [(b, nstep(np.asarray(v, np.float64)[:, take][:, idx], b.shifts())[2]) for b, v in blocks],
-                "fixed": np.array(fixed)[:, idx] if fixed else np.zeros((0, len(idx)))}
-
-    every = np.arange(len(take))
-    data = data_of(every)
+    data = {"Y": np.concatenate(ys, axis=0), "rows": rows, "nphase": sum(b.steps for b, _ in blocks),
+            "blocks": [(b, nstep(y, b.shifts())[2]) for (b, _), y in zip(blocks, ys)],
+            "fixed": np.array(fixed) if fixed else np.zeros((0, len(take))),
+            "groups": _groups([b for b, _ in blocks])}
     dof = sum(b.steps for b, _ in blocks) + len(fixed) - 2 - len(blocks)
     floor = quantum ** 2 / 12.0
-    gammas = GAMMA_GRID if gamma is None else np.array([float(gamma)])
-    costs = np.array([[_fit_cost(data, g, s) for s in BLUR_GRID] for g in gammas])
-    gi, si = np.unravel_index(np.argmin(costs), costs.shape)
-    blur = BLUR_GRID[si]
     note, measurable, std = "", True, 0.0
     if gamma is None:
-        g0 = float(gammas[gi])
-        lo, hi = max(0.3, g0 - 0.2), g0 + 0.2
-        blur = _golden(lambda s: _fit_cost(data, g0, s), 0.0, 3.0, 10)
-        g_hat = _golden(lambda g: _fit_cost(data, g, blur), lo, hi)
-        folds = [every[k::4] for k in range(4)]
-        est = [_golden(lambda g, d=data_of(f): _fit_cost(d, g, blur), lo - 0.2, hi + 0.2, 10) for f in folds]
-        std = float(np.std(est, ddof=1) / 2.0)
-        flat = np.ptp(costs[:, si][np.isfinite(costs[:, si])]) if np.isfinite(costs[:, si]).any() else 0.0
-        if dof <= 0 or not std < 0.25 or flat < 0.05 * max(costs[gi, si], 1e-12):
+        costs = np.array([_fit_cost(data, g, 1.0) for g in GAMMA_GRID])
+        gi = int(np.argmin(costs))
+        g0 = float(GAMMA_GRID[gi])
+        lo, hi = max(0.3, g0 - 0.3), g0 + 0.3
+        # gamma and blur trade off against each other a little: refine them in turn
+        blur = _golden(lambda s: _fit_cost(data, g0, s), 0.0, 3.0, 8)
+        g_hat = _golden(lambda g: _fit_cost(data, g, blur), lo, hi, 12)
+        blur = _golden(lambda s: _fit_cost(data, g_hat, s), 0.0, 3.0, 8)
+        g_hat = _golden(lambda g: _fit_cost(data, g, blur), g_hat - 0.04, g_hat + 0.04, 6)
+        std = _sandwich_std(data, g_hat, blur)
+        finite = costs[np.isfinite(costs)]
+        flat = float(np.ptp(finite)) if finite.size else 0.0
+        if dof <= 0 or not std < 0.25 or flat < 0.05 * max(float(costs[gi]), 1e-12):
             measurable = False
             note = ("the sequence does not determine the projector's gamma (no harmonic within a block, no shared "
                     "level across blocks, no white and black frames)")
         gamma_out = g_hat if measurable else float("nan")
     else:
-        blur = _golden(lambda s: _fit_cost(data, float(gamma), s), 0.0, 3.0, 10)
+        blur = _golden(lambda s: _fit_cost(data, float(gamma), s), 0.0, 3.0, 8)
         gamma_out = float(gamma)
     g_use = gamma_out if np.isfinite(gamma_out) else 1.0
     _, rss, beta, level = _fit_cost(data, g_use, blur, per_pixel=True)

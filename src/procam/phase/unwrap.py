@@ -44,17 +44,21 @@ def hierarchical(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, ma
     """``(x, sigma_x)`` from ``levels`` = ``[(u, su, period, x0), ...]`` coarsest first (the first spans the panel);
     ``reason`` (uint8) is updated in place (see the module docstring)."""
     u, su, span, x0 = levels[0]
-    x = x0 + span * u.astype(np.float64)
-    sx = span * su
+    f = u.dtype.type
+    x = f(x0) + f(span) * u
+    sx = f(span) * su
     period = span
     for u, su, period, x0 in levels[1:]:
-        t = (x - x0) / period - u
+        t = (x - f(x0)) * f(1.0 / period)
+        t -= u
         m = np.rint(t)
-        r = np.abs(t - m)
-        reason[(sx / period > max_sigma) & (reason == OK)] = LOW_MODULATION
-        reason[(r > tolerance) & (reason == OK)] = ORDER_DISAGREE
-        x = x0 + period * (m + u)
-        sx = period * su
+        t -= m
+        ok = reason == OK
+        reason[ok & (sx > f(max_sigma * period))] = LOW_MODULATION
+        reason[(reason == OK) & (np.abs(t) > f(tolerance))] = ORDER_DISAGREE
+        m += u
+        x = f(x0) + f(period) * m
+        sx = f(period) * su
     return _seam(x, levels[0][3], span, period), sx
 
 
@@ -65,7 +69,8 @@ def _seam(x, x0: float, span: float, period: float):
     k = span / period
     if abs(k - round(k)) > 1e-6:
         return x
-    return x0 + np.mod(x - x0, span)
+    f = x.dtype.type
+    return f(x0) + np.mod(x - f(x0), f(span))
 
 
 def _frac(v):
@@ -79,33 +84,34 @@ def heterodyne(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, max_
     l12 = p1 * p2 / (p2 - p1)
     l23 = p2 * p3 / (p3 - p2)
     l123 = l12 * l23 / (l23 - l12)
-    u1, u2, u3 = (np.asarray(u, np.float64) for u in (u1, u2, u3))
+    f = np.asarray(u1).dtype.type
     u12 = _frac(u1 - u2)
     u23 = _frac(u2 - u3)
     u123 = _frac(u12 - u23)
-    x = x0 + l123 * u123
-    s123 = l123 * np.sqrt(s1 ** 2 + 4.0 * s2 ** 2 + s3 ** 2)
-    s12 = np.sqrt(s1 ** 2 + s2 ** 2)
+    x = f(x0) + f(l123) * u123
+    s123 = f(l123) * np.sqrt(s1 * s1 + f(4.0) * s2 * s2 + s3 * s3)
+    s12 = np.sqrt(s1 * s1 + s2 * s2)
     # level 1: the beat of the beats orders the first beat
-    t = (x - x0) / l12 - u12
+    t = (x - f(x0)) * f(1.0 / l12) - u12
     m = np.rint(t)
-    bad_sigma = s123 / l12 > max_sigma
-    bad_order = np.abs(t - m) > tolerance
-    x12 = x0 + l12 * (m + u12)
-    sx12 = l12 * s12
+    bad_sigma = s123 > f(max_sigma * l12)
+    bad_order = np.abs(t - m) > f(tolerance)
+    x12 = f(x0) + f(l12) * (m + u12)
+    sx12 = f(l12) * s12
     # level 2: the first beat orders each fringe
     xs, ws = [], []
-    bad_sigma |= sx12 / p3 > max_sigma
+    bad_sigma |= sx12 > f(max_sigma * p3)
     for u, s, p in ((u1, s1, p1), (u2, s2, p2), (u3, s3, p3)):
-        t = (x12 - x0) / p - u
+        t = (x12 - f(x0)) * f(1.0 / p) - u
         m = np.rint(t)
-        bad_order |= np.abs(t - m) > tolerance
-        xs.append(x0 + p * (m + u))
-        ws.append(1.0 / np.maximum((p * s) ** 2, 1e-12))
+        bad_order |= np.abs(t - m) > f(tolerance)
+        xs.append(f(x0) + f(p) * (m + u))
+        ps = f(p) * s
+        ws.append(f(1.0) / np.maximum(ps * ps, f(1e-12)))
     # the three fringes must land on one coordinate
     for a in range(3):
         for b in range(a + 1, 3):
-            bad_order |= np.abs(xs[a] - xs[b]) > tolerance * p1
+            bad_order |= np.abs(xs[a] - xs[b]) > f(tolerance * p1)
     wsum = ws[0] + ws[1] + ws[2]
     x = (xs[0] * ws[0] + xs[1] * ws[1] + xs[2] * ws[2]) / wsum
     if all(abs(l123 / p - round(l123 / p)) < 1e-6 for p in (p1, p2, p3)):

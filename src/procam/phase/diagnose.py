@@ -1,0 +1,167 @@
+"""Does a phase-family description match its frames?  :func:`check_description` judges the frames against what
+the description says they are, on the decoder's sample of pixels (:data:`procam.phase.SAMPLE`), and raises a
+one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagrees:
+
+* **modulation**: a phase block whose fringes are almost invisible (median modulation under
+  :data:`MIN_RELATIVE_MODULATION` of the strongest block of its axis): not fringes, or a period the camera does
+  not resolve;
+* **a frame off its block's sinusoid** (blocks of 4 or more steps): a frame whose residual from the sinusoid the
+  block's other frames make is over :data:`MAX_FRAME_RESIDUAL` of the modulation and 4 times the block's typical
+  one -- a frame out of order, repeated or from another sequence;
+* **the cue's consistency**: the frequencies (or the Gray code and the fringes) give different fringe periods at
+  over :data:`MAX_DISAGREEMENT` of the well-lit pixels -- a wrong period, phase sign, shift direction or frame
+  order.  procam then tries the description with the shift direction and the phase sign of that axis's blocks
+  flipped, and with the axes exchanged, and names the change that makes them agree;
+* **the decoded coordinate range**: over :data:`MAX_DISAGREEMENT` of the well-lit pixels decode off the panel
+  (a period or a projector size that is not the capture's).
+
+A capture that passes can still be decoded wrongly in ways no frame shows (a consistent but shifted origin moves
+every coordinate by the same amount; it shows in the calibration, not here).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from .. import decoded as _d
+from ..errors import CaptureError, ProcamWarning
+from ..patterns.phase import PhaseSet
+from . import response as _resp
+
+MIN_RELATIVE_MODULATION = 0.15
+MAX_FRAME_RESIDUAL = 0.3
+MAX_DISAGREEMENT = 0.2
+
+
+def _decode_sample(view, ps, options):
+    from .decoder import decode_phase
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        return decode_phase(view, ps, options)
+
+
+def _frames(b) -> str:
+    return f"#{b.first}-#{b.first + b.count - 1}"
+
+
+def _block_name(b, ps) -> str:
+    cue = ", the unit-frequency cue" if b.period >= ps.size(b.axis) else ""
+    return f"frames {_frames(b)} ({'column' if b.axis == 'col' else 'row'} phase, period {b.period:.4g} px{cue})"
+
+
+def _fractions(res, lit) -> dict:
+    """Per axis: ``(disagree, off_panel)`` fractions of the lit, judged pixels."""
+    out = {}
+    for axis, r in (("col", res.reason_col[0]), ("row", res.reason_row[0])):
+        judged = lit & np.isin(r, (_d.OK, _d.ORDER_DISAGREE, _d.OUT_OF_RANGE, _d.LOW_CONTRAST))
+        n = max(int(judged.sum()), 1)
+        out[axis] = (float(np.sum(judged & (r == _d.ORDER_DISAGREE))) / n,
+                     float(np.sum(judged & (r == _d.OUT_OF_RANGE))) / n, n)
+    return out
+
+
+def _variants(ps: PhaseSet, axis: str):
+    """``(words, PhaseSet)`` of the description with one convention of ``axis``'s blocks changed."""
+    def flip(**how):
+        blocks = []
+        for b in ps.blocks:
+            if b.axis == axis and b.kind in ("phase", "gray"):
+                f = b.fringe
+                f = replace(f, **{k: -getattr(f, k) for k in how})
+                b = replace(b, fringe=f)
+            blocks.append(b)
+        return PhaseSet(ps.width, ps.height, ps.family, tuple(blocks), ps.order)
+
+    name = "column" if axis == "col" else "row"
+    yield f'"shift": -1 (the phase steps the other way) in the {name} blocks', flip(shift=True)
+    yield f'"sign": -1 (the phase falls along the {name}s) in the {name} blocks', flip(sign=True)
+    yield f'"shift" and "sign" both flipped in the {name} blocks', flip(shift=True, sign=True)
+    swapped = tuple(replace(b, axis={"col": "row", "row": "col"}.get(b.axis)) for b in ps.blocks)
+    try:
+        yield "the columns and rows exchanged (each block's axis)", PhaseSet(ps.width, ps.height, ps.family, swapped,
+                                                                             ps.order)
+    except ValueError:
+        return
+
+
+def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, options=None) -> None:
+    """Raise :class:`CaptureError` when the frames are not the sequence ``ps`` describes (the module docstring)."""
+    from .decoder import SAMPLE, PhaseOptions, sample_index
+
+    options = options or PhaseOptions()
+    K, H, W = stack.shape
+    idx = sample_index(H * W, SAMPLE)
+    sub = stack.reshape(K, -1)[:, idx]
+    subf = sub.astype(np.float64)
+    res = _decode_sample(np.ascontiguousarray(sub[:, None, :]), ps, options)
+    lit = np.ones(len(idx), bool)
+    for r in (res.reason_col[0], res.reason_row[0]):
+        lit &= (r != _d.SHADOW) & (r != _d.SATURATED)
+    if lit.sum() < 200:
+        return
+    # modulation and each frame's fit, block by block
+    for axis in ("col", "row"):
+        blocks = ps.phase_blocks(axis)
+        meds = []
+        for b in blocks:
+            A, B, psi = _resp.nstep(subf[list(b.frames)], b.shifts())
+            meds.append(float(np.median(B[lit])))
+            if b.steps >= 4:
+                fit = A[None] + B[None] * np.cos(psi[None] + b.shifts()[:, None])
+                r = np.median(np.abs(subf[list(b.frames)] - fit)[:, lit], axis=1) / max(meds[-1], 1e-9)
+                k = int(np.argmax(r))
+                if r[k] > MAX_FRAME_RESIDUAL and r[k] > 4 * np.median(r):
+                    raise CaptureError(
+                        f"{name}: frame {_describe(b.first + k, ps, files)} does not follow the sinusoid the other "
+                        f"frames of {_block_name(b, ps)} make (its typical residual is {r[k]:.2f} of the fringes' "
+                        f"modulation, the others' {np.median(r):.2f}): a frame out of order, repeated or from "
+                        "another sequence, or the block's steps are not the description's — check the frames and "
+                        "patterns.json (docs/patterns.md)")
+        strongest = max(meds)
+        for b, m in zip(blocks, meds):
+            if m < MIN_RELATIVE_MODULATION * strongest:
+                raise CaptureError(
+                    f"{name}: {_block_name(b, ps)} show almost no fringes (median modulation {m:.1f} grey levels, "
+                    f"{m / strongest:.0%} of the strongest {'column' if axis == 'col' else 'row'} block's): they are not "
+                    "fringes of that axis and period, or the camera does not resolve that period — check "
+                    "patterns.json (docs/patterns.md)")
+    fr = _fractions(res, lit)
+    for axis in ("col", "row"):
+        disagree, off, n = fr[axis]
+        if disagree <= MAX_DISAGREEMENT and off <= MAX_DISAGREEMENT:
+            continue
+        label = "column" if axis == "col" else "row"
+        blocks = [b for b in ps.blocks if b.axis == axis]
+        what = " and ".join(_block_name(b, ps) if b.kind == "phase" else f"the Gray code {_frames(b)}" for b in blocks)
+        if disagree > MAX_DISAGREEMENT:
+            how = (f"{what} give different fringe periods at {disagree:.0%} of the well-lit pixels (more than "
+                   f"{options.tolerance:g} of a period apart)")
+        else:
+            how = (f"{off:.0%} of the well-lit pixels decode off the panel's {ps.size(axis)} {label}s from {what}: a "
+                   "period, a Gray bit count or a projector size that is not the capture's")
+        hint = ""
+        fixed = dict(gamma=res.phase.gamma_used) if np.isfinite(res.phase.gamma_used) else {}
+        opts2 = replace(options, **fixed)
+        best = None
+        for words, alt in _variants(ps, axis):
+            f2 = _fractions(_decode_sample(np.ascontiguousarray(sub[:, None, :]), alt, opts2), lit)[axis]
+            bad = f2[0] + f2[1]
+            if bad < 0.05 and (best is None or bad < best[0]):
+                best = (bad, words)
+        if best is not None:
+            hint = f"; with {best[1]} they agree at {1 - best[0]:.0%} of them"
+        raise CaptureError(f"{name}: the description does not match the frames: along the {label}s {how}{hint} — fix "
+                           "patterns.json (docs/patterns.md: the conventions and the frame order)")
+
+
+def _describe(k: int, ps, files) -> str:
+    from pathlib import Path
+
+    text = f"#{k} ({ps.role(k)})"
+    if files is not None and k < len(files):
+        text += f" {Path(files[k]).name}"
+    return text
