@@ -273,6 +273,68 @@ RefinerOpt = Annotated[Refiner, typer.Option(
 WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
 EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
 
+# The pattern sequence of the commands that write one (patterns, simulate): docs/patterns.md
+Family = choice("Family", choices.PATTERN_FAMILIES)
+FamilyOpt = Annotated[Family, typer.Option(
+    "--family", help="Pattern family: gray (Gray codes), phase (N-step fringes + a unit-frequency cue), "
+                     "heterodyne (three frequencies) or gray-phase (Gray code + fringes); docs/patterns.md.")]
+StepsOpt = Annotated[Optional[int], typer.Option(
+    "--steps", help="Phase families: phase shifts per block, N >= 3 (default 8 for phase, 4 otherwise).")]
+PeriodOpt = Annotated[Optional[list[float]], typer.Option(
+    "--period", help="phase, gray-phase: fringe period in projector px (default 64, 16); phase: repeat it for "
+                     "more levels below the cue.")]
+CountsOpt = Annotated[Optional[str], typer.Option(
+    "--counts", help="heterodyne: the three counts of periods across the panel, e.g. 70,64,59 (the default).")]
+InverseOpt = Annotated[bool, typer.Option("--inverse/--no-inverse", help="gray-phase: every Gray bit followed by its "
+                                          "inverse.")]
+ComplementaryOpt = Annotated[bool, typer.Option(
+    "--complementary/--no-complementary", help="gray-phase: a complementary Gray bit (removes stripe-edge errors).")]
+WhiteBlackOpt = Annotated[bool, typer.Option("--white-black/--no-white-black",
+                                             help="Phase families: end with a white and a black frame.")]
+
+
+def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None, period=None, counts=None,
+                     inverse: bool = True, complementary: bool = True, white_black: bool = True):
+    """The sequence (:func:`procam.patterns.pattern_set`) of the pattern options, validated (one-line errors)."""
+    from .. import patterns
+
+    family = value(family)
+    if family == "gray":
+        given = [o for o, v in (("--steps", steps), ("--period", period), ("--counts", counts)) if v]
+        if given:
+            fail(f"{', '.join(given)} appl{'y' if len(given) > 1 else 'ies'} to the phase families; add --family "
+                 "phase, heterodyne or gray-phase")
+        try:
+            return patterns.pattern_set(*size, value(order), step)
+        except ValueError as e:
+            fail(f"--step {step}: {e}; use a smaller --step")
+    if step != 1:
+        fail("--step applies to the Gray family only")
+    kw = {"inverse": inverse, "complementary": complementary, "white_black": white_black}
+    if steps is not None:
+        kw["steps"] = int(number(steps, "--steps", lo=3, hi=64, what="a number of phase shifts"))
+    for p in period or ():
+        number(p, "--period", lo=2, hi=1e6, unit=" projector px", what="a fringe period")
+    if period and family == "heterodyne":
+        fail("--period: the heterodyne's periods are given as --counts (periods across the panel)")
+    if counts is not None and family != "heterodyne":
+        fail("--counts applies to --family heterodyne")
+    if family == "heterodyne" and counts is not None:
+        try:
+            kw["periods"] = tuple(float(v) for v in counts.replace(";", ",").split(","))
+        except ValueError:
+            fail(f"--counts must be three numbers like 70,64,59, got {counts!r}")
+        if len(kw["periods"]) != 3 or not all(math.isfinite(v) and v > 1 for v in kw["periods"]):
+            fail(f"--counts must be three numbers above 1 like 70,64,59, got {counts!r}")
+    elif period:
+        if family == "gray-phase" and len(period) > 1:
+            fail("--period: gray-phase has one fringe period")
+        kw["period" if len(period) == 1 else "periods"] = period[0] if len(period) == 1 else tuple(period)
+    try:
+        return patterns.pattern_set(*size, family=family, **kw)
+    except ValueError as e:
+        fail(f"the {family} sequence for a {size[0]}x{size[1]} projector: {e}")
+
 #: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
 POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),
                 ("contrast", ContrastOpt, 3.0), ("detector", DetectorOpt, Detector.auto),

@@ -1,4 +1,4 @@
-"""``procam decode``: captured Gray-code sequence -> per-pixel projector coordinates."""
+"""``procam decode``: a captured sequence (Gray codes or a phase family) -> per-pixel projector coordinates."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ._app import (FIGURE_SUFFIXES, ContrastOpt, DecodeMethod, DecodeOpt, OrderOpt, ProjectorOpt, ShadowOpt, StepOpt,
-                   app, optional_size, output_path, pose_options, say, user_errors, value, warn)
+                   app, fail, number, optional_size, output_path, pose_options, say, user_errors, value, warn)
 
 
 @app.command("decode")
@@ -22,14 +22,30 @@ def decode_cmd(
     method: DecodeOpt = DecodeMethod.robust,
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
+    gamma: str = typer.Option("auto", "--gamma", help="Phase families: the projector's gamma: auto (measure it from "
+                              "the frames and correct the phases), none (assume a linear projector; warns when it is "
+                              "not) or its value, e.g. 2.2."),
+    camera_noise: float = typer.Option(None, "--camera-noise", help="Phase families: the camera's noise sigma in "
+                                       "8-bit grey levels (default: measured from the frames)."),
 ):
-    """Decode a pose: projector column and row per camera pixel, validity and reasons."""
+    """Decode a pose: projector column and row per camera pixel, validity and reasons (and for the phase families
+    each coordinate's noise, the projector's gamma and the camera's noise)."""
+    import dataclasses
+
     from .. import capture
     from .. import decode as dec
     from ..io import save_decoded_maps
 
     size = optional_size(projector)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast).decode
+    if gamma not in ("auto", "none"):
+        try:
+            gamma = float(gamma)
+        except ValueError:
+            fail(f"--gamma must be auto, none or a number from 0.2 to 5, got {gamma!r}")
+        number(gamma, "--gamma", lo=0.2, hi=5, what="auto, none or a projector gamma")
+    number(camera_noise, "--camera-noise", lo=0, hi=100, lo_open=True, unit=" DN", what="a noise sigma")
+    opts = dataclasses.replace(opts, gamma=gamma, camera_noise=camera_noise)
     if out is not None and out.suffix != ".npz":
         out = out.with_suffix(".npz")
     output_path(out, "-o", (".npz",), inputs=(pose_dir,))
@@ -37,18 +53,25 @@ def decode_cmd(
     cap = capture.load_capture(pose_dir, size, value(order), step=step)
     for w in cap.warnings:
         warn(w)
-    res = dec.decode(cap.stack, cap.pattern_set, opts.method, shadow_threshold=opts.shadow_threshold,
-                     contrast_threshold=opts.contrast_threshold)
+    res = dec.decode_with(cap.stack, cap.pattern_set, opts)
     ps = cap.pattern_set
     h, w = res.col.shape
+    what = f"order {ps.order}, {opts.method} classifier" if not res.subpixel else ps.describe()
     say(f"{pose_dir}: {len(cap.files)} images {w}x{h} ({cap.stack.dtype}), projector "
-        f"{ps.width}x{ps.height}, order {ps.order}, {opts.method} classifier")
+        f"{ps.width}x{ps.height}, {what}")
     say(f"decoded: columns {res.valid_col.mean() * 100:.1f} %, rows {res.valid_row.mean() * 100:.1f} %, "
         f"both {res.valid.mean() * 100:.1f} % of {w * h} pixels")
     for axis, counts in res.reason_counts().items():
         for text, n in counts.items():
             if not text.startswith("decoded"):
                 say(f"  {axis}: {n} px {text}")
+    if res.subpixel:
+        from ..phase import summary_lines
+
+        for line in summary_lines(res):
+            say(line)
+        for line in res.phase.warnings:
+            warn(line)
     if out is not None:
         save_decoded_maps(out, res)
         say(f"wrote {out}")

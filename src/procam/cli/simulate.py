@@ -9,7 +9,8 @@ import typer
 
 from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
-from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
+from ._app import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, ForceOpt, InverseOpt, PeriodOpt, StepsOpt,
+                   WhiteBlackOpt, app, console, fail, is_tty, number, pattern_sequence, say, user_errors, value, warn)
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
@@ -52,10 +53,20 @@ def simulate_cmd(
                                 "without any noise (no shot noise either)."),
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
-    order: str = typer.Option("opencv", "--order", help="Sequence order: opencv (default) or moreno."),
+    order: str = typer.Option("opencv", "--order", help="Gray family: sequence order, opencv (default) or moreno."),
+    family: FamilyOpt = Family.gray,
+    steps: StepsOpt = None,
+    period: PeriodOpt = None,
+    counts: CountsOpt = None,
+    inverse: InverseOpt = True,
+    complementary: ComplementaryOpt = True,
+    white_black: WhiteBlackOpt = True,
+    proj_gamma: float = typer.Option(None, "--proj-gamma", help="The projector's gamma: a pattern value v emits "
+                                     "(v/255)^gamma of white (default 1, linear; fringes are distorted by it)."),
     force: ForceOpt = False,
 ):
-    """Render a synthetic Gray-code capture of a chessboard, with its ground truth (truth.json)."""
+    """Render a synthetic capture of a chessboard (Gray codes, or a phase family with --family), with its ground
+    truth (truth.json)."""
     from .. import simulate as sim
 
     if preset not in sim.PRESETS:
@@ -69,18 +80,23 @@ def simulate_cmd(
     number(distance, "--distance", lo=50, hi=20000, unit=" mm", what="a board depth")
     number(noise, "--noise", lo=0, hi=255, unit=" DN (8-bit grey levels)", what="a read noise")
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
+    number(proj_gamma, "--proj-gamma", lo=0.2, hi=5, what="a projector gamma")
     angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
-    from .. import capture, patterns
+    from .. import capture
 
     scene = sim.preset(preset)
+    ps = pattern_sequence(scene.proj_size, family=family, order=order, steps=steps, period=period, counts=counts,
+                          inverse=inverse, complementary=complementary, white_black=white_black)
     try:
-        capture.check_sequence_dir(out_dir, patterns.pattern_set(*scene.proj_size, order), writer="simulate",
-                                   force=force, extra=("truth.json",), option="OUT_DIR")
+        capture.check_sequence_dir(out_dir, ps, writer="simulate", force=force, extra=("truth.json",),
+                                   option="OUT_DIR")
     except OutputError as e:
         fail(str(e))
     if pose is not None or distance is not None or frame != "camera":
         scene = sim.with_board_pose(scene, angles, distance=distance, frame=frame)
     changes = {"bits": bits}
+    if proj_gamma is not None:
+        changes["proj_gamma"] = proj_gamma
     if noise is not None:
         changes["read_noise"] = noise
         if noise == 0:
@@ -98,12 +114,13 @@ def simulate_cmd(
         def progress(done, total):
             bar.update(task, completed=done, total=total)
 
-        stack, truth = sim.render(scene, order=order, seed=seed, progress=progress)
+        stack, truth = sim.render(scene, order=ps, seed=seed, progress=progress)
         bar.update(task, description="writing")
-        paths = sim.write_capture(out_dir, stack, truth, order=order, force=force)
+        paths = sim.write_capture(out_dir, stack, truth, order=ps, force=force)
 
     pc, pp = truth["pose"]["camera"], truth["pose"]["projector"]
-    say(f"wrote {len(paths)} images ({stack.shape[2]}x{stack.shape[1]}, {bits}-bit, order {order}), "
+    what = f"order {order}" if value(family) == "gray" else ps.describe()
+    say(f"wrote {len(paths)} images ({stack.shape[2]}x{stack.shape[1]}, {bits}-bit, {what}), "
         f"truth.json and patterns.json to {out_dir}")
     say(f"preset {preset}; board (psi, nu, phi) camera ({pc['angles_deg'][0]:.2f}, "
         f"{pc['angles_deg'][1]:.2f}, {pc['angles_deg'][2]:.2f}) deg, projector ({pp['angles_deg'][0]:.2f}, "

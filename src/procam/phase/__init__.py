@@ -10,4 +10,4 @@ heterodyne or by a Gray code) into sub-pixel projector coordinates with a per-pi
 * :mod:`~procam.phase.diagnose` - a description that does not match the frames, named.
 """
 
-from .decoder import SAMPLE, BlockStats, PhaseInfo, PhaseOptions, decode_phase  # noqa: F401
+from .decoder import SAMPLE, BlockStats, PhaseInfo, PhaseOptions, decode_phase, summary_lines  # noqa: F401

@@ -125,6 +125,30 @@ class PhaseInfo:
     sample: dict = field(default_factory=dict, compare=False, repr=False)
 
 
+def summary_lines(result: _d.DecodeResult) -> list[str]:
+    """What a phase decode measured, in lines for a person: the coordinates' noise, the projector's gamma and how
+    it was handled, the camera's noise, each block's modulation."""
+    info = result.phase
+    out = []
+    for label, s in (("columns", result.sigma_col), ("rows", result.sigma_row)):
+        ok = s[np.isfinite(s)]
+        if ok.size:
+            out.append(f"{label}: predicted noise of the decoded coordinate (camera noise and modulation only) median "
+                       f"{np.median(ok):.3f} px, 90th percentile {np.percentile(ok, 90):.3f} px")
+    if np.isfinite(info.gamma):
+        how = ("corrected" if abs(info.gamma_used - 1.0) > 1e-6 else "not corrected") + \
+              f", it leaves at most {info.gamma_error_px:.3f} px uncorrected"
+        out.append(f"projector gamma {info.gamma:.2f} +- {info.gamma_std:.2f} measured from the frames ({how})")
+    else:
+        out.append(f"projector gamma not measured; the phases assume {info.gamma_used:g}")
+    a, b = info.noise
+    out.append(f"camera noise: sigma^2 = {a:.2f} + {b:.4f} x level (grey levels^2 at the input scale)")
+    for st in info.blocks:
+        out.append(f"  {'column' if st.axis == 'col' else 'row'} fringes #{st.frames[0]}-#{st.frames[-1]} (period "
+                   f"{st.period:.4g} px, {st.steps} steps): median modulation {st.modulation:.1f} grey levels")
+    return out
+
+
 def sample_index(size: int, n: int) -> np.ndarray:
     """The sample's pixels: ``n`` of ``size`` (flat indices, sorted), the same fixed pseudo-random set as the
     capture checks' (:func:`procam.capture.sample_index`)."""

@@ -300,7 +300,8 @@ def render(scene: Scene, order="opencv", seed: int = 0,
             progress(k + 2, total)
     t = truth(scene)
     t["render"] = {"order": ps.order, "seed": int(seed), "count": int(ps.count),
-                   "white": int(ps.white), "black": int(ps.black),
+                   "white": None if ps.white is None else int(ps.white),
+                   "black": None if ps.black is None else int(ps.black),
                    "pattern_set": ps.to_dict()}
     return stack, to_jsonable(t)
 
