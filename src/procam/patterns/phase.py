@@ -406,7 +406,8 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
     """procam's own sequence of ``family`` for a ``width`` x ``height`` projector.
 
     Columns first, then rows; per axis the Gray block (gray-phase) and the phase blocks finest first, the
-    unit-frequency cue or the heterodyne's longest period last; then the white and the black frame.
+    unit-frequency cue (:func:`cue_period`: one period across the panel, or a little more when the panel is not
+    a whole number of fringe periods) or the heterodyne's longest period last; then the white and the black frame.
 
     Parameters
     ----------
@@ -452,11 +453,22 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
         levels = (p,) if periods is None else tuple(float(v) for v in periods)
         for q in sorted(levels):
             add(kind="phase", axis=axis, steps=steps, period=q)
-        add(kind="phase", axis=axis, steps=steps, period=float(n))
+        add(kind="phase", axis=axis, steps=steps, period=cue_period(n, sorted(levels)))
     if white_black:
         add(kind="white")
         add(kind="black")
     return PhaseSet(width, height, family, tuple(blocks))
+
+
+def cue_period(n: int, periods) -> float:
+    """The unit-frequency cue's period for a panel of ``n`` pixels above fringes of ``periods`` (finest first):
+    the panel's size when it is a whole number of the coarsest of them, else the smallest such multiple beyond it
+    (every level then repeats with the cue, so a pixel at the panel's edge whose cue wrapped keeps its place)."""
+    top = float(max(periods))
+    k = math.ceil(n / top - 1e-9)
+    if any(abs(top / q - round(top / q)) > 1e-9 for q in periods):
+        return float(n)
+    return top * k
 
 
 def frames(ps: PhaseSet, dtype=np.uint8):

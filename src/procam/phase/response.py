@@ -26,9 +26,10 @@ Measurement (:func:`fit_response`)
     determines it in none of these ways (3 steps, one block per period, no white or black frame) leaves it
     unmeasured (``measurable = False``).  Its standard deviation is the sandwich estimate from the per-pixel
     costs' first and second derivatives (pixels taken as independent).
-    The residuals at the optimum give the camera's noise: per pixel the residual variance (over ``frames - 2 -
-    blocks`` degrees of freedom), as a function of the pixel's level, ``var = a + b * level`` (read and
-    quantisation noise plus shot noise) fitted to binned medians.
+    The residuals at the optimum give the camera's noise: per pixel the residual variance, within the blocks of
+    4 or more steps each fitted with its own level and gain (``N - 3`` degrees of freedom each: the blur of the
+    fringes differs between the axes), else of the whole fit (``frames - 2 - blocks``), as a function of the
+    pixel's level, ``var = a + b * level`` (read and quantisation noise plus shot noise) fitted to binned medians.
 Failure modes
     Pixels on the edges of the board's squares mix two albedos (their blocks disagree on ``beta``): the cost is
     trimmed and the noise fitted to medians.  Frames that are not what the description says make every ``gamma``
@@ -287,13 +288,16 @@ def _noise(rss, beta, level, dof: int, floor: float):
             xs.append(float(np.median(level[m])))
             ys.append(float(np.median(var[m])) / med_factor)
     xs, ys = np.array(xs), np.array(ys)
-    if len(xs) < 2 or np.ptp(xs) < 1e-6 * max(1.0, float(np.max(np.abs(xs)))):
-        return max(float(np.median(var)) / med_factor, floor), 0.0
+    constant = max(float(np.median(var)) / med_factor, floor), 0.0
+    # the slope (shot noise) only where the levels spread enough to tell it from the intercept
+    if len(xs) < 2 or np.ptp(xs) < 0.3 * max(float(np.max(np.abs(xs))), 1e-9):
+        return constant
     (a, b), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(xs), xs]), ys, rcond=None)
-    if b < 0:
-        a, b = float(np.median(ys)), 0.0
-    if a < floor:
+    if a < floor:  # through the floor instead
         a = floor
+        b = float(np.sum((ys - a) * xs) / np.sum(xs * xs))
+    if b < 0:
+        return constant
     return float(a), float(b)
 
 
@@ -352,8 +356,38 @@ def fit_response(blocks, white=None, black=None, *, gamma: float | None = None, 
         gamma_out = float(gamma)
     g_use = gamma_out if np.isfinite(gamma_out) else 1.0
     _, rss, beta, level = _fit_cost(data, g_use, blur, per_pixel=True)
-    if rss is None or dof <= 0:
+    within = _within_blocks(data, g_use, blur)
+    if within is not None:  # blocks of 4 or more steps: each its own level and gain (blur differs by axis)
+        noise = _noise(within[0], beta, level, within[1], floor)
+    elif rss is None or dof <= 0:
         noise = (floor, 0.0)
     else:
         noise = _noise(rss, beta, level, dof, floor)
     return Response(float(gamma_out), std, float(blur), noise, len(take), measurable, note)
+
+
+def _within_blocks(data, gamma: float, blur: float):
+    """``(rss, dof)`` per pixel of the blocks of 4 or more steps, each fitted with its own ``alpha`` and ``beta``
+    (``N - 3`` degrees of freedom each), or None without such blocks."""
+    blocks = [b for b, _ in data["blocks"]]
+    rss, dof = None, 0
+    for period, members in data["groups"]:
+        ref = blocks[members[0]]
+        if ref.steps < 4:
+            continue
+        c = waveform(ref.fringe, gamma, period, blur)
+        lut = phase_lut(c, ref.shifts(), FIT_LUT_SIZE)
+        if lut is None:
+            return None
+        for i in members:
+            blk, psi = data["blocks"][i]
+            phi, _ = lut(psi, slope=False)
+            G = samples(c, phi, blk.shifts())
+            Y = data["Y"][data["rows"][i]:data["rows"][i] + blk.steps]
+            dG, dY = G - G.mean(0), Y - Y.mean(0)
+            sgg = np.einsum("sn,sn->n", dG, dG)
+            b = np.einsum("sn,sn->n", dG, dY) / np.maximum(sgg, 1e-12)
+            r = np.maximum(np.einsum("sn,sn->n", dY, dY) - b ** 2 * sgg, 0.0)
+            rss = r if rss is None else rss + r
+            dof += blk.steps - 3
+    return None if rss is None else (rss, dof)

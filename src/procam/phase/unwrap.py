@@ -7,8 +7,9 @@ an unknown order ``m`` (``x0`` where the block's phase is 0).  ``su`` is the fra
 :func:`hierarchical` (family ``phase``)
     The coarsest block spans the panel (period >= its size): ``x = x0 + P u`` outright.  Each finer block takes the
     order that puts it nearest: ``t = (x - x0) / P - u``, ``m = round(t)``; the residual ``t - m`` (cycles) is the
-    orders' disagreement.  When the coarsest period is a whole number of the finest, the result is taken modulo it
-    (a pixel at the panel's edge whose coarse estimate wrapped to the other edge keeps its place).  Marked: a residual beyond ``tolerance`` (ORDER_DISAGREE), a coarser estimate too noisy
+    orders' disagreement.  When each period is a whole number of the next finer one, the result is taken modulo
+    the coarsest (a pixel at the panel's edge whose coarse estimate wrapped to the other edge keeps its place);
+    otherwise a pixel whose coarse estimate is within 4 standard deviations of the wrap is LOW_MODULATION.  Marked: a residual beyond ``tolerance`` (ORDER_DISAGREE), a coarser estimate too noisy
     to order the finer periods, ``sd(t) > max_sigma`` (LOW_MODULATION).
 :func:`heterodyne` (three periods ``p1 < p2 < p3``)
     The beats ``u12 = frac(u1 - u2)`` (period ``l12 = p1 p2 / (p2 - p1)``), ``u23 = frac(u2 - u3)`` (``l23``) and
@@ -48,6 +49,11 @@ def hierarchical(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, ma
     x = f(x0) + f(span) * u
     sx = f(span) * su
     period = span
+    if not _divides([lv[2] for lv in levels]):
+        # the cue's wrap is not a whole number of every finer period: a pixel whose cue estimate may have wrapped
+        # (within 4 of its standard deviations of the seam) cannot be placed
+        near = (np.minimum(span * u, span * (1 - u)) < 4 * sx) & (reason == OK)
+        reason[near] = LOW_MODULATION
     for u, su, period, x0 in levels[1:]:
         t = (x - f(x0)) * f(1.0 / period)
         t -= u
@@ -59,7 +65,12 @@ def hierarchical(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, ma
         m += u
         x = f(x0) + f(period) * m
         sx = f(period) * su
-    return _seam(x, levels[0][3], span, period), sx
+    return (_seam(x, levels[0][3], span, period) if _divides([lv[2] for lv in levels]) else x), sx
+
+
+def _divides(periods) -> bool:
+    """Every period (coarsest first) a whole number of times in the one before it."""
+    return all(abs(a / b - round(a / b)) < 1e-6 for a, b in zip(periods[:-1], periods[1:]))
 
 
 def _seam(x, x0: float, span: float, period: float):
