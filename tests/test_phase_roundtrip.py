@@ -50,12 +50,9 @@ def _renderer(name: str, plain: bool):
 def _decode(name, family, gamma, plain=True, seed=1):
     r, tm = _renderer(name, plain)
     ps = patterns.pattern_set(*r.scene.proj_size, family=family, **SEQUENCES[family])
-    r = r.photometry(proj_gamma=gamma)
-    rr = simulate.Renderer.__new__(simulate.Renderer)
-    rr.__dict__.update(r.__dict__)
-    rr.pattern_set = ps
+    r = r.photometry(proj_gamma=gamma).with_patterns(ps)
     rng = np.random.default_rng(seed)
-    stack = np.stack([rr.frame(k, rng) for k in range(ps.count)])
+    stack = np.stack([r.frame(k, rng) for k in range(ps.count)])
     return decode.decode(stack, ps), tm
 
 
@@ -98,10 +95,14 @@ def test_round_trip_at_the_papers_rig(family, gamma):
 @pytest.mark.parametrize("family", FAMILIES)
 def test_chessboard_errors_are_the_decoders_predicted_noise(family):
     """On the chessboard (dark squares at 0.1 albedo) the decoded error is what the per-pixel noise estimate
-    says: z = error / sigma has an RMS within 15 % of 1 over the board's interior, and the white squares are
-    within 0.1 px RMS."""
+    says: z = error / sigma has an RMS within 15 % of 1 inside the squares, and the white squares are within
+    0.1 px RMS. (Within 2 px of a square's edge a pixel mixes a bright and a dark square's fringes, and its phase
+    leans to the bright side: an error the noise estimate does not describe, as in a real camera.)"""
     res, tm = _decode("paper", family, 2.2, plain=False)
-    lit = interior(tm) & tm.lit_board
+    r, _ = _renderer("paper", False)
+    light = r.linear(r.pattern_set.white)  # noise-free: the albedo, shading and vignetting
+    inside = (maximum_filter(light, 5) < 1.5 * minimum_filter(light, 5))
+    lit = interior(tm) & tm.lit_board & inside
     for got, true, sigma, mod in ((res.col, tm.col, res.sigma_col, res.modulation_col),
                                   (res.row, tm.row, res.sigma_row, res.modulation_row)):
         ok = lit & np.isfinite(got)

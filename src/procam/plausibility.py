@@ -311,6 +311,9 @@ def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows
             hint = (f"; {max(fc, fr):.0%} of the pixels also decode beyond the projector's edge, which is what "
                     f"swapping the most significant {'column' if axis == 'col' else 'row'} pattern with its inverse "
                     f"({_frame(a, files)} and {_frame(i, files)}) does: check those two frames first")
+    if maps is not None and maps.subpixel:
+        hint = ("; for a phase-family capture described by hand, also check the phase's \"sign\" in patterns.json "
+                "(a sign of the wrong way round mirrors the decoded coordinates along that axis)")
     raise CaptureError(
         f"{name}: the camera and projector images of the board are mirror images of each other ({int(np.sum(s < 0))} "
         f"of {len(s)} squares reversed): the camera image looks mirrored (some webcams flip left-right: turn the "

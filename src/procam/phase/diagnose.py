@@ -5,9 +5,10 @@ one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagr
 * **modulation**: a phase block whose fringes are almost invisible (median modulation under
   :data:`MIN_RELATIVE_MODULATION` of the strongest block of its axis): not fringes, or a period the camera does
   not resolve;
-* **a frame off its block's sinusoid** (blocks of 4 or more steps): a frame whose residual from the sinusoid the
-  block's other frames make is over :data:`MAX_FRAME_RESIDUAL` of the modulation and 4 times the block's typical
-  one -- a frame out of order, repeated or from another sequence;
+* **frames off their block's sinusoid** (blocks of 4 or more steps, the sinusoid through the projector's response
+  as decoded): a frame's typical residual over :data:`MAX_FRAME_RESIDUAL` of the modulation -- the frames that
+  stand out are named (from 5 steps; with 4 the one degree of freedom left shows a wrong frame in all four), else
+  the block: out of order, repeated or from another sequence;
 * **the cue's consistency**: the frequencies (or the Gray code and the fringes) give different fringe periods at
   over :data:`MAX_DISAGREEMENT` of the well-lit pixels -- a wrong period, phase sign, shift direction or frame
   order.  procam then tries the description with the shift direction and the phase sign of that axis's blocks
@@ -103,24 +104,12 @@ def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, op
         lit &= (r != _d.SHADOW) & (r != _d.SATURATED)
     if lit.sum() < 200:
         return
-    # modulation and each frame's fit, block by block
+    # modulation and each frame's fit, block by block (the fit through the projector's response as decoded)
+    gamma = res.phase.gamma_used
     for axis in ("col", "row"):
         blocks = ps.phase_blocks(axis)
-        meds = []
-        for b in blocks:
-            A, B, psi = _resp.nstep(subf[list(b.frames)], b.shifts())
-            meds.append(float(np.median(B[lit])))
-            if b.steps >= 4:
-                fit = A[None] + B[None] * np.cos(psi[None] + b.shifts()[:, None])
-                r = np.median(np.abs(subf[list(b.frames)] - fit)[:, lit], axis=1) / max(meds[-1], 1e-9)
-                k = int(np.argmax(r))
-                if r[k] > MAX_FRAME_RESIDUAL and r[k] > 4 * np.median(r):
-                    raise CaptureError(
-                        f"{name}: frame {_describe(b.first + k, ps, files)} does not follow the sinusoid the other "
-                        f"frames of {_block_name(b, ps)} make (its typical residual is {r[k]:.2f} of the fringes' "
-                        f"modulation, the others' {np.median(r):.2f}): a frame out of order, repeated or from "
-                        "another sequence, or the block's steps are not the description's — check the frames and "
-                        "patterns.json (docs/patterns.md)")
+        fits = [_resp.nstep(subf[list(b.frames)], b.shifts()) for b in blocks]
+        meds = [float(np.median(B[lit])) for _, B, _ in fits]
         strongest = max(meds)
         for b, m in zip(blocks, meds):
             if m < MIN_RELATIVE_MODULATION * strongest:
@@ -129,6 +118,9 @@ def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, op
                     f"{m / strongest:.0%} of the strongest {'column' if axis == 'col' else 'row'} block's): they are not "
                     "fringes of that axis and period, or the camera does not resolve that period — check "
                     "patterns.json (docs/patterns.md)")
+        for b, (_, _, psi) in zip(blocks, fits):
+            if b.steps >= 4:
+                _frame_fit(subf[list(b.frames)][:, lit], psi[lit], b, gamma, res.phase.blur, ps, name, files)
     fr = _fractions(res, lit)
     for axis in ("col", "row"):
         disagree, off, n = fr[axis]
@@ -156,6 +148,36 @@ def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, op
             hint = f"; with {best[1]} they agree at {1 - best[0]:.0%} of them"
         raise CaptureError(f"{name}: the description does not match the frames: along the {label}s {how}{hint} — fix "
                            "patterns.json (docs/patterns.md: the conventions and the frame order)")
+
+
+def _frame_fit(values, psi, b, gamma, blur, ps, name, files) -> None:
+    """Raise when frames of block ``b`` (samples ``values`` (N, n) at lit pixels) are off the block's sinusoid
+    (through the projector's response): each frame's median residual over the median modulation."""
+    c = _resp.waveform(b.fringe, gamma, b.period, blur)
+    lut = _resp.phase_lut(c, b.shifts())
+    phi = lut(psi, slope=False)[0] if lut is not None else psi
+    G = _resp.samples(c, phi, b.shifts())
+    dG, dY = G - G.mean(0), values - values.mean(0)
+    beta = np.einsum("sn,sn->n", dG, dY) / np.maximum(np.einsum("sn,sn->n", dG, dG), 1e-12)
+    fit = values.mean(0) + beta * dG
+    r = np.median(np.abs(values - fit), axis=1) / max(float(np.median(np.abs(beta) * np.ptp(G, axis=0) / 2)), 1e-9)
+    worst = float(r.max())
+    if worst <= MAX_FRAME_RESIDUAL:
+        return
+    bad = [int(k) for k in np.flatnonzero(r > max(0.5 * worst, 4 * float(r.min())))]
+    if 0 < len(bad) < b.steps:
+        which = " and ".join(_describe(b.first + k, ps, files) for k in bad)
+        good = np.delete(r, bad)
+        raise CaptureError(
+            f"{name}: frame{'s' if len(bad) > 1 else ''} {which} {'do' if len(bad) > 1 else 'does'} not follow the "
+            f"sinusoid of {_block_name(b, ps)} (typical residual {r[bad].max():.2f} of the fringes' modulation, the "
+            f"other frames' {float(np.median(good)):.2f}): a frame out of order, repeated or from another sequence — "
+            "check the frames and patterns.json (docs/patterns.md)")
+    raise CaptureError(
+        f"{name}: {_block_name(b, ps)} do not make one sinusoid of {b.steps} steps (every frame's typical residual "
+        f"is {float(np.median(r)):.2f} of the fringes' modulation): a frame out of order, repeated or from another "
+        "sequence, or the steps or the shift are not the description's — check the frames and patterns.json "
+        "(docs/patterns.md)")
 
 
 def _describe(k: int, ps, files) -> str:

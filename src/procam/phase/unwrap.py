@@ -154,7 +154,7 @@ def _low_bit(m: np.ndarray) -> np.ndarray:
 
 
 def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: np.ndarray, reason: np.ndarray,
-                comp=None, comp_certain=None, margin=0.0) -> np.ndarray:
+                comp=None, comp_certain=None, margin=0.0, su=None) -> np.ndarray:
     """The fringe order ``m`` (int64) of every pixel from its Gray bits (see the module docstring).
 
     Parameters
@@ -165,7 +165,10 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     reason : (...) uint8, updated in place.
     comp, comp_certain : (...) bool, the complementary bit and its certainty, or None.
     margin : (...) or scalar, how much lower (units of ``contrast``) a boundary bit's contrast must be than the
-        other's for the pixel to be at that boundary (a few standard deviations of the contrast's noise).
+        pixel's typical one and than the other boundary bit's for the pixel to be at that boundary (a few standard
+        deviations of the contrast's noise).
+    su : (...) the fraction's standard deviation: the phase can have crossed the wrap only within 4 of them of it
+        (None: within a quarter period).
     """
     n = len(bits)
     m1 = gray_value(bits)
@@ -200,9 +203,16 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     c_start, start_row = contrast_of(start_bit)
     c_end, end_row = contrast_of(end_bit)
     full = np.median(contrast, axis=0)  # most bits are far from their edges
-    up = (u < 0.25) & (c_end < 0.7 * full) & (c_end < c_start - margin)   # the phase wrapped past the interval's end
-    down = (u > 0.75) & (c_start < 0.7 * full) & (c_start < c_end - margin)  # ... or back past its start
+    reach = 0.25 if su is None else np.minimum(4.0 * su, 0.25)
+    edge = np.minimum(0.7 * full, full - margin)
+    near0, near1 = u < reach, u > 1 - reach
+    start_edge, end_edge = c_start < edge, c_end < edge
+    up = near0 & end_edge & (c_end < c_start - margin)   # the phase wrapped past the interval's end
+    down = near1 & start_edge & (c_start < c_end - margin)  # ... or back past its start
     m = m1 + up.astype(np.int64) - down.astype(np.int64)
+    # the phase at a wrap that no Gray bit shows an edge next to: either side is possible, so neither is taken
+    ambiguous = (near0 & ~up & ~start_edge) | (near1 & ~down & ~end_edge)
+    reason[ambiguous & (reason == OK)] = ORDER_DISAGREE
     # an unsure bit is allowed only where it is one of the two boundary bits
     boundary = (idx.reshape((-1,) + (1,) * u.ndim) == start_row) & (start_bit >= 0)
     boundary |= (idx.reshape((-1,) + (1,) * u.ndim) == end_row) & (end_bit >= 0) & (end_bit < n)

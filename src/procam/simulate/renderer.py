@@ -126,15 +126,30 @@ class Renderer:
 
         # band by band: no full-size intermediates (the float64 maps, the masks, the products)
         _geometry_bands(scene, s, work, GEOMETRY_BAND)
+        self._index_sequence()
+
+    def _index_sequence(self) -> None:
+        """The Gray-code bit planes and frame index of :attr:`pattern_set` (a phase family draws its lines)."""
         self.index = {}
         if _patterns.is_phase(self.pattern_set):
             return
+        Wp, Hp = self.scene.proj_size
         self.col_planes = _patterns.bit_planes(Wp, self.pattern_set.col_bits, self.pattern_set.col_offset)
         self.row_planes = _patterns.bit_planes(Hp, self.pattern_set.row_bits, self.pattern_set.row_offset)
         for j, (a, b) in enumerate(self.pattern_set.pair_indices("col")):
             self.index[int(a)], self.index[int(b)] = ("col", j, False), ("col", j, True)
         for j, (a, b) in enumerate(self.pattern_set.pair_indices("row")):
             self.index[int(a)], self.index[int(b)] = ("row", j, False), ("row", j, True)
+
+    def with_patterns(self, order) -> "Renderer":
+        """This renderer for another sequence of the same projector (a Gray-code order or any pattern set,
+        :func:`procam.patterns.pattern_set`); the geometry, most of the cost, is shared."""
+        import copy
+
+        other = copy.copy(self)
+        other.pattern_set = _sequence(self.scene, order)
+        other._index_sequence()
+        return other
 
     #: Scene fields :meth:`photometry` may change: they act after the geometry (the projector's response and
     #: black level, the camera's blur, noise, gamma and bit depth).
