@@ -71,25 +71,6 @@ def test_projection_matrix_edges_depth_and_skew():
         ex.opengl_projection(K, (W, H), float("nan"), 5.0)
 
 
-def test_unity_transforms_reproduce_the_view_matrices():
-    sc, calib = _paper()
-    doc = ex.opengl_document(calib, 100, 5000)
-    Xc = _board_cam(sc)[:5]
-    S = ex.UNITY_FROM_CV
-    for name in ("camera", "projector"):
-        u = doc[name]["unity"]
-        M, pos = np.array(u["rotation_matrix"]), np.array(u["position"])
-        local = ((S @ Xc.T).T - pos) @ M            # Unity worldToLocal of Unity-world points
-        eye = local * [1, 1, -1]                    # Unity's view space: z flipped
-        V = np.array(doc[name]["view"])
-        np.testing.assert_allclose(eye, (V @ np.column_stack([Xc, np.ones(5)]).T).T[:, :3], atol=1e-9)
-        from scipy.spatial.transform import Rotation
-        np.testing.assert_allclose(Rotation.from_quat(u["quaternion_xyzw"]).as_matrix(), M, atol=1e-12)
-        np.testing.assert_allclose(np.array(doc[name]["projection_column_major"]).reshape(4, 4).T,
-                                   doc[name]["projection"])
-    json.dumps(doc)   # JSON-able
-
-
 # ---------------------------------------------------------------------------------------------------
 # remap tables
 # ---------------------------------------------------------------------------------------------------

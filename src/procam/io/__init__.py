@@ -11,6 +11,7 @@
     calibration_file  one calibration file, whatever its format: save_calibration (by suffix), load_calibration
                       and load_camera_intrinsics (by content)
     maps              decoded maps (procam decode -o) and remap tables as .npz
+    engines           the engine exports' files: their JSON, the Blender script, distortion maps, the projector's view
     ply               point clouds as binary PLY
 
 Submodules load on first use (PEP 562): ``procam.io.load_calibration`` imports the calibration readers when it
@@ -22,7 +23,7 @@ from __future__ import annotations
 import importlib
 
 _SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "calibration_file",
-               "maps", "ply")
+               "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {

@@ -115,7 +115,8 @@ def procam_wrote(path) -> bool:
     Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
     :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a calibration FileStorage file
     (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG
-    marked ``procam`` (every figure and image procam writes is), or an empty file.
+    marked ``procam`` (every figure and image procam writes is), a script whose first line is procam's mark, or
+    an empty file.
     """
     path = Path(path)
     man = read_manifest(path.parent)
@@ -153,6 +154,8 @@ def procam_wrote(path) -> bool:
         return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix in (".pdf", ".svg", ".ps", ".eps"):
         return formats.SOFTWARE.encode() in head
+    if suffix == ".py":
+        return head.startswith(formats.SCRIPT_MARK.encode())
     return False
 
 
