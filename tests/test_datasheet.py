@@ -128,7 +128,8 @@ def test_lens_shifted_projector_datasheet_numbers_from_rendered_poses(tmp_path):
     for k, p in enumerate(POSES):
         s = simulate.with_board_pose(sc, p)
         stack, truth = simulate.render(s, seed=10 + k)
-        folders.append(simulate.write_capture(tmp_path / f"pose{k}", stack, truth) or tmp_path / f"pose{k}")
+        simulate.write_capture(tmp_path / f"pose{k}", stack, truth)
+        folders.append(tmp_path / f"pose{k}")
     with verdict_warnings():
         views = pipeline.views_from_folders(folders, Board(sc.board_cols, sc.board_rows, sc.square))
         calib = multi_pose.calibrate(views)

@@ -154,9 +154,11 @@ def export_cmd(
     if fmt == "maps":
         number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
     calib = io.load_calibration(calibration)
+    if projector is not None and fmt != "projector-view":
+        calib = io.complete_sizes(calib, proj_size=optional_size(projector))
     for w in calib.warnings:
         if "does not store the projector size" in w:
-            warn(w)
+            warn(w + " (--projector WIDTHxHEIGHT)")
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
     if fmt == "projector-view":

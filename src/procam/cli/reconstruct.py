@@ -69,6 +69,7 @@ def reconstruct_cmd(
         warn(w)
     ps = cap.pattern_set
     H, W = cap.stack.shape[1:]
+    calib = io.complete_sizes(calib, (W, H), (ps.width, ps.height))   # sizes the calibration file did not store
     if (W, H) != tuple(calib.camera.image_size):
         fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
              f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"

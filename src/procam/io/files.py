@@ -429,6 +429,33 @@ def full_scale_of(stack: np.ndarray) -> float:
             return float(2**bits - 1)
     return 65535.0
 
+def portable_path(text, base) -> str:
+    """``text`` as a path relative to the folder ``base`` (``/`` separators) when it names an existing file or
+    folder (absolute, or relative to the working directory), else unchanged: what a file procam writes stores
+    for the inputs it names, so that it does not hold the user's absolute paths and stays right when the folder
+    that holds both is moved."""
+    import os
+
+    s = str(text)
+    try:
+        if not s or not os.path.exists(s):
+            return s
+        return Path(os.path.relpath(os.path.abspath(s), os.path.abspath(base))).as_posix()
+    except (OSError, ValueError):          # another drive (Windows), an unreadable path
+        return s
+
+
+def portable_names(obj, base, keys=("name", "pose", "calibration", "source")):
+    """``obj`` (JSON-able dicts and lists) with the strings under ``keys`` that name existing paths made relative
+    to ``base`` (:func:`portable_path`); a new object, the input is not modified."""
+    if isinstance(obj, dict):
+        return {k: (portable_path(v, base) if k in keys and isinstance(v, str) else portable_names(v, base, keys))
+                for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [portable_names(v, base, keys) for v in obj]
+    return obj
+
+
 def to_jsonable(obj):
     """JSON-ready copy of ``obj``: numpy arrays/scalars -> lists/numbers, NaN/inf -> None, tuples -> lists,
     other objects -> str."""

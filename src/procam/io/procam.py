@@ -23,7 +23,7 @@ from ..errors import CalibrationFileError
 from ..summary import projector_assumptions
 from ..view import CORNER_REASONS, View
 from ..verdict import MEANING, VERDICTS
-from .files import to_jsonable, write_text
+from .files import portable_names, to_jsonable, write_text
 from .formats import CALIBRATION_FORMAT, CORRESPONDENCES_FORMAT
 from .validate import bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, short
 
@@ -162,8 +162,11 @@ def _verdict_reasons(path, v) -> tuple:
 
 
 def save_calibration_json(calib, path) -> Path:
-    """Write ``calib`` as procam's calibration JSON (:func:`calibration_to_dict`), atomically."""
-    return write_text(path, json.dumps(calibration_to_dict(calib), indent=1))
+    """Write ``calib`` as procam's calibration JSON (:func:`calibration_to_dict`), atomically; the poses' names
+    that are paths are stored relative to the file's folder (:func:`procam.io.files.portable_names`), never as the
+    user's absolute paths."""
+    doc = portable_names(calibration_to_dict(calib), Path(path).parent)
+    return write_text(path, json.dumps(doc, indent=1))
 
 
 def device_from_json(path, doc: dict, name: str) -> Device | None:
