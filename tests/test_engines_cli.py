@@ -185,3 +185,118 @@ def test_export_refuses_bad_options_in_one_line(files, tmp_path, args, phrase):
     code, out, err = run_cli(["export", paths["procam.json"], *args])
     assert code == 2 and phrase in err and len(err.strip().splitlines()) == 1, err
     assert [p.name for p in tmp_path.iterdir()] == []
+
+
+# ---------------------------------------------------------------------------------------------------
+# the smaller things (issue 26, item 6)
+# ---------------------------------------------------------------------------------------------------
+
+def _help(command):
+    code, out, err = run_cli([command, "--help"])
+    assert code == 0, err
+    return out
+
+
+def test_help_shows_no_bool_metavar_and_lists_every_choice():
+    """No command's --help shows ``<bool>`` for a flag, and every option with a closed set of values lists them
+    (``<a|b|c>``, from procam.choices) instead of ``<str>``."""
+    from procam import choices, simulate
+    from procam.cli import app
+
+    assert choices.SIM_PRESETS == simulate.PRESETS
+    commands = [c.name for c in app.registered_commands]
+    assert len(commands) >= 15
+    texts = {c: _help(c) for c in commands}
+    for c, t in texts.items():
+        assert "<bool>" not in t, c
+    assert "--preset <paper|ideal|lensshift|hard|vertical|ceiling>" in texts["simulate"]
+    assert "--frame <camera|projector>" in texts["simulate"] and "--order <opencv|moreno>" in texts["simulate"]
+    assert "--preset <paper|ideal|lensshift|hard|vertical|ceiling>" in texts["demo"]
+    assert "device <camera|projector>" in texts["study"]
+    assert "--cam-dist <auto|none|k1|k1k2|k1k2p1p2|k1k2p1p2k3|rational>" in texts["experiment"]
+    assert "--format <" + "|".join(choices.EXPORT_FORMATS) + ">" in texts["export"].replace("\n", "").replace(" ", "") \
+        .replace("--format<", "--format <")
+    for c in ("simulate", "demo", "study", "experiment"):
+        for word in ("--preset <str>", "--frame <str>", "--order <str>", "device <str>", "--cam-dist <str>"):
+            assert word not in texts[c], (c, word)
+    code, out, err = run_cli(["simulate", "x", "--preset", "moon"])
+    assert code == 2 and "moon" in err and len(err.strip().splitlines()) == 1
+
+
+def test_readme_advise_line_runs_and_json_lines_are_alone_on_stdout(tmp_path):
+    """README's ``procam advise --board 10x6`` needs no --square (as capture and check); with --json every stdout
+    line is one JSON object, the session's text goes to stderr, and time_s counts from the session's first frame."""
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    line = next(x for x in readme.splitlines() if x.startswith("procam advise"))
+    args = re.split(r"\s+#", line)[0].split()[1:]
+    code, out, err = run_cli([*args, "--camera", "virtual", "--json", "--max-frames", "3"])
+    assert code == 0, err
+    lines = out.splitlines()
+    docs = [json.loads(x) for x in lines]                  # every line is JSON: nothing else on stdout
+    assert [d["frame"] for d in docs] == [0, 1, 2]
+    assert docs[0]["time_s"] == 0.0 and 0 <= docs[2]["time_s"] < 60
+
+
+def test_advise_time_s_is_seconds_since_the_first_frame():
+    from procam.acquire.live import advise
+
+    class Frame:
+        def __init__(self, t):
+            self.image, self.timestamp = np.zeros((8, 8), np.uint8), t
+
+    class Camera:
+        def __init__(self):
+            self.k = 0
+
+        def grab(self):
+            self.k += 1
+            return Frame(86400.0 * 30 + 0.25 * self.k)      # a camera clock counting since the machine booted
+
+    class Advisor:
+        def update(self, img, t):
+            from types import SimpleNamespace
+
+            return SimpleNamespace(time_s=t, ready=False)
+
+    res = advise(Camera(), Advisor(), max_frames=5)
+    assert res.advice.time_s == pytest.approx(1.0) and res.t0 == pytest.approx(86400.0 * 30 + 0.25)
+    again = advise(Camera(), Advisor(), max_frames=2, t0=res.t0)      # a later pose of the same session
+    assert again.advice.time_s == pytest.approx(0.25)
+
+
+def test_check_picture_wraps_its_message_at_word_boundaries():
+    """The overlay's reasons are wrapped between words to the picture's width, never cut mid-word."""
+    from types import SimpleNamespace
+
+    import cv2
+
+    from procam.check import overlay_lines
+
+    reason = "camera: " + " ".join(["the board is turned too little about the vertical axis"] * 4)
+    check = SimpleNamespace(verdict="weak", reasons=(reason,))
+    lines = overlay_lines(check, 400)
+    assert len(lines) > 2 and lines[0] == "verdict: weak"
+    assert " ".join(lines[1:]).split() == reason.split(": ", 1)[1].split()      # every word whole, in order
+    for t in lines[1:]:
+        assert cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)[0][0] <= 400
+
+
+def test_text_goes_to_stderr_while_stdout_carries_json(capsys):
+    """``capture --advise --json`` and ``advise --json`` print their text lines (the devices, the pre-flight, the
+    files written, the quick calibration) through text_on_stderr, so stdout holds the JSON lines alone (the whole
+    capture session is tests/test_advisor.py's slow test)."""
+    from procam.cli._app import say, text_on_stderr, warn
+    from procam.cli._live import tell
+
+    with text_on_stderr(True):
+        say("wrote 36 frames")
+        warn("a warning")
+        tell("info", "quick calibration of pose01")
+    said = capsys.readouterr()
+    assert said.out == "" and "wrote 36 frames" in said.err and "quick calibration" in said.err
+    with text_on_stderr(False):
+        say("plain")
+    assert capsys.readouterr().out == "plain\n"
