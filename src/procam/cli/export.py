@@ -63,12 +63,14 @@ def _check_outputs(fmt, out, calibration, inputs, force):
 
 def _distortion(calib, out):
     """Write the distortion maps beside an engine export; returns the document entry and says what was written."""
+    from ..export.maps import distortion_maps
     from ..io.engines import distortion_map_paths, save_distortion_maps
 
-    for npz, png in distortion_map_paths(calib, out).values():
+    with_lens = [n for n in ("camera", "projector") if getattr(calib, n).distortion.model != "none"]
+    for npz, png in distortion_map_paths(out, with_lens).values():
         output_path(npz, "-o (its distortion map)", (".npz",), inputs=(out,))
         output_path(png, "-o (its distortion map)", (".png",), inputs=(out,))
-    maps = save_distortion_maps(calib, out)
+    maps = save_distortion_maps(out, distortion_maps(calib))
     for name, m in maps.items():
         say(f"wrote {out.parent / m['remap']} and {out.parent / m['st_map']} ({name} lens distortion, which the "
             f"engine camera cannot hold: {m['what']} maps)")
@@ -174,7 +176,8 @@ def export_cmd(
             doc = _ex.unity_document(calib, world=world, unit=unit, near_m=clip[0], far_m=clip[1])
         doc["calibration"] = Path(calibration).name
         doc["distortion_maps"] = _distortion(calib, out)
-        written = io.engines.save_blender(doc, out) if fmt == "blender" else [io.engines.save_document(doc, out)]
+        written = (io.engines.save_blender(doc, out, _ex.blender.script_text()) if fmt == "blender"
+                   else [io.engines.save_document(doc, out)])
         for p in written:
             say(f"wrote {p}")
         if not doc["distortion_maps"]:

@@ -56,6 +56,15 @@ SENSOR_WIDTH_MM = 36.0
 DEFAULT_CLIP_M = (0.1, 1000.0)
 
 
+def script_text() -> str:
+    """The source of :mod:`.blender_cameras`, the script ``procam export --format blender`` writes beside its JSON."""
+    from pathlib import Path
+
+    from . import blender_cameras
+
+    return Path(blender_cameras.__file__).read_text(encoding="utf-8")
+
+
 def blender_camera(device: Device, sensor_width_mm: float = SENSOR_WIDTH_MM) -> dict:
     """Blender's camera (``bpy.types.Camera``) and render (``RenderSettings``) properties of ``device`` (module
     docstring): ``{"data": {lens, sensor_width, sensor_height, sensor_fit, shift_x, shift_y, type}, "render":

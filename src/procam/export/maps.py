@@ -120,6 +120,21 @@ def st_map(map_x, map_y, source_size) -> np.ndarray:
     return np.round(np.clip(out, 0.0, 1.0) * ST_SCALE).astype(np.uint16)
 
 
+def distortion_maps(calib) -> dict:
+    """What no engine camera holds, per device with lens distortion: the camera's undistortion and the projector's
+    pre-distortion, ``{device: {"what", "map_x", "map_y", "st_map", "K", "size"}}`` (:func:`undistort_maps`,
+    :func:`predistort_maps`, :func:`st_map`); written by :func:`procam.io.engines.save_distortion_maps`."""
+    out = {}
+    for name, what in (("camera", "undistort"), ("projector", "predistort")):
+        dev = getattr(calib, name)
+        if dev is None or dev.distortion.model == "none":
+            continue
+        mx, my = undistort_maps(dev) if what == "undistort" else predistort_maps(dev)
+        out[name] = {"what": what, "map_x": mx, "map_y": my, "st_map": st_map(mx, my, dev.image_size), "K": dev.K,
+                     "size": tuple(dev.image_size)}
+    return out
+
+
 def st_map_lookup(st, source_size):
     """The source pixels ``(map_x, map_y)`` (H, W) float64 and the validity (H, W) bool of an ST map of
     :func:`st_map` (RGB order): the inverse of its convention, to check one or to use one with ``cv2.remap``."""

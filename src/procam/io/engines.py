@@ -34,42 +34,37 @@ def blender_script_path(path) -> Path:
     return Path(path).with_suffix(".py")
 
 
-def save_blender(doc: dict, path) -> list[Path]:
-    """Write the Blender export ``doc`` as ``path`` (JSON) and the script that creates its cameras beside it
-    (:func:`blender_script_path`, :mod:`procam.export.blender_cameras`); returns both paths."""
-    from ..export import blender_cameras
+def save_blender(doc: dict, path, script: str) -> list[Path]:
+    """Write the Blender export ``doc`` as ``path`` (JSON) and ``script`` (the text of
+    :mod:`procam.export.blender_cameras`, which creates its cameras) beside it (:func:`blender_script_path`);
+    returns both paths."""
+    script_path = blender_script_path(path)
+    write_text(script_path, script)
+    return [save_document(doc, path), script_path]
 
-    script = blender_script_path(path)
-    write_text(script, Path(blender_cameras.__file__).read_text(encoding="utf-8"))
-    return [save_document(doc, path), script]
 
-
-def distortion_map_paths(calib, path) -> dict:
-    """``{device: (npz path, ST-map png path)}`` beside ``path`` for each device with lens distortion."""
+def distortion_map_paths(path, devices) -> dict:
+    """``{device: (npz path, ST-map png path)}`` beside ``path`` for each of ``devices`` (the devices with lens
+    distortion)."""
     path = Path(path)
     out = {}
-    for name, what in DISTORTION_MAPS.items():
-        dev = getattr(calib, name)
-        if dev is not None and dev.distortion.model != "none":
-            base = path.with_name(f"{path.stem}_{name}_{what}")
-            out[name] = (base.with_suffix(".npz"), base.parent / (base.name + "_st.png"))
+    for name in devices:
+        base = path.with_name(f"{path.stem}_{name}_{DISTORTION_MAPS[name]}")
+        out[name] = (base.with_suffix(".npz"), base.parent / (base.name + "_st.png"))
     return out
 
 
-def save_distortion_maps(calib, path) -> dict:
-    """Write the distortion maps of :func:`distortion_map_paths`: the camera's undistortion and the projector's
-    pre-distortion (:mod:`procam.export.maps`), each as a remap ``.npz`` and a 16-bit ST-map PNG.  Returns
-    ``{device: {"what", "remap", "st_map"}}`` with file names only (for the export document)."""
-    from ..export.maps import predistort_maps, st_map, undistort_maps
-
+def save_distortion_maps(path, maps: dict) -> dict:
+    """Write each device's distortion maps beside ``path`` (:func:`distortion_map_paths`): ``maps`` is
+    ``{device: {"map_x", "map_y", "st_map", "K", "size"}}`` (:func:`procam.export.maps.distortion_maps`); the remap
+    table as ``.npz``, the ST map (RGB, uint16) as a 16-bit PNG.  Returns ``{device: {"what", "remap", "st_map"}}``
+    with file names only (for the export document)."""
     out = {}
-    for name, (npz, png) in distortion_map_paths(calib, path).items():
-        dev = getattr(calib, name)
-        what = DISTORTION_MAPS[name]
-        mx, my = undistort_maps(dev) if what == "undistort" else predistort_maps(dev)
-        save_maps(npz, mx, my, K=dev.K, size=np.array(dev.image_size))
-        write_image(png, st_map(mx, my, dev.image_size)[..., ::-1])
-        out[name] = {"what": what, "remap": npz.name, "st_map": png.name}
+    for name, (npz, png) in distortion_map_paths(path, maps).items():
+        m = maps[name]
+        save_maps(npz, m["map_x"], m["map_y"], K=m["K"], size=np.array(m["size"]))
+        write_image(png, np.asarray(m["st_map"])[..., ::-1])
+        out[name] = {"what": DISTORTION_MAPS[name], "remap": npz.name, "st_map": png.name}
     return out
 
 
