@@ -151,7 +151,7 @@ def datasheet_table(seeds):
     sc = simulate.preset("lensshift")
     truth = datasheet.datasheet_view(sc.K_proj, sc.proj_size)
     keys = ("throw_ratio", "shift_h_pct", "shift_v_pct", "fov_h_deg", "fov_v_deg")
-    print(f"\nlensshift projector truth: " + ", ".join(f"{k} {getattr(truth, k):.4f}" for k in keys))
+    print("\nlensshift projector truth: " + ", ".join(f"{k} {getattr(truth, k):.4f}" for k in keys))
     print("| seed | " + " | ".join(f"{k} (err / ±)" for k in keys) + " |")
     print("|---" * (len(keys) + 1) + "|")
     for seed in range(seeds):
@@ -174,8 +174,8 @@ def projector_view_table():
     found = detect_corners(pv.image, (10, 6))
     err = np.hypot(*(found - np.array(truth["corners"]["projector"])).T)
     print(f"\nprojector's view (640x400 camera -> 1920x1080 projector): {dt:.2f} s, mask {pv.coverage:.0%} of the "
-          f"projector, closing {pv.close_px} px; corners in the view vs truth: RMS {np.sqrt(np.mean(err ** 2)):.3f} px, "
-          f"max {err.max():.3f} px")
+          f"projector, closing {pv.close_px} px; corners in the view vs truth: RMS "
+          f"{np.sqrt(np.mean(err ** 2)):.3f} px, max {err.max():.3f} px")
 
 
 def main():

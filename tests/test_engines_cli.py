@@ -11,7 +11,7 @@ import pytest
 from procam import io
 from procam.export import opengl
 from procam.simulate import truth_calibration
-from sim_small import small_capture, small_scene
+from sim_small import small_capture
 from conftest import run_cli
 
 import procam.cli  # noqa: F401  (registers every command)

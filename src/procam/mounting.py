@@ -61,7 +61,8 @@ class Mounting:
         if self.position is None:
             return ""
         x, y, z = self.position
-        parts = [f"{abs(x):.0f} {'right of' if x >= 0 else 'left of'}", f"{abs(y):.0f} {'below' if y >= 0 else 'above'}",
+        parts = [f"{abs(x):.0f} {'right of' if x >= 0 else 'left of'}",
+                 f"{abs(y):.0f} {'below' if y >= 0 else 'above'}",
                  f"{abs(z):.0f} {'in front of' if z >= 0 else 'behind'}"]
         return "the projector is " + ", ".join(parts) + " the camera (calibration units; camera axes)"
 

@@ -381,6 +381,20 @@ def distinct_poses(poses) -> None:
         seen[key] = p
 
 
+def load_pose(pose_dir, projector, calib, order=None, step=None):
+    """The capture of one pose folder for a command that has a calibration: the projector size from
+    ``--projector``, else the folder's ``patterns.json``, else the calibration's; its warnings printed."""
+    from .. import capture
+
+    size = optional_size(projector)
+    if size is None and not (Path(pose_dir) / "patterns.json").exists():
+        size = tuple(calib.projector.image_size)
+    cap = capture.load_capture(pose_dir, size, value(order), step=step)
+    for w in cap.warnings:
+        warn(w)
+    return cap
+
+
 def assumed_size(calib, key: str) -> str:
     """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
     its size was assumed from the principal point; '' otherwise."""

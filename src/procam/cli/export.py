@@ -10,8 +10,8 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import (ForceOpt, OrderOpt, ProjectorOpt, StepOpt, app, choice, fail, number, optional_size, output_dir,
-                   output_path, say, user_errors, value, warn)
+from ._app import (ForceOpt, OrderOpt, ProjectorOpt, StepOpt, app, choice, fail, load_pose, number, optional_size,
+                   output_dir, output_path, say, user_errors, value, warn)
 
 Format = choice("Format", choices.EXPORT_FORMATS)
 World = choice("World", choices.WORLDS)
@@ -78,18 +78,13 @@ def _distortion(calib, out):
 
 
 def _projector_view(calib, out, pose, maps_file, projector, order, step):
-    from .. import capture, decode, io
+    from .. import decode, io
     from ..export.projector_view import projector_view
     from ..io import files as _files
 
     if pose is None:
         fail("--format projector-view needs --pose POSE_DIR (the captured pose whose white frame it remaps)")
-    size = optional_size(projector)
-    if size is None and not (Path(pose) / "patterns.json").exists():
-        size = tuple(calib.projector.image_size)
-    cap = capture.load_capture(pose, size, value(order), step=step)
-    for w in cap.warnings:
-        warn(w)
+    cap = load_pose(pose, projector, calib, order, step)
     ps = cap.pattern_set
     if maps_file is not None:
         m = io.load_decoded_maps(maps_file)
@@ -183,14 +178,8 @@ def export_cmd(
         if not doc["distortion_maps"]:
             say("neither device has lens distortion: the engine cameras are the whole calibration")
         return
-    if fmt == "kamino410":
-        io.save_kamino410(calib, out)
-        say(f"wrote {out}")
-        if calib.camera.distortion.model == "division":
-            say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
-        return
-    if fmt == "yaml":
-        io.save_opencv_yaml(calib, out)
+    if fmt in ("kamino410", "yaml"):
+        (io.save_kamino410 if fmt == "kamino410" else io.save_opencv_yaml)(calib, out)
         say(f"wrote {out}")
         if calib.camera.distortion.model == "division":
             say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")

@@ -20,43 +20,29 @@ frames are OpenCV's (x right, y down, z forward); ``x_p = R x_c + T`` maps camer
 units.  Every engine camera is a pinhole: each export says what it leaves out (lens distortion, skew) and the
 distortion maps carry it.
 
-Submodules load on first use (PEP 562), so ``import procam.export`` imports no scipy or OpenCV.
+Importing the package imports numpy only (OpenCV and scipy load inside the functions that use them), and the
+command line imports it only inside ``procam export``.
 """
 
 from __future__ import annotations
 
-import importlib
-
 from .. import choices
+from . import blender_cameras  # noqa: F401  (the script, as a module: importable without Blender)
+from .blender import BLENDER_FROM_CV, blender_camera, blender_document
+from .frames import LENGTH_UNITS, device_poses
+from .maps import distortion_maps, predistort_maps, st_map, st_map_lookup, undistort_maps
+from .opengl import GL_FROM_CV, clip_to_pixels, opengl_document, opengl_projection, view_matrices
+from .projector_view import ProjectorView, projector_view
+from .rectify import rectifying_rotations, stereo_rectify
+from .unity import UNITY_FROM_CV, physical_camera, unity_document, unity_projection, unity_transform
 
 #: The formats ``procam export --format`` writes.
 FORMATS = choices.EXPORT_FORMATS
 #: The world frames of the engine exports (``world=``).
 WORLDS = choices.WORLDS
 
-_SUBMODULES = ("frames", "opengl", "blender", "blender_cameras", "unity", "maps", "rectify", "projector_view")
-_EXPORTS = {
-    "GL_FROM_CV": "opengl", "opengl_projection": "opengl", "view_matrices": "opengl", "clip_to_pixels": "opengl",
-    "opengl_document": "opengl",
-    "BLENDER_FROM_CV": "blender", "blender_document": "blender", "blender_camera": "blender",
-    "UNITY_FROM_CV": "unity", "unity_document": "unity", "physical_camera": "unity", "unity_projection": "unity",
-    "unity_transform": "unity",
-    "undistort_maps": "maps", "predistort_maps": "maps", "st_map": "maps", "st_map_lookup": "maps",
-    "stereo_rectify": "rectify", "rectifying_rotations": "rectify",
-    "projector_view": "projector_view", "ProjectorView": "projector_view",
-    "device_poses": "frames", "LENGTH_UNITS": "frames",
-}
-
-__all__ = ["FORMATS", "WORLDS", *_SUBMODULES, *_EXPORTS]
-
-
-def __getattr__(name: str):
-    if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__all__ = ["FORMATS", "WORLDS", "BLENDER_FROM_CV", "GL_FROM_CV", "LENGTH_UNITS", "UNITY_FROM_CV", "ProjectorView",
+           "blender_camera", "blender_document", "clip_to_pixels", "device_poses", "distortion_maps",
+           "opengl_document", "opengl_projection", "physical_camera", "predistort_maps", "projector_view",
+           "rectifying_rotations", "st_map", "st_map_lookup", "stereo_rectify", "undistort_maps", "unity_document",
+           "unity_projection", "unity_transform", "view_matrices"]
