@@ -1,7 +1,7 @@
 """The figures of docs/datasheet.md and docs/exports.md: the datasheet's throw ratio and lens shift, the engines'
 frames and pixel origins, and the rectification of a floor rig (projector below the camera).
 
-    python examples/plot_export_figures.py docs/figures
+    python examples/export_figures.py docs/figures
 
 Every number drawn comes from procam (procam.datasheet, procam.export, the simulator's ``vertical`` rig).
 """
