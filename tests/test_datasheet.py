@@ -1,5 +1,7 @@
 """procam.datasheet: throw ratio and lens shift against their definitions, and the exact round trip."""
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -48,6 +50,7 @@ POSES = [(15, 12, 0), (-10, 20, 5), (20, -15, -5), (5, 25, 10), (-20, -10, 0)]
 KEYS = ("throw_ratio", "shift_h_pct", "shift_v_pct", "offset_pct", "fov_h_deg", "fov_v_deg")
 
 
+@functools.lru_cache(maxsize=None)
 def _fast_path_calibration(seed=0):
     from conftest import verdict_warnings
     from procam import multi_pose, simulate
