@@ -3,8 +3,10 @@
 Plain data, no printing: each table is one :class:`TextTable` (its header and rows, every cell a string,
 built by one function here), which the CLI renders with rich and the HTML report as HTML, so the terminal
 and the page show the same cells. The tables: the parameters (:func:`parameter_table`), the poses
-(:func:`pose_table`), the metric verification (:func:`verification_table`, :func:`cross_table`) and the
-leave-one-pose-out spread of the parameters (:func:`spread_table`).
+(:func:`pose_table`), the metric verification (:func:`verification_table`, :func:`cross_table`), the
+leave-one-pose-out spread of the parameters (:func:`spread_table`), and the devices as a projector datasheet
+prints them (:func:`datasheet_table`, :mod:`procam.datasheet`) with how they are mounted (:func:`mounting_lines`,
+:mod:`procam.mounting`).
 
 Every ``±`` is 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise i.i.d.
 (:mod:`procam.uncertainty`).
@@ -17,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import datasheet as _datasheet
 from . import models
 
 #: What every ``±`` in these rows means.
@@ -223,3 +226,33 @@ def pose_rows(calib) -> list[tuple[str, str, str, str]]:
         out.append((Path(str(p.get("name", ""))).name, ", ".join(f"{a:.1f}" for a in ca) if ca else "",
                     ", ".join(f"{a:.1f}" for a in pa) if pa else "", pose_verdict(p.get("advice") or {})))
     return out
+
+
+#: The datasheet view's rows: (key of :class:`procam.datasheet.DatasheetView`, label, format).
+DATASHEET_ROWS = (("throw_ratio", "throw ratio (distance / image width)", ".3f"),
+                  ("shift_h_pct", "lens shift, horizontal (% of width; + image right of the axis)", ".2f"),
+                  ("shift_v_pct", "lens shift, vertical (% of height; + image above the axis)", ".2f"),
+                  ("offset_pct", "offset (% of half height; 2 x vertical shift)", ".2f"),
+                  ("fov_h_deg", "field of view, horizontal (deg)", ".2f"),
+                  ("fov_v_deg", "field of view, vertical (deg)", ".2f"))
+
+
+def datasheet_table(calib) -> TextTable:
+    """The devices' intrinsics as a projector datasheet prints them (:func:`procam.datasheet.calibration_datasheet`:
+    throw ratio, lens shift in % of the image, offset, field of view), each with its ± where the calibration
+    has one; the conventions are :mod:`procam.datasheet`'s. No projector column for a camera-only calibration."""
+    views = [_datasheet.calibration_datasheet(calib, d) for d in ("camera", "projector")]
+    views = [v for v in views if v is not None]
+    rows = []
+    for key, label, fmt in DATASHEET_ROWS:
+        rows.append((label, *(pm(getattr(v, key), v.std.get(key), fmt) for v in views)))
+    header = ("datasheet", "camera") + (("projector",) if len(views) > 1 else ())
+    return TextTable(header, tuple(rows))
+
+
+def mounting_lines(calib) -> list[str]:
+    """How the devices are mounted, in sentences (:func:`procam.mounting.mounting`: upside-down or portrait
+    relative to the camera, where the projector sits)."""
+    from .mounting import mounting
+
+    return mounting(calib).lines()

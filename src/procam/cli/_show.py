@@ -50,6 +50,9 @@ def print_calibration(calib) -> None:
     """Print a calibration's parameters and poses, its warnings and its verdict."""
     console.print(rich_table(summary.parameter_table(calib),
                              plain(f"procam calibration ({calib.method}); {summary.PLUS_MINUS}")))
+    console.print(rich_table(summary.datasheet_table(calib), "as a projector datasheet prints it (docs/datasheet.md)"))
+    for line in summary.mounting_lines(calib):
+        say(f"mounting: {line}")
     poses = summary.pose_table(calib)
     if poses.rows:
         console.print(rich_table(poses, "poses"))

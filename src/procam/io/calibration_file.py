@@ -132,6 +132,26 @@ def load_calibration(path) -> Calibration:
     return validate_calibration(_read_storage(path, CALIBRATION_FORMATS, _storage_calibration), path)
 
 
+def complete_sizes(calib: Calibration, cam_size=None, proj_size=None) -> Calibration:
+    """``calib`` with the image sizes its file did not store (``info["image_size_assumed"]``: ``2 (u0, v0)`` was
+    assumed) replaced by the sizes a capture tells (``cam_size``, ``proj_size``: (width, height) or None); a size
+    the file stored is kept (a mismatch is the caller's to report).  The warning about the assumed size goes with
+    it.  Used by the commands that read a pose with a calibration (kamino410's own files store no projector size)."""
+    assumed = list((calib.info or {}).get("image_size_assumed", ()))
+    kw = {}
+    for key, name, size in (("cam_size", "camera", cam_size), ("proj_size", "projector", proj_size)):
+        dev = getattr(calib, name)
+        if size is not None and key in assumed and dev is not None:
+            kw[name] = Device(dev.K, tuple(int(v) for v in size), dev.distortion)
+            assumed.remove(key)
+    if not kw:
+        return calib
+    info = {**calib.info, "image_size_assumed": assumed} if assumed else \
+        {k: v for k, v in calib.info.items() if k != "image_size_assumed"}
+    warnings = tuple(w for w in calib.warnings if "does not store the projector size" not in w or "projector" not in kw)
+    return calib.replace(info=info, warnings=warnings, **kw)
+
+
 def load_camera_intrinsics(path, image_size=None) -> Device:
     """One camera's intrinsics (K, distortion, image size) from the files people have: :func:`load_calibration`'s
     reader asking for the camera only.
