@@ -8,16 +8,15 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
-                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, preload, say, user_errors,
-                   value, warn, with_pose_options)
+from ._app import (FIGURE_SUFFIXES, BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
+                   StepOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
+                   pose_options, preload, say, user_errors, value, warn, with_pose_options)
 
 Cod = choice("Cod", choices.COD_MODES)
 DistModel = choice("DistModel", choices.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
 #: The library's name of each --method.
 _METHODS = {"single": "single-pose", "multi": "multi-pose", None: None}
-BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
 
 
 #: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
@@ -46,10 +45,7 @@ def calibrate_cmd(
     cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
                                                     "when reliable, else the image centre as a prior), paper "
                                                     "(always the centre of distortion) or image-center."),
-    background: BackgroundMode = typer.Option(
-        BackgroundMode.free, "--background", help="Single-pose: the decoded points behind the board. free: lift the "
-        "paper's u0p = W/2 with them where they determine it; auto: only when they refute it; check: only say so; "
-        "off: ignore them (the paper's method)."),
+    background: BackgroundOpt = BackgroundMode.free,
     cam_dist: DistModel = typer.Option(DistModel.auto, "--cam-dist", help="Multi-pose camera distortion model (auto: "
                                        "the richest OpenCV model whose terms the poses determine)."),
     proj_dist: DistModel = typer.Option(DistModel.auto, "--proj-dist", help="Multi-pose projector distortion model."),
@@ -77,7 +73,7 @@ def calibrate_cmd(
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
-                        background=not multi and value(background) != "off")
+                        background=not multi)
     camera = _sp.CameraOptions(cod=value(cod))
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)

@@ -78,10 +78,11 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
     pp = max(su, sv)
     lo, hi = (r * float(np.hypot(*proj_size)) for r in o.plausible_f_range)
     level = "good"
-    if not (np.isfinite(f) and lo <= f <= hi):
-        level = "failed"
-    elif not (np.isfinite(rel) and np.isfinite(pp)) or rel > DEGENERATE_F_REL or pp > DEGENERATE_PP_PX:
+    # what the pose cannot determine first (its estimate may then be anything), then an impossible estimate
+    if not (np.isfinite(rel) and np.isfinite(pp)) or rel > DEGENERATE_F_REL or pp > DEGENERATE_PP_PX:
         level = "degenerate"
+    elif not (np.isfinite(f) and lo <= f <= hi):
+        level = "failed"
     elif rel > GOOD_F_REL or pp > GOOD_PP_PX:
         level = "weak"
     what = (f"f_p {f:.1f} ± {sf:.1f} px ({100 * rel:.2f} %), u0p ± {su:.1f}, v0p ± {sv:.1f} px (the fit's ±: noise, "
