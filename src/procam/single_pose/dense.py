@@ -12,8 +12,8 @@ carries everything else into the ``±``:
 3. **What is assumed becomes a prior** whose width is what the assumption can cost: ``alpha_p = 1 ± 0.003``,
    ``u0p = W / 2 ± 3 % of W`` (the spread of real projectors; a datasheet's lens shift replaces it), a datasheet's
    throw ratio on ``f_p``. A prior the data outweigh costs nothing; one they cannot check shows in the ``±``.
-4. **The lens model is chosen by held-out error**: each candidate (:data:`MODELS`: none, ``k1``, ``k1 k2``, and
-   ``k1 k2 p1 p2`` when asked for) is fitted; the data are split into spatial blocks of the camera image and each block's
+4. **The lens model is chosen by held-out error**: each candidate (:data:`MODELS`: none, ``k1``, ``k1 k2``,
+   ``k1 k2 k3``, and ``k1 k2 p1 p2`` when asked for) is fitted; the data are split into spatial blocks of the camera image and each block's
    residuals are predicted from the fit without it (the exact linearised leave-one-block-out, from the Jacobian);
    the models within ``model_tolerance`` of the smallest held-out chi-square are those the data cannot tell apart,
    and the simplest of them is the result (more terms than the data ask for trade the principal point against
@@ -40,7 +40,8 @@ from ..stats import robust_sigma
 from . import joint as J
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
-MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2p1p2": ("k1p", "k2p", "p1p", "p2p")}
+MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
+          "k1k2p1p2": ("k1p", "k2p", "p1p", "p2p")}
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,8 @@ class DenseOptions:
     models : the lens models tried (names of :data:`MODELS`); radial ones by default: tangential terms trade
         against the principal point, which a single pose cannot then tell apart (``k1k2p1p2`` is there to ask for).
     alpha_prior_std : ``alpha_p = 1 ±`` this (0 = estimated freely).
+    decentring_prior_px : each device's distortion centre is its principal point ± this (px): the models hold it there,
+        and the ± includes what that costs for a lens whose distortion is decentred (0: taken as exact).
     u0_prior_pct : ``u0p = W / 2 ±`` this percent of ``W`` when no datasheet gives the horizontal lens shift.
     prior : :class:`ProjectorPrior` (a datasheet), or None.
     use_background : use the background samples (False: the board alone).
@@ -94,8 +97,9 @@ class DenseOptions:
     min_samples : fewer board samples: no dense fit.
     """
 
-    models: tuple = ("none", "k1", "k1k2")
+    models: tuple = ("none", "k1", "k1k2", "k1k2k3")
     alpha_prior_std: float = 0.003
+    decentring_prior_px: float = 5.0
     u0_prior_pct: float = 3.0
     prior: ProjectorPrior | None = None
     use_background: bool = True
@@ -276,6 +280,10 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         Wc, Hc = cam_sol.image_size
         pp_prior = (np.array([(Wc - 1) / 2.0, (Hc - 1) / 2.0]), float(cam_sol.info["pp_prior_std"]))
     priors = priors_for(proj_size, options) if known_projector is None else []
+    dc = options.decentring_prior_px
+    held = ((("dcx", "dcy") if known_camera is None else ()) + (("dpx", "dpy") if known_projector is None else ())
+            if dc > 0 else ())
+    priors = priors + [(n, 0.0, float(dc)) for n in held]
     data = J.JointData(view.obj_pts, np.where(view.valid[:, None], view.cam_pts, np.nan), b.cam_pts[ib],
                        b.proj_pts[ib], g.cam_pts[ig] if use_bg else np.zeros((0, 2)),
                        g.proj_pts[ig] if use_bg else np.zeros((0, 2)), bw, gw,
@@ -325,10 +333,12 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         f = J.solve(model, p_m, free, max_nfev=60 if not fits else 20)
         if labels is None:
             labels = _labels(model, cam_sol.image_size, options.blocks)
-        held, C_jk = _held_out(f, labels)
-        fits[name] = ModelFit(name, f.p, f.cost, held, f.cov, _embed(C_jk, f.free), f.n_residuals, f.free)
+        h_out, C_jk = _held_out(f, labels)
+        # the covariance with the decentrings freed under their priors: what holding them at zero can cost
+        cov_fit = J.linearise(model, f.p, free + held)[2] if held else f.cov
+        fits[name] = ModelFit(name, f.p, f.cost, h_out, cov_fit, _embed(C_jk, f.free), f.n_residuals, f.free)
         lowest = min(m.held_out for m in fits.values())
-        if held > (1 + 10 * options.model_tolerance) * lowest:
+        if h_out > (1 + 10 * options.model_tolerance) * lowest:
             break      # the models are nested: the simpler ones left can only fit worse
     lowest = min(m.held_out for m in fits.values())
     near = tuple(m.name for m in fits.values() if m.held_out - lowest <= options.model_tolerance * lowest)
@@ -416,6 +426,8 @@ def _reported_covariance(best: ModelFit, near) -> np.ndarray:
     """The fit's covariance, widened to the block jackknife's where that is larger (per parameter, keeping the
     correlations), plus the spread of the indistinguishable models."""
     C = best.cov_fit.copy()
+    C[J.NC + len(J.PROJECTOR):, :] = 0.0        # the decentrings are held at zero: their own rows go
+    C[:, J.NC + len(J.PROJECTOR):] = 0.0
     s_fit = np.sqrt(np.clip(np.diag(C), 0, None))
     s_jk = np.sqrt(np.clip(np.diag(best.cov_jackknife), 0, None))
     with np.errstate(all="ignore"):

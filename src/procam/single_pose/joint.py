@@ -45,8 +45,12 @@ from ..parameters import CAMERA_VECTOR
 #: The projector's part of the joint parameter vector.
 PROJECTOR = ("f_p", "alpha_p", "u0p", "v0p", "k1p", "k2p", "p1p", "p2p", "k3p", "prx", "pry", "prz", "ptx", "pty",
              "ptz")
-#: The joint parameter vector: the camera's then the projector's.
-NAMES = CAMERA_VECTOR + PROJECTOR
+#: Where each device's distortion centre sits from its principal point (px): zero in the camera's single-pose model
+#: and in OpenCV's, and held there by a prior (:mod:`.dense`) whose width is what that assumption can cost for a
+#: lens whose distortion is decentred.
+DECENTRING = ("dcx", "dcy", "dpx", "dpy")
+#: The joint parameter vector: the camera's, the projector's, the decentrings.
+NAMES = CAMERA_VECTOR + PROJECTOR + DECENTRING
 NC = len(CAMERA_VECTOR)
 #: Index of each name in :data:`NAMES`.
 IDX = {n: i for i, n in enumerate(NAMES)}
@@ -206,28 +210,31 @@ class JointModel:
 
     # camera side -----------------------------------------------------------------------------------
     def _camera(self, p):
+        """``(f, alpha, u0, v0, k1, k2, cx, cy)``: intrinsics, division coefficients and distortion centre."""
         d = self.data
         if d.camera_fixed is not None:
             K = d.camera_fixed.K
-            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), 0.0, 0.0
-        return p[0], p[1], p[2], p[3], p[4] / S ** 2, p[5] / S ** 4
+            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), 0.0, 0.0, 0.0, 0.0
+        return p[0], p[1], p[2], p[3], p[4] / S ** 2, p[5] / S ** 4, p[2] + p[27], p[3] + p[28]
 
     def _rays(self, p, pix, und_fixed):
         """Normalised camera rays (x, y) of distorted camera pixels ``pix`` (M, 2)."""
-        f, a, u0, v0, k1, k2 = self._camera(p)
+        f, a, u0, v0, k1, k2, cx, cy = self._camera(p)
         if self.data.camera_fixed is not None:
             ux, uy = und_fixed[:, 0], und_fixed[:, 1]
         else:
-            ux, uy = _undistort_division(pix[:, 0], pix[:, 1], u0, v0, k1, k2)
+            ux, uy = _undistort_division(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
         return (ux - u0) / f, (uy - v0) / (a * f)
 
     def _projector(self, p):
+        """``(f, alpha, u0, v0, coeffs (5), dx, dy)``: intrinsics, OpenCV coefficients and the distortion centre's
+        offset from the principal point (normalised by f)."""
         d = self.data
         if d.projector_fixed is not None:
             K = d.projector_fixed.K
             coeffs = list(getattr(d.projector_fixed.device.distortion, "coeffs", ()) or ()) + [0.0] * 5
-            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), coeffs[:5]
-        return p[12], p[13], p[14], p[15], [p[16], p[17], p[18], p[19], p[20]]
+            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), coeffs[:5], 0.0, 0.0
+        return p[12], p[13], p[14], p[15], [p[16], p[17], p[18], p[19], p[20]], p[29] / p[12], p[30] / (p[12] * p[13])
 
     # residual blocks, in pixels ---------------------------------------------------------------------
     def blocks(self, p):
@@ -238,14 +245,14 @@ class JointModel:
         tc = [p[9], p[10], p[11]]
         # 1. camera corners
         X = D.transform(Rc, tc, [d.obj[:, 0], d.obj[:, 1], d.obj[:, 2]])
-        f, a, u0, v0, k1, k2 = self._camera(p)
+        f, a, u0, v0, k1, k2, cx, cy = self._camera(p)
         xu, yu = f * X[0] / X[2] + u0, a * f * X[1] / X[2] + v0
         if d.camera_fixed is not None:
             cam_res = [d._cam_und[:, 0] - xu, d._cam_und[:, 1] - yu]
         else:
-            xd, yd = _distort_division(xu, yu, u0, v0, k1, k2)
+            xd, yd = _distort_division(xu, yu, cx, cy, k1, k2)
             cam_res = [d.cam[:, 0] - xd, d.cam[:, 1] - yd]
-        fp, ap, u0p, v0p, kp = self._projector(p)
+        fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
         Rp = D.rotation([p[21], p[22], p[23]])
         tp = [p[24], p[25], p[26]]
         # 2. board samples: camera ray -> the board's plane -> the projector's panel
@@ -256,8 +263,8 @@ class JointModel:
         Xc = [rx * lam - tc[0], ry * lam - tc[1], lam - tc[2]]
         Xb = [Rc[0][i] * Xc[0] + Rc[1][i] * Xc[1] + Rc[2][i] * Xc[2] for i in range(3)]     # R_cb^T (X - t_cb)
         Xp = D.transform(Rp, tp, Xb)
-        bx, by = brown(Xp[0] / Xp[2], Xp[1] / Xp[2], *kp)
-        board_res = [d.board_proj[m, 0] - (fp * bx + u0p), d.board_proj[m, 1] - (ap * fp * by + v0p)]
+        bx, by = brown(Xp[0] / Xp[2] - ex, Xp[1] / Xp[2] - ey, *kp)
+        board_res = [d.board_proj[m, 0] - (fp * (bx + ex) + u0p), d.board_proj[m, 1] - (ap * fp * (by + ey) + v0p)]
         # 3. background samples: distance to the epipolar line, projector pixels
         m = self.keep_back
         rx, ry = self._rays(p, d.back_cam[m], d._back_cam_und[m] if d.camera_fixed is not None else None)
@@ -269,7 +276,8 @@ class JointModel:
             und = d._back_proj_und[m]
             xn, yn = (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp)
         else:
-            xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp, (d.back_proj[m, 1] - v0p) / (ap * fp), *kp)
+            xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
+            xn, yn = xn + ex, yn + ey
         back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1]) * fp
         # 4. priors
         pri = []
@@ -349,6 +357,20 @@ def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
     cov[np.ix_(idx, idx)] = _inverse(J)
     return JointFit(p=p, free=tuple(n for n in NAMES if n in free), cov=cov, cost=float(r @ r),
                     n_residuals=len(r), jac=J, residuals=r, nfev=int(res.nfev))
+
+
+def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The residuals, the Jacobian over ``free`` (names) and its covariance ``(J^T J)^-1`` (27 + 4 square, zero
+    rows and columns outside ``free``) at ``p``, without solving: the cost of an assumption held at ``p`` is the
+    covariance with its parameter freed under its prior."""
+    p = np.asarray(p, float)
+    mask = np.array([n in free for n in NAMES])
+    r = model.residuals(D.Dual(p, np.eye(len(NAMES))[:, mask]))
+    v, Jm = np.where(np.isfinite(r.v), r.v, 1e6), np.where(np.isfinite(r.d), r.d, 0.0)
+    cov = np.zeros((len(NAMES), len(NAMES)))
+    idx = np.flatnonzero(mask)
+    cov[np.ix_(idx, idx)] = _inverse(Jm)
+    return v, Jm, cov
 
 
 def _inverse(J) -> np.ndarray:
