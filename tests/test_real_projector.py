@@ -143,3 +143,12 @@ def test_a_background_that_follows_no_single_geometry_is_left_out_and_said():
     (msg,) = [w for w in cal.warnings if "epipolar geometry" in w]
     assert "px from the others' epipolar lines (tolerance" in msg and "chi-square" in msg
     _within(cal, scene)
+
+
+def test_a_datasheet_number_the_pose_contradicts_is_said():
+    scene = simulate.preset("lensshift")             # throw ratio 1.26
+    view = dense_view(scene, seed=7, background=False)
+    cal = _calibrate(view, dense=dense.DenseOptions(prior=dense.ProjectorPrior(throw_ratio=1.5)))
+    (msg,) = [w for w in cal.warnings if "sigma from the datasheet's" in w]
+    assert "f_p" in msg and "check that number" in msg
+    assert abs(cal.projector.K[0, 0] - scene.K_proj[0, 0]) < 0.01 * scene.K_proj[0, 0]

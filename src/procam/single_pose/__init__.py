@@ -382,9 +382,9 @@ def _dense_fit(view, cam, proj, proj_size, dense, background, known_camera, know
     if background is not None and background.mode == "off":
         dense = replace(dense, use_background=False)
     if known_projector is not None and tuple(known_projector.image_size) != tuple(proj_size):
-        raise CalibrationError(f"pose {view.name!r}: the given projector intrinsics are for "
-                               f"{known_projector.image_size[0]}x{known_projector.image_size[1]}, this pose's projector "
-                               f"is {proj_size[0]}x{proj_size[1]}")
+        w, h = known_projector.image_size
+        raise CalibrationError(f"pose {view.name!r}: the given projector intrinsics are for {w}x{h}, this pose's "
+                               f"projector is {proj_size[0]}x{proj_size[1]}")
     return _dense.fit(view, cam, proj, proj_size, dense, known_camera=known_camera, known_projector=known_projector)
 
 

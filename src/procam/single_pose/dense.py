@@ -13,15 +13,18 @@ carries everything else into the ``±``:
    ``u0p = W / 2 ± 3 % of W`` (the spread of real projectors; a datasheet's lens shift replaces it), a datasheet's
    throw ratio on ``f_p``. A prior the data outweigh costs nothing; one they cannot check shows in the ``±``.
 4. **The lens model is chosen by held-out error**: each candidate (:data:`MODELS`: none, ``k1``, ``k1 k2``,
-   ``k1 k2 k3``, and ``k1 k2 p1 p2`` when asked for) is fitted; the data are split into spatial blocks of the camera image and each block's
-   residuals are predicted from the fit without it (the exact linearised leave-one-block-out, from the Jacobian);
+   ``k1 k2 k3``, and ``k1 k2 p1 p2`` when asked for) is fitted; the data are split into spatial blocks of the
+   camera image and each block's residuals are predicted from the fit without it (the linearised
+   leave-one-block-out, from the Jacobian);
    the models within ``model_tolerance`` of the smallest held-out chi-square are those the data cannot tell apart,
    and the simplest of them is the result (more terms than the data ask for trade the principal point against
    tangential distortion).
 5. **The ± covers** the fit's noise (the Jacobian), noise that is correlated across neighbouring samples or
    structured by a lens no model describes exactly (the same leave-one-block-out: a block jackknife, used where it
    is larger), the camera's own uncertainty (it is a parameter of the fit), the spread of the indistinguishable
-   lens models, and the priors' widths.
+   lens models, the priors' widths, and what holding each lens's distortion centre at its principal point can cost
+   (a decentring of ``decentring_prior_px``, freed under that prior for the covariance only: one pose cannot tell
+   the two apart, and OpenCV's model has no place for the difference).
 6. **The background must follow one epipolar geometry**: the background samples' mean epipolar distance per
    quadrant of the camera image, against its uncertainty (noise and the lens models' spread); a background that
    fails is left out, with a warning that says by how much, against which tolerance.
@@ -139,6 +142,7 @@ class DenseFit:
     indistinguishable : the models counted in the ±; scales : the measured noise (px) of each block;
     n_board, n_background : samples used; background_used : False when left out (``background_reason`` says why);
     notes : lines for the user (what was estimated, assumed as a prior, left out).
+    conflicts : warnings: a prior the data contradict (more than 3 of its sigmas away), said, never kept silently.
     """
 
     model: str
@@ -153,6 +157,7 @@ class DenseFit:
     background_reason: str = ""
     notes: tuple = ()
     priors: tuple = field(default_factory=tuple)
+    conflicts: tuple = ()
 
     def std(self, name: str) -> float:
         return float(np.sqrt(max(self.cov[J.IDX[name], J.IDX[name]], 0.0)))
@@ -348,7 +353,26 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
-                    notes=notes, priors=tuple(priors))
+                    notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options))
+
+
+def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:
+    """A warning per prior the data contradict: the estimate more than 3 of the prior's sigmas from its mean (the
+    prior still pulls the estimate: the user should know; a datasheet number may be wrong)."""
+    out = []
+    for name, mu, sd in priors:
+        if name in J.DECENTRING:
+            continue
+        est = float(best.p[J.IDX[name]])
+        z = (est - mu) / sd
+        if abs(z) > 3:
+            source = ("the datasheet's" if options.prior is not None and name in ("f_p", "v0p") or
+                      (name == "u0p" and options.prior is not None and options.prior.shift_h_pct is not None)
+                      else "the assumed")
+            out.append(f"projector: the pose puts {name} at {est:.4g}, {abs(z):.1f} sigma from {source} {mu:.4g} +- "
+                       f"{sd:.3g} (a prior: it pulls the estimate towards it) -- check that number, or widen its "
+                       "tolerance")
+    return tuple(out)
 
 
 def _measured_scales(model: J.JointModel, p) -> J.Scales:

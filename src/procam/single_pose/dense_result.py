@@ -152,6 +152,7 @@ def apply(cal, fit: DenseFit, view, *, known_camera=None, known_projector=None):
     warnings = list(cal.warnings)
     if fit.background_reason:
         warnings.append(f"pose {view.name!r}: {fit.background_reason}")
+    warnings += [f"pose {view.name!r}: {c}" for c in fit.conflicts]
     info = dict(cal.info)
     info.update(dense=fit, projector_model=fit.model, notes=tuple(fit.notes))
     method = cal.method if known_projector is None else cal.method + ", projector given"
