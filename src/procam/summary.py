@@ -21,6 +21,14 @@ from . import models
 
 #: What every ``±`` in these rows means.
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
+#: What the ``±`` of a single-pose calibration with a real projector (:mod:`procam.single_pose.dense`) covers.
+PLUS_MINUS_DENSE = ("± is 1σ covering the fit's noise, residuals correlated across the image (a block jackknife), "
+                    "the lens models the data cannot tell apart, the priors, and a lens decentring of a few pixels")
+
+
+def plus_minus(calib) -> str:
+    """What the ``±`` of ``calib`` means (:data:`PLUS_MINUS` or :data:`PLUS_MINUS_DENSE`)."""
+    return PLUS_MINUS_DENSE if calib.info.get("dense") is not None else PLUS_MINUS
 
 
 @dataclass(frozen=True)
