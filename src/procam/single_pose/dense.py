@@ -34,7 +34,7 @@ Returns a :class:`DenseFit`; :func:`procam.single_pose.calibrate` turns it into 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -102,7 +102,7 @@ class DenseOptions:
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
     alpha_prior_std: float = 0.003
-    decentring_prior_px: float = 5.0
+    decentring_prior_px: float = 3.0
     u0_prior_pct: float = 3.0
     prior: ProjectorPrior | None = None
     use_background: bool = True
@@ -120,8 +120,9 @@ class DenseOptions:
 
 @dataclass(frozen=True)
 class ModelFit:
-    """One lens model's fit: its parameters ``p`` (27,), chi-square ``cost``, held-out chi-square ``held_out``,
-    covariance from the Jacobian ``cov_fit`` and from the block jackknife ``cov_jackknife`` (27, 27)."""
+    """One lens model's fit: its parameters ``p`` (31,), chi-square ``cost``, held-out chi-square ``held_out``,
+    covariance from the Jacobian with the decentrings freed under their priors ``cov_fit``, with them held
+    ``cov_held``, and from the block jackknife ``cov_jackknife`` (31, 31)."""
 
     name: str
     p: np.ndarray
@@ -131,14 +132,16 @@ class ModelFit:
     cov_jackknife: np.ndarray
     n_residuals: int
     free: tuple
+    cov_held: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
 class DenseFit:
     """The result of :func:`fit`.
 
-    model : the chosen lens model; p : (27,) its parameters (:data:`procam.single_pose.joint.NAMES`);
-    cov : (27, 27) the reported covariance (module docstring, 5); fits : every model's :class:`ModelFit`;
+    model : the chosen lens model; p : (31,) its parameters (:data:`procam.single_pose.joint.NAMES`);
+    cov : (31, 31) the reported covariance (module docstring, 5); cov_pose : the same without the decentrings'
+    cost, what this pose determines (the rating judges the pose by it); fits : every model's :class:`ModelFit`;
     indistinguishable : the models counted in the ±; scales : the measured noise (px) of each block;
     n_board, n_background : samples used; background_used : False when left out (``background_reason`` says why);
     notes : lines for the user (what was estimated, assumed as a prior, left out).
@@ -158,9 +161,12 @@ class DenseFit:
     notes: tuple = ()
     priors: tuple = field(default_factory=tuple)
     conflicts: tuple = ()
+    cov_pose: np.ndarray | None = None
 
-    def std(self, name: str) -> float:
-        return float(np.sqrt(max(self.cov[J.IDX[name], J.IDX[name]], 0.0)))
+    def std(self, name: str, *, pose_only: bool = False) -> float:
+        """The reported std of ``name``; ``pose_only``: without what holding the decentrings at zero can cost."""
+        C = self.cov_pose if (pose_only and self.cov_pose is not None) else self.cov
+        return float(np.sqrt(max(C[J.IDX[name], J.IDX[name]], 0.0)))
 
 
 def _even(n: int, most: int) -> np.ndarray:
@@ -341,7 +347,8 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         h_out, C_jk = _held_out(f, labels)
         # the covariance with the decentrings freed under their priors: what holding them at zero can cost
         cov_fit = J.linearise(model, f.p, free + held)[2] if held else f.cov
-        fits[name] = ModelFit(name, f.p, f.cost, h_out, cov_fit, _embed(C_jk, f.free), f.n_residuals, f.free)
+        fits[name] = ModelFit(name, f.p, f.cost, h_out, cov_fit, _embed(C_jk, f.free), f.n_residuals, f.free,
+                              f.cov)
         lowest = min(m.held_out for m in fits.values())
         if h_out > (1 + 10 * options.model_tolerance) * lowest:
             break      # the models are nested: the simpler ones left can only fit worse
@@ -349,11 +356,13 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     near = tuple(m.name for m in fits.values() if m.held_out - lowest <= options.model_tolerance * lowest)
     best = min((fits[n] for n in near), key=lambda m: len(MODELS.get(m.name, ())))      # the simplest of them
     cov = _reported_covariance(best, [fits[n] for n in near])
+    cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
-                    notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options))
+                    notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
+                    cov_pose=cov_pose)
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:

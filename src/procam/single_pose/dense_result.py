@@ -19,8 +19,9 @@ from ..stats import rms
 from . import joint as J
 from .dense import MODELS, DenseFit, to_devices
 
-#: A projector rated good: its ``±`` (1 sigma, the dense fit's) at most these, so that the values are within
-#: twice them -- 1 % of f_p, 15 px of the principal point -- with about 95 % probability.
+#: A projector rated good: what this pose determines (the dense fit's ``±`` without the lens decentring no pose can
+#: see, which the reported ``±`` adds) at most these, so that the values are within 1 % and 15 px with about 95 %
+#: probability.
 GOOD_F_REL = 0.005
 GOOD_PP_PX = 7.5
 #: Beyond these the pose does not determine the projector (degenerate).
@@ -73,7 +74,7 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
         return {**base, "level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                 "rel_std_f": 0.0, "message": "projector: intrinsics given, not estimated from this pose"}
     f = fit.p[J.IDX["f_p"]]
-    sf, su, sv = fit.std("f_p"), fit.std("u0p"), fit.std("v0p")
+    sf, su, sv = (fit.std(n, pose_only=True) for n in ("f_p", "u0p", "v0p"))
     rel = sf / f if f > 0 else float("inf")
     pp = max(su, sv)
     lo, hi = (r * float(np.hypot(*proj_size)) for r in o.plausible_f_range)
@@ -85,8 +86,9 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
         level = "failed"
     elif rel > GOOD_F_REL or pp > GOOD_PP_PX:
         level = "weak"
-    what = (f"f_p {f:.1f} ± {sf:.1f} px ({100 * rel:.2f} %), u0p ± {su:.1f}, v0p ± {sv:.1f} px (the fit's ±: noise, "
-            f"correlated and structured residuals, the lens models the data cannot tell apart, the priors)")
+    what = (f"this pose determines f_p {f:.1f} to ± {sf:.1f} px ({100 * rel:.2f} %), u0p to ± {su:.1f}, v0p to ± "
+            f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors; the "
+            f"reported ± adds a lens decentring no pose can see)")
     if level == "failed":
         msg = (f"projector: FAILED estimate: f_p = {f:.4g} px is impossible for a {proj_size[0]}x{proj_size[1]} panel "
                f"(plausible {lo:.0f}-{hi:.0f} px) -- turn the board about the projector's vertical axis")
