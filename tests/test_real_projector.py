@@ -152,3 +152,40 @@ def test_a_datasheet_number_the_pose_contradicts_is_said():
     (msg,) = [w for w in cal.warnings if "sigma from the datasheet's" in w]
     assert "f_p" in msg and "check that number" in msg
     assert abs(cal.projector.K[0, 0] - scene.K_proj[0, 0]) < 0.01 * scene.K_proj[0, 0]
+
+
+@pytest.mark.slow
+def test_a_rendered_lens_shifted_capture_through_the_cli(tmp_path):
+    """The whole loop on rendered images (decode, window samples, the dense fit, the file): a lens-shifted,
+    distorted projector from one pose within 3 sigma of the truth; then the same projector bumped, given by its
+    file with --projector-intrinsics, and R, T from a second pose within 3 sigma. (Fast siblings: the tests above.)"""
+    from conftest import run_cli
+    from procam.io import load_calibration
+
+    scene = simulate.preset("lensshift")
+    first, second = tmp_path / "pose1", tmp_path / "pose2"
+    assert run_cli(["simulate", first, "--preset", "lensshift", "--seed", "3"])[0] == 0
+    assert run_cli(["simulate", second, "--preset", "lensshift", "--pose", "-15,20,5", "--seed", "4"])[0] == 0
+    out = tmp_path / "calib.json"
+    with verdict_warnings():
+        code, text, _ = run_cli(["calibrate", first, "--board", "10x6", "--square", "24", "-o", out])
+    assert code == 0, text
+    cal = load_calibration(out)
+    _within(cal, scene)
+    assert cal.projector.distortion.model == "opencv"
+    k1 = cal.projector.distortion.coeffs[0]
+    assert abs(k1 - scene.proj_dist_coeffs[0]) < 0.2 * abs(scene.proj_dist_coeffs[0])
+    assert "projector_model" in cal.poses[0] and cal.poses[0]["projector_model"]["n_board_samples"] > 500
+
+    bumped = tmp_path / "bumped.json"
+    with verdict_warnings():
+        code, text, _ = run_cli(["calibrate", second, "--board", "10x6", "--square", "24", "--projector-intrinsics", out,
+                                 "-o", bumped])
+    assert code == 0, text
+    again = load_calibration(bumped)
+    np.testing.assert_allclose(again.projector.K, cal.projector.K)
+    Rt, Tt = simulate.with_board_pose(scene, (-15, 20, 5)).R, scene.T
+    eul = simulate.matrix_euler(again.R) - simulate.matrix_euler(Rt)
+    for i in range(3):
+        assert abs(again.T[i] - Tt[i]) <= 3 * again.std["T"][i] + 0.005 * np.linalg.norm(Tt)
+        assert abs(eul[i]) <= 3 * again.std["R_euler_deg"][i] + 0.05
