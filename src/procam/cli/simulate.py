@@ -9,8 +9,9 @@ import typer
 
 from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
-from ._app import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, ForceOpt, InverseOpt, PeriodOpt, StepsOpt,
-                   WhiteBlackOpt, app, console, fail, is_tty, number, pattern_sequence, say, user_errors, value, warn)
+from ._app import (ComplementaryOpt, CountsOpt, DeviceName, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt,
+                   SimPreset, StepsOpt, WhiteBlackOpt, app, console, fail, is_tty, number, pattern_sequence, say,
+                   user_errors, value, warn)
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
@@ -39,21 +40,21 @@ def _parse_pose(text: str) -> tuple[float, float, float]:
 @user_errors
 def simulate_cmd(
     out_dir: Path = typer.Argument(..., help="Output folder for the images, truth.json and patterns.json."),
-    preset: str = typer.Option("paper", "--preset", help="Rig: paper (the paper's simulated procam), ideal "
+    preset: SimPreset = typer.Option(SimPreset.paper, "--preset", help="Rig: paper (the paper's simulated procam), ideal "
                                "(u0p = W/2, alpha_p = 1, stronger lens distortion), lensshift (v0p beyond the "
                                "panel, projector lens distortion, a wall), hard (lenses OpenCV does not describe, "
                                "a room corner with objects), vertical (projector 0.6 m below the camera) or "
                                "ceiling (upside-down projector)."),
     pose: str = typer.Option(None, "--pose", help="Board angles PSI,NU,PHI in degrees (XYZ Euler, board -> "
                              "device; default: the recommended pose)."),
-    frame: str = typer.Option("camera", "--frame", help="Device frame of --pose: camera or projector."),
+    frame: DeviceName = typer.Option(DeviceName.camera, "--frame", help="Device frame of --pose."),
     distance: float = typer.Option(None, "--distance", help="Board-centre depth in mm along the device's axis "
                                    "(default: the nearest that keeps the whole board in both images)."),
     noise: float = typer.Option(None, "--noise", help="Camera read noise in 8-bit DN (default 1.0); 0 renders "
                                 "without any noise (no shot noise either)."),
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
-    order: str = typer.Option("opencv", "--order", help="Gray family: sequence order, opencv (default) or moreno."),
+    order: Order = typer.Option(Order.opencv, "--order", help="Gray family: sequence order."),
     family: FamilyOpt = Family.gray,
     steps: StepsOpt = None,
     period: PeriodOpt = None,
@@ -69,6 +70,7 @@ def simulate_cmd(
     truth (truth.json)."""
     from .. import simulate as sim
 
+    preset, frame, order = value(preset), value(frame), value(order)
     if preset not in sim.PRESETS:
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):
