@@ -1,8 +1,8 @@
 """Benchmark: the phase families against the Gray family, accuracy at the paper's rig and decode speed.
 
 Part 1 (accuracy, the ``paper`` preset rendered by the simulator): for each sequence (family x steps x
-frequencies) and each condition (camera read noise, projector gamma, projector defocus; one changed at a time
-from the base), against the simulator's truth:
+frequencies) at the base condition, and for Gray and the families' defaults under each other condition (camera
+read noise, projector gamma, projector defocus; one changed at a time from the base), against the simulator's truth:
 
 * ``pixel``: RMS of the decoded projector coordinate on the board's lit pixels (2 px from its edges; both axes),
   and the fraction of them decoded (the Gray family's coordinate is the whole projector pixel: its error is the
@@ -11,15 +11,16 @@ from the base), against the simulator's truth:
 * ``corner``: RMS of the corners' projector coordinates (the pipeline's: the local homography for Gray, the local
   fit of the sub-pixel map for the phase families) with the detected camera corners, and at the true camera
   corners (the decoder's own share);
-* ``f_p``: the single-pose projector focal length's error (``procam.single_pose.calibrate`` as a user runs it,
-  background check included) and the background check's outcome.
+* ``f_p``: the single-pose projector focal length's error and its stated ``±`` (``procam.single_pose.calibrate``
+  as a user runs it: the dense samples on the board and behind it), and the projector model it chose with the
+  samples' counts.
 
 Part 2 (speed, a 1688x1352 camera): every family's default sequence warped onto the camera (a tilted view of
 the projected image, defocus, gamma 2.2, 1.5 DN noise), decoded in one run: seconds per frame and the ratio to
 the Gray decode per frame (median of ``--repeat`` runs).
 
     python benchmarks/phase.py                 # both parts (about 10 minutes on one core)
-    python benchmarks/phase.py --quick         # the defaults and Gray at the base condition only
+    python benchmarks/phase.py --quick         # Gray and the defaults at the base condition only
     python benchmarks/phase.py --skip-accuracy --repeat 5
 """
 
@@ -80,16 +81,23 @@ def _pixel_error(maps, tm, board_px):
 
 
 def _fp(view, truth_fp):
-    """Single-pose f_p error and the background check's status (warnings are the table's subject, not raised)."""
+    """Single-pose f_p error, its stated +-, and how the projector was fitted (the dense samples' model and counts,
+    or the background check's outcome); warnings are the table's subject here, not raised."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
             cal = single_pose.calibrate(view)
         except ProcamError as e:
-            return float("nan"), f"failed: {e}"[:40]
-    bg = (cal.poses[0].get("background") or {}) if cal.poses else {}
-    status = bg.get("status", "-") if isinstance(bg, dict) else getattr(bg, "status", "-")
-    return cal.projector.K[0, 0] - truth_fp, status
+            return float("nan"), float("nan"), f"failed: {e}"[:40]
+    pose = cal.poses[0] if cal.poses else {}
+    pm = pose.get("projector_model")
+    if pm:
+        how = (f"{pm['model']}; {pm['n_board_samples']} board + {pm['n_background_samples']} background samples"
+               f"{'' if pm['background_used'] else ' (background unused)'}")
+    else:
+        bg = pose.get("background") or {}
+        how = "background check: " + (bg.get("status", "-") if isinstance(bg, dict) else getattr(bg, "status", "-"))
+    return cal.projector.K[0, 0] - truth_fp, float((cal.std or {}).get("f_p", float("nan"))), how
 
 
 def accuracy(args):
@@ -102,7 +110,6 @@ def accuracy(args):
     tm = simulate.true_projector_maps(base)
     board_px = binary_erosion(tm.lit_board, iterations=2)
     wall_px = binary_erosion(tm.lit & ~tm.board & (tm.surface >= 1), iterations=2)
-    sequences = SEQUENCES if not args.quick else [s for s in SEQUENCES if s[0] in QUICK]
     conditions = CONDITIONS if not args.quick else CONDITIONS[:1]
     rows = []
     renderers = {}
@@ -110,6 +117,8 @@ def accuracy(args):
         if defocus not in renderers:
             renderers[defocus] = simulate.Renderer(base.replace(proj_defocus=defocus))
         r0 = renderers[defocus].photometry(read_noise=noise, proj_gamma=gamma)
+        # every sequence at the base condition; Gray and each family's defaults under the others
+        sequences = SEQUENCES if cname == CONDITIONS[0][0] and not args.quick else [s for s in SEQUENCES if s[0] in QUICK]
         for label, family, kw in sequences:
             ps = patterns.pattern_set(*base.proj_size, family=family, **kw)
             r = r0.with_patterns(ps)
@@ -129,9 +138,10 @@ def accuracy(args):
             v = view.valid
             corner = _rms(np.linalg.norm(view.proj_pts - truth["projector"], axis=1)[v])
             corner_t = _rms(np.linalg.norm(at_truth.proj_pts - truth["projector"], axis=1)[at_truth.valid])
-            dfp, status = _fp(view, true_fp)
+            dfp, sfp, status = _fp(view, true_fp)
             rows.append((cname, label, ps.count, dict(px=px_rms, cov=px_cov, wall=wall, n=int(v.sum()), corner=corner,
-                                                      corner_t=corner_t, dfp=dfp, bg=status, t=t_view), ""))
+                                                      corner_t=corner_t, dfp=dfp, sfp=sfp, bg=status,
+                                                      t=t_view), ""))
             print(f"  {cname} | {label}: corner {corner:.4f} px, at truth {corner_t:.4f} px, f_p {dfp:+.1f} px",
                   file=sys.stderr)
     print(f"## Part 1: accuracy at the paper's rig (preset `paper`, {base.cam_size[0]}x{base.cam_size[1]} camera, "
@@ -140,22 +150,24 @@ def accuracy(args):
     for cname, *_ in conditions:
         print(f"### {cname}\n")
         print("| sequence | frames | pixel RMS px | board decoded | wall decoded | corners | corner RMS px | "
-              "at true camera corners px | vs Gray | f_p error px | background check |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|")
+              "at true camera corners px | vs Gray | f_p error px | f_p ± px | projector fit |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
         gray = next((m for c, lab, _, m, _ in rows if c == cname and lab == "gray" and m), None)
         for c, label, count, m, err in rows:
             if c != cname:
                 continue
             if m is None:
-                print(f"| {label} | {count} | failed: {err} |||||||||")
+                print(f"| {label} | {count} | failed: {err} ||||||||||")
                 continue
             ratio = f"{m['corner_t'] / gray['corner_t']:.2f}" if gray else "-"
             print(f"| {label} | {count} | {m['px']:.3f} | {100 * m['cov']:.0f} % | {100 * m['wall']:.0f} % | {m['n']} | "
-                  f"{m['corner']:.4f} | {m['corner_t']:.4f} | {ratio} | {m['dfp']:+.1f} | {m['bg']} |")
+                  f"{m['corner']:.4f} | {m['corner_t']:.4f} | {ratio} | {m['dfp']:+.1f} | {m['sfp']:.1f} | {m['bg']} |")
         print()
 
 
-QUICK = ("gray", "phase N=8 P=64 + cue", "heterodyne N=4 70/64/59", "gray-phase N=4 P=16 compl.")
+#: Gray and each family's default sequence (and the heterodyne with 8 steps, which keeps the wall).
+QUICK = ("gray", "phase N=8 P=64 + cue", "heterodyne N=4 70/64/59", "heterodyne N=8 70/64/59",
+         "gray-phase N=4 P=16 compl.")
 
 
 def _speed_stack(ps, cam, rng):

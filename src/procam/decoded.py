@@ -94,6 +94,15 @@ class DecodeResult:
         """True when the maps hold sub-pixel coordinates with a noise estimate (a phase family)."""
         return self.sigma_col is not None
 
+    @property
+    def noise(self) -> np.ndarray | None:
+        """(H, W) float32 per-pixel noise of the projector coordinate, px (the RMS of the column's and the row's
+        noise estimates, NaN where either is undecoded) for a phase family; None for a Gray code, whose
+        quantisation is no independent per-pixel noise (:func:`procam.samples.window_means` then measures it)."""
+        if self.sigma_col is None or self.sigma_row is None:
+            return None
+        return np.sqrt(np.float32(0.5) * (self.sigma_col ** 2 + self.sigma_row ** 2)).astype(np.float32)
+
     def coordinate_sigma(self, axis: str) -> np.ndarray:
         """(H, W) float32: the standard deviation of ``col`` (``axis="col"``) or ``row`` in projector pixels, NaN
         where invalid: the phase decode's noise estimate, or for a Gray code the quantisation of its value, the
