@@ -118,7 +118,8 @@ def accuracy(args):
             renderers[defocus] = simulate.Renderer(base.replace(proj_defocus=defocus))
         r0 = renderers[defocus].photometry(read_noise=noise, proj_gamma=gamma)
         # every sequence at the base condition; Gray and each family's defaults under the others
-        sequences = SEQUENCES if cname == CONDITIONS[0][0] and not args.quick else [s for s in SEQUENCES if s[0] in QUICK]
+        every = cname == CONDITIONS[0][0] and not args.quick
+        sequences = SEQUENCES if every else [s for s in SEQUENCES if s[0] in QUICK]
         for label, family, kw in sequences:
             ps = patterns.pattern_set(*base.proj_size, family=family, **kw)
             r = r0.with_patterns(ps)

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import CaptureError
 from ..io import files as _files
 from .frames import describe_frame
+from .sample import _sample, frame_levels
 
 
 def board_image(stack: np.ndarray, ps) -> np.ndarray:
@@ -50,7 +51,6 @@ def count_error(folder, files, ps, missing) -> str:
 
 
 def _levels_check(stack, ps, folder, files, sub) -> None:
-    from .read import frame_levels
 
     p5, p95 = frame_levels(stack, sub)
     for idx, want in ((ps.white, "white"), (ps.black, "black")):
@@ -94,7 +94,6 @@ def check_phase_capture(stack: np.ndarray, ps, folder, files, sub: np.ndarray | 
     """Raise :class:`CaptureError` when the frames are not the sequence ``ps`` describes (see the module
     docstring); returns warnings about the exposure."""
     from ..phase.diagnose import check_description
-    from .read import _sample
 
     sub = _sample(stack) if sub is None else sub
     _levels_check(stack, ps, folder, files, sub)

@@ -29,6 +29,7 @@ from .. import patterns
 from ..errors import CaptureError
 from ..io import files as _files
 from .frames import describe_frame, frame_role
+from .sample import _sample, frame_levels, sample_index  # noqa: F401 (sample_index, frame_levels: re-exported)
 
 
 @dataclass(frozen=True)
@@ -121,40 +122,6 @@ def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     if hints:
         return " — " + "; or ".join(hints)
     return " — check --projector and that no frames are missing or extra"
-
-
-def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
-    """(K, n) values at a fixed pseudo-random set of pixels (no aliasing with periodic stripes)."""
-    flat = stack.reshape(len(stack), -1)
-    if flat.shape[1] <= n:
-        return flat.astype(np.float32)
-    return np.take(flat, sample_index(flat.shape[1], n), axis=1).astype(np.float32)
-
-
-def sample_index(size: int, n: int) -> np.ndarray:
-    """The fixed pseudo-random set of ``n`` pixel indices (sorted) out of ``size`` every check and the phase
-    decoder's measurements use (all of them when ``size <= n``)."""
-    from ..phase.decoder import sample_index as _index
-
-    return _index(size, n)
-
-
-def frame_levels(stack: np.ndarray, sub: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Per frame, the 5th and 95th percentiles over well-lit pixels of
-    ``(I_k - min_k I) / (max_k I - min_k I)``.
-
-    A white frame is lit everywhere (5th percentile near 1), a black frame nowhere (95th near 0),
-    a pattern in parts (5th near 0, 95th near 1) — whatever the scene's albedo or vignetting.
-    ``sub`` is :func:`_sample` of ``stack`` if the caller has it already.
-    """
-    sub = _sample(stack) if sub is None else sub
-    lo, hi = sub.min(axis=0), sub.max(axis=0)
-    span = hi - lo
-    lit = span > 0.25 * np.percentile(span, 99)
-    if lit.sum() < 10:
-        return np.full(len(stack), 0.5), np.full(len(stack), 0.5)
-    norm = (sub[:, lit] - lo[lit]) / span[lit]
-    return np.percentile(norm, 5, axis=1), np.percentile(norm, 95, axis=1)
 
 
 def check_light(stack: np.ndarray, folder, min_span: float = 10.0, sub: np.ndarray | None = None) -> None:
