@@ -102,7 +102,7 @@ class DenseOptions:
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
     alpha_prior_std: float = 0.003
-    decentring_prior_px: float = 3.0
+    decentring_prior_px: float = 5.0
     u0_prior_pct: float = 3.0
     prior: ProjectorPrior | None = None
     use_background: bool = True
