@@ -48,11 +48,11 @@ from procam.errors import ProcamError  # noqa: E402
 #: (label, family, keywords of procam.patterns.pattern_set); the first of each family is procam's default.
 SEQUENCES = [
     ("gray", "gray", {}),
+    ("phase N=8 P=16,128 + cue", "phase", dict(steps=8, periods=(16, 128))),
     ("phase N=8 P=64 + cue", "phase", dict(steps=8, period=64)),
     ("phase N=4 P=64 + cue", "phase", dict(steps=4, period=64)),
-    ("phase N=8 P=16,128 + cue", "phase", dict(steps=8, periods=(16, 128))),
-    ("heterodyne N=4 70/64/59", "heterodyne", dict(steps=4)),
     ("heterodyne N=8 70/64/59", "heterodyne", dict(steps=8)),
+    ("heterodyne N=4 70/64/59", "heterodyne", dict(steps=4)),
     ("gray-phase N=4 P=16 compl.", "gray-phase", dict(steps=4, period=16)),
     ("gray-phase N=8 P=16 compl.", "gray-phase", dict(steps=8, period=16)),
     ("gray-phase N=3 P=32 compl.", "gray-phase", dict(steps=3, period=32)),
@@ -166,9 +166,9 @@ def accuracy(args):
         print()
 
 
-#: Gray and each family's default sequence (and the heterodyne with 8 steps, which keeps the wall).
-QUICK = ("gray", "phase N=8 P=64 + cue", "heterodyne N=4 70/64/59", "heterodyne N=8 70/64/59",
-         "gray-phase N=4 P=16 compl.")
+#: Gray and each family's default sequence (and the earlier defaults of phase and heterodyne, which lose the wall).
+QUICK = ("gray", "phase N=8 P=16,128 + cue", "phase N=8 P=64 + cue", "heterodyne N=8 70/64/59",
+         "heterodyne N=4 70/64/59", "gray-phase N=4 P=16 compl.")
 
 
 def _speed_stack(ps, cam, rng):

@@ -251,6 +251,22 @@ def test_frame_vocabulary_of_the_phase_families():
         "the unit-frequency cue")
 
 
+def test_default_sequences_have_a_middle_level_and_eight_steps(tmp_path):
+    """The defaults keep the dim wall behind the board (benchmarks/phase.py): phase has a 128-px level between its
+    16-px fringes and the cue, the heterodyne 8 steps; one --period gives one level under the cue."""
+    ps = patterns.pattern_set(1920, 1080, family="phase")
+    assert [(b.period, b.steps) for b in ps.phase_blocks("col")] == [(1920, 8), (128, 8), (16, 8)]
+    assert [b.period for b in ps.phase_blocks("row")] == [1152, 128, 16]  # the cue a whole number of 128 px
+    assert ps.count == 50
+    het = patterns.pattern_set(1920, 1080, family="heterodyne")
+    assert {b.steps for b in het.blocks if b.kind == "phase"} == {8} and het.count == 50
+    assert patterns.pattern_set(1920, 1080, family="gray-phase").count == 42  # unchanged: 4 steps at 16 px
+    code, out, _ = run_cli(["patterns", "-p", "320x240", "-o", tmp_path / "one", "--family", "phase", "--period", "40"])
+    assert code == 0 and "columns 8 steps at 40 px + 8 steps at 320 px;" in out
+    code, out, _ = run_cli(["patterns", "-p", "320x240", "-o", tmp_path / "dflt", "--family", "phase"])
+    assert code == 0 and "columns 8 steps at 16 px + 8 steps at 128 px + 8 steps at 384 px;" in out
+
+
 def test_a_missing_frame_is_counted_against_the_description(tmp_path):
     ps = patterns.pattern_set(320, 240, family="heterodyne", steps=3)
     capture.write_sequence(tmp_path, patterns.frames(ps), ps)

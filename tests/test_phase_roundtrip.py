@@ -20,10 +20,10 @@ from procam import decode, patterns, simulate
 from sim_small import small_scene
 
 FAMILIES = ("phase", "heterodyne", "gray-phase")
-#: The sequences of the round trip: 8 steps, and for the cue's family a level between the fringes and the cue, so
-#: that the wall behind the board (half the board's albedo, farther away) decodes too, to within 0.1 px.
-SEQUENCES = {"phase": dict(steps=8, periods=(16, 128)), "heterodyne": dict(steps=8),
-             "gray-phase": dict(steps=8, period=16)}
+#: The sequences of the round trip: the defaults of phase (8 steps at 16 and 128 px under the cue: a level between
+#: the fringes and the cue) and heterodyne (8 steps), so that the wall behind the board (half the board's albedo,
+#: farther away) decodes too, to within 0.1 px; gray-phase with 8 steps.
+SEQUENCES = {"phase": {}, "heterodyne": {}, "gray-phase": dict(steps=8, period=16)}
 
 
 def interior(tm, margin: int = 2) -> np.ndarray:

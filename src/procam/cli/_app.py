@@ -304,10 +304,11 @@ FamilyOpt = Annotated[Family, typer.Option(
     "--family", help="Pattern family: gray (Gray codes), phase (N-step fringes + a unit-frequency cue), "
                      "heterodyne (three frequencies) or gray-phase (Gray code + fringes); docs/patterns.md.")]
 StepsOpt = Annotated[Optional[int], typer.Option(
-    "--steps", help="Phase families: phase shifts per block, N >= 3 (default 8 for phase, 4 otherwise).")]
+    "--steps", help="Phase families: phase shifts per block, N >= 3 (default 8 for phase and heterodyne, 4 for "
+                "gray-phase).")]
 PeriodOpt = Annotated[Optional[list[float]], typer.Option(
-    "--period", help="phase, gray-phase: fringe period in projector px (default 64, 16); phase: repeat it for "
-                     "more levels below the cue.")]
+    "--period", help="phase, gray-phase: fringe period in projector px (default: phase 16 and 128 under the "
+                     "cue, gray-phase 16); phase: repeat it for more levels below the cue.")]
 CountsOpt = Annotated[Optional[str], typer.Option(
     "--counts", help="heterodyne: the three counts of periods across the panel, e.g. 70,64,59 (the default).")]
 InverseOpt = Annotated[bool, typer.Option("--inverse/--no-inverse", help="gray-phase: every Gray bit followed by its "

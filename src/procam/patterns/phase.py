@@ -41,10 +41,13 @@ AXES = ("col", "row")
 #: The phase families (every family but ``gray``).
 PHASE_FAMILIES = tuple(f for f in PATTERN_FAMILIES if f != "gray")
 #: procam's own sequences' defaults (measured in ``benchmarks/phase.py`` at the paper's rig): fringe periods
-#: (projector pixels), steps, and the heterodyne's counts of periods across the panel.  The two-frequency scheme
-#: needs the cue's noise times the ratio of the periods below a tenth of a period: coarser fringes and more steps.
-DEFAULT_PERIOD = {"phase": 64.0, "gray-phase": 16.0}
-DEFAULT_STEPS = {"phase": 8, "heterodyne": 4, "gray-phase": 4}
+#: (projector pixels, finest first; ``phase`` adds the unit-frequency cue above them), steps, and the heterodyne's
+#: counts of periods across the panel.  Chosen so that the dim wall behind the board decodes (the single-pose dense
+#: fit needs it): the cue's noise times the ratio of the periods must stay below a tenth of a period, so ``phase``
+#: has a middle level (16 and 128 px under the cue; 64 px under the cue alone left the wall undecoded) and 8 steps,
+#: and the heterodyne 8 steps (with 4 its beats' noise left the wall undecoded).
+DEFAULT_PERIODS = {"phase": (16.0, 128.0), "gray-phase": (16.0,)}
+DEFAULT_STEPS = {"phase": 8, "heterodyne": 8, "gray-phase": 4}
 DEFAULT_HETERODYNE_COUNTS = (70, 64, 59)
 
 
@@ -412,9 +415,11 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
     Parameters
     ----------
     family : ``"phase"``, ``"heterodyne"`` or ``"gray-phase"``.
-    steps : phase shifts per block, ``N >= 3`` (default :data:`DEFAULT_STEPS`: 8, 4, 4).
-    period : fringe period in projector pixels (phase, gray-phase; default :data:`DEFAULT_PERIOD`: 64, 16).
-    periods : family ``phase``: the fringe periods of every level but the cue (default ``(period,)``);
+    steps : phase shifts per block, ``N >= 3`` (default :data:`DEFAULT_STEPS`: 8 for phase and heterodyne, 4
+        for gray-phase).
+    period : fringe period in projector pixels (phase: the one level under the cue; gray-phase: default 16).
+    periods : family ``phase``: the fringe periods of every level but the cue (default ``(period,)`` when
+        ``period`` is given, else :data:`DEFAULT_PERIODS`: 16 and 128);
         ``heterodyne``: three counts of periods across the panel (default ``(70, 64, 59)``; the periods are the
         panel's size over them, so rows get finer fringes than columns).
     inverse, complementary : gray-phase: every Gray bit followed by its inverse; one complementary bit (default
@@ -444,13 +449,16 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
             for c in sorted(counts, reverse=True):
                 add(kind="phase", axis=axis, steps=steps, period=n / float(c))
             continue
-        p = float(period if period is not None else DEFAULT_PERIOD[family])
+        p = float(period if period is not None else DEFAULT_PERIODS[family][0])
         if family == "gray-phase":
             add(kind="gray", axis=axis, bits=bits_for(_periods_needed(n, p, fringe.x0)), inverse=bool(inverse),
                 complementary=bool(complementary), period=p)
             add(kind="phase", axis=axis, steps=steps, period=p)
             continue
-        levels = (p,) if periods is None else tuple(float(v) for v in periods)
+        if periods is not None:
+            levels = tuple(float(v) for v in periods)
+        else:
+            levels = (p,) if period is not None else DEFAULT_PERIODS[family]
         for q in sorted(levels):
             add(kind="phase", axis=axis, steps=steps, period=q)
         add(kind="phase", axis=axis, steps=steps, period=cue_period(n, sorted(levels)))
