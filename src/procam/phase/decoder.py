@@ -4,8 +4,10 @@ reads).
 
 Two passes.  On a fixed sample of pixels (:data:`SAMPLE`) the projector's response and the camera's noise are
 measured (:func:`procam.phase.response.fit_response`).  Then, band by band of camera rows, every phase block's
-wrapped phase (:mod:`procam.phase.wrapped`), its correction for the projector's gamma (a lookup table), the fringe
-fractions and their noise, the masks and the unwrapping (:mod:`procam.phase.unwrap`).
+wrapped phase (:mod:`procam.phase.wrapped`), its correction for the projector's gamma (a lookup table, one index
+per pixel: :meth:`procam.phase.response.PhaseLUT.apply`), the fringe fractions and their noise (the camera's noise
+at the pixel's level once per axis), the masks and the unwrapping (:mod:`procam.phase.unwrap`), in place where the
+arrays allow.
 
 Masks (reason codes of :data:`procam.decoded.REASONS`)
     SHADOW: the coarsest fringes' peak-to-peak ``2 B`` (and ``white - black`` when the sequence has them) below
@@ -225,7 +227,7 @@ def _response(sub, ps: PhaseSet, opts: PhaseOptions, fs: float, scale: float):
                          "patterns or use more steps")
         elif _lut_px(lut, b.period) >= GAMMA_SKIP_PX:
             luts[b.first] = lut
-    return resp, measured, used, err_px, noise, luts, notes, lit
+    return resp, measured, used, err_px, noise, luts, notes, lit, stats
 
 
 def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseOptions(), *,
@@ -260,7 +262,7 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     K, H, W = stack.shape
     idx = sample_index(H * W, SAMPLE)
     sub = stack.reshape(K, -1)[:, idx].astype(np.float64)
-    resp, measured, used, err_px, noise, luts, notes, lit = _response(sub, ps, options, fs, scale)
+    resp, measured, used, err_px, noise, luts, notes, lit, nsteps = _response(sub, ps, options, fs, scale)
     ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts, plan=_plan(ps, luts, noise))
     out = {k: np.empty((H, W), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
     out["rcol"], out["rrow"] = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
@@ -276,7 +278,8 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     sout["rcol"], sout["rrow"], sout["conf"] = np.empty((1, len(idx)), np.uint8), np.empty((1, len(idx)), np.uint8), None
     _band(view, slice(0, 1), sout, {"col": np.zeros(2 * W + 2, np.int64), "row": np.zeros(2 * H + 2, np.int64)}, **ctx)
     sample.update({k: sout[k][0] for k in ("col", "row", "rcol", "rrow")})
-    stats = _block_stats(sub, ps, lit)
+    phase_blocks = [b for b in ps.blocks if b.kind == "phase"]
+    stats = _block_stats(ps, lit, {b.first: st for b, st in zip(phase_blocks, nsteps)})
     info = PhaseInfo(measured, resp.gamma_std, used, err_px, resp.blur, noise, stats, tuple(notes), sample)
     for w in notes:
         warnings.warn(w, ProcamWarning, stacklevel=2)
@@ -287,13 +290,15 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
                            out["mcol"], out["mrow"], info)
 
 
-def _block_stats(sub, ps: PhaseSet, lit) -> tuple:
+def _block_stats(ps: PhaseSet, lit, nsteps: dict) -> tuple:
+    """:class:`BlockStats` of every phase block from its N-step estimates on the sample (``nsteps``: ``{first
+    frame: (A, B, psi)}``)."""
     out = []
     for axis in ("col", "row"):
         blocks = ps.phase_blocks(axis)
         meds = []
         for b in blocks:
-            _, B, _ = _resp.nstep(sub[list(b.frames)], b.shifts())
+            B = nsteps[b.first][1]
             meds.append(float(np.median(B[lit])) if lit.any() else 0.0)
         typical = float(np.median(meds)) if meds else 0.0
         for b, m in zip(blocks, meds):
@@ -329,26 +334,37 @@ def _phase_of(blk, bl, pb, wide):
     frames = [blk[k] for k in bl.frames]
     C = weighted_sum(frames, pb["C"], wide)
     S = weighted_sum(frames, pb["S"], wide)
-    psi = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
+    u = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
     B = cv2.magnitude(C, S)
     B *= np.float32(2.0 / bl.steps)
     slope = None
     if pb["lut"] is not None:
-        psi, slope = pb["lut"].apply(psi)
-    u = psi * pb["turn"]
-    u -= np.floor(u)
+        u, slope = pb["lut"].apply(u)
+    u *= pb["turn"]
+    np.floor(u, out=C)  # C is spent: its buffer takes the floor
+    u -= C
     return B, u, slope
 
 
-def _noise_of(B, A, slope, pb, plan):
-    """float32 standard deviation of a block's fringe fraction (cycles) from its modulation ``B`` and the
-    camera's noise at level ``A``."""
+def _level_noise(A, plan):
+    """float32 standard deviation of the camera's noise at the level ``A`` (one per axis and band), or a
+    scalar when it does not depend on the level."""
     if plan["b"] > 0:
-        su = np.sqrt(plan["a"] + plan["b"] * np.maximum(A, 0.0))
-        su *= pb["k"]
-        su /= B
+        sd = np.maximum(A, np.float32(0.0))
+        sd *= plan["b"]
+        sd += plan["a"]
+        return np.sqrt(sd, out=sd)
+    return plan["sd0"]
+
+
+def _noise_of(B, sd, slope, pb):
+    """float32 standard deviation of a block's fringe fraction (cycles) from its modulation ``B`` and the
+    camera's noise ``sd`` at the pixel's level (:func:`_level_noise`)."""
+    if np.ndim(sd) == 0:
+        su = (sd * pb["k"]) / B
     else:
-        su = (plan["sd0"] * pb["k"]) / B
+        su = sd * pb["k"]
+        su /= B
     if slope is not None:
         su *= slope
     return su
@@ -361,15 +377,22 @@ def _mean_of(blk, bl, wide) -> np.ndarray:
     return acc.astype(np.float32) * np.float32(1.0 / bl.steps)
 
 
+def _mark(reason, code, mask):
+    """``reason = code`` where ``mask`` and the pixel is still OK (in place)."""
+    mask &= reason == _d.OK
+    np.copyto(reason, np.uint8(code), where=mask)
+
+
 def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, noise, luts, plan):
     """Decode the rows ``sl`` (frames ``blk`` (K, h, W)) into ``out`` (see :func:`decode_phase`)."""
     h, w = blk.shape[1:]
     wide = np.int16 if blk.dtype == np.uint8 and max(b.steps for b in ps.blocks if b.kind == "phase") <= 128 \
         else np.int32
-    span = None
+    span = dark = None
+    shadow_t = np.float32(opts.shadow_threshold * scale / 2.0)
     if ps.white is not None and ps.black is not None:
         span = blk[ps.white].astype(np.float32) - blk[ps.black]
-    shadow_t = np.float32(opts.shadow_threshold * scale / 2.0)
+        dark = span < 2.0 * shadow_t
     conf = None
     with np.errstate(divide="ignore", invalid="ignore"):
         for axis, key, rkey, skey, mkey in (("col", "col", "rcol", "scol", "mcol"),
@@ -378,6 +401,7 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
             blocks = plan["axes"][axis]  # coarsest first
             peak = blk[blocks[0].first].copy()
             A = _mean_of(blk, blocks[-1], wide)  # the pixel's level (the finest fringes' mean)
+            sd = _level_noise(A, plan)
             levels = []
             for bl in blocks:
                 for k in bl.frames:
@@ -386,28 +410,31 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
                 B, u, slope = _phase_of(blk, bl, pb, wide)
                 if not levels:
                     shadow = B < shadow_t
-                levels.append((u, _noise_of(B, A, slope, pb, plan), bl.period, bl.fringe.x0))
+                levels.append((u, _noise_of(B, sd, slope, pb), bl.period, bl.fringe.x0))
             reason = np.zeros((h, w), np.uint8)
-            reason[shadow] = _d.SHADOW
-            if span is not None:
-                reason[span < 2.0 * shadow_t] = _d.SHADOW
-            reason[(peak >= fs) & (reason == _d.OK)] = _d.SATURATED
+            if dark is not None:
+                shadow |= dark
+            np.copyto(reason, np.uint8(_d.SHADOW), where=shadow)
+            _mark(reason, _d.SATURATED, peak >= fs)
             if ps.family == "phase":
                 x, sx = _unwrap.hierarchical(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
             elif ps.family == "heterodyne":
                 x, sx = _unwrap.heterodyne(levels, reason, tolerance=opts.tolerance, max_sigma=opts.max_sigma)
             else:
                 x, sx = _gray_phase(blk, ps, axis, levels[0], (A, B), span, reason, opts, scale, noise)
-            reason[((x < -0.5) | (x > n - 0.5)) & (reason == _d.OK)] = _d.OUT_OF_RANGE
-            fin = (reason == _d.OK) | (reason == _d.OUT_OF_RANGE) | (reason == _d.ORDER_DISAGREE)
+            off = x < np.float32(-0.5)
+            off |= x > np.float32(n - 0.5)
+            _mark(reason, _d.OUT_OF_RANGE, off)
+            bad = reason != _d.OK
+            fin = bad & (reason != _d.OUT_OF_RANGE) & (reason != _d.ORDER_DISAGREE)
+            np.logical_not(fin, out=fin)  # OK, OUT_OF_RANGE or ORDER_DISAGREE: a coordinate was decoded
             hists[axis] += np.bincount(np.clip(np.rint(x[fin]), 0, len(hists[axis]) - 1).astype(np.intp),
                                        minlength=len(hists[axis]))
-            bad = reason != _d.OK
             xo, so = out[key][sl], out[skey][sl]
             np.copyto(xo, x, casting="unsafe")
             np.copyto(so, sx, casting="unsafe")
-            xo[bad] = np.nan
-            so[bad] = np.nan
+            np.copyto(xo, np.float32(np.nan), where=bad)
+            np.copyto(so, np.float32(np.nan), where=bad)
             out[mkey][sl] = B
             out[rkey][sl] = reason
             if out["conf"] is not None:

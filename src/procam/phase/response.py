@@ -48,6 +48,9 @@ import numpy as np
 HARMONICS = 8
 #: Entries of a phase lookup table over [0, 2 pi] (linear interpolation errs by under 1e-4 rad).
 LUT_SIZE = 1024
+#: Entries of the table :meth:`PhaseLUT.apply` looks the nearest up in (the decoder's lookup: an index, no
+#: interpolation).
+FINE_SIZE = 16384
 #: Pixels of the sample the response is measured on.
 FIT_PIXELS = 1200
 #: Candidate gammas of the coarse search (at a blur of 1 projector pixel), refined by golden sections.
@@ -75,17 +78,26 @@ def waveform(fringe, gamma: float, period: float, blur: float) -> np.ndarray:
 
 
 def samples(c: np.ndarray, phase: np.ndarray, shifts: np.ndarray) -> np.ndarray:
-    """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift (Chebyshev's recurrence
-    ``cos h t = 2 cos t cos (h-1) t - cos (h-2) t``)."""
-    t = np.asarray(phase)[None] + np.asarray(shifts).reshape((-1,) + (1,) * np.ndim(phase))
-    c1 = np.cos(t)
-    out = c[0] + c[1] * c1
-    prev, cur = np.ones_like(c1), c1
-    two = 2.0 * c1
-    for h in range(2, len(c)):
-        prev, cur = cur, two * cur - prev
-        out += c[h] * cur
-    return out
+    """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift: ``sum_h c_h (cos h phase cos h d_k -
+    sin h phase sin h d_k)``, the harmonics of the phase by the angle-addition recurrence (once per pixel, not
+    per shift) and the sum over them a matrix product."""
+    phase = np.asarray(phase, np.float64)
+    d = np.asarray(shifts, np.float64)
+    n = len(c)
+    x = phase.reshape(1, -1)
+    ch, sh = np.empty((n, x.shape[1])), np.empty((n, x.shape[1]))
+    ch[0], sh[0] = 1.0, 0.0
+    if n > 1:
+        ch[1], sh[1] = np.cos(x[0]), np.sin(x[0])
+    for h in range(2, n):  # cos (h t) and sin (h t) from those of (h - 1) t and t
+        np.multiply(ch[h - 1], ch[1], out=ch[h])
+        ch[h] -= sh[h - 1] * sh[1]
+        np.multiply(sh[h - 1], ch[1], out=sh[h])
+        sh[h] += ch[h - 1] * sh[1]
+    hd = np.arange(n)[None] * d[:, None]
+    cw = np.asarray(c, np.float64)[None]
+    out = (cw * np.cos(hd)) @ ch - (cw * np.sin(hd)) @ sh
+    return out.reshape((len(d),) + phase.shape)
 
 
 def nstep(values: np.ndarray, shifts: np.ndarray):
@@ -113,22 +125,26 @@ class PhaseLUT:
     slope: np.ndarray
     max_error: float
 
-    def apply(self, psi: np.ndarray):
-        """``(phase, slope)`` float32 at float32 estimates ``psi`` (any shape), by a linear lookup (fast)."""
-        import cv2
-
+    def apply(self, psi: np.ndarray, slope: bool = True):
+        """``(phase, slope)`` float32 at float32 estimates ``psi`` (any shape; ``slope`` None unless asked), fast:
+        the nearest entry of a table :data:`FINE_SIZE` entries fine, the linear interpolation of this one there
+        (which differs from the linear interpolation at ``psi`` by at most ``|slope - 1| pi / FINE_SIZE``, that
+        is ``2e-4 |slope - 1|`` rad)."""
+        fine = getattr(self, "_fine", None)
+        if fine is None:
+            q = np.arange(FINE_SIZE + 1) * ((len(self.correction) - 1) / FINE_SIZE)
+            grid = np.arange(len(self.correction))
+            fine = (np.interp(q, grid, self.correction).astype(np.float32),
+                    np.interp(q, grid, self.slope).astype(np.float32))
+            object.__setattr__(self, "_fine", fine)
         psi = np.asarray(psi, np.float32)
-        table = getattr(self, "_table", None)
-        if table is None:
-            table = np.stack([self.correction, self.slope]).astype(np.float32)  # rows: correction, slope
-            object.__setattr__(self, "_table", table)
-        shape = psi.shape
-        flat = psi.reshape(1, -1) if psi.ndim != 2 else psi
-        q = flat * np.float32(LUT_SIZE / (2.0 * np.pi))
-        zeros = np.zeros_like(q)
-        corr = cv2.remap(table[:1], q, zeros, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        slope = cv2.remap(table[1:], q, zeros, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        return (flat + corr).reshape(shape), slope.reshape(shape)
+        q = np.multiply(psi, np.float32(FINE_SIZE / (2.0 * np.pi)), dtype=np.float32)
+        q += np.float32(0.5)
+        idx = q.astype(np.intp)
+        del q
+        out = np.take(fine[0], idx, mode="clip")
+        out += psi
+        return out, (np.take(fine[1], idx, mode="clip") if slope else None)
 
     def __call__(self, psi: np.ndarray, slope: bool = True):
         """``(phase, slope)`` at estimates ``psi`` (radians in [0, 2 pi)); ``slope`` None unless asked."""
@@ -138,24 +154,37 @@ class PhaseLUT:
         return psi + np.interp(q, grid, self.correction), (np.interp(q, grid, self.slope) if slope else None)
 
 
+@lru_cache(maxsize=8)
+def _basis(m: int, n: int):
+    """``(phi, E)``: the ``m`` phases ``2 pi j / m`` and ``E[j, h - 1] = exp(i h phi_j)`` for ``h = 1 .. n``."""
+    phi = np.arange(m) * (2.0 * np.pi / m)
+    E = np.exp(1j * phi[:, None] * np.arange(1, n + 1)[None])
+    phi.flags.writeable = E.flags.writeable = False
+    return phi, E
+
+
+@lru_cache(maxsize=64)
+def _shift_sums(shifts: tuple, n: int):
+    """``(a, b, a0)``: ``a_h = sum_k exp(i (h-1) d_k)``, ``b_h = sum_k exp(-i (h+1) d_k)`` (``h = 1 .. n``) and
+    ``a0 = sum_k exp(-i d_k)`` of the shifts ``d_k``."""
+    d = np.asarray(shifts, np.float64)
+    h = np.arange(1, n + 1)[:, None]
+    a = np.exp(1j * (h - 1) * d[None]).sum(axis=1)
+    b = np.exp(-1j * (h + 1) * d[None]).sum(axis=1)
+    return a, b, complex(np.exp(-1j * d).sum())
+
+
 def phase_lut(c: np.ndarray, shifts: np.ndarray, size: int = LUT_SIZE) -> PhaseLUT | None:
     """The :class:`PhaseLUT` (``size`` entries) of waveform ``c`` sampled at ``shifts``; None when the N-step
     estimate is not monotonic in the phase (the waveform cannot be corrected)."""
     m = 2 * size
-    phi = np.arange(m) * (2.0 * np.pi / m)
+    phi, E = _basis(m, len(c) - 1)
     # sum_k w(phi + d_k) exp(-i d_k), harmonic by harmonic: cos h(phi + d) exp(-i d) sums to
     # (exp(i h phi) sum_k exp(i (h-1) d_k) + exp(-i h phi) sum_k exp(-i (h+1) d_k)) / 2
-    d = np.asarray(shifts, np.float64)
-    z = np.zeros(m, complex)
-    e1 = np.exp(1j * phi)
-    eh = np.ones(m, complex)
-    for h in range(1, len(c)):
-        eh = eh * e1
-        a = np.exp(1j * (h - 1) * d).sum()
-        b = np.exp(-1j * (h + 1) * d).sum()
-        z += c[h] * (a * eh + b * np.conj(eh))
-    z += c[0] * np.exp(-1j * d).sum()
-    err = np.angle(z * np.conj(e1))  # estimate - phase, wrapped
+    a, b, a0 = _shift_sums(tuple(np.asarray(shifts, np.float64).tolist()), len(c) - 1)
+    c = np.asarray(c, np.float64)
+    z = (E * (c[1:] * a)).sum(axis=1) + (np.conj(E) * (c[1:] * b)).sum(axis=1) + c[0] * a0
+    err = np.angle(z * np.conj(E[:, 0]))  # estimate - phase, wrapped
     est = phi + err
     if not np.all(np.diff(est) > 0):
         return None
@@ -226,11 +255,12 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
         lut = phase_lut(c, ref.shifts(), FIT_LUT_SIZE)
         if lut is None:
             return (np.inf, None, None, None) if per_pixel else np.inf
-        for i in members:
-            blk, psi = data["blocks"][i]
-            phi, _ = lut(psi, slope=False)
+        # the members share the shifts: one lookup and one evaluation for all of them
+        phi, _ = lut(np.concatenate([data["blocks"][i][1] for i in members]), slope=False)
+        values = samples(c, phi, ref.shifts()).reshape(ref.steps, len(members), -1)
+        for j, i in enumerate(members):
             row = data["rows"][i]
-            G[row:row + blk.steps] = samples(c, phi, blk.shifts())
+            G[row:row + ref.steps] = values[:, j]
     G[data["nphase"]:] = data["fixed"]
     Gm, Ym = G.mean(0), Y.mean(0)
     dG, dY = G - Gm, Y - Ym

@@ -55,15 +55,24 @@ def hierarchical(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, ma
         near = (np.minimum(span * u, span * (1 - u)) < 4 * sx) & (reason == OK)
         reason[near] = LOW_MODULATION
     for u, su, period, x0 in levels[1:]:
-        t = (x - f(x0)) * f(1.0 / period)
+        t = x - f(x0)
+        t *= f(1.0 / period)
         t -= u
         m = np.rint(t)
         t -= m
         ok = reason == OK
-        reason[ok & (sx > f(max_sigma * period))] = LOW_MODULATION
-        reason[(reason == OK) & (np.abs(t) > f(tolerance))] = ORDER_DISAGREE
+        low = sx > f(max_sigma * period)
+        low &= ok
+        np.copyto(reason, np.uint8(LOW_MODULATION), where=low)
+        np.abs(t, out=t)
+        far = t > f(tolerance)
+        far &= ok
+        far &= ~low
+        np.copyto(reason, np.uint8(ORDER_DISAGREE), where=far)
         m += u
-        x = f(x0) + f(period) * m
+        m *= f(period)
+        m += f(x0)
+        x = m
         sx = f(period) * su
     return (_seam(x, levels[0][3], span, period) if _divides([lv[2] for lv in levels]) else x), sx
 
@@ -81,7 +90,11 @@ def _seam(x, x0: float, span: float, period: float):
     if abs(k - round(k)) > 1e-6:
         return x
     f = x.dtype.type
-    return f(x0) + np.mod(x - f(x0), f(span))
+    v = x - f(x0)  # within a period of [0, span): np.mod's result by one addition or subtraction
+    np.add(v, f(span), out=v, where=v < 0)
+    np.subtract(v, f(span), out=v, where=v >= f(span))
+    v += f(x0)
+    return v
 
 
 def _frac(v):
@@ -137,8 +150,9 @@ def gray_value(bits: np.ndarray) -> np.ndarray:
     out = np.zeros(bits.shape[1:], np.int64)
     prev = np.zeros(bits.shape[1:], bool)
     for b in bits:
-        prev = prev ^ b
-        out = (out << 1) | prev
+        prev ^= b
+        out <<= 1
+        out |= prev
     return out
 
 
@@ -176,7 +190,10 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     if comp is not None:
         unsure = ~certain
         n_unsure = unsure.sum(axis=0)
-        which = np.argmax(unsure, axis=0)  # the first unsure bit, most significant first
+        which = np.zeros(u.shape, np.int64)  # the first unsure bit, most significant first (0 when none)
+        for b in range(n - 1, 0, -1):
+            np.copyto(which, b, where=unsure[b])
+        np.copyto(which, 0, where=unsure[0])
         m1_alt = m1 ^ ((np.int64(1) << (n - which).astype(np.int64)) - 1)  # that bit read the other way round
         v2 = (m1 << 1) | (comp ^ _parity(m1))
         v2_alt = (m1_alt << 1) | (comp ^ _parity(m1_alt))
