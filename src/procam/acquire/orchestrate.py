@@ -132,7 +132,7 @@ def capture_session(out_dir, poses: int, rig: Rig, options: CaptureOptions, *, b
         proj, size = _open_projector(rig)
         stack.enter_context(proj)
         hooks.projector(proj)
-        run = _Session(rig, proj, size, stack, options.order, poses, board, live, hooks)
+        run = _Session(rig, proj, size, stack, options, poses, board, live, hooks)
         if live is not None:
             stack.callback(live.close)
         if poses == 1:
@@ -163,10 +163,11 @@ def _open_projector(rig: Rig):
 class _Session:
     """One session's devices and the steps around each pose (kept out of the public API)."""
 
-    def __init__(self, rig: Rig, projector, size, stack: ExitStack, order: str, poses: int, board, live,
+    def __init__(self, rig: Rig, projector, size, stack: ExitStack, options: CaptureOptions, poses: int, board, live,
                  hooks: Hooks):
         self.rig, self.projector, self.size, self.stack = rig, projector, size, stack
-        self.order, self.poses, self.board, self.live, self.hooks = order, poses, board, live, hooks
+        self.order, self.poses, self.board, self.live, self.hooks = options.order, poses, board, live, hooks
+        self.options = options
         self.kind = rig.camera_kind
         self._scenes: dict = {}
         self._virtual: dict = {}
@@ -190,10 +191,16 @@ class _Session:
                 from .. import simulate
                 from .cameras import VirtualCamera
 
+                gray = self.options.family == "gray"
+                try:
+                    sequence = None if gray else self.options.sequence(*self.size)
+                except ValueError as e:
+                    raise ProcamError(f"pattern sequence: {e}") from None
                 cam = VirtualCamera(self.projector, self._scene(i), order=self.order, seed=rig.seed + i,
-                                    gain=1.0 if rig.gain is None else rig.gain)
+                                    gain=1.0 if rig.gain is None else rig.gain, sequence=sequence)
                 with self.hooks.busy(f"rendering the simulator's view of pose {i + 1}"):
-                    cam.stack, _ = simulate.render(cam.scene, order=self.order, seed=rig.seed + i)
+                    cam.stack, _ = simulate.render(cam.scene, order=self.order if gray else sequence,
+                                                   seed=rig.seed + i)
                 self._virtual[i] = self.stack.enter_context(cam)
             return self._virtual[i]
         if self._shared is None:

@@ -5,7 +5,8 @@
 1. pre-flight: white, black and white again -> :func:`procam.acquire.checks.preflight` (refuses to
    start when the projector's light is not visible, the white frame is saturated on the board, the
    board is not found, ...);
-2. the sequence (:func:`procam.patterns.generate`, OpenCV order + white + black by default): per
+2. the sequence (:func:`procam.patterns.generate`: Gray codes in OpenCV's order + white + black by default,
+   or a phase family's, :meth:`CaptureOptions.sequence`): per
    pattern show, wait the settle time, flush the camera, grab, check
    (:func:`~procam.acquire.checks.check_frame`; per pattern/inverse pair
    :func:`~procam.acquire.checks.check_pair`) and re-grab up to ``retries`` times, then stop with
@@ -49,7 +50,10 @@ class CaptureFailed(ProcamError):
 class CaptureOptions:
     """Options of :func:`capture_pose`.
 
-    order, step : the sequence (:func:`procam.patterns.pattern_set`).
+    order, step : the Gray family's sequence (:func:`procam.patterns.pattern_set`).
+    family : the pattern family (:data:`procam.patterns.FAMILIES`; default ``"gray"``).
+    phase : the phase family's keywords of :func:`procam.patterns.phase_set` (``steps``, ``period``, ``periods``,
+        ``inverse``, ``complementary``); its sequence always ends with a white and a black frame.
     settle_s : wait after showing a pattern before flushing and grabbing (s).
     retries : re-grabs allowed per frame (and per pattern/inverse pair) before the capture stops.
     flush : call the camera's ``flush()`` before each grab.
@@ -63,6 +67,8 @@ class CaptureOptions:
 
     order: str = "opencv"
     step: int = 1
+    family: str = "gray"
+    phase: dict = field(default_factory=dict)
     settle_s: float = 0.25
     retries: int = 3
     flush: bool = True
@@ -75,6 +81,13 @@ class CaptureOptions:
     postflight: bool = True
     keep_failed: bool = False
 
+    def sequence(self, width: int, height: int):
+        """The pattern set of a ``width`` x ``height`` projector (raises ValueError when the options do not make
+        one)."""
+        if self.family == "gray":
+            return patterns.pattern_set(width, height, self.order, self.step)
+        return patterns.pattern_set(width, height, family=self.family, **self.phase)
+
     def __post_init__(self):
         import math
 
@@ -84,6 +97,12 @@ class CaptureOptions:
             raise ValueError(f"retries must be an integer >= 0, got {self.retries}")
         if self.order not in patterns.ORDERS:
             raise ValueError(f"order must be one of {patterns.ORDERS}, got {self.order!r}")
+        if self.family not in patterns.FAMILIES:
+            raise ValueError(f"family must be one of {patterns.FAMILIES}, got {self.family!r}")
+        if self.family == "gray" and self.phase:
+            raise ValueError(f"the Gray family takes no {', '.join(sorted(self.phase))}")
+        if "white_black" in self.phase:
+            raise ValueError("a captured sequence always has its white and black frames (white_black)")
         for name in ("max_saturated", "min_span", "level_tol", "stale_frac", "min_agreement"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -119,9 +138,11 @@ class CaptureResult:
 
 
 def _units(ps) -> list[tuple[int, ...]]:
-    """The sequence as units in capture order: (pattern, inverse) pairs and the single white/black frames."""
+    """The sequence as units in capture order: (pattern, inverse) pairs and the single frames (white, black, the
+    phase families' fringes, Gray bits without inverses)."""
     units = [(int(a), int(b)) for axis in ("col", "row") for a, b in ps.pair_indices(axis)]
-    units += [(ps.white,), (ps.black,)]
+    paired = {k for u in units for k in u}
+    units += [(k,) for k in range(ps.count) if k not in paired]
     return sorted(units, key=lambda u: u[0])
 
 
@@ -195,10 +216,11 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
     out = check_out_dir(out_dir)
     W, H = (int(v) for v in projector.size)
     try:
-        ps = patterns.pattern_set(W, H, o.order, o.step)
+        ps = o.sequence(W, H)
     except ValueError as e:
         raise ProcamError(f"pattern sequence: {e}") from None
-    seq = patterns.generate(W, H, o.order, step=o.step)
+    seq = patterns.generate(W, H, o.order, step=o.step) if o.family == "gray" else \
+        patterns.generate(W, H, family=o.family, **o.phase)
     white_img = np.full((H, W), 255, np.uint8)
     black_img = np.zeros((H, W), np.uint8)
     writer = SequenceWriter(out, ps, writer="capture", captured=True, keep_failed=o.keep_failed,
@@ -253,8 +275,8 @@ def capture_pose(out_dir, projector, camera, options: CaptureOptions = CaptureOp
             "format": CAPTURE_FORMAT, "version": 1, "procam": __version__, "status": "complete",
             "started": started, "finished": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "projector": projector.describe(), "camera": camera.describe(),
-            "pattern_set": {"width": W, "height": H, "order": o.order, "step": o.step, "count": ps.count,
-                            "white": ps.white, "black": ps.black},
+            "pattern_set": {"width": W, "height": H, "family": o.family, "order": o.order if o.family == "gray" else
+                            ps.order, "step": o.step, "count": ps.count, "white": ps.white, "black": ps.black},
             "settings": {**{k: v for k, v in asdict(o).items() if k != "keep_failed"},
                          "settle_ms": round(o.settle_s * 1000.0, 3)},
             "preflight": pre_record, "postflight": post, "retries": run.retries,

@@ -336,6 +336,19 @@ def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None,
             fail(f"--step {step}: {e}; use a smaller --step")
     if step != 1:
         fail("--step applies to the Gray family only")
+    kw = phase_keywords(family, steps=steps, period=period, counts=counts, inverse=inverse,
+                        complementary=complementary, white_black=white_black)
+    try:
+        return patterns.pattern_set(*size, family=family, **kw)
+    except ValueError as e:
+        fail(f"the {family} sequence for a {size[0]}x{size[1]} projector: {e}")
+
+
+def phase_keywords(family, *, steps=None, period=None, counts=None, inverse: bool = True, complementary: bool = True,
+                   white_black: bool = True) -> dict:
+    """The keywords of :func:`procam.patterns.phase_set` for a phase ``family`` from the pattern options, each
+    validated (one-line errors)."""
+    family = value(family)
     kw = {"inverse": inverse, "complementary": complementary, "white_black": white_black}
     if steps is not None:
         kw["steps"] = int(number(steps, "--steps", lo=3, hi=64, what="a number of phase shifts"))
@@ -356,10 +369,7 @@ def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None,
         if family == "gray-phase" and len(period) > 1:
             fail("--period: gray-phase has one fringe period")
         kw["period" if len(period) == 1 else "periods"] = period[0] if len(period) == 1 else tuple(period)
-    try:
-        return patterns.pattern_set(*size, family=family, **kw)
-    except ValueError as e:
-        fail(f"the {family} sequence for a {size[0]}x{size[1]} projector: {e}")
+    return kw
 
 #: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
 POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),

@@ -1,4 +1,5 @@
-"""``procam capture``: show the Gray-code sequence on the projector, grab and check a camera frame per pattern.
+"""``procam capture``: show the pattern sequence (Gray codes, or a phase family with ``--family``) on the
+projector, grab and check a camera frame per pattern.
 
 Importing this module registers the command on :data:`procam.cli._app.app`.
 """
@@ -12,8 +13,9 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain,
-                   text_on_stderr, user_errors, value)
+from ._app import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, InverseOpt, Order, PeriodOpt, StepsOpt, app,
+                   console, err_console, fail, is_tty, number, parse_board, parse_size, pattern_sequence,
+                   phase_keywords, plain, text_on_stderr, user_errors, value)
 
 
 def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
@@ -82,8 +84,15 @@ def capture_cmd(
                                            "default 1: lengths in squares."),
     board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
                                         "and judges the exposure on it (default: on the projector's light)."),
-    order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
-    step: int = typer.Option(1, "--step", help="Projector pixels per Gray code (kamino410's graycode_step)."),
+    order: Order = typer.Option(Order.opencv, "--order", help="Gray family: sequence order."),
+    step: int = typer.Option(1, "--step", help="Gray family: projector pixels per Gray code (kamino410's "
+                             "graycode_step)."),
+    family: FamilyOpt = Family.gray,
+    steps: StepsOpt = None,
+    period: PeriodOpt = None,
+    counts: CountsOpt = None,
+    inverse: InverseOpt = True,
+    complementary: ComplementaryOpt = True,
     timeout: float = typer.Option(60.0, "--timeout", help="folder camera: seconds to wait for each new file."),
     keep_failed: bool = typer.Option(False, "--keep-failed", help="Keep the frames of a failed capture in a hidden "
                                      "partial folder."),
@@ -105,8 +114,9 @@ def capture_cmd(
     max_frames: Optional[int] = typer.Option(None, "--max-frames", help="--advise: capture after N frames of advice "
                                              "at the latest (default: no limit; 30 with --virtual)."),
 ):
-    """Show the pattern sequence full screen on the projector, grab and check one camera frame per pattern,
-    and write a pose folder that decode/calibrate read as is (images, patterns.json, capture.json)."""
+    """Show the pattern sequence full screen on the projector (Gray codes, or a phase family with --family,
+    docs/patterns.md), grab and check one camera frame per pattern, and write a pose folder that decode/calibrate
+    read as is (images, patterns.json, capture.json)."""
     from ..acquire.cameras import parse_camera_spec
     from ..acquire.orchestrate import Rig, capture_session
     from ..acquire.session import CaptureOptions
@@ -143,8 +153,15 @@ def capture_cmd(
     kind, _ = parse_camera_spec("virtual" if virtual else camera)
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
-    options = CaptureOptions(order=order, step=step, retries=retries, board=board_size, keep_failed=keep_failed,
-                             settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
+    # the sequence, checked at the projector's size (or a 1920x1080 one until the display is known)
+    pattern_sequence(size or (1920, 1080), family=family, order=order, step=step, steps=steps, period=period,
+                     counts=counts, inverse=inverse, complementary=complementary)
+    family = value(family)
+    phase = {} if family == "gray" else phase_keywords(family, steps=steps, period=period, counts=counts,
+                                                       inverse=inverse, complementary=complementary)
+    phase.pop("white_black", None)  # a captured sequence always ends with white and black
+    options = CaptureOptions(order=order, step=step, family=family, phase=phase, retries=retries, board=board_size,
+                             keep_failed=keep_failed, settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
     rig = Rig(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
               exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
     with text_on_stderr(json_lines), _Printer() as printer:     # --json: stdout carries the advice only

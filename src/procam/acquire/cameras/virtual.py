@@ -40,7 +40,9 @@ class VirtualCamera(_Camera):
         :class:`~procam.acquire.projector.VirtualProjector` or a real window.
     scene : :class:`procam.simulate.Scene`; its ``proj_size`` must be the projector's size.
     order, seed : the sequence order and noise seed of the render.
-    stack : the rendered stack of ``scene`` in ``order`` (skips the render; e.g. shared by tests).
+    sequence : the pattern set the projector shows (any family, :mod:`procam.patterns`; it needs a white and a
+        black frame, which the pre-flight shows); None = the Gray codes in ``order``.
+    stack : the rendered stack of ``scene``'s sequence (skips the render; e.g. shared by tests).
     latency : frames the camera has buffered: the first ``latency`` grabs after a new pattern
         return the frame of the pattern shown before it (stale), unless :meth:`flush` drained them.
     flush_works : whether :meth:`flush` drains the buffered frames.
@@ -52,6 +54,7 @@ class VirtualCamera(_Camera):
     """
 
     def __init__(self, projector, scene, *, order: str = "opencv", seed: int = 0, stack: np.ndarray | None = None,
+                 sequence=None,
                  latency: int = 0, flush_works: bool = True, stale_grabs=(), dead_projector: bool = False,
                  gain: float = 1.0, exposure_change_at: int | None = None, exposure_factor: float = 0.5):
         self.projector = projector
@@ -59,6 +62,7 @@ class VirtualCamera(_Camera):
         self.order = order
         self.seed = int(seed)
         self.stack = stack
+        self.sequence = sequence
         self.latency = int(latency)
         self.flush_works = flush_works
         self.stale_grabs = frozenset(int(i) for i in stale_grabs)
@@ -84,15 +88,19 @@ class VirtualCamera(_Camera):
                               f"{self.scene.proj_size[1]} but the patterns are {self.projector.size[0]}x"
                               f"{self.projector.size[1]}")
         w, h = self.scene.proj_size
-        self._ps = patterns.pattern_set(w, h, self.order)
+        ps = self.sequence if self.sequence is not None else patterns.pattern_set(w, h, self.order)
+        if (ps.width, ps.height) != (w, h) or ps.white is None or ps.black is None:
+            raise ProcamError(f"virtual camera: the sequence must be {w}x{h} with a white and a black frame")
+        self._ps = ps
         if self.stack is None:
             from ... import simulate
 
-            self.stack, _ = simulate.render(self.scene, order=self.order, seed=self.seed)
+            self.stack, _ = simulate.render(self.scene, order=ps if self.sequence is not None else self.order,
+                                            seed=self.seed)
         expected = (self._ps.count, self.scene.cam_size[1], self.scene.cam_size[0])
         if self.stack.shape != expected:
             raise ValueError(f"stack must be {expected} for this scene and order, got {self.stack.shape}")
-        self._index = {_digest(img): k for k, img in enumerate(patterns.generate(w, h, self.order))}
+        self._index = {_digest(img): k for k, img in enumerate(patterns.frames(ps))}
         return self
 
     def _identify(self, image) -> int:
@@ -101,8 +109,14 @@ class VirtualCamera(_Camera):
         k = self._index.get(_digest(image))
         if k is None:
             raise ProcamError("virtual camera: the projector shows an image that is not one of the sequence's "
-                              f"patterns (order {self.order}, step 1); the simulator renders only those")
+                              f"patterns ({self._describe()}); the simulator renders only those")
         return k
+
+    def _describe(self) -> str:
+        ps = self._ps if self._ps is not None else self.sequence
+        if ps is None or not hasattr(ps, "family"):
+            return f"Gray codes, order {self.order}, step 1"
+        return ps.describe()
 
     def _update(self):
         if self.projector.shown != self._seen_show:
@@ -142,7 +156,7 @@ class VirtualCamera(_Camera):
     def describe(self) -> dict:
         s = self.scene
         return {"backend": "virtual", "scene": s.name, "size": list(s.cam_size), "projector_size": list(s.proj_size),
-                "order": self.order, "seed": self.seed, "latency": self.latency,
+                "order": self.order, "sequence": self._describe(), "seed": self.seed, "latency": self.latency,
                 "stale_grabs": sorted(self.stale_grabs), "dead_projector": self.dead_projector,
                 "settings": {"gain": _setting(self.gain, self.gain, self.gain, True)},
                 "notes": ["frames rendered by procam.simulate"]}
