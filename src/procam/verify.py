@@ -310,7 +310,7 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
     out_raws, failures, refits = [], [], []
     results = full.info.get("leave_one_out_refits")
     same = (results is not None and len(results) == len(views) == len(full.views)
-            and all(_same_pose(a, b) for a, b in zip(views, full.views))
+            and all(same_pose(a, b) for a, b in zip(views, full.views))
             and {k: v for k, v in multi_pose_options.items() if k != "leave_one_out"} == _options_of(full))
     if not same:  # the refits the calibration made (same poses, same options), else made here
         results = refit_each(views, multi_pose.calibrate, **options)
@@ -409,7 +409,7 @@ def multi_pose_options(calib) -> dict:
     return out
 
 
-def _same_pose(a: View, b: View) -> bool:
+def same_pose(a: View, b: View) -> bool:
     """The same capture: identical camera and projector corners (NaN where the other has NaN)."""
     return (a.cam_pts.shape == b.cam_pts.shape and a.proj_pts.shape == b.proj_pts.shape
             and np.array_equal(a.cam_pts, b.cam_pts, equal_nan=True)
@@ -452,7 +452,7 @@ def verify_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_c
     own_names = {str(p.get("name", "")) for p in calib.poses}
 
     def fitted(v):
-        return any(_same_pose(v, w) for w in own) if own else str(v.name) in own_names
+        return any(same_pose(v, w) for w in own) if own else str(v.name) in own_names
 
     ins = [v for v in views if fitted(v)]
     outs = [v for v in views if not fitted(v)]
