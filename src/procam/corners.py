@@ -172,6 +172,92 @@ def canonical_order(corners: np.ndarray, cols: int, rows: int) -> np.ndarray:
     return best.reshape(-1, 2).copy()
 
 
+#: The 8 labellings of a grid: (u, v) -> M (u, v) (origin in any corner, COLSxROWS either way round).
+_GRID_SYMMETRIES = tuple(np.array(m, float) for m in (
+    [[1, 0], [0, 1]], [[-1, 0], [0, 1]], [[1, 0], [0, -1]], [[-1, 0], [0, -1]],
+    [[0, 1], [1, 0]], [[0, -1], [1, 0]], [[0, 1], [-1, 0]], [[0, -1], [-1, 0]]))
+
+
+def canonical_labelling(obj_pts, img_pts):
+    """The labelling of a full planar grid of board points that does not depend on how it was numbered.
+
+    A board given as ``9x7`` or ``7x9``, with its origin in any corner, is the same physical board; a solver fed
+    with its canonical labelling gives the same result, bit for bit, whichever the user chose. The rule is
+    :func:`canonical_order`'s, over all 8 labellings (rows and columns may swap): the grid's axes as the image
+    sees them (an affine fit of the finite image points) right-handed with y down, and of those, corner 0 nearest
+    the image's top-left corner.
+
+    Parameters
+    ----------
+    obj_pts : (N, 3) board points of a full regular grid (z = 0), in any numbering.
+    img_pts : (N, 2) their image points (NaN where missing; at least 3 finite, not on a line).
+
+    Returns
+    -------
+    ``(order (N,) int, obj (N, 3), G (3, 3))``: the canonical corner ``k`` is the given corner ``order[k]``; ``obj``
+    the canonical board points (``(i s, j s, 0)`` minus their centroid, ``k = j * cols + i``); ``G`` the proper
+    rotation of the board frame with ``obj[k] = G @ obj_pts[order[k]]`` (a board pose ``R`` in the canonical frame
+    is ``R @ G`` in the given one). None when the points are not a full grid or the image points too few.
+    """
+    obj = np.asarray(obj_pts, float).reshape(-1, 3)
+    img = np.asarray(img_pts, float).reshape(-1, 2)
+    n = len(obj)
+    if n < 4 or len(img) != n or not np.all(np.isfinite(obj)) or np.any(obj[:, 2] != 0):
+        return None
+    steps = []
+    for c in (obj[:, 0], obj[:, 1]):
+        d = np.diff(np.unique(c))
+        d = d[d > 1e-9 * max(np.ptp(c), 1e-300)]
+        steps.append(float(d.min()) if len(d) else np.inf)
+    s = min(steps)
+    if not np.isfinite(s) or s <= 0:
+        return None
+    s = float(f"{s:.10g}")  # the same pitch whichever the numbering (the centroid rounds differently)
+    ij = (obj[:, :2] - obj[:, :2].min(axis=0)) / s
+    grid = np.rint(ij)
+    if np.max(np.abs(ij - grid)) > 1e-6:
+        return None
+    grid = grid.astype(int)
+    ni, nj = grid.max(axis=0) + 1
+    if ni * nj != n or len({(a, b) for a, b in grid}) != n:
+        return None
+    uv = 2 * grid - np.array([ni - 1, nj - 1])  # centred coordinates, doubled: integers
+    ok = np.isfinite(img).all(1)
+    if ok.sum() < 3:
+        return None
+    X = np.column_stack([uv[ok] / 2.0, np.ones(int(ok.sum()))])
+    coef, *_ = np.linalg.lstsq(X, img[ok], rcond=None)
+    A, b = coef[:2].T, coef[2]
+    if not abs(np.linalg.det(A)) > 0:
+        return None
+    best = None
+    for M in _GRID_SYMMETRIES:
+        Ag = A @ M.T  # the image directions of the labelling's axes
+        if np.linalg.det(Ag) <= 0:  # right-handed with y down only
+            continue
+        w = np.abs(M @ np.array([ni - 1, nj - 1], float))  # the labelling's half extent (in uv units)
+        corner0 = b + Ag @ (-w / 2.0)  # its corner 0 (centred coordinates are halves of uv)
+        key = float(corner0.sum())
+        if best is None or key < best[0]:
+            best = (key, M, w)
+    _, M, w = best
+    uv2 = np.rint(uv @ M.T).astype(int)  # exact: M holds 0 and +-1
+    w0, w1 = (int(round(x)) for x in w)
+    cols2 = w0 + 1
+    i2, j2 = (uv2[:, 0] + w0) // 2, (uv2[:, 1] + w1) // 2
+    k2 = j2 * cols2 + i2
+    order = np.empty(n, int)
+    order[k2] = np.arange(n)
+    ii, jj = np.arange(n) % cols2, np.arange(n) // cols2
+    obj2 = np.column_stack([ii * s, jj * s, np.zeros(n)])
+    obj2[:, :2] -= obj2[:, :2].mean(axis=0)
+    # the frame change: obj2 = M (obj - centroid); z flipped with a mirror, so that G is a rotation
+    G = np.eye(3)
+    G[:2, :2] = M
+    G[2, 2] = np.linalg.det(M)
+    return order, obj2, G
+
+
 # --------------------------------------------------------------------------------------------
 # detection
 # --------------------------------------------------------------------------------------------

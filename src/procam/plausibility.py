@@ -381,11 +381,16 @@ def gate_failures(calib, options: GateOptions = GateOptions()) -> list[str]:
     return msgs
 
 
-def apply_gates(calib, options: GateOptions = GateOptions(), *, stacklevel: int = 2):
+def apply_gates(calib, options: GateOptions = GateOptions(), *, over_degenerate: bool = True, stacklevel: int = 2):
     """The calibration with the verdict ``failed`` when a gate fails (:func:`gate_failures`): the failures lead
     its ``verdict_reasons``, join its ``warnings`` and are emitted as one
     :class:`~procam.errors.FailedEstimateWarning`. A calibration that passes is returned unchanged (as is a
-    failure a solver already gave as a reason)."""
+    failure a solver already gave as a reason).
+
+    ``over_degenerate=False`` keeps a ``degenerate`` verdict (the failures join only its warnings): where the
+    stable prediction already says the numbers may be anything, where the optimiser stopped -- and so whether
+    they are also impossible -- must not change the verdict (single-pose, :mod:`procam.single_pose.rating`).
+    """
     import warnings as _warnings
 
     from .errors import FailedEstimateWarning
@@ -394,6 +399,9 @@ def apply_gates(calib, options: GateOptions = GateOptions(), *, stacklevel: int 
                 if not any(m.split("FAILED estimate: ", 1)[-1] in r for r in calib.verdict_reasons)]
     if not failures:
         return calib
+    warnings = tuple(calib.warnings) + tuple(w for w in failures if w not in calib.warnings)
+    if calib.verdict == "degenerate" and not over_degenerate:
+        return calib.replace(warnings=warnings)
     _warnings.warn("; ".join(failures), FailedEstimateWarning, stacklevel=stacklevel + 1)
     return calib.replace(verdict="failed", verdict_reasons=tuple(failures) + tuple(calib.verdict_reasons),
-                         warnings=tuple(calib.warnings) + tuple(w for w in failures if w not in calib.warnings))
+                         warnings=warnings)

@@ -142,7 +142,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
     from . import evidence, poseset
     from .. import plausibility
 
-    views = list(views)
+    given = list(views)
+    views, labellings = _canonical(given)  # no step may depend on how each board's corners were numbered
     for name, d in (("cam_dist", cam_dist), ("proj_dist", proj_dist)):
         if d not in DIST_CHOICES:
             raise CalibrationError(f"unknown distortion model {d!r} for {name}; choose one of {', '.join(DIST_CHOICES)}")
@@ -176,11 +177,37 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
             level = max(level, lvl, key=LEVELS.index)
     calib = calib.replace(info=info, verdict=level, verdict_reasons=tuple(reasons),
                           warnings=tuple(calib.warnings) + tuple(r for r in reasons if r not in calib.warnings))
-    calib = plausibility.apply_gates(calib, stacklevel=2)
+    calib = plausibility.apply_gates(_given(calib, given, labellings), stacklevel=2)
     if calib.verdict in ("weak", "degenerate"):
         category = WeakPoseWarning if calib.verdict == "weak" else DegeneratePoseWarning
         _warnings.warn("; ".join(calib.verdict_reasons), category, stacklevel=2)
     return calib
+
+
+def _canonical(views):
+    """Each view in the canonical labelling of its board (:func:`procam.single_pose._robust.canonical_view`)."""
+    from ..single_pose._robust import canonical_view
+
+    out = [canonical_view(v) for v in views]
+    return [v for v, _ in out], [lab for _, lab in out]
+
+
+def _given(calib, views, labellings) -> Calibration:
+    """A calibration of canonical views as the given ``views``': each pose's board pose and angles in its given
+    board frame, ``views`` the given ones."""
+    if all(lab is None or lab.identity for lab in labellings):
+        return calib.replace(views=tuple(views))
+    poses = []
+    for p, lab in zip(calib.poses, labellings):
+        p = dict(p)
+        if lab is not None and "R_cam" in p:
+            R_cb, t_cb = np.asarray(p["R_cam"], float) @ lab.G, np.asarray(p["t_cam"], float)
+            p["R_cam"] = R_cb.tolist()
+            p["camera_angles_deg"] = models.board_angles_deg(R_cb, t_cb).tolist()
+            if calib.R is not None and p.get("projector_angles_deg") is not None:
+                p["projector_angles_deg"] = models.board_angles_deg(*models.compose(calib.R, calib.T, R_cb, t_cb)).tolist()
+        poses.append(p)
+    return calib.replace(views=tuple(views), poses=tuple(poses))
 
 
 def _calibrate_auto(views, cam_dist, proj_dist, refine, options) -> Calibration:
@@ -475,7 +502,8 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
     """
     import cv2
 
-    views = list(views)
+    given = list(views)
+    views, labellings = _canonical(given)  # independent of how each board's corners were numbered
     if len(views) < 2:
         raise CalibrationError(f"camera-only calibration from photos needs at least 2 (5-20 recommended), got "
                                f"{len(views)}; one photo: the single-pose method (procam.single_pose)")
@@ -533,7 +561,7 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
            "cam_dist": [float(v) for v in sd_dist]}
     poses = []
     for j, n in enumerate(names):
-        R = models.rvec_to_matrix(dev.rvecs[j])
+        R = models.rvec_to_matrix(dev.rvecs[j]) @ (labellings[j].G if labellings[j] is not None else np.eye(3))
         poses.append({"name": n, "n_corners": int(len(objs[j])), "cam_rms": float(per_view[j]),
                       "camera_angles_deg": models.board_angles_deg(R, dev.tvecs[j]).tolist(),
                       "projector_angles_deg": None})
@@ -544,5 +572,5 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
             "photos": len(views)}
     return Calibration(camera=Device(dev.K, size, Distortion("opencv", coeffs=tuple(float(c) for c in dev.coeffs))),
                        projector=None, R=None, T=None, method="camera-only", cam_rms=dev.rms, std=std,
-                       poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info, verdict=verdict,
+                       poses=tuple(poses), views=tuple(given), warnings=tuple(warnings), info=info, verdict=verdict,
                        verdict_reasons=tuple(warnings))

@@ -6,6 +6,7 @@ Generic over the device: :func:`fit_robust` takes a ``fit(used_mask) -> solution
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -231,3 +232,125 @@ def rejection_report(sol, predict, obs, valid, used, thr, notes, name: str, what
     warnings += [f"pose {name!r}: {what}: {n}" for n in notes]
     return replace(sol, residuals=res, rejected=rej, rejected_residuals_px=norms, outlier_threshold_px=float(thr),
                    warnings=tuple(warnings))
+
+
+# --------------------------------------------------------------------------------------------------
+# no step may depend on how the board's corners were numbered
+# --------------------------------------------------------------------------------------------------
+
+_CORNER_REF = re.compile(r"#(\d+) \(")
+
+
+@dataclass(frozen=True)
+class Labelling:
+    """How a view's corners were renumbered into the canonical labelling (:func:`procam.corners.canonical_labelling`).
+
+    Attributes
+    ----------
+    order : (N,) int: canonical corner ``k`` is the given corner ``order[k]``.
+    G : (3, 3) rotation of the board frame: a board pose ``R`` in the canonical frame is ``R @ G`` in the given one.
+    """
+
+    order: np.ndarray
+    G: np.ndarray
+
+    @property
+    def identity(self) -> bool:
+        return bool(np.array_equal(self.order, np.arange(len(self.order))) and np.array_equal(self.G, np.eye(3)))
+
+    def to_given(self, k):
+        """The given index of canonical corner(s) ``k``."""
+        return self.order[k]
+
+    def given_rows(self, a):
+        """Per-corner rows ``a`` (N, ...) in the canonical order, put back in the given order."""
+        a = np.asarray(a)
+        out = np.empty_like(a)
+        out[self.order] = a
+        return out
+
+    def given_text(self, text: str) -> str:
+        """A message listing rejected canonical corners (``#k (``) with the given corners' numbers."""
+        if "rejected as outliers" not in text:
+            return text
+        return _CORNER_REF.sub(lambda m: f"#{int(self.order[int(m.group(1))])} (", text)
+
+
+def canonical_view(view):
+    """``(view in the canonical labelling, Labelling)`` -- the same physical corners, numbered the way
+    :func:`procam.corners.canonical_labelling` does whatever the user's ``COLSxROWS`` and origin; ``(view, None)``
+    when its board points are not a full grid (nothing to renumber)."""
+    from dataclasses import replace as _replace
+
+    from ..corners import canonical_labelling
+
+    cam = np.asarray(view.cam_pts, float)
+    lab = canonical_labelling(view.obj_pts, cam if np.isfinite(cam).all(1).sum() >= 3 else view.proj_pts)
+    if lab is None:
+        return view, None
+    order, obj, G = lab
+    diag = {k: (np.asarray(v)[order] if isinstance(v, np.ndarray) and len(v) == len(order) else v)
+            for k, v in view.diagnostics.items()}
+    return _replace(view, obj_pts=obj, cam_pts=view.cam_pts[order], proj_pts=view.proj_pts[order], diagnostics=diag,
+                    board=None), Labelling(order, G)
+
+
+def canonical_points(obj_pts, img_pts):
+    """``(obj, img, Labelling or None)``: board and image points in the canonical labelling (as
+    :func:`canonical_view`, for a camera-only photo)."""
+    from ..corners import canonical_labelling
+
+    obj = np.asarray(obj_pts, float)
+    obj = np.column_stack([obj, np.zeros(len(obj))]) if obj.ndim == 2 and obj.shape[1] == 2 else obj
+    img = np.asarray(img_pts, float).reshape(-1, 2)
+    lab = canonical_labelling(obj, img) if obj.ndim == 2 and len(obj) == len(img) else None
+    if lab is None:
+        return obj_pts, img_pts, None
+    order, obj2, G = lab
+    return obj2, img[order], Labelling(order, G)
+
+
+def _given_solution(sol, lab: Labelling):
+    from .. import models
+
+    if sol is None or getattr(sol, "residuals", None) is None:
+        return sol
+    R = np.asarray(sol.R, float) @ lab.G
+    return replace(sol, R=R, angles_deg=models.board_angles_deg(R, sol.t),
+                   residuals=lab.given_rows(sol.residuals),
+                   mask=None if sol.mask is None else lab.given_rows(sol.mask),
+                   rejected=lab.to_given(np.asarray(sol.rejected, int)),
+                   warnings=tuple(lab.given_text(w) for w in sol.warnings))
+
+
+def given_labelling(calib, view, lab: Labelling | None):
+    """A single-pose calibration of the canonical view (:func:`canonical_view`) as the given ``view``'s: the
+    rejected corners, the residuals and the messages that name corners in the given numbering, the board angles
+    and poses in the given board frame, ``views`` the given one. The calibration itself (intrinsics, ``R, T``,
+    the ``±``, the verdict) is the canonical view's, so it is the same for every labelling of the board.
+    ``info["labelling"]`` records the renumbering (the solutions' parameter vectors stay canonical)."""
+    from .. import models
+
+    if lab is None:
+        return calib
+    poses = []
+    for p in calib.poses:
+        p = dict(p)
+        rej = p.get("rejected_corners")
+        if rej:
+            p["rejected_corners"] = {d: [{**r, "index": int(lab.to_given(int(r["index"])))} for r in rs]
+                                     for d, rs in rej.items()}
+        for key, sol in (("camera_angles_deg", calib.info.get("camera")),
+                         ("projector_angles_deg", calib.info.get("projector"))):
+            if p.get(key) is not None and getattr(sol, "R", None) is not None:
+                p[key] = [float(a) for a in models.board_angles_deg(np.asarray(sol.R, float) @ lab.G, sol.t)]
+        poses.append(p)
+    info = dict(calib.info)
+    for k in ("camera", "projector"):
+        if k in info:
+            info[k] = _given_solution(info[k], lab)
+    info["labelling"] = {"order": lab.order.tolist(), "G": lab.G.tolist(),
+                         "note": "solved in the canonical labelling of the board (corners.canonical_labelling)"}
+    return calib.replace(views=calib.views if view is None else (view,), poses=tuple(poses), info=info,
+                         warnings=tuple(lab.given_text(w) for w in calib.warnings),
+                         verdict_reasons=tuple(lab.given_text(r) for r in calib.verdict_reasons))
