@@ -75,7 +75,8 @@ def _assumptions(calib) -> list[str]:
     if calib.method in ("single-pose", "camera-only"):
         src = calib.info.get("principal_point_source")
         pp = {"cod": "the centre of distortion", "joint": "the joint fit of all camera parameters",
-              "image-center": "the image centre, ASSUMED (a prior: the centre of distortion was not reliable)",
+              "image-center": "a PRIOR: the image centre ± 32 px per axis, refined by the fit (the centre of "
+                              "distortion was not reliable)",
               "given": "given"}.get(src, None)
         out.append("Camera: pinhole, zero skew, division-model distortion (k1, k2) about the principal point"
                    + (f"; the principal point comes from {pp}" if pp else "") + ".")
