@@ -84,14 +84,19 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
         flips = [(_flipped_beyond(hist, size, b, ps.step, offset), b) for b in range(nbits)]
         f2, b = min(flips)
         if f2 < MAX_BEYOND / 4:
-            a, i = ps.pair_indices(axis)[nbits - 1 - b]
+            pairs = _code_pairs(maps, 4).get(axis)  # other pairs swapped too: each named, not only this one
+            more = [] if pairs is None else [c for c, _ in _swapped(*pairs, nbits, ps.step, flipped=(b,))]
             raise CaptureError(
-                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: as captured "
-                f"{f:.0%} of the decoded pixels point to projector {label}s beyond the {size} of the projector, with "
-                f"that pair the other way round {f2:.1%} — a pattern and its inverse were exchanged (or come from "
-                "another capture); re-capture, or check that the file names sort in capture order")
+                f"{name}: {_pairs_text(ps, axis, label, [b] + more, files)} look swapped: as captured {f:.0%} of the "
+                f"decoded pixels point to projector {label}s beyond the {size} of the projector, with "
+                f"{'those pairs' if more else 'that pair'} the other way round {f2:.1%}"
+                + (" and the map continuous" if more else "") + " — a pattern and its inverse were exchanged (or "
+                "come from another capture); re-capture, or check that the file names sort in capture order")
         bad.append((label, f, code_extent(hist), size))
     if bad:
+        transposed = _transposed(maps)
+        if transposed is not None:
+            raise CaptureError(f"{name}: {transposed}")
         what = "; ".join(f"{f:.0%} of the decoded pixels point to projector {label}s beyond the given {size} "
                          f"(up to {e - 1})" for label, f, e, size in bad)
         real = [ps.width, ps.height]
@@ -107,6 +112,43 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
                             f"projector has {e} {label}s (not {size}), pass the right --projector; otherwise part of "
                             "the projection is outside the camera's view")
     return warnings
+
+
+def _slopes(m: np.ndarray, sample: int = 4) -> tuple[float, float]:
+    """Median |change| of a decoded map per camera pixel along x and along y (every ``sample``-th line)."""
+    v = m[::sample, ::sample]
+    dx, dy = np.diff(v, axis=1) / sample, np.diff(v, axis=0) / sample
+    dx, dy = dx[np.isfinite(dx)], dy[np.isfinite(dy)]
+    return (float(np.median(np.abs(dx))) if dx.size else 0.0, float(np.median(np.abs(dy))) if dy.size else 0.0)
+
+
+def _transposed(maps: DecodeResult) -> str | None:
+    """Why the decoded codes point beyond the projector when the reason is the axes, not the size: the codes fit
+    the projector with columns and rows exchanged. Rows captured first (the decoded "columns" then hold row codes
+    and change along the camera's vertical, the "rows" along its horizontal), or the projector's size given
+    the wrong way round (the maps change as a camera and projector side by side make them). None otherwise."""
+    ps = maps.pattern_set
+    total_c = maps.codes_col.sum() if maps.codes_col is not None else 0
+    total_r = maps.codes_row.sum() if maps.codes_row is not None else 0
+    if not (total_c and total_r):
+        return None
+    swapped_c = float(maps.codes_col[ps.height:].sum() / total_c)
+    swapped_r = float(maps.codes_row[ps.width:].sum() / total_r)
+    if max(swapped_c, swapped_r) > MAX_BEYOND:
+        return None
+    ec, er = code_extent(maps.codes_col), code_extent(maps.codes_row)
+    (cx, cy), (rx, ry) = _slopes(maps.col), _slopes(maps.row)
+    if cy > cx and rx > ry:
+        cp, rp = ps.pair_indices("col"), ps.pair_indices("row")
+        return (f"the column and row patterns look exchanged (captured rows first?): the codes decoded as projector "
+                f"columns span 0-{ec - 1} and change along the camera's vertical, those decoded as rows span "
+                f"0-{er - 1} and change along its horizontal -- a {ps.width}x{ps.height} projector's rows and columns "
+                f"the other way round. procam reads frames #{cp[0][0]}-#{cp[-1][1]} as the column pairs and "
+                f"#{rp[0][0]}-#{rp[-1][1]} as the row pairs ({ps.order} order); put the column frames first (rename "
+                "the files so they sort in capture order) or re-capture columns first; --projector is not the problem")
+    return (f"the projector's size looks given the wrong way round: the decoded columns span 0-{ec - 1} and the rows "
+            f"0-{er - 1}, which fit a {ps.height}x{ps.width} projector, not {ps.width}x{ps.height}; pass --projector "
+            f"{ps.height}x{ps.width} (width x height) if that is the panel")
 
 
 def _median_of_hist(h: np.ndarray, lo: int) -> float:
@@ -160,6 +202,29 @@ def _neighbour_pairs(code: np.ndarray, ok: np.ndarray, axis: int, reach: int = 3
             np.concatenate([h[k], np.ones(int(far.sum()), np.int64)]).astype(float))
 
 
+def _code_pairs(maps: DecodeResult, sample: int):
+    """Per axis: the distinct pairs of neighbouring codes of the decoded map (full-precision pixels only) and
+    their counts ``(c1, c2, w, n_pixels)``, or None when fewer than 2000 pixels count (see :func:`swap_scores`)."""
+    ps = maps.pattern_set
+    out = {}
+    for axis, vals, dropped, offset, cam_axis in (("col", maps.col, maps.dropped_col, ps.col_offset, 1),
+                                                 ("row", maps.row, maps.dropped_row, ps.row_offset, 0)):
+        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
+        ok = np.isfinite(v)
+        if dropped is not None:
+            ok &= (dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0
+        n_ok = int(np.count_nonzero(ok))
+        if n_ok < 2000:
+            out[axis] = None
+            continue
+        # twice the decoded values are integers (block centres are whole or half pixels)
+        v1, v2, w = _neighbour_pairs(np.rint(2.0 * np.where(ok, v, 0.0)).astype(np.int64), ok, cam_axis)
+        # the codes of the pairs' ends (a decoded value is its block's centre)
+        c1, c2 = (np.rint((x - (ps.step - 1)) / (2.0 * ps.step)).astype(np.int64) + offset for x in (v1, v2))
+        out[axis] = (c1, c2, w, n_ok)
+    return out
+
+
 def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     """The smoothness of the decoded maps as decoded and with each Gray-code bit decoded the other way round.
 
@@ -174,64 +239,85 @@ def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     """
     ps = maps.pattern_set
     out = {}
-    for axis, vals, dropped, nbits, offset, cam_axis in (
-            ("col", maps.col, maps.dropped_col, ps.col_bits, ps.col_offset, 1),
-            ("row", maps.row, maps.dropped_row, ps.row_bits, ps.row_offset, 0)):
-        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
-        ok = np.isfinite(v)
-        if dropped is not None:
-            ok &= (dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0
-        n_ok = int(np.count_nonzero(ok))
-        if n_ok < 2000:
+    for axis, pairs in _code_pairs(maps, sample).items():
+        if pairs is None:
             out[axis] = None
             continue
-        # twice the decoded values are integers (block centres are whole or half pixels)
-        v1, v2, w = _neighbour_pairs(np.rint(2.0 * np.where(ok, v, 0.0)).astype(np.int64), ok, cam_axis)
-        # the codes of the pairs' ends (a decoded value is its block's centre)
-        c1, c2 = (np.rint((x - (ps.step - 1)) / (2.0 * ps.step)).astype(np.int64) + offset for x in (v1, v2))
-        flipped = []
-        for b in range(nbits - 1):
-            m = (1 << (b + 1)) - 1
-            flipped.append(_hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * ps.step), w))
-        out[axis] = {"n": n_ok, "scores": _hist_scores(v2 - v1, w), "flipped": flipped}
+        c1, c2, w, n_ok = pairs
+        nbits = ps.col_bits if axis == "col" else ps.row_bits
+        out[axis] = {"n": n_ok, "scores": _hist_scores((c2 - c1) * (2 * ps.step), w),
+                     "flipped": [_hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * ps.step), w)
+                                 for m in ((1 << (b + 1)) - 1 for b in range(nbits - 1))]}
     return out
 
 
+def _swapped(c1, c2, w, n, nbits, step, flipped=()) -> list[tuple[int, str]]:
+    """The Gray-code bits decoded the wrong way round, found one at a time: the bit whose flip makes the map
+    clearly smoother (1.6 times) or removes two thirds of its breaks is taken, and the search goes on from the map
+    with it flipped (two swapped pairs each hide the other's improvement). ``[(bit, how)]``."""
+    found = []
+    mask = 0
+    for b in flipped:
+        mask ^= (1 << (b + 1)) - 1
+    while len(found) < nbits - 1:
+        rough0, breaks0 = _hist_scores(((c2 ^ mask) - (c1 ^ mask)) * (2 * step), w)
+        candidates = []
+        for b in range(nbits - 1):
+            if b in flipped or any(b == f for f, _ in found):
+                continue
+            m = mask ^ ((1 << (b + 1)) - 1)
+            rough, breaks = _hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * step), w)
+            smoother = rough * 1.6 < rough0 and rough0 - rough > 0.2 * step
+            fewer = breaks * 3 < breaks0 and breaks0 - breaks > 0.002 * n
+            if smoother or fewer:
+                how = (f"{rough0 / max(rough, 1e-9):.0f} times smoother" if smoother else
+                       f"continuous ({breaks} breaks instead of {breaks0})")
+                candidates.append((breaks, rough, b, how))
+        if not candidates:
+            break
+        _, _, b, how = min(candidates)
+        found.append((b, how))
+        mask ^= (1 << (b + 1)) - 1
+    return found
+
+
+def _pairs_text(ps, axis, label, bits, files) -> str:
+    nbits = ps.col_bits if axis == "col" else ps.row_bits
+    parts = []
+    for b in bits:
+        a, i = ps.pair_indices(axis)[nbits - 1 - b]
+        parts.append(f"{_frame(a, files)} and {_frame(i, files)} ({label} bit {b})")
+    return ("images " + " and ".join(parts) if len(parts) == 1 else
+            f"{len(parts)} pairs of images: " + "; ".join(parts))
+
+
 def check_swapped_bits(maps: DecodeResult, name: str, files=None, *, sample: int = 4) -> None:
-    """Raise when decoding one Gray-code bit the other way round makes the decoded map clearly continuous:
-    that bit's pattern and inverse were swapped in the capture (or one of them comes from another sequence).
+    """Raise when decoding Gray-code bits the other way round makes the decoded map clearly continuous: those
+    bits' patterns and inverses were swapped in the capture (or one of them comes from another sequence).
 
     A swapped bit ``b`` reverses the order of the codes inside every block of ``2^(b+1)`` codes. Small blocks
     make the map rough (neighbouring differences far from the slope); large blocks leave it smooth inside and
     break it at every block boundary. A correct decoding only gets worse when a bit is flipped; a swapped bit
-    gets at least 1.6 times smoother, or loses two thirds of its breaks, when it is flipped back (the bit whose
-    flip leaves the fewest breaks is named). (The most
-    significant bits are also caught by :func:`check_projector_size`, the most significant alone by
-    :func:`check_orientation`.) The maps are read on every ``sample``-th line (:func:`swap_scores`).
+    gets at least 1.6 times smoother, or loses two thirds of its breaks, when it is flipped back. Bits are found
+    one at a time, each from the map with the ones before flipped back (:func:`_swapped`), so that every swapped
+    pair is named, not only the first. (The most significant bits are also caught by
+    :func:`check_projector_size`, the most significant alone by :func:`check_orientation`.) The maps are read on
+    every ``sample``-th line.
     """
     ps = maps.pattern_set
-    scores = swap_scores(maps, sample)
-    for label, axis, nbits in (("column", "col", ps.col_bits), ("row", "row", ps.row_bits)):
-        sc = scores[axis]
-        if sc is None:
+    for axis, pairs in _code_pairs(maps, sample).items():
+        if pairs is None:
             continue
-        rough0, breaks0 = sc["scores"]
-        candidates = []
-        for b, (rough, breaks) in enumerate(sc["flipped"]):
-            smoother = rough * 1.6 < rough0 and rough0 - rough > 0.2 * ps.step
-            fewer = breaks * 3 < breaks0 and breaks0 - breaks > 0.002 * sc["n"]
-            if smoother or fewer:
-                candidates.append((breaks, rough, b, smoother))
-        if candidates:
-            breaks, rough, b, smoother = min(candidates)
-            a, i = ps.pair_indices(axis)[nbits - 1 - b]
-            how = (f"{rough0 / max(rough, 1e-9):.0f} times smoother" if smoother else
-                   f"continuous ({breaks} breaks instead of {breaks0})")
+        label = "column" if axis == "col" else "row"
+        c1, c2, w, n = pairs
+        found = _swapped(c1, c2, w, n, ps.col_bits if axis == "col" else ps.row_bits, ps.step)
+        if found:
+            how = ", then ".join(h for _, h in found)
             raise CaptureError(
-                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: the "
-                f"decoded projector {label}s are {how} with that pair the other way round — a pattern and its "
-                "inverse were exchanged (or come from another capture); re-capture, or check that the file names "
-                "sort in capture order")
+                f"{name}: {_pairs_text(ps, axis, label, [b for b, _ in found], files)} look swapped: the decoded "
+                f"projector {label}s are {how} with {'those pairs' if len(found) > 1 else 'that pair'} the other way "
+                "round — a pattern and its inverse were exchanged (or come from another capture); re-capture, or "
+                "check that the file names sort in capture order")
 
 
 def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows: int, name: str, maps=None,
