@@ -133,7 +133,7 @@ def calibrate_cmd(
 
         check = verify_calibration(calib)
         calib = with_evidence(calib, check)  # its verdict consults the verification before anything is written
-    _show.print_calibration(calib)
+    _show.print_calibration(calib, check)
     if check is not None:
         _show.print_verification(check)
         if check.leave_one_out is not None and check.leave_one_out.refits:

@@ -169,11 +169,12 @@ def _spreads(items) -> str:
     """``"f_c by ±889 (82 times its ±11 from the fit), fy_c by ±691 (63 times)"``; without fit ± said once."""
     parts, no_std = [], False
     for n, (k, v, js, jack, *_) in enumerate(items):
+        u = "" if k.startswith("T[") else " px"
         if js:
-            parts.append(f"{k} by ±{jack:.3g} ({jack / js:.0f} times its ±{js:.2g} from the fit)" if n == 0 else
-                         f"{k} by ±{jack:.3g} ({jack / js:.0f} times)")
+            parts.append(f"{k} by ±{jack:.3g}{u} ({jack / js:.0f} times its ±{js:.2g} from the fit)" if n == 0 else
+                         f"{k} by ±{jack:.3g}{u} ({jack / js:.0f} times)")
         else:
-            parts.append(f"{k} by ±{jack:.3g}")
+            parts.append(f"{k} by ±{jack:.3g}{u}")
             no_std = True
     return ", ".join(parts) + (" (no ± from the fit without the joint refinement)" if no_std else "")
 

@@ -45,6 +45,8 @@ def verdict_section(calib, verdict: Verdict, check: CalibrationVerification | No
     if flags:
         parts.append(f'<p class="warn"><strong>Flagged ({len(flags)}):</strong></p><ul class="warn" id="flagged">'
                      + "".join(f"<li>{escape(f)}</li>" for f in flags) + "</ul>")
+    elif verdict.word != "good" and verdict.reasons:
+        parts.append('<p id="flagged">Nothing else was flagged.</p>')
     else:
         parts.append('<p id="flagged">Nothing was flagged: no warning, no rejected corner, no prior, no verification '
                      "figure out of line.</p>")

@@ -246,7 +246,7 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
             reasons.append("its corners do not fit the model")
         if reasons:
             level = "weak"
-            msg = f"{device}: weak pose: " + "; ".join(reasons) + f" -- {turn}"
+            msg = f"{device}: weak pose ({angle_txt}): " + "; ".join(reasons) + f" -- {turn}"
         else:
             level, msg = "good", f"{device}: pose OK ({rel_txt}; {angle_txt})"
     out = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), level=level,
