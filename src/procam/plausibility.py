@@ -1,4 +1,5 @@
-"""Is a decoded capture a plausible picture of a projector? Checks that blame the capture, not the pose.
+"""Is a decoded capture a plausible picture of a projector, and is a calibration possible for a real rig? Checks
+that blame the capture, not the pose; and the plausibility gates every calibration method passes.
 
 A capture can pass every frame-level check and still be wrong in a way that gives a confident wrong
 calibration: the projector size given is not the projector's, a pattern was swapped with its own inverse
@@ -14,7 +15,20 @@ the decoded maps or the corners:
   onto each other preserving orientation; a mirrored camera image, a mirroring projector setting, or the most
   significant pattern swapped with its inverse (which mirrors the codes) reverses it.
 
+* **columns and rows exchanged** (:func:`check_projector_size`): codes that fit the projector only with its
+  columns and rows exchanged are a sequence captured rows first when the decoded "columns" change along the
+  camera's vertical, a projector size given the wrong way round when they change along its horizontal;
+* **several swapped pairs**: found one at a time, each from the map with the ones before flipped back, and all
+  named.
+
 The checks raise :class:`~procam.errors.CaptureError` naming the frames or the setting to check.
+
+**The gates** (:func:`gate_failures`, :func:`apply_gates`): a calibration whose focal length is impossible for
+its image (or not positive), whose ``R`` is not a rotation, whose boards lie behind a device, whose stereo RMS is
+far above the devices' own or whose baseline is absurd against the boards' distance is ``failed`` -- from every
+method and every fallback (single-pose, multi-pose with or without the joint refinement, camera-only). The gates
+read only what the calibration carries; they assume a real rig (a lens of 11-136 deg diagonal field of view,
+boards in front of both devices).
 """
 
 from __future__ import annotations

@@ -54,14 +54,16 @@ def projector_freed(calib) -> frozenset:
     return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
 
 
-def _alpha_prior_std(calib) -> float:
-    """The std of the prior ``alpha_p = 1 +- std`` a single-pose projector fit with the background used."""
-    v = calib.info.get("alpha_prior_std")
-    if v is None:
-        from .single_pose.background import BackgroundOptions
+#: The default std of the prior ``alpha_p = 1 +- std`` of a single-pose projector fit with the background
+#: (``procam.single_pose.background.BackgroundOptions.alpha_prior_std``; a test holds the two equal). Here as a
+#: number, not an import: the file writers read this module and sit below the solvers.
+ALPHA_PRIOR_STD = 0.003
 
-        v = BackgroundOptions().alpha_prior_std
-    return float(v)
+
+def _alpha_prior_std(calib) -> float:
+    """The std of the prior ``alpha_p = 1 +- std`` a single-pose projector fit with the background used (the
+    calibration's ``info["alpha_prior_std"]`` when it records it)."""
+    return float(calib.info.get("alpha_prior_std", ALPHA_PRIOR_STD))
 
 
 def parameter_status(calib) -> dict:

@@ -18,6 +18,12 @@ Its evidence, in order:
 
 No statistics are computed here: the verdict only reads what the solvers measured. A file with no poses and
 no recorded verdict stays ``unknown`` -- the word says there is no evidence, not that the calibration is bad.
+
+The metric verification (:mod:`procam.verify`) is evidence too: :func:`evidence_reasons` reads it (the
+triangulated board's scale error, in-sample and held out; the held-out reprojection RMS against the in-sample
+one) and :func:`with_evidence` makes the verdict worse where it says so -- ``procam calibrate`` does this before
+it writes anything, the report before it shows the verdict. :func:`flagged` lists everything a careful reader
+should know, the list the report prints under the verdict.
 """
 
 from __future__ import annotations

@@ -185,8 +185,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
 
 
 def _canonical(views):
-    """Each view in the canonical labelling of its board (:func:`procam.single_pose._robust.canonical_view`)."""
-    from ..single_pose._robust import canonical_view
+    """Each view in the canonical labelling of its board (:func:`procam.labelling.canonical_view`)."""
+    from ..labelling import canonical_view
 
     out = [canonical_view(v) for v in views]
     return [v for v, _ in out], [lab for _, lab in out]

@@ -35,8 +35,8 @@ from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..residuals import pnp, stereo_pose
 from ..stats import rms, robust_sigma
 from ..plausibility import apply_gates
-from ._robust import (RobustOptions, canonical_points, canonical_view, check_corners, clean, fit_robust,
-                      given_labelling, rejection_report)
+from ..labelling import canonical_points, canonical_view, given_labelling
+from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .misfit import misfit
 from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
