@@ -290,7 +290,7 @@ ARGUMENT_CASES = [
     (["study", "camera", "-o", "{tmp}/st", "-j", "0"], ["--jobs"]),
     (["study", "camera", "-o", "{tmp}/st", "--seed", "-3"], ["--seed"]),
     (["study", "camera", "-o", "{tmp}/st", "--grid", "-80:80:0.2", "--trials", "100000"], ["days"]),
-    (["study", "lens", "-o", "{tmp}/st"], ["camera or projector"]),
+    (["study", "lens", "-o", "{tmp}/st"], ["'camera', 'projector'"]),
     # calibrate / correspond / decode
     (["calibrate", "{pose}", "--board", "99999999999x6", "--square", "24", "-o", "{tmp}/c.json"], ["--board"]),
     (["calibrate", "{pose}", "--board", "10x6", "--square", "1e300", "-o", "{tmp}/c.json"], ["--square"]),

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import os
 import re
 from pathlib import Path
 
@@ -85,8 +86,9 @@ def test_evaluate_single_pose_on_other_poses_is_held_out(folders, views, tmp_pat
     code, stdout, err = run_cli(["evaluate", cpath, *folders, *BOARD, "-o", jpath])
     assert code == 0, err
     d = json.loads(jpath.read_text())["verification"]
-    assert [p["name"] for p in d["in_sample"]["poses"]] == [str(folders[0])]
-    assert [p["name"] for p in d["held_out"]["poses"]] == [str(f) for f in folders[1:]]
+    # the poses are named by their folders relative to the JSON file, not by absolute paths
+    assert [p["name"] for p in d["in_sample"]["poses"]] == [os.path.relpath(folders[0], tmp_path)]
+    assert [p["name"] for p in d["held_out"]["poses"]] == [os.path.relpath(f, tmp_path) for f in folders[1:]]
     assert d["leave_one_out"] is None
     assert "metric verification on other poses (held out" in stdout
 

@@ -48,10 +48,12 @@ def test_imports_no_solver_code():
         for m in _imported_modules(f):
             if m.startswith("procam."):
                 # only the package itself, procam.patterns, procam.capture (the folder format),
-                # procam.io.files (no solver code) and procam.calibration, the result container that
+                # procam.io.files and procam.io.formats (file names and format marks, no solver code) and
+                # procam.calibration, the result container that
                 # truth_calibration fills with the scene's numbers (it computes nothing with procam.models)
                 assert m.startswith("procam.simulate.") or m in ("procam.patterns", "procam.capture",
-                                                                 "procam.io.files", "procam.calibration"), (f.name, m)
+                                                                 "procam.io.files", "procam.io.formats",
+                                                                 "procam.calibration"), (f.name, m)
             else:
                 assert m.startswith(allowed_prefix), (f.name, m)
 

@@ -180,7 +180,7 @@ def test_cli(tmp_path):
     assert (out / "study_projector_none_slices.png").exists()
     assert "cells" in r.output
     bad = runner.invoke(app, ["study", "lens", "-o", str(out)])
-    assert bad.exit_code == 2 and "camera or projector" in bad.output
+    assert bad.exit_code == 2 and "'camera', 'projector'" in bad.output
     bad = runner.invoke(app, ["study", "camera", "--grid", "1:2", "-o", str(out)])
     assert bad.exit_code == 2 and "START:STOP:STEP" in bad.output
 

@@ -48,7 +48,7 @@ class PoseCheck:
 
 
 def check_pose(folder, board: Board, projector=None, order=None, *, options: pipeline.PoseOptions = pipeline.PoseOptions(),
-               step=None) -> PoseCheck:
+               step=None, background: str = "free") -> PoseCheck:
     """The instant verdict of the pose captured in ``folder`` (see the module docstring).
 
     Raises the capture's own errors (:class:`~procam.errors.CaptureError`, ``BoardNotFoundError``, ...) when the
@@ -66,7 +66,7 @@ def check_pose(folder, board: Board, projector=None, order=None, *, options: pip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ProcamWarning)
         try:
-            calib = single_pose.calibrate(view)
+            calib = single_pose.calibrate(view, background=single_pose.background.BackgroundOptions(mode=background))
         except DegeneratePoseError as e:
             verdict, reasons = "degenerate", (str(e),)
         except CalibrationError as e:
@@ -117,10 +117,36 @@ def overlay(check: PoseCheck, max_width: int = 1280) -> np.ndarray:
     if scale < 1.0:
         img = cv2.resize(img, (int(img.shape[1] * scale), int(img.shape[0] * scale)), interpolation=cv2.INTER_AREA)
     colour = _COLOUR.get(check.verdict, (200, 200, 200))
-    text = [f"verdict: {check.verdict}"] + [r.split(": ", 1)[-1][:110] for r in check.reasons[:3]]
+    text = overlay_lines(check, img.shape[1] - 20)
     h = 28 * len(text) + 12
     cv2.rectangle(img, (0, 0), (img.shape[1], h), (30, 30, 30), -1)
     for k, t in enumerate(text):
         cv2.putText(img, t, (10, 26 + 28 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.7 if k == 0 else 0.5,
                     colour if k == 0 else (230, 230, 230), 2 if k == 0 else 1, cv2.LINE_AA)
     return img
+
+
+def overlay_lines(check: PoseCheck, width_px: int, max_lines: int = 8) -> list[str]:
+    """The text lines of :func:`overlay`: the verdict, then up to three reasons wrapped at word boundaries to
+    ``width_px`` pixels of the picture's font (a word is never cut); an ellipsis ends the last line when the
+    reasons need more than ``max_lines`` lines."""
+    import cv2
+
+    def fits(t):
+        return cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)[0][0] <= width_px
+
+    lines = [f"verdict: {check.verdict}"]
+    for reason in check.reasons[:3]:
+        line = ""
+        for word in reason.split(": ", 1)[-1].split():
+            if line and not fits(f"{line} {word}"):
+                lines.append(line)
+                line = word
+            else:
+                line = f"{line} {word}" if line else word
+        if line:
+            lines.append(line)
+    if len(lines) > max_lines:
+        lines = lines[:max_lines]
+        lines[-1] += " ..."
+    return lines

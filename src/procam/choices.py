@@ -25,7 +25,13 @@ DIST_CHOICES = ("auto", *DIST_MODELS)
 #: Calibration methods (:mod:`procam.method`).
 METHODS = ("single-pose", "multi-pose", "camera-only")
 #: Export formats and the world frame of engine exports (:mod:`procam.export`).
-EXPORT_FORMATS = ("opengl", "maps", "kamino410")
+EXPORT_FORMATS = ("opengl", "blender", "unity", "maps", "kamino410", "yaml", "projector-view")
 WORLDS = ("camera", "projector")
+#: The two devices of a camera-projector pair (a frame, a swept device).
+DEVICES = ("camera", "projector")
+#: The simulator's ready rigs (:data:`procam.simulate.PRESETS`).
+SIM_PRESETS = ("paper", "ideal", "lensshift", "hard", "vertical", "ceiling")
+#: The length unit of a calibration (the board's square), which the engine exports turn into metres.
+LENGTH_UNITS = ("mm", "cm", "m", "in")
 #: Which projector coordinates a triangulation uses (:mod:`procam.triangulate`).
 TRIANGULATION_USES = ("both", "col", "row")

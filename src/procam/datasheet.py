@@ -22,6 +22,11 @@ a projector as seen from behind it, facing the screen, not mirrored):
 * **field of view**: the full angles the panel spans, horizontal and vertical, degrees (``atan`` of each edge's
   distance from the principal point over the focal length, summed).
 
+A calibration's datasheet view (:func:`calibration_datasheet`) carries a ``±`` for each number, propagated to
+first order from the ``±`` of ``f``, ``fy``, ``u0``, ``v0`` the calibration reports (:mod:`procam.uncertainty`),
+taken as independent: it is 1 sigma, assumes what those assume (the model is right, the corner noise i.i.d.), and
+a number whose inputs have no ``±`` (a single-pose projector's assumed ``u0p = W/2``) has none.
+
 >>> K = intrinsic_matrix(1920, 1080, throw_ratio=1.5, shift_h=0.0, shift_v=50.0)
 >>> float(K[0, 0]), float(K[0, 2]), float(K[1, 2])
 (2880.0, 959.5, 1079.5)
@@ -33,7 +38,7 @@ a projector as seen from behind it, facing the screen, not mirrored):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -44,7 +49,8 @@ class DatasheetView:
 
     ``throw_ratio`` (``f_x / W``), ``shift_h_pct`` / ``shift_v_pct`` (lens shift, % of the image width / height,
     positive = image right of / above the lens axis), ``offset_pct`` (``2 shift_v``), ``fov_h_deg`` / ``fov_v_deg``
-    (full field of view, degrees), ``aspect`` (``fy / fx``: 1 for square pixels).
+    (full field of view, degrees), ``aspect`` (``fy / fx``: 1 for square pixels); ``std``: the 1-sigma ``±`` of
+    those that have one (:func:`calibration_datasheet`), by the same names.
     """
 
     throw_ratio: float
@@ -54,9 +60,12 @@ class DatasheetView:
     fov_h_deg: float
     fov_v_deg: float
     aspect: float
+    std: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
+        out = {k: float(getattr(self, k)) for k in self.__dataclass_fields__ if k != "std"}
+        out["std"] = {k: float(v) for k, v in self.std.items()}
+        return out
 
 
 def datasheet_view(K, size) -> DatasheetView:
@@ -88,3 +97,47 @@ def intrinsic_matrix(width: int, height: int, *, throw_ratio: float, shift_h: fl
     f = focal_from_throw_ratio(throw_ratio, width)
     u0, v0 = principal_point_from_shift(shift_h, shift_v, (width, height))
     return np.array([[f, 0.0, u0], [0.0, aspect * f, v0], [0.0, 0.0, 1.0]])
+
+
+#: The names of each device's intrinsics in a calibration's ``std`` (:mod:`procam.parameters`).
+_STD_NAMES = {"camera": ("f_c", "fy_c", "u0c", "v0c"), "projector": ("f_p", "fy_p", "u0p", "v0p")}
+
+
+def calibration_datasheet(calib, device: str = "projector") -> DatasheetView | None:
+    """The datasheet view of a calibration's ``device`` (``"projector"`` or ``"camera"``) with the ``±`` of its
+    numbers (module docstring); None when the calibration has no such device."""
+    dev = getattr(calib, device, None)
+    if dev is None:
+        return None
+    view = datasheet_view(dev.K, dev.image_size)
+    K = np.asarray(dev.K, float)
+    W, H = (float(v) for v in dev.image_size)
+    fx, fy, u0, v0 = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    sd = {}
+    for k, name in zip(("fx", "fy", "u0", "v0"), _STD_NAMES[device]):
+        v = calib.std.get(name)
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            v = float("nan")
+        if math.isfinite(v) and v > 0:
+            sd[k] = v
+    std = {}
+    if "fx" in sd:
+        std["throw_ratio"] = sd["fx"] / W
+    if "u0" in sd:
+        std["shift_h_pct"] = 100.0 * sd["u0"] / W
+    if "v0" in sd:
+        std["shift_v_pct"] = 100.0 * sd["v0"] / H
+        std["offset_pct"] = 2.0 * std["shift_v_pct"]
+    for key, f, sf, c, sc, side in (("fov_h_deg", fx, "fx", u0, "u0", W), ("fov_v_deg", fy, "fy", v0, "v0", H)):
+        if sf not in sd:
+            continue
+        a, b = c + 0.5, side - 0.5 - c
+        d_f = -(a / (f * f + a * a) + b / (f * f + b * b))         # d fov / d f (rad per px)
+        d_c = f / (f * f + a * a) - f / (f * f + b * b)             # d fov / d centre
+        var = (d_f * sd[sf]) ** 2 + ((d_c * sd[sc]) ** 2 if sc in sd else 0.0)
+        std[key] = math.degrees(math.sqrt(var))
+    if "fx" in sd and "fy" in sd:
+        std["aspect"] = float(fy / fx) * math.hypot(sd["fx"] / fx, sd["fy"] / fy)
+    return DatasheetView(**{k: getattr(view, k) for k in view.__dataclass_fields__ if k != "std"}, std=std)

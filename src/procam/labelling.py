@@ -209,10 +209,12 @@ def given_labelling(calib, view, lab: Labelling | None):
         if rej:
             p["rejected_corners"] = {d: [{**r, "index": int(lab.to_given(int(r["index"])))} for r in rs]
                                      for d, rs in rej.items()}
-        for key, sol in (("camera_angles_deg", calib.info.get("camera")),
-                         ("projector_angles_deg", calib.info.get("projector"))):
-            if p.get(key) is not None and getattr(sol, "R", None) is not None:
-                p[key] = [float(a) for a in models.board_angles_deg(np.asarray(sol.R, float) @ lab.G, sol.t)]
+        fitted = calib.info.get("board_poses") or {}  # the poses the result's angles came from (a dense fit's)
+        for key, device in (("camera_angles_deg", "camera"), ("projector_angles_deg", "projector")):
+            sol = calib.info.get(device)
+            R, t = fitted.get(device) or (getattr(sol, "R", None), getattr(sol, "t", None))
+            if p.get(key) is not None and R is not None:
+                p[key] = [float(a) for a in models.board_angles_deg(np.asarray(R, float) @ lab.G, t)]
         poses.append(p)
     info = dict(calib.info)
     for k in ("camera", "projector"):

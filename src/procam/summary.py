@@ -3,8 +3,10 @@
 Plain data, no printing: each table is one :class:`TextTable` (its header and rows, every cell a string,
 built by one function here), which the CLI renders with rich and the HTML report as HTML, so the terminal
 and the page show the same cells. The tables: the parameters (:func:`parameter_table`), the poses
-(:func:`pose_table`), the metric verification (:func:`verification_table`, :func:`cross_table`) and the
-leave-one-pose-out spread of the parameters (:func:`spread_table`).
+(:func:`pose_table`), the metric verification (:func:`verification_table`, :func:`cross_table`), the
+leave-one-pose-out spread of the parameters (:func:`spread_table`), and the devices as a projector datasheet
+prints them (:func:`datasheet_table`, :mod:`procam.datasheet`) with how they are mounted (:func:`mounting_lines`,
+:mod:`procam.mounting`).
 
 Every ``±`` is 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise i.i.d.
 (:mod:`procam.uncertainty`).
@@ -17,10 +19,19 @@ from pathlib import Path
 
 import numpy as np
 
+from . import datasheet as _datasheet
 from . import models
 
 #: What every ``±`` in these rows means.
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
+#: What the ``±`` of a single-pose calibration with a real projector (:mod:`procam.single_pose.dense`) covers.
+PLUS_MINUS_DENSE = ("± is 1σ covering the fit's noise, residuals correlated across the image (a block jackknife), "
+                    "the lens models the data cannot tell apart, the priors, and a lens decentring of a few pixels")
+
+
+def plus_minus(calib) -> str:
+    """What the ``±`` of ``calib`` means (:data:`PLUS_MINUS` or :data:`PLUS_MINUS_DENSE`)."""
+    return PLUS_MINUS_DENSE if calib.info.get("dense") is not None else PLUS_MINUS
 
 
 @dataclass(frozen=True)
@@ -48,8 +59,11 @@ def short_name(name) -> str:
 
 
 def projector_freed(calib) -> frozenset:
-    """Which of the single-pose projector assumptions (``"u0p"``, ``"alpha_p"``) the background behind the board
-    replaced by estimates (:mod:`procam.background`); empty when the paper's model was kept."""
+    """Which of the paper projector's assumptions (``"u0p"``, ``"alpha_p"``) a single-pose calibration estimated
+    instead: both with the dense samples (:mod:`procam.single_pose.dense`), those the background lifted without them
+    (:mod:`procam.single_pose.background`); empty when the paper's model was kept."""
+    if calib.info.get("dense") is not None:
+        return frozenset({"u0p", "alpha_p"})
     model = calib.info.get("background_model")  # "single-pose" (unchanged), "assumed", "u0p", "u0p+alpha_p"
     return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
 
@@ -77,14 +91,17 @@ def parameter_status(calib) -> dict:
     """
     out = {}
     W = calib.projector.image_size[0] if calib.projector is not None else None
-    if calib.method.endswith("camera given"):
+    if "camera given" in calib.method:
         for k in ("f_c", "fy_c", "alpha_c", "u0c", "v0c", "k1", "k2", "cam_dist"):
             out[k] = ("given", "given (--camera), not estimated from this pose")
     elif calib.method in ("single-pose", "camera-only") and calib.info.get("principal_point_source") == "image-center":
         for k in ("u0c", "v0c"):
             out[k] = ("prior", "a PRIOR: the image centre ± 32 px per axis (the centre of distortion was not "
                                "reliable), refined by the fit")
-    if calib.method.startswith("single-pose") and calib.projector is not None:
+    if "projector given" in calib.method:
+        for k in ("f_p", "fy_p", "alpha_p", "u0p", "v0p", "proj_dist"):
+            out[k] = ("given", "given (--projector-intrinsics), not estimated from this pose")
+    elif calib.method.startswith("single-pose") and calib.projector is not None and calib.info.get("dense") is None:
         freed = projector_freed(calib)
         K = calib.projector.K
         u0, f, fy = float(K[0, 2]), float(K[0, 0]), float(K[1, 1])
@@ -111,13 +128,49 @@ def parameter_status(calib) -> dict:
 
 
 def projector_assumptions(calib) -> list[str]:
-    """What a single-pose calibration's projector numbers rest on, in words (empty for other methods): the
-    paper's u0p = W/2 and alpha_p = 1 where they were kept, a prior where it held them, what the background
-    estimated instead, and no projector lens distortion (:func:`parameter_status`)."""
-    if calib.method != "single-pose" or calib.projector is None:
+    """What a single-pose calibration's projector numbers rest on, in words (empty for other methods): with the
+    pose's dense samples what each intrinsic rests on (:func:`_dense_assumptions`); otherwise the paper's u0p = W/2
+    and alpha_p = 1 where they were kept, a prior where it held them, what the background estimated instead, and no
+    projector lens distortion (:func:`parameter_status`)."""
+    if not calib.method.startswith("single-pose") or calib.projector is None:
         return []
+    dense = calib.info.get("dense")
+    if dense is not None:
+        return _dense_assumptions(calib, dense)
     st = parameter_status(calib)
     return [st[k][1] for k in ("u0p", "alpha_p", "proj_dist") if k in st]
+
+
+def _dense_assumptions(calib, dense) -> list[str]:
+    """What a dense single-pose projector rests on (:mod:`procam.single_pose.dense`): each intrinsic estimated from
+    the pose's samples or resting on its prior, and the lens model."""
+    if "projector given" in calib.method:
+        return ["the projector's intrinsics and distortion are GIVEN (an earlier calibration), not estimated"]
+    K = calib.projector.K
+    value = {"f_p": K[0, 0], "u0p": K[0, 2], "v0p": K[1, 2], "alpha_p": K[1, 1] / K[0, 0]}
+    where = "the pose's decoded board" + (" and background" if dense.background_used else " (no background)")
+    out = []
+    named = {n: (mu, sd) for n, mu, sd in dense.priors}
+    for name in ("u0p", "v0p", "alpha_p", "f_p"):
+        s = _std(calib, name)
+        fmt = ".4f" if name == "alpha_p" else ".1f"
+        if name in named:
+            mu, sd = named[name]
+            if s is not None and s > 0.7 * sd:
+                out.append(f"{name} rests on its PRIOR {mu:{fmt}} ± {sd:.3g}: this pose barely determines it (the ± "
+                           "includes the prior)")
+                continue
+            out.append(f"{name} = {pm(value[name], s, fmt)} is ESTIMATED from {where} (prior {mu:{fmt}} ± {sd:.3g})")
+        elif name in ("u0p", "v0p"):
+            out.append(f"{name} = {pm(value[name], s, fmt)} is ESTIMATED from {where}")
+    d = calib.projector.distortion
+    if d.model == "opencv" and any(d.coeffs):
+        terms = "k1, k2, p1, p2, k3"
+        out.append(f"the projector's lens distortion (OpenCV {terms}: {', '.join(f'{c:.4g}' for c in d.coeffs)}) is "
+                   f"ESTIMATED (model {dense.model}, chosen by held-out error)")
+    else:
+        out.append("the projector's lens distortion: none estimated (the held-out data ask for none)")
+    return out
 
 
 def _std(calib, key, idx=None):
@@ -173,6 +226,11 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
                      p_dist))
     elif p_dist:
         rows.append(("distortion", "none", p_dist))
+    if p_dist and calib.method.startswith("single-pose") and _std(calib, "proj_dist", 0) is not None:
+        for i, term in enumerate(("k1", "k2", "p1", "p2", "k3")):
+            c, sd = calib.projector.distortion.coeffs[i], _std(calib, "proj_dist", i)
+            if c or sd:
+                rows.append((f"{term} (OpenCV)", "", pm(c, sd, ".4g")))
     rows.append(("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}"))
     if calib.R is not None:
         eul = models.euler_deg(calib.R)
@@ -202,7 +260,7 @@ def parameter_table(calib) -> TextTable:
     projector column for a camera-only calibration."""
     rows = [list(r) for r in parameter_rows(calib)]
     st = parameter_status(calib)
-    if calib.method == "single-pose" and calib.projector is not None:
+    if calib.method == "single-pose" and calib.projector is not None and calib.info.get("dense") is None:
         for r in rows:
             if r[0].startswith("u0"):
                 r[2] += {"estimated": " (from the background)", "assumed": " (assumed W/2)",
@@ -282,3 +340,33 @@ def pose_rows(calib) -> list[tuple[str, str, str, str]]:
         out.append((Path(str(p.get("name", ""))).name, ", ".join(f"{a:.1f}" for a in ca) if ca else "",
                     ", ".join(f"{a:.1f}" for a in pa) if pa else "", pose_verdict(p.get("advice") or {})))
     return out
+
+
+#: The datasheet view's rows: (key of :class:`procam.datasheet.DatasheetView`, label, format).
+DATASHEET_ROWS = (("throw_ratio", "throw ratio (distance / image width)", ".3f"),
+                  ("shift_h_pct", "lens shift, horizontal (% of width; + image right of the axis)", ".2f"),
+                  ("shift_v_pct", "lens shift, vertical (% of height; + image above the axis)", ".2f"),
+                  ("offset_pct", "offset (% of half height; 2 x vertical shift)", ".2f"),
+                  ("fov_h_deg", "field of view, horizontal (deg)", ".2f"),
+                  ("fov_v_deg", "field of view, vertical (deg)", ".2f"))
+
+
+def datasheet_table(calib) -> TextTable:
+    """The devices' intrinsics as a projector datasheet prints them (:func:`procam.datasheet.calibration_datasheet`:
+    throw ratio, lens shift in % of the image, offset, field of view), each with its ± where the calibration
+    has one; the conventions are :mod:`procam.datasheet`'s. No projector column for a camera-only calibration."""
+    views = [_datasheet.calibration_datasheet(calib, d) for d in ("camera", "projector")]
+    views = [v for v in views if v is not None]
+    rows = []
+    for key, label, fmt in DATASHEET_ROWS:
+        rows.append((label, *(pm(getattr(v, key), v.std.get(key), fmt) for v in views)))
+    header = ("datasheet", "camera") + (("projector",) if len(views) > 1 else ())
+    return TextTable(header, tuple(rows))
+
+
+def mounting_lines(calib) -> list[str]:
+    """How the devices are mounted, in sentences (:func:`procam.mounting.mounting`: upside-down or portrait
+    relative to the camera, where the projector sits)."""
+    from .mounting import mounting
+
+    return mounting(calib).lines()

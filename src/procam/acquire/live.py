@@ -33,16 +33,18 @@ from .cameras.base import to_gray
 @dataclass(frozen=True)
 class AdviseResult:
     """How :func:`advise` ended: ``reason`` (``"key"``, ``"auto"``, ``"max-frames"``, ``"quit"``), the last
-    :class:`~procam.advisor.Advice` (None if no frame was seen) and the number of ``frames``."""
+    :class:`~procam.advisor.Advice` (None if no frame was seen), the number of ``frames`` and ``t0``, the clock
+    reading the advice's ``time_s`` counts from."""
 
     reason: str
     advice: object
     frames: int
+    t0: float = 0.0
 
 
 def advise(camera, advisor, *, on_advice: Callable | None = None, poll: Callable | None = None,
            auto: bool = False, max_frames: int | None = None, clock: Callable[[], float] = time.monotonic,
-           use_camera_time: bool = True) -> AdviseResult:
+           use_camera_time: bool = True, t0: float | None = None) -> AdviseResult:
     """Run the advisor on the camera's live frames until the capture should start (or the loop ends).
 
     Parameters
@@ -56,6 +58,8 @@ def advise(camera, advisor, *, on_advice: Callable | None = None, poll: Callable
     max_frames : end after this many frames (scripts, tests).
     clock : time source when the camera's time stamps are not used.
     use_camera_time : use each frame's own time stamp (``Frame.timestamp``) for the stillness test.
+    t0 : the clock reading that is time 0 (default: the first frame's): each advice's ``time_s`` is seconds since
+        then, not the camera's or the machine's uptime clock.
 
     Returns
     -------
@@ -68,17 +72,19 @@ def advise(camera, advisor, *, on_advice: Callable | None = None, poll: Callable
         frame = camera.grab()
         img = to_gray(frame.image)
         t = frame.timestamp if use_camera_time and frame.timestamp is not None else clock()
-        last = advisor.update(img, t)
+        if t0 is None:
+            t0 = t
+        last = advisor.update(img, t - t0)
         n += 1
         if on_advice is not None:
             on_advice(img, last)
         what = poll() if poll is not None else None
         if what in ("capture", "quit"):
-            return AdviseResult("key" if what == "capture" else "quit", last, n)
+            return AdviseResult("key" if what == "capture" else "quit", last, n, t0)
         if auto and last.ready:
-            return AdviseResult("auto", last, n)
+            return AdviseResult("auto", last, n, t0)
         if max_frames is not None and n >= max_frames:
-            return AdviseResult("max-frames", last, n)
+            return AdviseResult("max-frames", last, n, t0)
 
 
 def advisor_options(target: float, still_s: float, still_px: float):
@@ -148,6 +154,7 @@ class LiveAdvice:
         self.advisor = None
         self.window = None
         self.best = None   # (score, calibration, source) of the captured poses
+        self.t0 = None     # the clock reading of the session's first frame: time_s counts from it
 
     def close(self):
         if self.window is not None:
@@ -186,7 +193,10 @@ class LiveAdvice:
                 self.window.show(img, advice)
 
         poll = self.window.poll if self.window is not None else self.poll
-        return advise(camera, advisor, on_advice=on_advice, poll=poll, auto=self.auto, max_frames=self.max_frames)
+        res = advise(camera, advisor, on_advice=on_advice, poll=poll, auto=self.auto, max_frames=self.max_frames,
+                     t0=self.t0)
+        self.t0 = res.t0
+        return res
 
     def learn(self, folder, name: str | None = None, checked=None):
         """Calibrate a captured pose quickly (single-pose) and use its R, T, K for the next advice when it is the

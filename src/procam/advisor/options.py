@@ -178,7 +178,8 @@ class Advice:
 
     Attributes
     ----------
-    frame : index of the frame (0, 1, ... per :class:`Advisor`); ``time_s`` its time stamp (s).
+    frame : index of the frame (0, 1, ... per :class:`Advisor`); ``time_s`` its time, seconds since the advising
+        session's first frame (:func:`procam.acquire.live.advise`).
     state : ``"no-board"``, ``"adjust"``, ``"good"`` (good — hold still) or ``"ready"`` (good and still).
     message : the headline shown to the user.
     actions : :class:`Action` s, most urgent first.

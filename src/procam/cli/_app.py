@@ -7,6 +7,7 @@ everything heavy inside their function, so ``procam --help`` and ``--version`` s
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import errno
 import functools
@@ -86,6 +87,21 @@ class _LazyConsole:
 
 console = _LazyConsole()
 err_console = _LazyConsole(stderr=True)
+
+
+@contextlib.contextmanager
+def text_on_stderr(on: bool = True):
+    """While stdout carries data (``--json`` lines), print the command's text lines (:func:`say`, :func:`warn`,
+    tables) on stderr; ``on=False`` changes nothing."""
+    if not on:
+        yield
+        return
+    old = console._console
+    console._console = err_console.real
+    try:
+        yield
+    finally:
+        console._console = old
 
 
 def escape(text: str) -> str:
@@ -186,6 +202,10 @@ DecodeMethod = choice("DecodeMethod", choices.DECODE_METHODS)
 Detector = choice("Detector", choices.DETECTORS)
 Refiner = choice("Refiner", choices.REFINERS)
 Estimator = choice("Estimator", choices.ESTIMATORS)
+DistModel = choice("DistModel", choices.DIST_CHOICES)
+SimPreset = choice("SimPreset", choices.SIM_PRESETS)
+DeviceName = choice("DeviceName", choices.DEVICES)
+BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
 
@@ -272,6 +292,11 @@ RefinerOpt = Annotated[Refiner, typer.Option(
                      "(OpenCV cornerSubPix, the paper's) or none.")]
 WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
 EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
+BackgroundOpt = Annotated[BackgroundMode, typer.Option(
+    "--background", help="Single-pose: the decoded scene behind the board. off: the board alone calibrates the "
+    "projector; free (default), auto, check: the background is the second plane of the projector's dense fit (with a "
+    "view without dense samples: free lifts the paper's u0p = W/2 where the background determines it, auto only when "
+    "it refutes it, check only says so).")]
 
 #: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
 POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),
@@ -360,6 +385,20 @@ def distinct_poses(poses) -> None:
         if key in seen:
             fail(f"{p}: this pose folder is given twice (also as {seen[key]}); give each pose once")
         seen[key] = p
+
+
+def load_pose(pose_dir, projector, calib, order=None, step=None):
+    """The capture of one pose folder for a command that has a calibration: the projector size from
+    ``--projector``, else the folder's ``patterns.json``, else the calibration's; its warnings printed."""
+    from .. import capture
+
+    size = optional_size(projector)
+    if size is None and not (Path(pose_dir) / "patterns.json").exists():
+        size = tuple(calib.projector.image_size)
+    cap = capture.load_capture(pose_dir, size, value(order), step=step)
+    for w in cap.warnings:
+        warn(w)
+    return cap
 
 
 def assumed_size(calib, key: str) -> str:

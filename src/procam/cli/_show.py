@@ -52,7 +52,12 @@ def print_calibration(calib, check=None) -> None:
     from ..verdict import MEANING, flagged
 
     console.print(rich_table(summary.parameter_table(calib),
-                             plain(f"procam calibration ({calib.method}); {summary.PLUS_MINUS}")))
+                             plain(f"procam calibration ({calib.method}); {summary.plus_minus(calib)}")))
+    for line in summary.projector_assumptions(calib):
+        say(f"projector: {line}")
+    console.print(rich_table(summary.datasheet_table(calib), "as a projector datasheet prints it (docs/datasheet.md)"))
+    for line in summary.mounting_lines(calib):
+        say(f"mounting: {line}")
     poses = summary.pose_table(calib)
     if poses.rows:
         console.print(rich_table(poses, "poses"))

@@ -12,7 +12,7 @@ from typing import Optional
 
 import typer
 
-from ._app import BoardOpt, SquareOpt, app, fail, parse_board, parse_size, say, user_errors
+from ._app import BoardOpt, app, fail, parse_board, parse_size, say, text_on_stderr, user_errors
 from ._live import live_advice
 
 
@@ -36,7 +36,8 @@ def parse_angles(text: str, option: str) -> tuple[float, float, float]:
 @user_errors
 def advise_cmd(
     board: BoardOpt,
-    square: SquareOpt,
+    square: Optional[float] = typer.Option(None, "--square", help="Square size, the length unit of the advice's "
+                                           "distances (default: the calibration's, else 1: lengths in squares)."),
     camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | virtual "
                                "(the simulator's view of the board under the projector's white light)."),
     calibration: Optional[Path] = typer.Option(None, "--calibration", help="A calibration of this camera (procam JSON "
@@ -61,9 +62,11 @@ def advise_cmd(
     that has R, T, in the projector), the predicted std of f_c and f_p for that pose, and which way to turn the
     board; Space/Enter or --auto ends it."""
     from ..acquire import cameras as cams
-    from ..acquire.live import advisor_options, load_calibration_for
+    from ..acquire.live import advisor_options, calibration_square, load_calibration_for
 
-    b = parse_board(board, square)
+    if calibration is not None and square is None:
+        square = calibration_square(calibration)
+    b = parse_board(board, 1.0 if square is None else square)
     options = advisor_options(target, still, still_px)
     if max_frames is not None and not 1 <= max_frames <= 10_000_000:
         fail(f"--max-frames must be >= 1, got {max_frames}")
@@ -98,7 +101,7 @@ def advise_cmd(
     session = live_advice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
                           max_frames=max_frames)
     try:
-        with cam:
+        with cam, text_on_stderr(json_lines):
             res = session.run(cam)
     finally:
         session.close()

@@ -12,8 +12,8 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain, user_errors,
-                   value)
+from ._app import (Order, app, console, err_console, fail, is_tty, number, parse_board, parse_size, plain,
+                   text_on_stderr, user_errors, value)
 
 
 def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
@@ -147,7 +147,7 @@ def capture_cmd(
                              settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
     rig = Rig(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
               exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
-    with _Printer() as printer:
+    with text_on_stderr(json_lines), _Printer() as printer:     # --json: stdout carries the advice only
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, app, console, fail, number, output_dir, say, user_errors
+from ._app import ForceOpt, SimPreset, app, console, fail, number, output_dir, say, user_errors, value
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
@@ -22,8 +22,9 @@ def _row(t, name, true, est, std=None, fmt=".2f"):
 @user_errors
 def demo_cmd(
     out_dir: Path = typer.Argument(Path("procam-demo"), help="Folder for the capture and the results."),
-    preset: str = typer.Option("ideal", "--preset", help="Simulated rig: ideal (the method's assumptions hold) "
-                                                         "or paper (the seed paper's rig, u0p != W/2)."),
+    preset: SimPreset = typer.Option(SimPreset.ideal, "--preset", help="Simulated rig: ideal (the method's "
+                                     "assumptions hold), paper (the seed paper's rig, u0p != W/2) or another of "
+                                     "procam simulate's."),
     seed: int = typer.Option(0, "--seed", help="Noise seed."),
     force: ForceOpt = False,
 ):
@@ -44,6 +45,7 @@ def demo_cmd(
     from ..stats import rms
     from . import _show
 
+    preset = value(preset)
     if preset not in simulate.PRESETS:
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
     number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")

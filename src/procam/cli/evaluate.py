@@ -112,5 +112,5 @@ def evaluate_cmd(
         d = {"format": EVALUATION_FORMAT, "version": 1, "calibration": str(calibration), "method": calib.method,
              **ev.to_dict(), "verification": check.to_dict(),
              "evidence": [{"level": lv, "reason": r} for lv, r in evidence]}
-        _files.write_text(out, json.dumps(_files.to_jsonable(d), indent=1))
+        _files.write_text(out, json.dumps(_files.portable_names(_files.to_jsonable(d), out.parent), indent=1))
         say(f"wrote {out}")

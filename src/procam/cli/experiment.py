@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import typer
 
 from .._fmt import fmt_number
-from ._app import (BoardOpt, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
+from ._app import (BoardOpt, DistModel, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
                    err_console, fail, is_tty, optional_size, output_dir, parse_board, plain, pose_options, say,
                    user_errors, value, with_pose_options)
 
@@ -79,8 +79,8 @@ def experiment_cmd(
     joint_refine: bool = typer.Option(False, "--refine", help="Jointly refine every multi-pose calibration. Off by default "
                                                         "here (Moreno-Taubin's frozen-intrinsics stereo, as the paper), "
                                                         "unlike `procam calibrate`, which refines unless --no-refine."),
-    cam_dist: str = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
-    proj_dist: str = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
+    cam_dist: DistModel = typer.Option("k1k2p1p2k3", "--cam-dist", help="Multi-pose camera distortion model."),
+    proj_dist: DistModel = typer.Option("k1k2p1p2k3", "--proj-dist", help="Multi-pose projector distortion model."),
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
@@ -109,6 +109,7 @@ def experiment_cmd(
         fail(f"{len(poses)} poses with --min-set {min_set} make {n_sets} pose sets to calibrate (at most {MAX_SETS}); "
              "raise --min-set or give fewer poses")
     output_dir(out, "-o", "experiment", force)
+    cam_dist, proj_dist = value(cam_dist), value(proj_dist)
     for name, d in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
         if d not in DIST_CHOICES:
             fail(f"{name} must be one of {', '.join(DIST_CHOICES)}, got {d!r}")

@@ -1,8 +1,8 @@
-"""``procam export``: a calibration for other tools (OpenGL/Unity matrices, remap tables, kamino410 XML)."""
+"""``procam export``: a calibration for other tools (Blender, Unity, OpenGL/TouchDesigner, remap tables, kamino410
+XML, OpenCV YAML) and the projector's view of a pose."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Optional
@@ -10,81 +10,208 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import ForceOpt, app, choice, fail, number, output_dir, output_path, say, user_errors, value
+from ._app import (ForceOpt, OrderOpt, ProjectorOpt, StepOpt, app, choice, fail, load_pose, number, optional_size,
+                   output_dir, output_path, say, user_errors, value, warn)
 
 Format = choice("Format", choices.EXPORT_FORMATS)
 World = choice("World", choices.WORLDS)
+Unit = choice("Unit", choices.LENGTH_UNITS)
+
+#: The output file suffixes of each file format (``maps`` writes a folder).
+SUFFIXES = {"opengl": (".json",), "blender": (".json",), "unity": (".json",), "kamino410": (".xml", ".yml", ".yaml"),
+            "yaml": (".yml", ".yaml", ".xml"), "projector-view": (".png",)}
+ENGINES = ("opengl", "blender", "unity")
+
+
+def _clip(fmt: str, near, far, unit: str):
+    """``(near, far)`` checked, in the calibration's unit (opengl) or in metres (blender, unity: None = the
+    engine's defaults)."""
+    if near is None and far is None and fmt != "opengl":
+        return None, None
+    if near is None or far is None:
+        fail(f"--format {fmt} needs --near and --far together (clipping distances in the calibration's units, "
+             "e.g. mm)" + ("" if fmt == "opengl" else "; leave both out for the engine's defaults"))
+    if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far <= 1e12):
+        fail(f"--near and --far must be finite with 0 < near < far <= 1e12, got {near} and {far}")
+    if far / near > 1e7:
+        fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
+             "so raise --near")
+    if fmt == "opengl":
+        return near, far
+    from ..export.frames import metres_per_unit
+
+    return near * metres_per_unit(unit), far * metres_per_unit(unit)
+
+
+def _check_outputs(fmt, out, calibration, inputs, force):
+    """Every output file checked before any work (the neighbours an export writes beside ``out`` too)."""
+    if fmt == "maps":
+        if out.exists() and not out.is_dir():
+            fail(f"-o {out}: --format maps writes several files; give a folder")
+        output_dir(out, "-o", "export", force)
+        return
+    output_path(out, "-o", SUFFIXES[fmt], inputs=inputs)
+    if fmt == "blender":
+        from ..io.engines import blender_script_path
+
+        output_path(blender_script_path(out), "-o (its script)", (".py",), inputs=inputs)
+    if fmt == "projector-view":
+        from ..io.engines import projector_view_paths
+
+        output_path(projector_view_paths(out)[1], "-o (its mask)", (".png",), inputs=inputs)
+
+
+def _distortion(calib, out):
+    """Write the distortion maps beside an engine export; returns the document entry and says what was written."""
+    from ..export.maps import distortion_maps
+    from ..io.engines import distortion_map_paths, save_distortion_maps
+
+    with_lens = [n for n in ("camera", "projector") if getattr(calib, n).distortion.model != "none"]
+    for npz, png in distortion_map_paths(out, with_lens).values():
+        output_path(npz, "-o (its distortion map)", (".npz",), inputs=(out,))
+        output_path(png, "-o (its distortion map)", (".png",), inputs=(out,))
+    maps = save_distortion_maps(out, distortion_maps(calib))
+    for name, m in maps.items():
+        say(f"wrote {out.parent / m['remap']} and {out.parent / m['st_map']} ({name} lens distortion, which the "
+            f"engine camera cannot hold: {m['what']} maps)")
+    return maps
+
+
+def _projector_view(calib, out, pose, maps_file, projector, order, step):
+    from .. import decode, io
+    from ..export.projector_view import projector_view
+    from ..io import files as _files
+
+    if pose is None:
+        fail("--format projector-view needs --pose POSE_DIR (the captured pose whose white frame it remaps)")
+    cap = load_pose(pose, projector, calib, order, step)
+    ps = cap.pattern_set
+    if maps_file is not None:
+        m = io.load_decoded_maps(maps_file)
+        if m["col"].shape != cap.stack.shape[1:] or tuple(m["projector_size"]) != (ps.width, ps.height):
+            fail(f"--maps {maps_file}: its maps are not of {pose} (another camera size or projector size)")
+        col, row, valid = m["col"], m["row"], m["valid_col"] & m["valid_row"]
+    else:
+        d = decode.decode(cap.stack, ps)
+        col, row, valid = d.col, d.row, d.valid_col & d.valid_row
+    white = _files.read_image(cap.files[ps.white], gray=False)
+    view = projector_view(col, row, valid, white, (ps.width, ps.height))
+    if not view.mask.any():
+        fail(f"{pose}: nothing was decoded; check the decode picture (procam decode --png)")
+    written = io.engines.save_projector_view(view, out)
+    say(f"wrote {written[0]} (the camera's view in {ps.width}x{ps.height} projector pixels) and {written[1]} (the "
+        f"decoded-valid mask: {view.coverage:.0%} of the projector)")
 
 
 @app.command("export")
 @user_errors
 def export_cmd(
-    calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML)."),
-    fmt: Format = typer.Option(..., "--format", help="opengl (JSON with projection/view matrices), maps (remap "
-                                                 "tables, .npz, into a folder) or kamino410 (their XML)."),
-    out: Path = typer.Option(..., "-o", "--out", help="Output file (opengl: .json; kamino410: .xml) or folder (maps)."),
-    near: Optional[float] = typer.Option(None, "--near", help="opengl: near clipping distance, calibration units."),
-    far: Optional[float] = typer.Option(None, "--far", help="opengl: far clipping distance, calibration units."),
-    world: World = typer.Option(World.camera, "--world", help="opengl: world frame, camera or projector."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON or YAML, OpenCV YAML/XML, kamino410 "
+                                                 "XML)."),
+    fmt: Format = typer.Option(..., "--format", help="blender (JSON + script), unity (JSON), opengl (JSON with "
+                                                     "projection/view matrices, TouchDesigner too), maps (remap "
+                                                     "tables, .npz, into a folder), kamino410 (their XML), yaml "
+                                                     "(OpenCV FileStorage with procam's keys) or projector-view (PNG "
+                                                     "of a pose seen from the projector)."),
+    out: Path = typer.Option(..., "-o", "--out", help="Output file (.json; kamino410 .xml; yaml .yml/.xml; "
+                                                    "projector-view .png) or folder (maps)."),
+    near: Optional[float] = typer.Option(None, "--near", help="Near clipping distance, calibration units (opengl: "
+                                                              "required; blender, unity: default the engine's)."),
+    far: Optional[float] = typer.Option(None, "--far", help="Far clipping distance, calibration units."),
+    world: World = typer.Option(World.camera, "--world", help="Engines: the device whose frame is the world, taken "
+                                                              "as mounted upright."),
+    unit: Unit = typer.Option(Unit.mm, "--unit", help="blender, unity: the calibration's length unit (the board's "
+                                                      "square), turned into metres."),
     y_down: bool = typer.Option(False, "--y-down", help="opengl: NDC y down (Vulkan) instead of up (OpenGL, Unity)."),
     zero_to_one: bool = typer.Option(False, "--zero-to-one", help="opengl: NDC depth 0..1 instead of -1..1."),
     rectify: bool = typer.Option(False, "--rectify", help="maps: also the stereo rectification maps of both devices."),
     scale: float = typer.Option(1.0, "--scale", help="maps --rectify: rectified focal length in units of the "
                                                      "camera's."),
+    pose: Optional[Path] = typer.Option(None, "--pose", help="projector-view: the pose folder (its white frame)."),
+    maps_file: Optional[Path] = typer.Option(None, "--maps", help="projector-view: the pose's decoded maps (procam "
+                                                                 "decode -o), instead of decoding it again."),
+    projector: ProjectorOpt = None,
+    order: OrderOpt = None,
+    step: StepOpt = None,
     force: ForceOpt = False,
 ):
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
+    from .. import io
+
+    fmt, world, unit = value(fmt), value(world), value(unit)
+    inputs = tuple(p for p in (calibration, pose, maps_file) if p is not None)
+    _check_outputs(fmt, out, calibration, inputs, force)
+    for opt, given, fmts in (("--pose", pose, ("projector-view",)), ("--maps", maps_file, ("projector-view",)),
+                             ("--rectify", rectify, ("maps",)), ("--y-down", y_down, ("opengl",)),
+                             ("--zero-to-one", zero_to_one, ("opengl",)), ("--near", near, ENGINES),
+                             ("--far", far, ENGINES)):
+        if given and fmt not in fmts:
+            fail(f"{opt} belongs to --format {' or '.join(fmts)}, not {fmt}")
+    clip = _clip(fmt, near, far, unit) if fmt in ENGINES else (None, None)
+    if fmt == "maps":
+        number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
+    calib = io.load_calibration(calibration)
+    if projector is not None and fmt != "projector-view":
+        calib = io.complete_sizes(calib, proj_size=optional_size(projector))
+    for w in calib.warnings:
+        if "does not store the projector size" in w:
+            warn(w + " (--projector WIDTHxHEIGHT)")
+    if calib.projector is None or calib.R is None:
+        fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
+    if fmt == "projector-view":
+        return _projector_view(calib, out, pose, maps_file, projector, order, step)
+    if fmt in ENGINES:
+        from .. import export as _ex
+
+        if fmt == "opengl":
+            doc = _ex.opengl_document(calib, *clip, world=world, y_up=not y_down, zero_to_one=zero_to_one)
+        elif fmt == "blender":
+            doc = _ex.blender_document(calib, world=world, unit=unit, near_m=clip[0], far_m=clip[1])
+        else:
+            doc = _ex.unity_document(calib, world=world, unit=unit, near_m=clip[0], far_m=clip[1])
+        doc["calibration"] = Path(calibration).name
+        doc["distortion_maps"] = _distortion(calib, out)
+        written = (io.engines.save_blender(doc, out, _ex.blender.script_text()) if fmt == "blender"
+                   else [io.engines.save_document(doc, out)])
+        for p in written:
+            say(f"wrote {p}")
+        if not doc["distortion_maps"]:
+            say("neither device has lens distortion: the engine cameras are the whole calibration")
+        return
+    if fmt in ("kamino410", "yaml"):
+        (io.save_kamino410 if fmt == "kamino410" else io.save_opencv_yaml)(calib, out)
+        say(f"wrote {out}")
+        if calib.camera.distortion.model == "division":
+            say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
+        return
+    _maps(calib, out, force, rectify, scale)
+
+
+def _maps(calib, out, force, rectify, scale):
     import numpy as np
 
     from .. import export as _ex
     from .. import io
-    from ..io.files import to_jsonable, write_text
 
-    fmt, world = value(fmt), value(world)
-    if fmt == "opengl":
-        output_path(out, "-o", (".json",), inputs=(calibration,))
-        if near is None or far is None:
-            fail("--format opengl needs --near and --far (clipping distances in the calibration's units, e.g. mm)")
-        if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far <= 1e12):
-            fail(f"--near and --far must be finite with 0 < near < far <= 1e12, got {near} and {far}")
-        if far / near > 1e7:
-            fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
-                 "so raise --near")
-    elif fmt == "kamino410":
-        output_path(out, "-o", (".xml", ".yml", ".yaml"), inputs=(calibration,))
-    else:
-        if out.exists() and not out.is_dir():
-            fail(f"-o {out}: --format maps writes several files; give a folder")
-        number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
-        output_dir(out, "-o", "export", force)
-    calib = io.load_calibration(calibration)
-    if calib.projector is None or calib.R is None:
-        fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
-    if fmt == "opengl":
-        doc = _ex.opengl_document(calib, near, far, world=world, y_up=not y_down, zero_to_one=zero_to_one)
-        doc["calibration"] = str(calibration)
-        write_text(out, json.dumps(to_jsonable(doc), indent=1))
-        say(f"wrote {out}")
-    elif fmt == "kamino410":
-        io.save_kamino410(calib, out)
-        say(f"wrote {out}")
-        if calib.camera.distortion.model == "division":
-            say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
-    else:
-        output_dir(out, "-o", "export", force, create=True)
-        written = []
-        cam, proj = calib.camera, calib.projector
-        mx, my = _ex.undistort_maps(cam)
-        written.append(io.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
-                                   size=np.array(cam.image_size)))
-        mx, my = _ex.predistort_maps(proj)
-        written.append(io.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
-                                   size=np.array(proj.image_size)))
-        if rectify:
-            rect = _ex.stereo_rectify(calib, scale=scale)
-            for name, dev, k in (("camera", cam, "1"), ("projector", proj, "2")):
-                mx, my = _ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
-                written.append(io.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
-                                           size=np.array(rect["size" + k])))
-        for p in written:
-            say(f"wrote {p}")
+    output_dir(out, "-o", "export", force, create=True)
+    written = []
+    cam, proj = calib.camera, calib.projector
+    mx, my = _ex.undistort_maps(cam)
+    written.append(io.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
+                                size=np.array(cam.image_size)))
+    mx, my = _ex.predistort_maps(proj)
+    written.append(io.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
+                                size=np.array(proj.image_size)))
+    if rectify:
+        from ..export.rectify import turn_words
+
+        rect = _ex.stereo_rectify(calib, scale=scale)
+        for name, dev, k in (("camera", cam, "1"), ("projector", proj, "2")):
+            mx, my = _ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
+            turn = rect["rows_along_deg"][name]
+            written.append(io.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
+                                        Q=rect["Q"], size=np.array(rect["size" + k]), rows_along_deg=np.array(turn)))
+            say(f"{name}: rectified image {rect['size' + k][0]}x{rect['size' + k][1]}, {turn_words(turn)} "
+                f"(its rows run at {turn:+.1f} deg in the {name}'s image)")
+    for p in written:
+        say(f"wrote {p}")

@@ -9,8 +9,8 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, optional_size,
-                   output_path, parse_size, plain, say, user_errors, value, warn)
+from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, load_pose, output_path,
+                   parse_size, plain, say, user_errors, value)
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 
@@ -41,7 +41,7 @@ def reconstruct_cmd(
     import numpy as np
 
     from .. import board as _board
-    from .. import capture, decode, io, pipeline
+    from .. import decode, io, pipeline
     from ..io.formats import PLY_COMMENT
     from ..io import files as _files
     from .. import reconstruct as rc
@@ -61,14 +61,10 @@ def reconstruct_cmd(
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot triangulate; give a procam calibration")
-    size = optional_size(projector)
-    if size is None and not (Path(pose_dir) / "patterns.json").exists():
-        size = tuple(calib.projector.image_size)
-    cap = capture.load_capture(pose_dir, size, value(order), step=step)
-    for w in cap.warnings:
-        warn(w)
+    cap = load_pose(pose_dir, projector, calib, order, step)
     ps = cap.pattern_set
     H, W = cap.stack.shape[1:]
+    calib = io.complete_sizes(calib, (W, H), (ps.width, ps.height))   # sizes the calibration file did not store
     if (W, H) != tuple(calib.camera.image_size):
         fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
              f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"

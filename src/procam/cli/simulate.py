@@ -9,7 +9,7 @@ import typer
 
 from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
-from ._app import ForceOpt, app, console, fail, is_tty, number, say, user_errors, warn
+from ._app import DeviceName, ForceOpt, Order, SimPreset, app, console, fail, is_tty, number, say, user_errors, value, warn
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
@@ -38,26 +38,27 @@ def _parse_pose(text: str) -> tuple[float, float, float]:
 @user_errors
 def simulate_cmd(
     out_dir: Path = typer.Argument(..., help="Output folder for the images, truth.json and patterns.json."),
-    preset: str = typer.Option("paper", "--preset", help="Rig: paper (the paper's simulated procam), ideal "
+    preset: SimPreset = typer.Option(SimPreset.paper, "--preset", help="Rig: paper (the paper's simulated procam), ideal "
                                "(u0p = W/2, alpha_p = 1, stronger lens distortion), lensshift (v0p beyond the "
                                "panel, projector lens distortion, a wall), hard (lenses OpenCV does not describe, "
                                "a room corner with objects), vertical (projector 0.6 m below the camera) or "
                                "ceiling (upside-down projector)."),
     pose: str = typer.Option(None, "--pose", help="Board angles PSI,NU,PHI in degrees (XYZ Euler, board -> "
                              "device; default: the recommended pose)."),
-    frame: str = typer.Option("camera", "--frame", help="Device frame of --pose: camera or projector."),
+    frame: DeviceName = typer.Option(DeviceName.camera, "--frame", help="Device frame of --pose."),
     distance: float = typer.Option(None, "--distance", help="Board-centre depth in mm along the device's axis "
                                    "(default: the nearest that keeps the whole board in both images)."),
     noise: float = typer.Option(None, "--noise", help="Camera read noise in 8-bit DN (default 1.0); 0 renders "
                                 "without any noise (no shot noise either)."),
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
-    order: str = typer.Option("opencv", "--order", help="Sequence order: opencv (default) or moreno."),
+    order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
     force: ForceOpt = False,
 ):
     """Render a synthetic Gray-code capture of a chessboard, with its ground truth (truth.json)."""
     from .. import simulate as sim
 
+    preset, frame, order = value(preset), value(frame), value(order)
     if preset not in sim.PRESETS:
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):

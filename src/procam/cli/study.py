@@ -10,7 +10,7 @@ import typer
 
 from .._fmt import fmt_number
 from ..errors import ProcamError
-from ._app import ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors
+from ._app import DeviceName, ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors, value
 
 #: Most cell-trials (cells x (trials + 1)) a study may run: about a day of one core at ~1 ms per trial.
 MAX_WORK = 10**8
@@ -19,7 +19,7 @@ MAX_WORK = 10**8
 @app.command("study")
 @user_errors
 def study(
-    device: str = typer.Argument(..., help="camera or projector: the device whose board rotation is swept."),
+    device: DeviceName = typer.Argument(..., help="The device whose board rotation is swept."),
     output: Path = typer.Option(..., "-o", "--out", help="Output folder (CSV, JSON summary, PNG figures)."),
     grid: str = typer.Option("-45:45:5", help="Heat-map angles for both ψ and ν: START:STOP:STEP or a comma list (deg)."),
     psi_grid: Optional[str] = typer.Option(None, "--psi", help="ψ angles (deg), overrides --grid for ψ."),
@@ -47,7 +47,7 @@ def study(
 
     from ..paper.study import StudyConfig, parse_grid, run_study
 
-    device = device.lower()
+    device = value(device)
     if device not in ("camera", "projector"):
         raise ProcamError(f"device must be camera or projector, got {device!r}")
     number(trials, "--trials", lo=0, hi=10**6, what="a number of trials")

@@ -11,6 +11,7 @@
     calibration_file  one calibration file, whatever its format: save_calibration (by suffix), load_calibration
                       and load_camera_intrinsics (by content)
     maps              decoded maps (procam decode -o) and remap tables as .npz
+    engines           the engine exports' files: their JSON, the Blender script, distortion maps, the projector's view
     ply               point clouds as binary PLY
 
 Submodules load on first use (PEP 562): ``procam.io.load_calibration`` imports the calibration readers when it
@@ -22,7 +23,7 @@ from __future__ import annotations
 import importlib
 
 _SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "calibration_file",
-               "maps", "ply")
+               "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {
@@ -33,7 +34,8 @@ _EXPORTS = {
     "save_opencv_yaml": "opencv",
     "KAMINO410_KEYS": "kamino410", "load_kamino410": "kamino410", "save_kamino410": "kamino410",
     "load_calibration": "calibration_file", "load_camera_intrinsics": "calibration_file",
-    "save_calibration": "calibration_file",
+    "load_projector_intrinsics": "calibration_file",
+    "save_calibration": "calibration_file", "complete_sizes": "calibration_file",
     "load_decoded_maps": "maps", "save_decoded_maps": "maps", "save_maps": "maps",
     "read_ply": "ply", "write_ply": "ply",
 }

@@ -132,6 +132,26 @@ def load_calibration(path) -> Calibration:
     return validate_calibration(_read_storage(path, CALIBRATION_FORMATS, _storage_calibration), path)
 
 
+def complete_sizes(calib: Calibration, cam_size=None, proj_size=None) -> Calibration:
+    """``calib`` with the image sizes its file did not store (``info["image_size_assumed"]``: ``2 (u0, v0)`` was
+    assumed) replaced by the sizes a capture tells (``cam_size``, ``proj_size``: (width, height) or None); a size
+    the file stored is kept (a mismatch is the caller's to report).  The warning about the assumed size goes with
+    it.  Used by the commands that read a pose with a calibration (kamino410's own files store no projector size)."""
+    assumed = list((calib.info or {}).get("image_size_assumed", ()))
+    kw = {}
+    for key, name, size in (("cam_size", "camera", cam_size), ("proj_size", "projector", proj_size)):
+        dev = getattr(calib, name)
+        if size is not None and key in assumed and dev is not None:
+            kw[name] = Device(dev.K, tuple(int(v) for v in size), dev.distortion)
+            assumed.remove(key)
+    if not kw:
+        return calib
+    info = {**calib.info, "image_size_assumed": assumed} if assumed else \
+        {k: v for k, v in calib.info.items() if k != "image_size_assumed"}
+    warnings = tuple(w for w in calib.warnings if "does not store the projector size" not in w or "projector" not in kw)
+    return calib.replace(info=info, warnings=warnings, **kw)
+
+
 def load_camera_intrinsics(path, image_size=None) -> Device:
     """One camera's intrinsics (K, distortion, image size) from the files people have: :func:`load_calibration`'s
     reader asking for the camera only.
@@ -190,3 +210,25 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
         raise CalibrationFileError(f"{path}: the file does not say the image size the intrinsics belong to; "
                                    "give it (width x height)")
     return Device(K, size, dist if dist is not None else Distortion())
+
+
+def load_projector_intrinsics(path, image_size=None) -> Device:
+    """A projector's intrinsics and distortion (a :class:`~procam.calibration.Device`) from a procam calibration
+    in any format :func:`load_calibration` reads (procam JSON, OpenCV FileStorage YAML/XML with procam's keys,
+    kamino410's XML): the file's ``projector``.
+
+    ``image_size``: the projector (width, height) the intrinsics will be used with; they must agree.
+
+    Raises :class:`~procam.errors.CalibrationFileError` when the file holds no projector (a camera-only file) or
+    one of another size.
+    """
+    calib = load_calibration(path)
+    if calib.projector is None:
+        raise CalibrationFileError(f"{path}: holds no projector (a camera-only calibration); give a procam "
+                                   "calibration of this projector")
+    size = tuple(int(v) for v in calib.projector.image_size)
+    if image_size is not None and size != tuple(int(v) for v in image_size):
+        raise CalibrationFileError(f"{path}: the projector's intrinsics are for {size[0]}x{size[1]}, this pose's "
+                                   f"projector is {int(image_size[0])}x{int(image_size[1])}; give the calibration "
+                                   "of this projector at this resolution")
+    return calib.projector

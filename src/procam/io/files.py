@@ -115,7 +115,8 @@ def procam_wrote(path) -> bool:
     Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
     :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a calibration FileStorage file
     (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG
-    marked ``procam`` (every figure and image procam writes is), or an empty file.
+    marked ``procam`` (every figure and image procam writes is), a script whose first line is procam's mark, or
+    an empty file.
     """
     path = Path(path)
     man = read_manifest(path.parent)
@@ -153,6 +154,8 @@ def procam_wrote(path) -> bool:
         return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix in (".pdf", ".svg", ".ps", ".eps"):
         return formats.SOFTWARE.encode() in head
+    if suffix == ".py":
+        return head.startswith(formats.SCRIPT_MARK.encode())
     return False
 
 
@@ -425,6 +428,33 @@ def full_scale_of(stack: np.ndarray) -> float:
         if mx <= 2**bits - 1:
             return float(2**bits - 1)
     return 65535.0
+
+def portable_path(text, base) -> str:
+    """``text`` as a path relative to the folder ``base`` (``/`` separators) when it names an existing file or
+    folder (absolute, or relative to the working directory), else unchanged: what a file procam writes stores
+    for the inputs it names, so that it does not hold the user's absolute paths and stays right when the folder
+    that holds both is moved."""
+    import os
+
+    s = str(text)
+    try:
+        if not s or not os.path.exists(s):
+            return s
+        return Path(os.path.relpath(os.path.abspath(s), os.path.abspath(base))).as_posix()
+    except (OSError, ValueError):          # another drive (Windows), an unreadable path
+        return s
+
+
+def portable_names(obj, base, keys=("name", "pose", "calibration", "source")):
+    """``obj`` (JSON-able dicts and lists) with the strings under ``keys`` that name existing paths made relative
+    to ``base`` (:func:`portable_path`); a new object, the input is not modified."""
+    if isinstance(obj, dict):
+        return {k: (portable_path(v, base) if k in keys and isinstance(v, str) else portable_names(v, base, keys))
+                for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [portable_names(v, base, keys) for v in obj]
+    return obj
+
 
 def to_jsonable(obj):
     """JSON-ready copy of ``obj``: numpy arrays/scalars -> lists/numbers, NaN/inf -> None, tuples -> lists,

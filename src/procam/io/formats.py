@@ -14,6 +14,7 @@ FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) holding a dev
 ``.npz``            the members :data:`DECODED_MAPS_MARK` (decoded maps) or :data:`REMAP_MARK` (a remap table)
 PLY                 a header comment that starts with :data:`PLY_COMMENT`
 PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
+Python script       a first line that starts with :data:`SCRIPT_MARK` (the Blender script of an export)
 PDF, SVG, PS, EPS   :data:`SOFTWARE` as the figure's Creator
 ==================  ===========================================================================================
 """
@@ -31,6 +32,9 @@ JSON_PREFIX = "procam"
 CALIBRATION_FORMAT = "procam-calibration"
 CORRESPONDENCES_FORMAT = "procam-correspondences"
 OPENGL_FORMAT = "procam-opengl"
+#: ``procam export --format blender`` / ``unity``: the engine cameras of a calibration.
+BLENDER_FORMAT = "procam-blender"
+UNITY_FORMAT = "procam-unity"
 MANIFEST_FORMAT = "procam-manifest"
 #: ``patterns.json`` of a written Gray-code sequence (an older procam's folders are known by it).
 GRAYCODE_FORMAT = "procam-graycode"
@@ -83,3 +87,5 @@ REMAP_MARK = ("map_x", "map_y")
 PLY_COMMENT = "procam"
 #: The PNG ``tEXt`` key procam's signature stands under (value :data:`SOFTWARE`).
 PNG_TEXT_KEY = "Software"
+#: The first line of a script procam writes (``procam export --format blender``) starts with this.
+SCRIPT_MARK = "# procam"

@@ -102,7 +102,8 @@ def read_calibration(fs, path, proj_size=None) -> Calibration:
                         "from its principal point: give the real size")
     return Calibration(Device(Kc, cam_size, distortion(fs, path, keys.cam_dist)),
                        Device(Kp, proj_size, distortion(fs, path, keys.proj_dist)), R, T, "kamino410",
-                       stereo_rms=real(fs, path, "rms"), warnings=tuple(warnings), info={"source": str(path)})
+                       stereo_rms=real(fs, path, "rms"), warnings=tuple(warnings),
+                       info={"source": str(path), **({"image_size_assumed": ["proj_size"]} if warnings else {})})
 
 
 def load_kamino410(path, proj_size=None) -> Calibration:

@@ -15,13 +15,15 @@ from pathlib import Path
 import numpy as np
 
 from ..board import Board
+from ..datasheet import calibration_datasheet
+from ..mounting import mounting
 from ..calibration import Calibration, Device
 from ..distortion import opencv_from_division
 from ..errors import CalibrationFileError
 from ..summary import projector_assumptions
 from ..view import CORNER_REASONS, View
 from ..verdict import MEANING, VERDICTS
-from .files import to_jsonable, write_text
+from .files import portable_names, to_jsonable, write_text
 from .formats import CALIBRATION_FORMAT, CORRESPONDENCES_FORMAT
 from .validate import bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, short
 
@@ -105,6 +107,16 @@ VERDICT_MEANING = MEANING
 #: What every standard deviation in the file means.
 UNCERTAINTY_NOTE = ("std: 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise "
                     "independent and Gaussian; single-pose results also assume what 'assumptions' lists")
+#: ... of a single-pose calibration with a real projector (procam.single_pose.dense).
+DENSE_UNCERTAINTY_NOTE = ("std: 1 sigma covering the fit's noise, residuals correlated across the image (a block "
+                          "jackknife), the lens models the data cannot tell apart, the priors 'assumptions' lists, "
+                          "and a lens decentring of a few pixels")
+
+
+#: What the ``datasheet`` block of a calibration file is (derived from K; a reader ignores it).
+DATASHEET_NOTE = ("derived from K and its std (procam.datasheet): throw_ratio = fx / W; shift_h_pct = 100 ((W - 1)/2 "
+                  "- u0) / W (+ image right of the lens axis); shift_v_pct = 100 (v0 - (H - 1)/2) / H (+ image above "
+                  "the axis); offset_pct = 2 shift_v_pct; fov in degrees; std 1 sigma, first order")
 
 
 def calibration_to_dict(calib, include_views: bool = True) -> dict:
@@ -114,7 +126,7 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         "format": CALIBRATION_FORMAT, "version": 1, "method": calib.method,
         "verdict": {"level": calib.verdict, "reasons": list(calib.verdict_reasons),
                     "meaning": VERDICT_MEANING.get(calib.verdict, "")},
-        "uncertainty": UNCERTAINTY_NOTE,
+        "uncertainty": DENSE_UNCERTAINTY_NOTE if calib.info.get("dense") is not None else UNCERTAINTY_NOTE,
         "assumptions": projector_assumptions(calib),
         "conventions": CONVENTIONS,
         "camera": _device_dict(calib.camera, calib.cam_rms),
@@ -130,6 +142,10 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         out["camera"]["opencv_fit"] = {"coeffs": list(map(float, coeffs)), "max_err_px": float(err),
                                        "note": "OpenCV (k1, k2, p1, p2, k3) fitted to the division model over "
                                                "the image; written as cam_kc in the YAML file"}
+    sheets = {d: calibration_datasheet(calib, d) for d in ("camera", "projector")}
+    out["datasheet"] = {**{d: v.to_dict() for d, v in sheets.items() if v is not None},
+                        "note": DATASHEET_NOTE}
+    out["mounting"] = mounting(calib).to_dict()
     if include_views and calib.views:
         out["views"] = [view_to_dict(v) for v in calib.views]
     return to_jsonable(out)
@@ -150,8 +166,11 @@ def _verdict_reasons(path, v) -> tuple:
 
 
 def save_calibration_json(calib, path) -> Path:
-    """Write ``calib`` as procam's calibration JSON (:func:`calibration_to_dict`), atomically."""
-    return write_text(path, json.dumps(calibration_to_dict(calib), indent=1))
+    """Write ``calib`` as procam's calibration JSON (:func:`calibration_to_dict`), atomically; the poses' names
+    that are paths are stored relative to the file's folder (:func:`procam.io.files.portable_names`), never as the
+    user's absolute paths."""
+    doc = portable_names(calibration_to_dict(calib), Path(path).parent)
+    return write_text(path, json.dumps(doc, indent=1))
 
 
 def device_from_json(path, doc: dict, name: str) -> Device | None:

@@ -13,8 +13,8 @@ from html import escape
 
 import numpy as np
 
-from ..summary import (PLUS_MINUS, parameter_table, pose_table, projector_assumptions, short_name, spread_table,
-                       verification_table)
+from ..summary import (PLUS_MINUS, datasheet_table, mounting_lines, parameter_table, plus_minus, pose_table,
+                       projector_assumptions, short_name, spread_table, verification_table)
 from ..verdict import Verdict
 from ..verify import CalibrationVerification
 from .coverage import coverage_fractions
@@ -86,7 +86,10 @@ def _assumptions(calib) -> list[str]:
         out.append(f"Camera: pinhole, zero skew, OpenCV distortion "
                    f"({escape(str(calib.info.get('cam_dist_model', len(d.coeffs))))}).")
     if calib.projector is not None:
-        if calib.method == "single-pose":
+        if calib.method.startswith("single-pose") and calib.info.get("dense") is not None:
+            out.append("Projector (single-pose, dense samples): " + "; ".join(projector_assumptions(calib)) + ". "
+                       + plus_minus(calib) + ".")
+        elif calib.method == "single-pose":
             out.append("Projector (single-pose model): " + "; ".join(projector_assumptions(calib)) + ". "
                        "The ± of the projector do not cover a projector that breaks what is assumed "
                        "(e.g. a lens-shifted projector with u0p far from W/2 when the background could not tell).")
@@ -108,9 +111,16 @@ def _assumptions(calib) -> list[str]:
 
 
 def parameters_section(calib) -> str:
-    parts = [f'<p class="note">{escape(PLUS_MINUS)}.</p>', text_table(parameter_table(calib))]
+    parts = [f'<p class="note">{escape(plus_minus(calib))}.</p>', text_table(parameter_table(calib))]
     parts.append("<h3>Model and assumptions</h3><ul>" + "".join(f"<li>{escape(a)}</li>" for a in _assumptions(calib))
                  + "</ul>")
+    parts += ['<h3 id="datasheet">As a projector datasheet prints it</h3>',
+              '<p class="note">Throw ratio = throw distance / image width = f / W; lens shift = how far the image '
+              "centre sits from the lens axis, in % of the image (+: right, above); offset = 2 x the vertical shift; "
+              "the conventions and a figure are in procam's docs/datasheet.md.</p>", text_table(datasheet_table(calib))]
+    mount = mounting_lines(calib)
+    if mount:
+        parts.append("<h3>Mounting</h3><ul>" + "".join(f"<li>{escape(m)}</li>" for m in mount) + "</ul>")
     poses = pose_table(calib)
     if poses.rows:
         parts += ["<h3>Poses</h3>", text_table(poses)]
