@@ -99,7 +99,7 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
         f2, b = min(flips)
         if f2 < MAX_BEYOND / 4:
             pairs = _code_pairs(maps, 4).get(axis)  # other pairs swapped too: each named, not only this one
-            more = [] if pairs is None else [c for c, _ in _swapped(*pairs, nbits, ps.step, flipped=(b,))]
+            more = [] if pairs is None else [c for c, _ in _swapped(*pairs[:4], nbits, ps.step, flipped=(b,))]
             raise CaptureError(
                 f"{name}: {_pairs_text(ps, axis, label, [b] + more, files)} look swapped: as captured {f:.0%} of the "
                 f"decoded pixels point to projector {label}s beyond the {size} of the projector, with "
@@ -218,7 +218,8 @@ def _neighbour_pairs(code: np.ndarray, ok: np.ndarray, axis: int, reach: int = 3
 
 def _code_pairs(maps: DecodeResult, sample: int):
     """Per axis: the distinct pairs of neighbouring codes of the decoded map (full-precision pixels only) and
-    their counts ``(c1, c2, w, n_pixels)``, or None when fewer than 2000 pixels count (see :func:`swap_scores`)."""
+    their counts ``(c1, c2, w, n_pixels, dv)`` (``dv`` the decoded values' differences, twice over), or None when
+    fewer than 2000 pixels count (see :func:`swap_scores`)."""
     ps = maps.pattern_set
     out = {}
     for axis, vals, dropped, offset, cam_axis in (("col", maps.col, maps.dropped_col, ps.col_offset, 1),
@@ -235,7 +236,7 @@ def _code_pairs(maps: DecodeResult, sample: int):
         v1, v2, w = _neighbour_pairs(np.rint(2.0 * np.where(ok, v, 0.0)).astype(np.int64), ok, cam_axis)
         # the codes of the pairs' ends (a decoded value is its block's centre)
         c1, c2 = (np.rint((x - (ps.step - 1)) / (2.0 * ps.step)).astype(np.int64) + offset for x in (v1, v2))
-        out[axis] = (c1, c2, w, n_ok)
+        out[axis] = (c1, c2, w, n_ok, v2 - v1)
     return out
 
 
@@ -257,9 +258,9 @@ def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
         if pairs is None:
             out[axis] = None
             continue
-        c1, c2, w, n_ok = pairs
+        c1, c2, w, n_ok, dv = pairs
         nbits = ps.col_bits if axis == "col" else ps.row_bits
-        out[axis] = {"n": n_ok, "scores": _hist_scores((c2 - c1) * (2 * ps.step), w),
+        out[axis] = {"n": n_ok, "scores": _hist_scores(dv, w),
                      "flipped": [_hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * ps.step), w)
                                  for m in ((1 << (b + 1)) - 1 for b in range(nbits - 1))]}
     return out
@@ -323,7 +324,7 @@ def check_swapped_bits(maps: DecodeResult, name: str, files=None, *, sample: int
         if pairs is None:
             continue
         label = "column" if axis == "col" else "row"
-        c1, c2, w, n = pairs
+        c1, c2, w, n, _ = pairs
         found = _swapped(c1, c2, w, n, ps.col_bits if axis == "col" else ps.row_bits, ps.step)
         if found:
             how = ", then ".join(h for _, h in found)

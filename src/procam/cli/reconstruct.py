@@ -10,7 +10,7 @@ import typer
 
 from .. import choices
 from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, load_pose, output_path,
-                   parse_size, plain, say, user_errors, value)
+                   parse_size, plain, say, user_errors, value, warn)
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 
