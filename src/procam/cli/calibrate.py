@@ -174,25 +174,34 @@ def calibrate_cmd(
         from ..io import load_projector_intrinsics
 
         known_projector = load_projector_intrinsics(projector_file, views[0].proj_size)
-    calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
-                                         background=BackgroundOptions(mode=value(background)),
-                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine,
-                                         known_projector=known_projector, dense=dense_options)
-    _show.print_calibration(calib)
+    from ..errors import DegeneratePoseError
+    from ..verdict import with_evidence
+
+    try:
+        calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
+                                             background=BackgroundOptions(mode=value(background)),
+                                             cam_dist=value(cam_dist), proj_dist=value(proj_dist),
+                                             refine=not no_refine, known_projector=known_projector,
+                                             dense=dense_options)
+    except DegeneratePoseError as e:  # no result at all: nothing to write, even with --force
+        fail(f"degenerate: {e}", code=3, label="not trusted")
+    check = None
+    if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
+        from ..verify import verify_calibration
+
+        check = verify_calibration(calib)
+        calib = with_evidence(calib, check)  # its verdict consults the verification before anything is written
+    _show.print_calibration(calib, check)
+    if check is not None:
+        _show.print_verification(check)
+        if check.leave_one_out is not None and check.leave_one_out.refits:
+            _show.print_spread(calib, check.leave_one_out.refits)
     trusted = calib.trusted
     if not trusted and not force:
         fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
              "(--force writes it anyway, marked as such)", code=3, label="not trusted")
     io.save_calibration(calib, out)
     say(f"wrote {out}" + ("" if trusted else f" (marked {calib.verdict})"))
-    check = None
-    if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
-        from ..verify import verify_calibration
-
-        check = verify_calibration(calib)
-        _show.print_verification(check)
-        if check.leave_one_out is not None and check.leave_one_out.refits:
-            _show.print_spread(calib, check.leave_one_out.refits)
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")
