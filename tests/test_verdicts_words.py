@@ -118,7 +118,8 @@ def test_the_fits_plus_minus_and_a_predicted_bound_are_labelled_and_angles_read_
         msg = rating[device]["message"]
         for m in re.finditer(rf"f_{d} ±[\d.]+ %( [a-z]+)?", msg):  # every relative ± says what it is
             assert "predicted at this pose" in msg[m.start():m.start() + 80] or \
-                   "from the fit" in msg[m.start():m.start() + 40], msg
+                   "from the fit" in msg[m.start():m.start() + 40] or \
+                   "with what the assumed" in msg[m.start():m.start() + 40], msg
     # the angle the message quotes is the pose table's, sign and all
     ca = calib.poses[0]["camera_angles_deg"]
     assert f"psi_c = {ca[0]:.1f}" in rating["camera"]["message"] and ca[0] < 0

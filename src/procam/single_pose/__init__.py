@@ -42,7 +42,7 @@ from ..labelling import canonical_points, canonical_view, given_labelling
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .misfit import misfit
-from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
+from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector, u0_cost
 from .rating import Prediction, RatingOptions, judge, predict, rate_pose
 
 __all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "known_camera_pose",
@@ -67,6 +67,21 @@ def _stereo_rms(obj, cam_und, proj, Kc, Kp, R, T, R0, t0) -> float:
     """Stereo RMS (px) over camera and projector points (:func:`procam.residuals.stereo_pose`)."""
     _, _, rc, rp = stereo_pose(obj, cam_und, proj, Kc, Kp, R, T, R0, t0)
     return rms([rc, rp])
+
+
+def _u0p_assumption(view, obj, proj_pts, proj: ProjectorSolution, options: ProjectorOptions,
+                    rating_options: RatingOptions) -> dict:
+    """What the paper's assumed ``u0p = W/2`` can cost ``f_p`` (:func:`.projector.u0_cost` over a real projector's
+    range, ``rating_options.u0p_spread_fraction`` of W), for the rating: none when the user gave ``u0p`` or when the
+    view carries a background (:mod:`.background` then checks the assumption against it, or lifts it)."""
+    if options.u0 is not None or getattr(view, "background", None) is not None:
+        return {}
+    spread = rating_options.u0p_spread_fraction * proj.image_size[0]
+    if not spread > 0:
+        return {}
+    cost = u0_cost(obj, proj_pts, proj, spread, view.name)
+    return {"projector": (cost, f"the assumed u0p = W/2 (a real projector's u0p may sit {spread:.0f} px, "
+                                f"{100 * rating_options.u0p_spread_fraction:g} % of W, off the centre)")}
 
 
 def extrinsics(cam: CameraSolution, proj: ProjectorSolution):
@@ -316,7 +331,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                  for (k, v), d in zip(predicted.items(), (cam, proj))}
     adv = rate_pose(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
                     values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, cam_size=cam.image_size,
-                    proj_size=proj.image_size, predicted=predicted, options=rating_options)
+                    proj_size=proj.image_size, predicted=predicted, options=rating_options,
+                    assumed=_u0p_assumption(view, obj_all, only_valid(view.proj_pts), proj, projector, rating_options))
     if known_camera is not None:
         adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                          "message": "camera: intrinsics given, not estimated from this pose"}

@@ -52,6 +52,11 @@ class RatingOptions:
     camera_noise_px, projector_noise_px : the least corner noise (px) the stable prediction assumes.
     data_alarm : corners that scatter about the fitted model more than this many times that noise are bad data
         (a wrong decode or detection), not a bad pose: the rating says so instead of asking for another pose.
+    u0p_spread_fraction : how far from the panel's centre a real projector's ``u0p`` may lie, as a fraction of
+        its width (horizontal lens shift; the rigs issue 23 measured and the simulator's presets sit within 3 %).
+        The paper's projector assumes ``u0p = W/2``; what that assumption can cost ``f_p`` over this range
+        (:func:`procam.single_pose.projector.u0_cost`) joins the fit's ``±`` in the rating, so a pose is not
+        rated good when the assumption alone may put ``f_p`` several % off.
     """
 
     camera_rule_deg: float = 10.0
@@ -64,6 +69,7 @@ class RatingOptions:
     camera_noise_px: float = 0.1
     projector_noise_px: float = 0.2
     data_alarm: float = 10.0
+    u0p_spread_fraction: float = 0.03
 
 
 @dataclass(frozen=True)
@@ -183,8 +189,23 @@ def _angle_words(device, angles, prediction) -> str:
     return txt
 
 
-def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, size, o: RatingOptions) -> dict:
-    """One device's rating (see the module docstring)."""
+def _with_assumption(key, rel, rel_txt, fit_rel, assumed) -> tuple[float, str, bool]:
+    """The rating's relative ``±`` with what an assumption can cost (``assumed = (cost_rel, words)``) added in
+    quadrature to the fit's, when that is the larger; labelled as such."""
+    if not assumed or assumed[0] is None:
+        return rel, rel_txt, False
+    cost, words = assumed
+    total = float(np.hypot(fit_rel or 0.0, cost)) if np.isfinite(cost) else float("inf")
+    if total <= rel:
+        return rel, rel_txt, False
+    own = f"; the fit's own ± is {_pct(fit_rel)[1:]}" if fit_rel is not None else ""
+    return total, f"{key} {_pct(total)} with what {words} can cost ({_pct(cost)[1:]}{own})", True
+
+
+def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, size, o: RatingOptions,
+                 assumed=None) -> dict:
+    """One device's rating (see the module docstring); ``assumed``: ``(cost_rel, words)``, what an assumption of
+    the model can cost the focal length (:func:`_with_assumption`)."""
     key = "f_c" if device == "camera" else "f_p"
     a = prediction.angles_deg if prediction is not None else np.asarray(angles, float)
     psi, nu = abs(float(a[0])), abs(float(a[1]))
@@ -236,8 +257,13 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
     else:
         reasons = []
         rel, rel_txt = _uncertainty_words(key, pred_rel, fit_rel, prediction)
+        rel, rel_txt, by_assumption = _with_assumption(key, rel, rel_txt, fit_rel, assumed)
         if rel > o.weak_rel_std:
             reasons.append(f"{rel_txt} (aim for under {_pct(o.weak_rel_std)[1:]})")
+            if by_assumption and not bad_data:
+                turn = ("the board's corners alone cannot measure u0p: calibrate from the decoded pose folder (its "
+                        "dense samples and the wall behind the board measure u0p, lens shift and distortion), give "
+                        "u0p if it is known (Python: ProjectorOptions(u0=...)), or calibrate from several poses")
         if angle < o.weak_angle_deg:
             reasons.append(f"an angle is close to zero ({angle_txt})")
         if not paper_ok and not bad_data:
@@ -252,13 +278,16 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
     out = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), level=level,
                degenerate=level in ("degenerate", "failed"), weak=level == "weak", failed=level == "failed",
                rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, bad_data=bool(bad_data), message=msg)
+    if assumed and assumed[0] is not None:
+        out["assumption_rel_f"] = float(assumed[0])
     if device == "camera":
         out.update(sum_abs_deg=psi + nu, min_abs_deg=min(psi, nu))
     return out
 
 
 def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, cam_size=None,
-              proj_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions()) -> dict:
+              proj_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions(),
+              assumed: dict | None = None) -> dict:
     """Is this pose good for single-pose calibration? A rating per device and for the pose.
 
     Parameters
@@ -273,6 +302,9 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
         quantities; their angles replace the fitted ones in the rules. Without them the rating rests on
         the given angles and the fit's std alone (as for angles typed in by hand).
     options : :class:`RatingOptions`, the thresholds.
+    assumed : ``{"projector": (cost_rel, words)}``: what an assumption of the model (the paper's ``u0p = W/2``)
+        can cost the focal length, relative; it joins the fit's ``±`` (in quadrature) where that is larger, labelled
+        (``assumption_rel_f`` in the device's rating).
 
     Returns
     -------
@@ -290,7 +322,7 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
         if angles is None and predicted.get(device) is None:
             continue
         out[device] = _rate_device(device, angles, predicted.get(device), std.get(key), values.get(key), size,
-                                   options)
+                                   options, (assumed or {}).get(device))
     subs = [v for v in out.values() if isinstance(v, dict)]
     level = max((s["level"] for s in subs), key=LEVELS.index, default="good")
     out["level"] = level
