@@ -53,12 +53,20 @@ def simulate_cmd(
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
     order: Order = typer.Option(Order.opencv, "--order", help="Sequence order."),
+    rig: str = typer.Option(None, "--rig", help="Render a rig instead (two_projectors: one camera, two projectors "
+                            "overlapping on a wall; two_cameras: one projector between two cameras) as a rig pose "
+                            "folder: one pose folder per camera-projector pair, rig.json and the rig's truth.json "
+                            "(--pose in the reference camera's frame; --preset and --frame do not apply)."),
     force: ForceOpt = False,
 ):
     """Render a synthetic Gray-code capture of a chessboard, with its ground truth (truth.json)."""
     from .. import simulate as sim
 
     preset, frame, order = value(preset), value(frame), value(order)
+    if rig is not None and rig not in sim.RIG_PRESETS:
+        fail(f"--rig must be one of {', '.join(sim.RIG_PRESETS)}, got {rig!r}")
+    if rig is not None and frame != "camera":
+        fail("--frame does not apply to a rig: --pose is in the reference camera's frame")
     if preset not in sim.PRESETS:
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):
@@ -71,6 +79,16 @@ def simulate_cmd(
     number(noise, "--noise", lo=0, hi=255, unit=" DN (8-bit grey levels)", what="a read noise")
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
     angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
+    if rig is not None:
+        from . import _rig
+
+        changes = {"bits": bits, **({} if noise is None else {"read_noise": noise})}
+        if noise == 0:
+            changes["full_well"] = 0.0
+        try:
+            return _rig.simulate(out_dir, rig, angles, distance, changes, seed, order, force)
+        except OutputError as e:
+            fail(str(e))
     from .. import capture, patterns
 
     scene = sim.preset(preset)
