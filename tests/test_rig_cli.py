@@ -97,3 +97,28 @@ def test_rendered_rig_end_to_end(tmp_path):
         assert np.all(np.abs(np.array(r["angles_deg"]) - models.euler_deg(R)) < 3 * np.array(r["std"]["angles_deg"]))
     _, T = rig.relative_pose("left", "right")
     assert np.linalg.norm(np.array(doc["relative"]["left->right"]["T"]) - T) <= 0.005 * np.linalg.norm(T)
+    # the blend masks of the first pose's two projectors
+    code, stdout, _ = run_cli(["blend", folders[0], "-o", tmp_path / "blend"])
+    assert code == 0, stdout
+    from procam.io.files import read_image
+
+    a = read_image(tmp_path / "blend" / "alpha_left.png")
+    assert a.dtype == np.uint16 and a.shape == (1080, 1920) and a.min() < 1000 and a.max() == 65535
+
+
+def test_export_covers_every_device_of_a_rig(monkeypatch, tmp_path):
+    _, folders = _fake_rig_folders(monkeypatch, tmp_path)
+    out = tmp_path / "rig.json"
+    assert run_cli(["calibrate", *folders, "--board", "10x6", "--square", "24", "-o", out])[0] == 0
+    code, _, err = run_cli(["export", out, "--format", "opengl", "--near", "100", "--far", "5000", "-o",
+                            tmp_path / "x.json"])
+    assert code == 2 and "--pair" in err
+    worlds = {}
+    for p in ("left", "right"):
+        code, stdout, _ = run_cli(["export", out, "--pair", p, "--format", "opengl", "--near", "100", "--far", "5000",
+                                   "-o", tmp_path / f"{p}.json"])
+        assert code == 0, stdout
+        worlds[p] = json.loads((tmp_path / f"{p}.json").read_text())
+    # both in the reference camera's world: the same camera, different projectors
+    assert worlds["left"]["camera"] == worlds["right"]["camera"]
+    assert worlds["left"]["projector"] != worlds["right"]["projector"]

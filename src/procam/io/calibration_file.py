@@ -117,7 +117,8 @@ def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
         what = "names no pair" if pair is not None and not hits else "is ambiguous" if pair is not None else ""
         raise CalibrationFileError(f"{path}: a rig calibration of {len(pairs)} pairs ({', '.join(pairs)})"
                                    + (f"; pair {pair!r} {what}" if what else "") + "; name one pair "
-                                   "(load_calibration(path, pair='camera/projector'))")
+                                   "(camera/projector or a device's name: procam export --pair, "
+                                   "load_calibration(path, pair=...))")
     if not isinstance(pairs[hits[0]], dict) or pairs[hits[0]].get("format") != CALIBRATION_FORMAT:
         raise CalibrationFileError(f"{path}: pair {hits[0]!r} is not a procam calibration document")
     return pairs[hits[0]]
