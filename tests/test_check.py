@@ -28,10 +28,11 @@ def test_check_of_a_good_pose(paper_capture, tmp_path):
     chk = check_pose(folder, Board(10, 6, 24.0))
     assert chk.verdict in ("good", "weak") and chk.calibration is not None
     assert chk.lines[-1].startswith(f"verdict: {chk.verdict}")
-    # the paper rig's u0p is 1013, not W/2: the background lifts it, and the line says so, not the assumption
-    assert chk.calibration.info["background_model"].startswith("u0p")
-    assert any("ESTIMATED from the background behind the board" in ln for ln in chk.lines)
+    # the paper rig's u0p is 1013, not W/2: the dense fit estimates it, and the line says so, not the assumption
+    assert chk.calibration.info["dense"] is not None
+    assert any("u0p = " in ln and "ESTIMATED from the pose's decoded board and background" in ln for ln in chk.lines)
     assert not any("u0p = W/2" in ln for ln in chk.lines)
+    assert abs(chk.calibration.projector.K[0, 2] - paper_capture[2]["projector"]["u0"]) < 4 * chk.calibration.std["u0p"]
     f_true = paper_capture[2]["camera"]["f"]
     assert abs(chk.calibration.camera.K[0, 0] - f_true) < 0.03 * f_true
     img = overlay(chk)
@@ -42,9 +43,12 @@ def test_check_of_a_good_pose(paper_capture, tmp_path):
 
 
 def test_check_of_a_degenerate_pose_exits_3(degenerate_folder, tmp_path):
-    chk = check_pose(degenerate_folder, Board(10, 6, 24.0))
+    # nu_p = 0: the board alone does not determine the projector (the wall behind it would, roughly: weak)
+    chk = check_pose(degenerate_folder, Board(10, 6, 24.0), background="off")
     assert chk.verdict == "degenerate" and any("projector" in r for r in chk.reasons)
-    code, out, err = run_cli(["check", degenerate_folder, "--board", "10x6"])
+    chk = check_pose(degenerate_folder, Board(10, 6, 24.0))
+    assert chk.verdict in ("weak", "degenerate")
+    code, out, err = run_cli(["check", degenerate_folder, "--board", "10x6", "--background", "off"])
     assert code == 3 and "verdict: degenerate" in out
     assert len(err.strip().splitlines()) == 1 and "not good" in err and "turn the board" in err
 

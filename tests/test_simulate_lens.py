@@ -87,11 +87,12 @@ def test_scene_lenses_are_the_devices_lenses():
 
 def test_lenses_beyond_opencv_are_not_described_by_its_five_terms():
     """The 'hard' lenses: higher radial terms and a decentred radial centre, which no 5-term OpenCV lens fits
-    exactly (with K free): the fit's residual is what a solver using OpenCV's model must live with."""
+    exactly (with K free): the fit's residual is what a solver using OpenCV's model must live with (0.005 px for
+    the camera, 0.027 px for the projector with their decentrings of a few pixels, as manufacturing leaves them)."""
     from scipy.optimize import least_squares
 
     s = sim.preset("hard")
-    for K, lens, size, rms_min in ((s.K_proj, s.proj_lens, s.proj_size, 0.1), (s.K_cam, s.cam_lens, s.cam_size, 0.01)):
+    for K, lens, size, rms_min in ((s.K_cam, s.cam_lens, s.cam_size, 0.003), (s.K_proj, s.proj_lens, s.proj_size, 0.015)):
         assert not lens.describable(K)
         words = " ".join(lens.left_out(K))
         assert "r^8" in words and "radial centre" in words

@@ -48,7 +48,7 @@ class PoseCheck:
 
 
 def check_pose(folder, board: Board, projector=None, order=None, *, options: pipeline.PoseOptions = pipeline.PoseOptions(),
-               step=None) -> PoseCheck:
+               step=None, background: str = "free") -> PoseCheck:
     """The instant verdict of the pose captured in ``folder`` (see the module docstring).
 
     Raises the capture's own errors (:class:`~procam.errors.CaptureError`, ``BoardNotFoundError``, ...) when the
@@ -66,7 +66,7 @@ def check_pose(folder, board: Board, projector=None, order=None, *, options: pip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ProcamWarning)
         try:
-            calib = single_pose.calibrate(view)
+            calib = single_pose.calibrate(view, background=single_pose.background.BackgroundOptions(mode=background))
         except DegeneratePoseError as e:
             verdict, reasons = "degenerate", (str(e),)
         except CalibrationError as e:

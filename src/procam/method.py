@@ -64,7 +64,8 @@ def _check(method: str, n_views: int, known_camera: bool) -> None:
 
 
 def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, camera=None, background=None,
-              cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True):
+              cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True, known_projector=None,
+              dense=None):
     """Calibrate ``views`` by the method :func:`choose` names; the result's ``method`` says which it was.
 
     Parameters
@@ -78,6 +79,9 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
     cam_dist, proj_dist : the OpenCV distortion models of a multi-pose calibration (``"auto"``: the richest the
         poses determine); ``cam_dist`` also of a camera-only calibration from several photos.
     refine : multi-pose: the joint refinement.
+    known_projector : single-pose: the projector's intrinsics and distortion (a Device), fixed.
+    dense : single-pose: :class:`procam.single_pose.dense.DenseOptions` (default options when None; a datasheet's
+        priors go there).
 
     Returns
     -------
@@ -91,7 +95,7 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
     """
     views = list(views)
     method = choose(len(views), method)
-    _check(method, len(views), known_camera is not None)
+    _check(method, len(views), known_camera is not None or known_projector is not None)
     if method == "multi-pose":
         from . import multi_pose
 
@@ -105,7 +109,9 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
     camera = single_pose.CameraOptions() if camera is None else camera
     view = views[0]
     if method == "single-pose":
-        return single_pose.calibrate(view, camera=camera, known_camera=known_camera, background=background)
+        return single_pose.calibrate(view, camera=camera, known_camera=known_camera, background=background,
+                                     known_projector=known_projector,
+                                     dense=single_pose.dense.DenseOptions() if dense is None else dense)
     calib = single_pose.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name,
                                               camera=camera)
     return calib.replace(views=(view,))

@@ -24,7 +24,8 @@ from . import plausibility as _plausible
 from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError, ProcamError
 from .patterns import PatternSet
-from .view import Background, View
+from .samples import WINDOW, dense_samples
+from .view import View
 
 
 @dataclass(frozen=True)
@@ -40,8 +41,10 @@ class PoseOptions:
     refine : corner refinement, one of :data:`procam.corners.REFINERS`.
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
-    background : keep the decoded points off the board (:func:`procam.correspond.background_points`) in
-        ``view.background``, for the single-pose background check (:mod:`procam.single_pose.background`).
+    background : keep the dense decoded samples (:func:`procam.samples.dense_samples`) on the board in
+        ``view.board_samples`` and off it in ``view.background``: the single-pose projector's dense constraints
+        and its background (:mod:`procam.single_pose`).
+    window : the samples' window side, camera pixels (odd).
     """
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
@@ -51,6 +54,7 @@ class PoseOptions:
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
     background: bool = True
+    window: int = WINDOW
 
     def __post_init__(self):
         if self.detector not in _corners.DETECTORS:
@@ -59,6 +63,9 @@ class PoseOptions:
             raise ValueError(f"refine window must be from 0 to 100 px, got {self.refine_window!r}")
         if self.refine not in _corners.REFINERS:
             raise ValueError(f"refine must be one of {', '.join(_corners.REFINERS)}, got {self.refine!r}")
+        if not (isinstance(self.window, (int, np.integer)) and 3 <= self.window <= 101 and self.window % 2 == 1):
+            raise ValueError(f"the samples' window must be an odd number of camera pixels from 3 to 101, "
+                             f"got {self.window!r}")
 
 
 def as_board(board) -> Board:
@@ -139,9 +146,10 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     _plausible.check_swapped_bits(maps, name, files)
     _plausible.check_orientation(cam_pts, proj, board.cols, board.rows, name, maps, files)
     H, W = stack.shape[1:]
-    background = Background(*_corr.background_points(maps, cam_pts)) if options.background else None
+    on_board, background = (dense_samples(maps, cam_pts, window=options.window) if options.background
+                             else (None, None))
     view = View(board.object_points(), cam_pts, proj, name, (W, H), (pattern_set.width, pattern_set.height),
-                {**diag, "warnings": warnings}, board, background)
+                {**diag, "warnings": warnings}, board, background, on_board)
     n_ok = int(view.valid.sum())
     if board.n_corners < options.min_corners:
         raise CorrespondenceError(

@@ -24,6 +24,14 @@ from . import models
 
 #: What every ``±`` in these rows means.
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
+#: What the ``±`` of a single-pose calibration with a real projector (:mod:`procam.single_pose.dense`) covers.
+PLUS_MINUS_DENSE = ("± is 1σ covering the fit's noise, residuals correlated across the image (a block jackknife), "
+                    "the lens models the data cannot tell apart, the priors, and a lens decentring of a few pixels")
+
+
+def plus_minus(calib) -> str:
+    """What the ``±`` of ``calib`` means (:data:`PLUS_MINUS` or :data:`PLUS_MINUS_DENSE`)."""
+    return PLUS_MINUS_DENSE if calib.info.get("dense") is not None else PLUS_MINUS
 
 
 @dataclass(frozen=True)
@@ -51,8 +59,11 @@ def short_name(name) -> str:
 
 
 def projector_freed(calib) -> frozenset:
-    """Which of the single-pose projector assumptions (``"u0p"``, ``"alpha_p"``) the background behind the board
-    replaced by estimates (:mod:`procam.background`); empty when the paper's model was kept."""
+    """Which of the paper projector's assumptions (``"u0p"``, ``"alpha_p"``) a single-pose calibration estimated
+    instead: both with the dense samples (:mod:`procam.single_pose.dense`), those the background lifted without them
+    (:mod:`procam.single_pose.background`); empty when the paper's model was kept."""
+    if calib.info.get("dense") is not None:
+        return frozenset({"u0p", "alpha_p"})
     model = calib.info.get("background_model")  # "single-pose" (unchanged), "assumed", "u0p", "u0p+alpha_p"
     return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
 
@@ -61,8 +72,11 @@ def projector_assumptions(calib) -> list[str]:
     """What a single-pose calibration's projector numbers assume, in words (empty for other methods): the
     paper's u0p = W/2 and alpha_p = 1 where they were kept, what the background estimated instead, and no
     projector lens distortion."""
-    if calib.method != "single-pose" or calib.projector is None:
+    if not calib.method.startswith("single-pose") or calib.projector is None:
         return []
+    dense = calib.info.get("dense")
+    if dense is not None:
+        return _dense_assumptions(calib, dense)
     freed = projector_freed(calib)
     W = calib.projector.image_size[0]
     u0 = float(calib.projector.K[0, 2])
@@ -77,6 +91,38 @@ def projector_assumptions(calib) -> list[str]:
     else:
         out.append("alpha_p = 1 (fy_p = f_p) is ASSUMED")
     out.append("the projector has NO lens distortion (ASSUMED)")
+    return out
+
+
+def _dense_assumptions(calib, dense) -> list[str]:
+    """What a dense single-pose projector rests on (:mod:`procam.single_pose.dense`): each intrinsic estimated from
+    the pose's samples or resting on its prior, and the lens model."""
+    if "projector given" in calib.method:
+        return ["the projector's intrinsics and distortion are GIVEN (an earlier calibration), not estimated"]
+    K = calib.projector.K
+    value = {"f_p": K[0, 0], "u0p": K[0, 2], "v0p": K[1, 2], "alpha_p": K[1, 1] / K[0, 0]}
+    where = "the pose's decoded board" + (" and background" if dense.background_used else " (no background)")
+    out = []
+    named = {n: (mu, sd) for n, mu, sd in dense.priors}
+    for name in ("u0p", "v0p", "alpha_p", "f_p"):
+        s = _std(calib, name)
+        fmt = ".4f" if name == "alpha_p" else ".1f"
+        if name in named:
+            mu, sd = named[name]
+            if s is not None and s > 0.7 * sd:
+                out.append(f"{name} rests on its PRIOR {mu:{fmt}} ± {sd:.3g}: this pose barely determines it (the ± "
+                           "includes the prior)")
+                continue
+            out.append(f"{name} = {pm(value[name], s, fmt)} is ESTIMATED from {where} (prior {mu:{fmt}} ± {sd:.3g})")
+        elif name in ("u0p", "v0p"):
+            out.append(f"{name} = {pm(value[name], s, fmt)} is ESTIMATED from {where}")
+    d = calib.projector.distortion
+    if d.model == "opencv" and any(d.coeffs):
+        terms = "k1, k2, p1, p2, k3"
+        out.append(f"the projector's lens distortion (OpenCV {terms}: {', '.join(f'{c:.4g}' for c in d.coeffs)}) is "
+                   f"ESTIMATED (model {dense.model}, chosen by held-out error)")
+    else:
+        out.append("the projector's lens distortion: none estimated (the held-out data ask for none)")
     return out
 
 
@@ -123,6 +169,11 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
         rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs), p_dist))
     elif p_dist:
         rows.append(("distortion", "none", p_dist))
+    if p_dist and calib.method.startswith("single-pose") and _std(calib, "proj_dist", 0) is not None:
+        for i, term in enumerate(("k1", "k2", "p1", "p2", "k3")):
+            c, sd = calib.projector.distortion.coeffs[i], _std(calib, "proj_dist", i)
+            if c or sd:
+                rows.append((f"{term} (OpenCV)", "", pm(c, sd, ".4g")))
     rows.append(("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}"))
     if calib.R is not None:
         eul = models.euler_deg(calib.R)
@@ -150,7 +201,7 @@ def parameter_table(calib) -> TextTable:
     the paper's model assumes says so, or that the background estimated it, and a row says the projector has
     no lens distortion. No projector column for a camera-only calibration."""
     rows = [list(r) for r in parameter_rows(calib)]
-    if calib.method == "single-pose" and calib.projector is not None:
+    if calib.method == "single-pose" and calib.projector is not None and calib.info.get("dense") is None:
         freed = projector_freed(calib)
         for r in rows:
             if r[0].startswith("u0"):

@@ -1,5 +1,5 @@
-"""The correspondences of one pose: board, camera and projector points (and, optionally, the decoded
-points of the background behind the board)."""
+"""The correspondences of one pose: board, camera and projector points, and, optionally, the dense decoded
+samples on the board and on the scene behind it (:mod:`procam.samples`)."""
 
 from __future__ import annotations
 
@@ -22,33 +22,46 @@ CORNER_REASONS = {
 
 
 @dataclass(frozen=True)
-class Background:
-    """Decoded points of what is behind and around the board (wall, table), off the board's plane.
-
-    They are not used to fit the board; :mod:`procam.background` checks (and refines) the calibration's
-    camera-projector epipolar geometry with them.
+class Samples:
+    """Dense decoded correspondences: camera pixels and the projector coordinates decoded there.
 
     Attributes
     ----------
-    cam_pts : (M, 2) float64 distorted camera pixels (x, y) (pixel centres).
-    proj_pts : (M, 2) float64 projector pixels (x, y) decoded there (column and row).
+    cam_pts : (M, 2) float64 distorted camera pixels (x, y).
+    proj_pts : (M, 2) float64 projector pixels (x, y) (column and row).
+    sigma : (M,) float64 noise of each sample's projector coordinate (px, per axis; a relative weight), or None
+        (equal weights: raw decoded pixels).
+    window : side (camera px) of the window each sample averages (:mod:`procam.samples`); 1 for raw pixels.
     """
 
     cam_pts: np.ndarray
     proj_pts: np.ndarray
+    sigma: np.ndarray | None = None
+    window: int = 1
 
     def __post_init__(self):
         cam = np.asarray(self.cam_pts, dtype=np.float64).reshape(-1, 2)
         proj = np.asarray(self.proj_pts, dtype=np.float64).reshape(-1, 2)
         if len(cam) != len(proj):
-            raise ValueError(f"background camera/projector point counts differ: {len(cam)}, {len(proj)}")
-        for arr in (cam, proj):
+            raise ValueError(f"sample camera/projector point counts differ: {len(cam)}, {len(proj)}")
+        arrays = [cam, proj]
+        if self.sigma is not None:
+            sig = np.asarray(self.sigma, dtype=np.float64).reshape(-1)
+            if len(sig) != len(cam):
+                raise ValueError(f"sample sigma has {len(sig)} values for {len(cam)} samples")
+            object.__setattr__(self, "sigma", sig)
+            arrays.append(sig)
+        for arr in arrays:
             arr.setflags(write=False)
         object.__setattr__(self, "cam_pts", cam)
         object.__setattr__(self, "proj_pts", proj)
 
     def __len__(self) -> int:
         return len(self.cam_pts)
+
+
+#: The samples of the scene behind the board (the name the single-pose background check knows them by).
+Background = Samples
 
 
 @dataclass(frozen=True)
@@ -69,8 +82,11 @@ class View:
     diagnostics : dict
         Per-corner diagnostics (arrays of length N) and free-form notes.
     board : :class:`procam.board.Board` the points were made for, or None when unknown.
-    background : :class:`Background` or None -- decoded points off the board (filled by
-        :mod:`procam.pipeline` from the decoded maps; None when unknown, e.g. a view read from a file).
+    background : :class:`Samples` or None -- decoded samples off the board, the scene behind it (filled by
+        :mod:`procam.pipeline` from the decoded maps, :func:`procam.samples.dense_samples`; None when unknown,
+        e.g. a view read from a file).
+    board_samples : :class:`Samples` or None -- decoded samples on the board (the same; the single-pose
+        projector's dense constraints).
     """
 
     obj_pts: np.ndarray
@@ -81,7 +97,8 @@ class View:
     proj_size: tuple[int, int] | None = None
     diagnostics: dict = field(default_factory=dict, compare=False)
     board: Board | None = None
-    background: Background | None = field(default=None, compare=False)
+    background: Samples | None = field(default=None, compare=False)
+    board_samples: Samples | None = field(default=None, compare=False)
 
     def __post_init__(self):
         obj = np.asarray(self.obj_pts, dtype=np.float64)
@@ -110,4 +127,4 @@ class View:
         diag = {k: (np.asarray(v)[mask] if isinstance(v, np.ndarray) and len(v) == len(mask) else v)
                 for k, v in self.diagnostics.items()}
         return View(self.obj_pts[mask], self.cam_pts[mask], self.proj_pts[mask], self.name,
-                    self.cam_size, self.proj_size, diag, self.board, self.background)
+                    self.cam_size, self.proj_size, diag, self.board, self.background, self.board_samples)

@@ -205,6 +205,7 @@ Estimator = choice("Estimator", choices.ESTIMATORS)
 DistModel = choice("DistModel", choices.DIST_CHOICES)
 SimPreset = choice("SimPreset", choices.SIM_PRESETS)
 DeviceName = choice("DeviceName", choices.DEVICES)
+BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
 
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
 
@@ -291,6 +292,11 @@ RefinerOpt = Annotated[Refiner, typer.Option(
                      "(OpenCV cornerSubPix, the paper's) or none.")]
 WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
 EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
+BackgroundOpt = Annotated[BackgroundMode, typer.Option(
+    "--background", help="Single-pose: the decoded scene behind the board. off: the board alone calibrates the "
+    "projector; free (default), auto, check: the background is the second plane of the projector's dense fit (with a "
+    "view without dense samples: free lifts the paper's u0p = W/2 where the background determines it, auto only when "
+    "it refutes it, check only says so).")]
 
 #: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
 POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),

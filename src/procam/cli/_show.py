@@ -49,7 +49,9 @@ def cross_table(cross) -> Table:
 def print_calibration(calib) -> None:
     """Print a calibration's parameters and poses, its warnings and its verdict."""
     console.print(rich_table(summary.parameter_table(calib),
-                             plain(f"procam calibration ({calib.method}); {summary.PLUS_MINUS}")))
+                             plain(f"procam calibration ({calib.method}); {summary.plus_minus(calib)}")))
+    for line in summary.projector_assumptions(calib):
+        say(f"projector: {line}")
     console.print(rich_table(summary.datasheet_table(calib), "as a projector datasheet prints it (docs/datasheet.md)"))
     for line in summary.mounting_lines(calib):
         say(f"mounting: {line}")

@@ -8,16 +8,61 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, choice, console,
-                   distinct_poses, fail, optional_size, output_path, parse_board, pose_options, preload, say, user_errors,
-                   value, warn, with_pose_options)
+from ._app import (FIGURE_SUFFIXES, BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
+                   StepOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
+                   number, pose_options, preload, say, user_errors, value, warn, with_pose_options)
 
 Cod = choice("Cod", choices.COD_MODES)
 DistModel = choice("DistModel", choices.DIST_CHOICES)
 Method = choice("Method", ("single", "multi"))
 #: The library's name of each --method.
 _METHODS = {"single": "single-pose", "multi": "multi-pose", None: None}
-BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
+
+
+def _tolerance(text: str, option: str, default: float) -> tuple[str, float]:
+    """``"VALUE+-TOL"`` (or ``±``) -> (``"VALUE"``, TOL); no tolerance given -> ``default``."""
+    for sep in ("+-", "±", "+/-"):
+        if sep in text:
+            head, tol = text.split(sep, 1)
+            return head, number(_float(tol, option), option, lo=0, lo_open=True, hi=1e6, what="a tolerance")
+    return text, default
+
+
+def _float(text: str, option: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        fail(f"{option}: {text!r} is not a number")
+
+
+def _dense_options(throw_ratio, lens_shift, projector_file, not_single: bool):
+    """The single-pose projector's options from ``--throw-ratio``, ``--lens-shift`` (priors) and
+    ``--projector-intrinsics`` (checked here, before any work)."""
+    from ..single_pose.dense import DenseOptions, ProjectorPrior
+
+    if (throw_ratio or lens_shift or projector_file) and not_single:
+        fail("--throw-ratio, --lens-shift and --projector-intrinsics are for a single-pose calibration (one pose "
+             "folder); a multi-pose calibration estimates the projector from its poses")
+    if projector_file is not None and (throw_ratio or lens_shift):
+        fail("--projector-intrinsics gives the projector's intrinsics; --throw-ratio and --lens-shift are priors for "
+             "estimating them: use one or the other")
+    if not (throw_ratio or lens_shift):
+        return DenseOptions()
+    kw = {}
+    if throw_ratio:
+        head, tol = _tolerance(throw_ratio, "--throw-ratio", 0.02)
+        kw["throw_ratio"] = number(_float(head, "--throw-ratio"), "--throw-ratio", lo=0.05, hi=20,
+                                   what="a throw ratio")
+        kw["throw_ratio_std"] = number(tol, "--throw-ratio tolerance", lo=0, lo_open=True, hi=5)
+    if lens_shift:
+        head, tol = _tolerance(lens_shift, "--lens-shift", 2.0)
+        parts = head.replace(" ", "").split(",")
+        if len(parts) != 2:
+            fail(f"--lens-shift must be H,V in percent (e.g. 0,50), got {lens_shift!r}")
+        kw["shift_h_pct"], kw["shift_v_pct"] = (number(_float(v, "--lens-shift"), "--lens-shift", lo=-300, hi=300,
+                                                       what="a lens shift in percent") for v in parts)
+        kw["shift_std_pct"] = number(tol, "--lens-shift tolerance", lo=0, lo_open=True, hi=100)
+    return DenseOptions(prior=ProjectorPrior(**kw))
 
 
 #: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
@@ -41,16 +86,23 @@ def calibrate_cmd(
     camera_file: Path = typer.Option(None, "--camera", help="The camera's intrinsics from an earlier calibration "
                                      "(procam JSON, OpenCV or kamino410 YAML/XML): fixed; one pose then calibrates "
                                      "the projector and R, T."),
+    projector_file: Path = typer.Option(None, "--projector-intrinsics", help="The projector's intrinsics and "
+                                        "distortion from an earlier calibration of it (procam JSON, OpenCV YAML/XML, "
+                                        "kamino410 XML): fixed; one pose then calibrates R, T (a projector that was "
+                                        "bumped)."),
+    throw_ratio: str = typer.Option(None, "--throw-ratio", help="Single-pose: the projector datasheet's throw ratio "
+                                    "(distance / image width) as a prior, e.g. 1.26 or 1.26+-0.03 (default "
+                                    "tolerance 0.02; docs/datasheet.md)."),
+    lens_shift: str = typer.Option(None, "--lens-shift", help="Single-pose: the datasheet's lens shift H,V in "
+                                   "percent of the image (positive: image right of / above the lens axis; "
+                                   "docs/datasheet.md) as a prior, e.g. 0,50 or 0,50+-5 (default tolerance 2 %)."),
     yaml: Path = typer.Option(None, "--yaml", help="Also write OpenCV FileStorage YAML (cam_K, cam_kc, ...)."),
     png: Path = typer.Option(None, "--png", help="Residual plot."),
     report: Path = typer.Option(None, "--report", help="Also write the HTML report (one self-contained file)."),
     cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
                                                     "when reliable, else the image centre as a prior), paper "
                                                     "(always the centre of distortion) or image-center."),
-    background: BackgroundMode = typer.Option(
-        BackgroundMode.free, "--background", help="Single-pose: the decoded points behind the board. free: lift the "
-        "paper's u0p = W/2 with them where they determine it; auto: only when they refute it; check: only say so; "
-        "off: ignore them (the paper's method)."),
+    background: BackgroundOpt = BackgroundMode.free,
     cam_dist: DistModel = typer.Option(DistModel.auto, "--cam-dist", help="Multi-pose camera distortion model (auto: "
                                        "the richest OpenCV model whose terms the poses determine)."),
     proj_dist: DistModel = typer.Option(DistModel.auto, "--proj-dist", help="Multi-pose projector distortion model."),
@@ -78,8 +130,9 @@ def calibrate_cmd(
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
-                        background=not multi and value(background) != "off")
+                        background=not multi)
     camera = _sp.CameraOptions(cod=value(cod))
+    dense_options = _dense_options(throw_ratio, lens_shift, projector_file, multi or camera_only)
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
     output_path(yaml, "--yaml", (".yml", ".yaml"), inputs=poses)
@@ -125,14 +178,19 @@ def calibrate_cmd(
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
             for w in v.diagnostics.get("warnings", []):
                 warn(w)
-    known = None
+    known = known_projector = None
     if camera_file is not None:
         from ..io import load_camera_intrinsics
 
         known = load_camera_intrinsics(camera_file, views[0].cam_size)
+    if projector_file is not None:
+        from ..io import load_projector_intrinsics
+
+        known_projector = load_projector_intrinsics(projector_file, views[0].proj_size)
     calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
                                          background=BackgroundOptions(mode=value(background)),
-                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine)
+                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine,
+                                         known_projector=known_projector, dense=dense_options)
     _show.print_calibration(calib)
     trusted = calib.trusted
     if not trusted and not force:

@@ -6,8 +6,9 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, fail, optional_size,
-                   output_path, parse_board, pose_options, user_errors, value, with_pose_options)
+from ._app import (FIGURE_SUFFIXES, BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
+                   StepOpt, app, fail, optional_size, output_path, parse_board, pose_options, user_errors, value,
+                   with_pose_options)
 
 
 @app.command("check")
@@ -21,6 +22,7 @@ def check_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
+    background: BackgroundOpt = BackgroundMode.free,
     **pose_args,
 ):
     """Is this pose good for single-pose calibration? Checks the capture, decodes it, finds the corners,
@@ -32,7 +34,8 @@ def check_cmd(
     brd = parse_board(board, square)
     opts = pose_options(**pose_args)
     output_path(png, "--png", FIGURE_SUFFIXES)
-    check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step)
+    check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step,
+                       background=value(background))
     _show.print_pose_check(check, png)
     if check.verdict in ("degenerate", "failed"):
         fail(f"{pose_dir}: {check.verdict} pose for single-pose calibration: "

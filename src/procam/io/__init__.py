@@ -34,6 +34,7 @@ _EXPORTS = {
     "save_opencv_yaml": "opencv",
     "KAMINO410_KEYS": "kamino410", "load_kamino410": "kamino410", "save_kamino410": "kamino410",
     "load_calibration": "calibration_file", "load_camera_intrinsics": "calibration_file",
+    "load_projector_intrinsics": "calibration_file",
     "save_calibration": "calibration_file", "complete_sizes": "calibration_file",
     "load_decoded_maps": "maps", "save_decoded_maps": "maps", "save_maps": "maps",
     "read_ply": "ply", "write_ply": "ply",

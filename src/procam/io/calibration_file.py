@@ -241,3 +241,25 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
         raise CalibrationFileError(f"{path}: the file does not say the image size the intrinsics belong to; "
                                    "give it (width x height)")
     return Device(K, size, dist if dist is not None else Distortion())
+
+
+def load_projector_intrinsics(path, image_size=None) -> Device:
+    """A projector's intrinsics and distortion (a :class:`~procam.calibration.Device`) from a procam calibration
+    in any format :func:`load_calibration` reads (procam JSON, OpenCV FileStorage YAML/XML with procam's keys,
+    kamino410's XML): the file's ``projector``.
+
+    ``image_size``: the projector (width, height) the intrinsics will be used with; they must agree.
+
+    Raises :class:`~procam.errors.CalibrationFileError` when the file holds no projector (a camera-only file) or
+    one of another size.
+    """
+    calib = load_calibration(path)
+    if calib.projector is None:
+        raise CalibrationFileError(f"{path}: holds no projector (a camera-only calibration); give a procam "
+                                   "calibration of this projector")
+    size = tuple(int(v) for v in calib.projector.image_size)
+    if image_size is not None and size != tuple(int(v) for v in image_size):
+        raise CalibrationFileError(f"{path}: the projector's intrinsics are for {size[0]}x{size[1]}, this pose's "
+                                   f"projector is {int(image_size[0])}x{int(image_size[1])}; give the calibration "
+                                   "of this projector at this resolution")
+    return calib.projector

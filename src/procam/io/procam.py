@@ -107,6 +107,10 @@ VERDICT_MEANING = MEANING
 #: What every standard deviation in the file means.
 UNCERTAINTY_NOTE = ("std: 1 sigma from the fit's Jacobian, assuming the model is right and the corner noise "
                     "independent and Gaussian; single-pose results also assume what 'assumptions' lists")
+#: ... of a single-pose calibration with a real projector (procam.single_pose.dense).
+DENSE_UNCERTAINTY_NOTE = ("std: 1 sigma covering the fit's noise, residuals correlated across the image (a block "
+                          "jackknife), the lens models the data cannot tell apart, the priors 'assumptions' lists, "
+                          "and a lens decentring of a few pixels")
 
 
 #: What the ``datasheet`` block of a calibration file is (derived from K; a reader ignores it).
@@ -122,7 +126,7 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         "format": CALIBRATION_FORMAT, "version": 1, "method": calib.method,
         "verdict": {"level": calib.verdict, "reasons": list(calib.verdict_reasons),
                     "meaning": VERDICT_MEANING.get(calib.verdict, "")},
-        "uncertainty": UNCERTAINTY_NOTE,
+        "uncertainty": DENSE_UNCERTAINTY_NOTE if calib.info.get("dense") is not None else UNCERTAINTY_NOTE,
         "assumptions": projector_assumptions(calib),
         "conventions": CONVENTIONS,
         "camera": _device_dict(calib.camera, calib.cam_rms),

@@ -13,7 +13,7 @@ from html import escape
 
 import numpy as np
 
-from ..summary import (PLUS_MINUS, datasheet_table, mounting_lines, parameter_table, pose_table,
+from ..summary import (PLUS_MINUS, datasheet_table, mounting_lines, parameter_table, plus_minus, pose_table,
                        projector_assumptions, short_name, verification_table)
 from ..verdict import Verdict
 from ..verify import CalibrationVerification
@@ -73,7 +73,10 @@ def _assumptions(calib) -> list[str]:
         out.append(f"Camera: pinhole, zero skew, OpenCV distortion "
                    f"({escape(str(calib.info.get('cam_dist_model', len(d.coeffs))))}).")
     if calib.projector is not None:
-        if calib.method == "single-pose":
+        if calib.method.startswith("single-pose") and calib.info.get("dense") is not None:
+            out.append("Projector (single-pose, dense samples): " + "; ".join(projector_assumptions(calib)) + ". "
+                       + plus_minus(calib) + ".")
+        elif calib.method == "single-pose":
             out.append("Projector (single-pose model): " + "; ".join(projector_assumptions(calib)) + ". "
                        "The ± of the projector do not cover a projector that breaks what is assumed "
                        "(e.g. a lens-shifted projector with u0p far from W/2 when the background could not tell).")
@@ -95,7 +98,7 @@ def _assumptions(calib) -> list[str]:
 
 
 def parameters_section(calib) -> str:
-    parts = [f'<p class="note">{escape(PLUS_MINUS)}.</p>', text_table(parameter_table(calib))]
+    parts = [f'<p class="note">{escape(plus_minus(calib))}.</p>', text_table(parameter_table(calib))]
     parts.append("<h3>Model and assumptions</h3><ul>" + "".join(f"<li>{escape(a)}</li>" for a in _assumptions(calib))
                  + "</ul>")
     parts += ['<h3 id="datasheet">As a projector datasheet prints it</h3>',

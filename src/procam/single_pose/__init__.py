@@ -23,10 +23,13 @@ from __future__ import annotations
 
 import contextlib
 import warnings as _warnings
+from dataclasses import replace
 
 import numpy as np
 
 from . import background as _background
+from . import dense as _dense
+from . import dense_result as _dense_result
 from .. import models
 from .. import uncertainty as unc
 from .._threads import deterministic
@@ -221,7 +224,8 @@ def _rejected_list(sol) -> list:
 def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
               projector: ProjectorOptions = ProjectorOptions(), robust: RobustOptions = RobustOptions(),
               rating_options: RatingOptions = RatingOptions(), cam_size=None, strict: bool = False,
-              known_camera: Device | None = None, background: _background.BackgroundOptions | None = None
+              known_camera: Device | None = None, background: _background.BackgroundOptions | None = None,
+              dense: _dense.DenseOptions | None = _dense.DenseOptions(), known_projector: Device | None = None
               ) -> Calibration:
     """Single-pose procam calibration of one :class:`procam.view.View`.
 
@@ -240,10 +244,18 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         the projector and ``R, T`` (``camera`` options are not used).
     strict : raise :class:`~procam.errors.DegeneratePoseError` for a degenerate or failed pose instead of
         returning it with its verdict and a warning.
-    background : :class:`procam.single_pose.background.BackgroundOptions` (default: mode ``free``) -- used only when
-        ``view.background`` holds decoded points off the board: the check of the projector's assumptions
-        (u0p = W/2, alpha_p = 1) against them and, by its mode, the joint refinement that lifts them
-        (:func:`procam.single_pose.background.apply`). Without ``view.background`` the result is the paper's method alone.
+    background : :class:`procam.single_pose.background.BackgroundOptions` (default: mode ``free``): with dense
+        samples, mode ``off`` leaves the background samples out of the dense fit (the board alone); without them
+        (a view read from a correspondences file), the check of the paper projector's assumptions (u0p = W/2,
+        alpha_p = 1) against ``view.background`` and, by its mode, the joint refinement that lifts them
+        (:func:`procam.single_pose.background.apply`).
+    dense : :class:`procam.single_pose.dense.DenseOptions` -- when the view carries dense samples
+        (``view.board_samples``, from :mod:`procam.pipeline`), the projector is a real one: principal point, aspect,
+        lens distortion chosen by evidence, the camera jointly, an honest ``±`` (:mod:`.dense`); None keeps the
+        paper's projector model (u0p = W/2, alpha_p = 1, no distortion).
+    known_projector : the projector's intrinsics and distortion (:class:`~procam.calibration.Device`) from an
+        earlier calibration: held fixed, so the pose gives ``R, T`` (the twin of ``known_camera``; needs dense
+        samples).
 
     Returns
     -------
@@ -304,9 +316,16 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     if known_camera is not None:
         adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                          "message": "camera: intrinsics given, not estimated from this pose"}
+    # a real projector from the dense samples (single_pose.dense): it is rated by the ± it reports
+    fit = _dense_fit(view, cam, proj, proj_size, dense, background, known_camera, known_projector)
+    if fit is not None:
+        adv["projector"] = _dense_result.projector_rating(fit, proj_size, known_projector, rating_options)
+        _relevel(adv)
     warnings = list(cam.warnings) + list(proj.warnings)
     verdict, reasons = judge(adv, name, strict, warnings)
-    fits = {"camera": _misfit(obj_all, cam, 0.1), "projector": _misfit(obj_all, proj, 0.2)}
+    fits = {"camera": _misfit(obj_all, cam, 0.1)}
+    if fit is None:
+        fits["projector"] = _misfit(obj_all, proj, 0.2)
     verdict, reasons = _model_error(fits, name, verdict, reasons, warnings)
     cin, pin = cam.mask, proj.mask
     both = cin & pin
@@ -332,12 +351,41 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                       info={"camera": cam, "projector": proj, "principal_point_source": cam.principal_point_source,
                             "cod_score": None if cam.cod is None else cam.cod.score,
                             "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
-    # the background behind the board (single_pose.background): the check, and the refinement, of the projector's
-    # assumptions -- only when the view carries decoded background points
+    if fit is not None:
+        return _dense_result.apply(cal, fit, view, known_camera=known_camera, known_projector=known_projector)
+    if known_projector is not None:
+        raise CalibrationError(f"pose {name!r}: given projector intrinsics need the pose's dense samples (a pose "
+                               "folder decoded by procam, not a correspondences file)")
+    # the background behind the board (single_pose.background): the check, and the refinement, of the paper
+    # projector's assumptions -- for a view with a background and no dense board samples
     bg = getattr(view, "background", None)
     if bg is not None:
         cal = _background.apply(cal, bg.cam_pts, bg.proj_pts, background or _background.BackgroundOptions())
     return cal
+
+
+def _relevel(adv: dict) -> None:
+    """The pose's level, ``ok``, ``degenerate`` and ``failed`` of a rating whose device entries changed."""
+    from ..verdict import LEVELS
+
+    subs = [adv[k] for k in ("camera", "projector") if isinstance(adv.get(k), dict)]
+    adv["level"] = max((s["level"] for s in subs), key=LEVELS.index, default="good")
+    adv["degenerate"] = any(s["degenerate"] for s in subs)
+    adv["failed"] = any(s["failed"] for s in subs)
+    adv["ok"] = adv["level"] == "good"
+
+
+def _dense_fit(view, cam, proj, proj_size, dense, background, known_camera, known_projector):
+    """The dense projector fit of the view (:mod:`.dense`), or None (no dense options or samples)."""
+    if dense is None or getattr(view, "board_samples", None) is None:
+        return None
+    if background is not None and background.mode == "off":
+        dense = replace(dense, use_background=False)
+    if known_projector is not None and tuple(known_projector.image_size) != tuple(proj_size):
+        w, h = known_projector.image_size
+        raise CalibrationError(f"pose {view.name!r}: the given projector intrinsics are for {w}x{h}, this pose's "
+                               f"projector is {proj_size[0]}x{proj_size[1]}")
+    return _dense.fit(view, cam, proj, proj_size, dense, known_camera=known_camera, known_projector=known_projector)
 
 
 @deterministic()

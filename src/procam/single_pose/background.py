@@ -435,9 +435,11 @@ def _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, optio
     thr = _chi2_isf(options.false_alarm, 3)
     if stat > thr:
         u0 = [four.full(x4)[1][1], *x4[-3:]]
-        return (f"the background's quadrants disagree (u0p = {', '.join(f'{u:.1f}' for u in u0)} px from each, "
-                f"likelihood ratio {stat:.0f} > {thr:.0f}): it does not follow one epipolar geometry (interreflections, "
-                "a reflective or moving surface?)")
+        return (f"the background's quadrants do not fit one epipolar geometry: one u0p per quadrant fits their "
+                f"epipolar distances better than one for all by a likelihood ratio of {stat:.0f} (threshold {thr:.0f} "
+                f"for noise {sigma_n:.2f} px; the quadrants' u0p are {', '.join(f'{u:.1f}' for u in u0)} px): "
+                "interreflections, a reflective or moving surface, or a lens the paper's projector model does not "
+                "describe (the dense fit models the projector's distortion)")
     return ""
 
 

@@ -1,0 +1,163 @@
+"""A dense single-pose fit (:mod:`.dense`) as the calibration: devices, ``R, T``, every ``±``, the rating.
+
+The calibration of :func:`procam.single_pose.calibrate` is first the seed method's (the camera from its corners,
+the paper's projector); when the pose carries dense samples, :func:`apply` replaces the devices, the extrinsics and
+their standard deviations by the dense fit's, rates the projector by the ``±`` it reports (not by the bound of the
+paper's model, which assumed what the dense fit estimates), and records what was estimated, what entered as a
+prior and which lens models the data could not tell apart.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import models
+from .. import uncertainty as unc
+from ..errors import CalibrationError
+from ..residuals import pnp, stereo_pose
+from ..stats import rms
+from . import joint as J
+from .dense import MODELS, DenseFit, to_devices
+
+#: A projector rated good: what this pose determines (the dense fit's ``±`` without the lens decentring no pose can
+#: see, which the reported ``±`` adds) at most these, so that the values are within 1 % and 15 px with about 95 %
+#: probability.
+GOOD_F_REL = 0.005
+GOOD_PP_PX = 7.5
+#: Beyond these the pose does not determine the projector (degenerate).
+DEGENERATE_F_REL = 0.05
+DEGENERATE_PP_PX = 150.0
+
+
+def _derived(p):
+    """Derived quantities of the joint vector: fy_c, fy_p, Euler angles of R (3), T (3), board angles in the camera
+    (3) and in the projector (3)."""
+    Rc, tc = models.rvec_to_matrix(p[6:9]), p[9:12]
+    Rp, tp = models.rvec_to_matrix(p[21:24]), p[24:27]
+    R = Rp @ Rc.T
+    T = tp - R @ tc
+    return np.r_[p[0] * p[1], p[J.IDX["f_p"]] * p[J.IDX["alpha_p"]], models.euler_deg(R), T,
+                 models.board_angles_deg(Rc, tc), models.board_angles_deg(Rp, tp)]
+
+
+def std_dict(fit: DenseFit, known_camera=None, known_projector=None) -> dict:
+    """Standard deviations under procam's parameter names (:mod:`procam.parameters`) from the fit's covariance."""
+    C, p = fit.cov, fit.p
+    s = np.sqrt(np.clip(np.diag(C), 0, None))
+    free = np.diag(C) > 0
+    typ = np.where(free, np.abs(p).clip(1e-3), 1.0)
+    with np.errstate(all="ignore"):
+        sd = np.sqrt(np.clip(np.diag(unc.propagate(C, _derived, p, typical=typ)), 0, None))
+    out = {"R_euler_deg": [float(v) for v in sd[2:5]], "T": [float(v) for v in sd[5:8]],
+           "camera_angles_deg": [float(v) for v in sd[8:11]], "projector_angles_deg": [float(v) for v in sd[11:14]]}
+    if known_camera is None:
+        out.update({"f_c": float(s[0]), "alpha_c": float(s[1]), "fy_c": float(sd[0]), "u0c": float(s[2]),
+                    "v0c": float(s[3]), "k1": float(s[4] / J.S ** 2), "k2": float(s[5] / J.S ** 4)})
+    if known_projector is None:
+        i = J.IDX
+        out.update({"f_p": float(s[i["f_p"]]), "fy_p": float(sd[1]), "alpha_p": float(s[i["alpha_p"]]),
+                    "u0p": float(s[i["u0p"]]), "v0p": float(s[i["v0p"]]),
+                    "proj_dist": [float(s[i[t]]) for t in J.DIST_TERMS]})
+    return out
+
+
+def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=None) -> dict:
+    """The projector's rating from the dense fit's ``±`` (module constants), in the rating's words (the keys of
+    :func:`procam.single_pose.rating.rate_pose`'s device entries, ``source = "fit"``)."""
+    from .rating import RatingOptions
+
+    o = options or RatingOptions()
+    a = models.board_angles_deg(models.rvec_to_matrix(fit.p[21:24]), fit.p[24:27])
+    base = {"psi_abs_deg": float(abs(a[0])), "nu_abs_deg": float(abs(a[1])),
+            "paper_rule_ok": bool(abs(a[1]) > o.projector_rule_deg), "predicted_rel_std_f": None, "source": "fit"}
+    if known_projector is not None:
+        return {**base, "level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
+                "rel_std_f": 0.0, "message": "projector: intrinsics given, not estimated from this pose"}
+    f = fit.p[J.IDX["f_p"]]
+    sf, su, sv = (fit.std(n, pose_only=True) for n in ("f_p", "u0p", "v0p"))
+    rel = sf / f if f > 0 else float("inf")
+    pp = max(su, sv)
+    lo, hi = (r * float(np.hypot(*proj_size)) for r in o.plausible_f_range)
+    level = "good"
+    # what the pose cannot determine first (its estimate may then be anything), then an impossible estimate
+    if not (np.isfinite(rel) and np.isfinite(pp)) or rel > DEGENERATE_F_REL or pp > DEGENERATE_PP_PX:
+        level = "degenerate"
+    elif not (np.isfinite(f) and lo <= f <= hi):
+        level = "failed"
+    elif rel > GOOD_F_REL or pp > GOOD_PP_PX:
+        level = "weak"
+    what = (f"this pose determines f_p {f:.1f} to ± {sf:.1f} px ({100 * rel:.2f} %), u0p to ± {su:.1f}, v0p to ± "
+            f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors; the "
+            f"reported ± adds a lens decentring no pose can see)")
+    if level == "failed":
+        msg = (f"projector: FAILED estimate: f_p = {f:.4g} px is impossible for a {proj_size[0]}x{proj_size[1]} panel "
+               f"(plausible {lo:.0f}-{hi:.0f} px) -- turn the board about the projector's vertical axis")
+    elif level == "good":
+        msg = f"projector: pose OK: {what}"
+    elif level == "weak":
+        msg = (f"projector: weak pose: {what}; aim for under {100 * GOOD_F_REL:.1f} % and {GOOD_PP_PX:g} px -- turn "
+               "the board about the projector's vertical axis (|nu_p| 15-30 deg), let it fill more of the projector "
+               "image, keep the wall behind it lit")
+    else:
+        msg = (f"projector: degenerate pose: {what}: this pose does not determine the projector -- turn the board "
+               "about the projector's vertical axis (|nu_p| 15-30 deg) with the wall behind it lit")
+    return {**base, "level": level, "degenerate": level in ("degenerate", "failed"), "weak": level == "weak",
+            "failed": level == "failed", "message": msg, "rel_std_f": float(rel), "pp_std_px": float(pp)}
+
+
+def apply(cal, fit: DenseFit, view, *, known_camera=None, known_projector=None):
+    """``cal`` (the seed method's calibration of ``view``) with the dense fit's devices, ``R, T``, ``±``, RMS and
+    projector rating (module docstring). Returns a new :class:`procam.calibration.Calibration`."""
+    cam_sol = cal.info["camera"]
+    camera, projector, R, T, (Rc, tc), (Rp, tp) = to_devices(fit, cam_sol, cal.camera.image_size,
+                                                             cal.projector.image_size, known_camera, known_projector)
+    std = std_dict(fit, known_camera, known_projector)
+    obj = np.asarray(view.obj_pts, float)
+    pose0 = dict(cal.poses[0])
+    cin = np.asarray(cam_sol.mask, bool) if cam_sol.mask is not None else view.valid
+    pin = view.valid
+    with np.errstate(all="ignore"):
+        cam_und = camera.undistort(np.where(view.valid[:, None], view.cam_pts, np.nan))
+        proj_und = projector.undistort(np.where(view.valid[:, None], view.proj_pts, np.nan))
+
+    def pnp_rms(o, m, K):
+        ok = np.isfinite(m).all(1)
+        try:
+            return rms(pnp(o[ok], m[ok], K)[2])
+        except CalibrationError:
+            return float("nan")
+
+    cam_rms = pnp_rms(obj[cin], cam_und[cin], camera.K)
+    proj_rms = pnp_rms(obj[pin], proj_und[pin], projector.K)
+    both = cin & pin & np.isfinite(cam_und).all(1) & np.isfinite(proj_und).all(1)
+    try:
+        _, _, rc, rp = stereo_pose(obj[both], cam_und[both], proj_und[both], camera.K, projector.K, R, T, Rc, tc)
+        stereo = rms([rc, rp])
+    except CalibrationError:
+        stereo = float("nan")
+    rating = pose0.get("advice")
+    models_doc = {n: {"cost": m.cost, "held_out": m.held_out, "terms": list(MODELS.get(n, ())),
+                      "f_p": float(m.p[J.IDX["f_p"]]), "u0p": float(m.p[J.IDX["u0p"]]),
+                      "v0p": float(m.p[J.IDX["v0p"]])} for n, m in fit.fits.items()}
+    pose0.update({"camera_angles_deg": [float(a) for a in models.board_angles_deg(Rc, tc)],
+                  "projector_angles_deg": [float(a) for a in models.board_angles_deg(Rp, tp)],
+                  "cam_rms": cam_rms, "proj_rms": proj_rms, "stereo_rms": stereo, "advice": rating,
+                  "projector_model": {"model": fit.model, "indistinguishable": list(fit.indistinguishable),
+                                      "models": models_doc, "n_board_samples": fit.n_board,
+                                      "n_background_samples": fit.n_background,
+                                      "background_used": fit.background_used,
+                                      "background_reason": fit.background_reason,
+                                      "noise_px": {"camera": fit.scales.camera, "board": fit.scales.board,
+                                                   "background": fit.scales.background},
+                                      "priors": [{"name": n, "mean": float(m), "std": float(s)}
+                                                 for n, m, s in fit.priors]}})
+    warnings = list(cal.warnings)
+    if fit.background_reason:
+        warnings.append(f"pose {view.name!r}: {fit.background_reason}")
+    warnings += [f"pose {view.name!r}: {c}" for c in fit.conflicts]
+    info = dict(cal.info)
+    info.update(dense=fit, projector_model=fit.model, notes=tuple(fit.notes))
+    method = cal.method if known_projector is None else cal.method + ", projector given"
+    return cal.replace(camera=camera, projector=projector, R=R, T=T, std=std, cam_rms=cam_rms, proj_rms=proj_rms,
+                       stereo_rms=stereo, poses=(pose0, *cal.poses[1:]), warnings=tuple(warnings), info=info,
+                       method=method)

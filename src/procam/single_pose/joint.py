@@ -1,0 +1,387 @@
+"""The joint single-pose model: one least-squares problem over the camera and a real projector.
+
+A real projector throws its image above or below its lens axis (vertical lens shift: ``v0p`` near or beyond the
+panel's last row), often a little sideways, through a lens that distorts. One pose of a plane cannot tell a
+pinhole projector's ``u0p``/``alpha_p`` from its focal length (the board's homography has 8 degrees of freedom),
+but the decoded patterns carry much more than 60 corners:
+
+* the **board samples** (:mod:`procam.samples`): camera pixels on the board whose projector coordinates are
+  known to a fraction of a pixel, thousands per pose. Through the camera (its distortion, intrinsics and board
+  pose) each is a point of the board's plane, which the projector images through its distortion: for a
+  lens-shifted projector the distortion centre is the lens axis, far from the panel centre, and the radial field
+  it leaves across the board pins ``(u0p, v0p)`` where the lens distorts enough;
+* the **background samples**: the wall (or anything) behind the board, off the board's plane, constrains the
+  camera-projector epipolar geometry whatever its shape: each sample's projector point must lie on the epipolar
+  line of its camera pixel (one residual each, in projector pixels, after removing the projector's distortion);
+  with the board this is the second plane that fixes ``u0p`` and ``alpha_p``;
+* the **camera corners**, the camera's own single-pose likelihood, so the camera is estimated jointly and its own
+  uncertainty (``f_c`` is known to a percent or two from one pose) is carried into the projector's numbers instead
+  of a camera taken as exact; and
+* **priors** where the user or the model says something: ``alpha_p = 1`` to a few tenths of a percent, a
+  datasheet's throw ratio and lens shift, the camera's principal point near the image centre when its centre of
+  distortion is unobservable.
+
+The parameter vector is the camera's (:data:`procam.parameters.CAMERA_VECTOR`: division model about its
+principal point) followed by the projector's :data:`PROJECTOR`: ``f_p, alpha_p, u0p, v0p``, OpenCV's distortion
+``k1, k2, p1, p2, k3`` on normalised coordinates about ``(u0p, v0p)`` (the forward map takes a 3-D point to the
+panel pixel that lights it, as ``cv2.projectPoints``), and the board -> projector pose ``(rvec, t)``. A camera or
+projector whose intrinsics are given is held fixed (its pixels undistorted once by its own model, any OpenCV model).
+
+Every residual is divided by its noise (camera corners, board and background samples each have a scale the fit
+measures), so the cost is a chi-square and the Jacobian's covariance is in the data's units. Derivatives are exact
+(forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import _dual as D
+from .. import models
+from ..parameters import CAMERA_VECTOR
+
+#: The projector's part of the joint parameter vector.
+PROJECTOR = ("f_p", "alpha_p", "u0p", "v0p", "k1p", "k2p", "p1p", "p2p", "k3p", "prx", "pry", "prz", "ptx", "pty",
+             "ptz")
+#: Where each device's distortion centre sits from its principal point (px): zero in the camera's single-pose model
+#: and in OpenCV's, and held there by a prior (:mod:`.dense`) whose width is what that assumption can cost for a
+#: lens whose distortion is decentred.
+DECENTRING = ("dcx", "dcy", "dpx", "dpy")
+#: The joint parameter vector: the camera's, the projector's, the decentrings.
+NAMES = CAMERA_VECTOR + PROJECTOR + DECENTRING
+NC = len(CAMERA_VECTOR)
+#: Index of each name in :data:`NAMES`.
+IDX = {n: i for i, n in enumerate(NAMES)}
+#: The projector's OpenCV distortion terms, in OpenCV's order.
+DIST_TERMS = ("k1p", "k2p", "p1p", "p2p", "k3p")
+#: The projector's board pose.
+POSE_P = ("prx", "pry", "prz", "ptx", "pty", "ptz")
+POSE_C = ("rx", "ry", "rz", "tx", "ty", "tz")
+S = models.KAPPA_SCALE
+
+
+# ------------------------------------------------------------------------------------------------
+# the model's pieces (plain arrays or Duals)
+
+def _undistort_division(x, y, cx, cy, k1, k2):
+    dx, dy = x - cx, y - cy
+    r2 = dx * dx + dy * dy
+    s = 1.0 / (1.0 + k1 * r2 + k2 * r2 * r2)
+    return cx + dx * s, cy + dy * s
+
+
+def _distort_division(x, y, cx, cy, k1, k2, iterations: int = 8):
+    """Undistorted -> distorted pixels of the division model (Newton on the radial scale; converged values then
+    one step carry the derivatives)."""
+    dx, dy = x - cx, y - cy
+    q = dx * dx + dy * dy
+    qv, k1v, k2v = D.value(q), D.value(k1), D.value(k2)
+    s = np.ones_like(qv)
+    with np.errstate(all="ignore"):
+        for _ in range(iterations):
+            g = s - 1.0 - k1v * s * s * qv - k2v * s ** 4 * qv * qv
+            s = s - g / (1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv)
+    if isinstance(q, D.Dual) or isinstance(k1, D.Dual) or isinstance(k2, D.Dual):
+        g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
+        dg = 1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv
+        s = s - g / dg
+    return cx + dx * s, cy + dy * s
+
+
+def brown(x, y, k1, k2, p1, p2, k3):
+    """OpenCV's distortion of normalised coordinates: ``(x_d, y_d)``."""
+    r2 = x * x + y * y
+    rad = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
+    xy = x * y
+    return x * rad + 2.0 * p1 * xy + p2 * (r2 + 2.0 * x * x), y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * xy
+
+
+def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
+    """Undistorted normalised coordinates of distorted ones: fixed-point iteration on the values, then one Newton
+    step that carries the derivatives (the implicit function's, exactly)."""
+    V = D.value
+    kv = [V(k) for k in (k1, k2, p1, p2, k3)]
+    xdv, ydv = V(xd), V(yd)
+    x, y = xdv, ydv
+    with np.errstate(all="ignore"):
+        for _ in range(iterations):
+            bx, by = brown(x, y, *kv)
+            x, y = x - (bx - xdv), y - (by - ydv)
+    if not any(isinstance(a, D.Dual) for a in (xd, yd, k1, k2, p1, p2, k3)):
+        return x, y
+    r2 = x * x + y * y
+    rad = 1 + kv[0] * r2 + kv[1] * r2 ** 2 + kv[4] * r2 ** 3
+    dr = kv[0] + 2 * kv[1] * r2 + 3 * kv[4] * r2 ** 2
+    a = rad + 2 * x * x * dr + 2 * kv[2] * y + 6 * kv[3] * x
+    b = 2 * x * y * dr + 2 * kv[2] * x + 2 * kv[3] * y
+    d = rad + 2 * y * y * dr + 6 * kv[2] * y + 2 * kv[3] * x
+    det = a * d - b * b
+    bx, by = brown(x, y, k1, k2, p1, p2, k3)
+    ex, ey = bx - xd, by - yd
+    return x - (d * ex - b * ey) / det, y - (a * ey - b * ex) / det
+
+
+def _transpose(R):
+    return [[R[j][i] for j in range(3)] for i in range(3)]
+
+
+def _matmul(A, B):
+    return [[A[i][0] * B[0][j] + A[i][1] * B[1][j] + A[i][2] * B[2][j] for j in range(3)] for i in range(3)]
+
+
+# ------------------------------------------------------------------------------------------------
+# the data and the model
+
+@dataclass(frozen=True)
+class FixedDevice:
+    """A device whose intrinsics are given: its undistorted pixels are computed once (any of its models)."""
+
+    K: np.ndarray
+    device: object   # procam.calibration.Device
+
+
+@dataclass
+class JointData:
+    """What one joint fit sees (all pixels distorted, as decoded).
+
+    obj : (N, 3) board corners; cam : (N, 2) camera corners (NaN = not used).
+    board_cam, board_proj : (M, 2) board samples; board_w : (M,) their relative noise (1 = typical).
+    back_cam, back_proj : (B, 2) background samples; back_w : (B,) their relative noise.
+    camera_fixed, projector_fixed : a :class:`FixedDevice`, or None (estimated).
+    pp_prior : (centre (2,), std) of the camera's principal point, or None.
+    priors : list of ``(name, mean, std)`` Gaussian priors on projector parameters.
+    """
+
+    obj: np.ndarray
+    cam: np.ndarray
+    board_cam: np.ndarray
+    board_proj: np.ndarray
+    back_cam: np.ndarray
+    back_proj: np.ndarray
+    board_w: np.ndarray | None = None
+    back_w: np.ndarray | None = None
+    camera_fixed: FixedDevice | None = None
+    projector_fixed: FixedDevice | None = None
+    pp_prior: tuple | None = None
+    priors: list = field(default_factory=list)
+
+    def __post_init__(self):
+        ok = np.isfinite(self.cam).all(1) & np.isfinite(self.obj).all(1)
+        self.obj, self.cam = np.asarray(self.obj, float)[ok], np.asarray(self.cam, float)[ok]
+        for a, w in (("board", "board_w"), ("back", "back_w")):
+            c, p = np.asarray(getattr(self, a + "_cam"), float), np.asarray(getattr(self, a + "_proj"), float)
+            ok = np.isfinite(c).all(1) & np.isfinite(p).all(1)
+            setattr(self, a + "_cam", c[ok])
+            setattr(self, a + "_proj", p[ok])
+            wv = getattr(self, w)
+            setattr(self, w, np.ones(int(ok.sum())) if wv is None else np.asarray(wv, float)[ok])
+        if self.camera_fixed is not None:
+            dev = self.camera_fixed.device
+            self._cam_und = dev.undistort(self.cam)
+            self._board_cam_und = dev.undistort(self.board_cam)
+            self._back_cam_und = dev.undistort(self.back_cam)
+        if self.projector_fixed is not None:
+            dev = self.projector_fixed.device
+            self._back_proj_und = dev.undistort(self.back_proj)
+
+
+@dataclass
+class Scales:
+    """The noise of each block (px): camera corners, board samples, background samples."""
+
+    camera: float
+    board: float
+    background: float
+
+
+class JointModel:
+    """Residuals of :class:`JointData` for a full parameter vector ``p`` (:data:`NAMES`), plain or Dual.
+
+    ``keep_board`` / ``keep_back``: (M,) / (B,) bool, the samples in use (outliers out).
+    """
+
+    def __init__(self, data: JointData, scales: Scales):
+        self.data = data
+        self.scales = scales
+        self.keep_board = np.ones(len(data.board_cam), bool)
+        self.keep_back = np.ones(len(data.back_cam), bool)
+
+    # camera side -----------------------------------------------------------------------------------
+    def _camera(self, p):
+        """``(f, alpha, u0, v0, k1, k2, cx, cy)``: intrinsics, division coefficients and distortion centre."""
+        d = self.data
+        if d.camera_fixed is not None:
+            K = d.camera_fixed.K
+            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), 0.0, 0.0, 0.0, 0.0
+        return p[0], p[1], p[2], p[3], p[4] / S ** 2, p[5] / S ** 4, p[2] + p[27], p[3] + p[28]
+
+    def _rays(self, p, pix, und_fixed):
+        """Normalised camera rays (x, y) of distorted camera pixels ``pix`` (M, 2)."""
+        f, a, u0, v0, k1, k2, cx, cy = self._camera(p)
+        if self.data.camera_fixed is not None:
+            ux, uy = und_fixed[:, 0], und_fixed[:, 1]
+        else:
+            ux, uy = _undistort_division(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
+        return (ux - u0) / f, (uy - v0) / (a * f)
+
+    def _projector(self, p):
+        """``(f, alpha, u0, v0, coeffs (5), dx, dy)``: intrinsics, OpenCV coefficients and the distortion centre's
+        offset from the principal point (normalised by f)."""
+        d = self.data
+        if d.projector_fixed is not None:
+            K = d.projector_fixed.K
+            coeffs = list(getattr(d.projector_fixed.device.distortion, "coeffs", ()) or ()) + [0.0] * 5
+            return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), coeffs[:5], 0.0, 0.0
+        return p[12], p[13], p[14], p[15], [p[16], p[17], p[18], p[19], p[20]], p[29] / p[12], p[30] / (p[12] * p[13])
+
+    # residual blocks, in pixels ---------------------------------------------------------------------
+    def blocks(self, p):
+        """``(camera (2N,), board (2M,), background (B,), priors (P,))`` residuals: the first three in pixels
+        (observed - predicted), the priors in their own sigmas."""
+        d = self.data
+        Rc = D.rotation([p[6], p[7], p[8]])
+        tc = [p[9], p[10], p[11]]
+        # 1. camera corners
+        X = D.transform(Rc, tc, [d.obj[:, 0], d.obj[:, 1], d.obj[:, 2]])
+        f, a, u0, v0, k1, k2, cx, cy = self._camera(p)
+        xu, yu = f * X[0] / X[2] + u0, a * f * X[1] / X[2] + v0
+        if d.camera_fixed is not None:
+            cam_res = [d._cam_und[:, 0] - xu, d._cam_und[:, 1] - yu]
+        else:
+            xd, yd = _distort_division(xu, yu, cx, cy, k1, k2)
+            cam_res = [d.cam[:, 0] - xd, d.cam[:, 1] - yd]
+        fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
+        Rp = D.rotation([p[21], p[22], p[23]])
+        tp = [p[24], p[25], p[26]]
+        # 2. board samples: camera ray -> the board's plane -> the projector's panel
+        m = self.keep_board
+        rx, ry = self._rays(p, d.board_cam[m], d._board_cam_und[m] if d.camera_fixed is not None else None)
+        n = [Rc[0][2], Rc[1][2], Rc[2][2]]
+        lam = (n[0] * tc[0] + n[1] * tc[1] + n[2] * tc[2]) / (n[0] * rx + n[1] * ry + n[2])
+        Xc = [rx * lam - tc[0], ry * lam - tc[1], lam - tc[2]]
+        Xb = [Rc[0][i] * Xc[0] + Rc[1][i] * Xc[1] + Rc[2][i] * Xc[2] for i in range(3)]     # R_cb^T (X - t_cb)
+        Xp = D.transform(Rp, tp, Xb)
+        bx, by = brown(Xp[0] / Xp[2] - ex, Xp[1] / Xp[2] - ey, *kp)
+        board_res = [d.board_proj[m, 0] - (fp * (bx + ex) + u0p), d.board_proj[m, 1] - (ap * fp * (by + ey) + v0p)]
+        # 3. background samples: distance to the epipolar line, projector pixels
+        m = self.keep_back
+        rx, ry = self._rays(p, d.back_cam[m], d._back_cam_und[m] if d.camera_fixed is not None else None)
+        R = _matmul(Rp, _transpose(Rc))
+        T = [tp[i] - (R[i][0] * tc[0] + R[i][1] * tc[1] + R[i][2] * tc[2]) for i in range(3)]
+        Rr = [R[i][0] * rx + R[i][1] * ry + R[i][2] for i in range(3)]
+        ln = [T[1] * Rr[2] - T[2] * Rr[1], T[2] * Rr[0] - T[0] * Rr[2], T[0] * Rr[1] - T[1] * Rr[0]]
+        if d.projector_fixed is not None:
+            und = d._back_proj_und[m]
+            xn, yn = (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp)
+        else:
+            xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
+            xn, yn = xn + ex, yn + ey
+        back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1]) * fp
+        # 4. priors
+        pri = []
+        if d.pp_prior is not None and d.camera_fixed is None:
+            c, sd = d.pp_prior
+            pri += [(p[2] - c[0]) / sd, (p[3] - c[1]) / sd]
+        for name, mu, sd in d.priors:
+            pri.append((p[IDX[name]] - mu) / sd)
+        return cam_res, board_res, back_res, pri
+
+    def residuals(self, p):
+        """All residuals in noise sigmas (Dual when ``p`` is), one 1-D vector."""
+        cam_res, board_res, back_res, pri = self.blocks(p)
+        s = self.scales
+        d = self.data
+        wb = d.board_w[self.keep_board] * s.board
+        wg = d.back_w[self.keep_back] * s.background
+        parts = [cam_res[0] / s.camera, cam_res[1] / s.camera, board_res[0] / wb, board_res[1] / wb,
+                 back_res / wg, *pri]
+        if isinstance(p, D.Dual):
+            return D.concatenate([q for q in parts if np.size(D.value(q))])
+        return np.concatenate([np.ravel(q) for q in parts if np.size(q)])
+
+
+# ------------------------------------------------------------------------------------------------
+# the fit
+
+@dataclass(frozen=True)
+class JointFit:
+    """One least-squares solution of a :class:`JointModel` with the parameters ``free`` (names) estimated.
+
+    p : (27,) full parameter vector; free : the names estimated; cov : (27, 27) covariance (zero rows and columns
+    for fixed parameters) from the Jacobian, in the scales' units; cost : the chi-square (sum of squared residuals
+    in sigmas); n_residuals : their count; jac : (n, len(free)) Jacobian at the solution; residuals : (n,).
+    """
+
+    p: np.ndarray
+    free: tuple
+    cov: np.ndarray
+    cost: float
+    n_residuals: int
+    jac: np.ndarray
+    residuals: np.ndarray
+    nfev: int
+
+
+def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
+    """Least squares of ``model`` from ``p0`` over the parameters ``free`` (names of :data:`NAMES`), with the exact
+    Jacobian; trust-region reflective, steps scaled by the Jacobian's columns."""
+    from scipy.optimize import least_squares
+
+    p0 = np.asarray(p0, float)
+    mask = np.array([n in free for n in NAMES])
+    basis = np.eye(len(NAMES))[:, mask]
+    cache = {}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            p = p0.copy()
+            p[mask] = x
+            r = model.residuals(D.Dual(p, basis))
+            v = np.where(np.isfinite(r.v), r.v, 1e6)
+            j = np.where(np.isfinite(r.d), r.d, 0.0)
+            cache[key] = (v, j)
+        return cache[key]
+
+    with np.errstate(all="ignore"):
+        res = least_squares(lambda x: evaluate(x)[0], p0[mask], jac=lambda x: evaluate(x)[1], method="trf",
+                            x_scale="jac", xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
+    p = p0.copy()
+    p[mask] = res.x
+    r, J = evaluate(res.x)
+    cov = np.zeros((len(NAMES), len(NAMES)))
+    idx = np.flatnonzero(mask)
+    cov[np.ix_(idx, idx)] = _inverse(J)
+    return JointFit(p=p, free=tuple(n for n in NAMES if n in free), cov=cov, cost=float(r @ r),
+                    n_residuals=len(r), jac=J, residuals=r, nfev=int(res.nfev))
+
+
+def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The residuals, the Jacobian over ``free`` (names) and its covariance ``(J^T J)^-1`` (27 + 4 square, zero
+    rows and columns outside ``free``) at ``p``, without solving: the cost of an assumption held at ``p`` is the
+    covariance with its parameter freed under its prior."""
+    p = np.asarray(p, float)
+    mask = np.array([n in free for n in NAMES])
+    r = model.residuals(D.Dual(p, np.eye(len(NAMES))[:, mask]))
+    v, Jm = np.where(np.isfinite(r.v), r.v, 1e6), np.where(np.isfinite(r.d), r.d, 0.0)
+    cov = np.zeros((len(NAMES), len(NAMES)))
+    idx = np.flatnonzero(mask)
+    cov[np.ix_(idx, idx)] = _inverse(Jm)
+    return v, Jm, cov
+
+
+def _inverse(J) -> np.ndarray:
+    """``(J^T J)^-1`` with columns normalised (conditioning); infinite where the normal matrix is singular."""
+    s = np.linalg.norm(J, axis=0)
+    s = np.where(s > 0, s, 1.0)
+    A = (J / s).T @ (J / s)
+    try:
+        w, V = np.linalg.eigh(A)
+    except np.linalg.LinAlgError:
+        return np.full(A.shape, np.inf)
+    if w.min() <= w.max() * 1e-14:
+        return np.full(A.shape, np.inf)
+    return (V / w) @ V.T / np.outer(s, s)
