@@ -21,7 +21,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
-import dataclasses
 import json
 import resource
 import subprocess
@@ -114,19 +113,18 @@ def scale_calibration():
 
 
 def scale_render():
-    from procam import decode, pipeline
+    from procam import pipeline
     from procam import simulate as sim
     from procam.board import Board
 
     r = four_projector_rig().with_board_pose((18, 14, 0))
     t = time.perf_counter()
     sc = r.scene("cam", "p2")
-    stack, truth = sim.render(sc, seed=1)
+    stack, _ = sim.render(sc, seed=1)
     t_render = time.perf_counter() - t
     t = time.perf_counter()
     view, _ = pipeline.view_from_stack(stack, sim.Renderer(sc).pattern_set, Board(10, 6, 40.0), keep_maps=False)
     t_dec = time.perf_counter() - t
-    del decode
     return {"render_s": t_render, "decode_s": t_dec, "corners": int(view.valid.sum()), "stack_mb": stack.nbytes / 2**20}
 
 
@@ -157,7 +155,7 @@ def main():
     phases = ["calibrate"] + ([] if a.skip_render else ["render"])
     print("\nscale: 1 camera + 4 projectors, 1920x1080 each, 5 poses (each phase in its own process)\n")
     for ph in phases:
-        res = subprocess.run([sys.executable, __file__, "--phase", ph], capture_output=True, text=True)
+        res = subprocess.run([sys.executable, __file__, "--phase", ph], capture_output=True, text=True, check=False)
         line = res.stdout.strip().splitlines()[-1] if res.stdout.strip() else res.stderr.strip()[-300:]
         print(f"- {ph}: {line}")
 

@@ -24,9 +24,9 @@ def rig_figure(rc, agreement=(), *, title: str = "", depth: float | None = None)
         bp = rc.info.get("board_poses") or []
         depth = 1.2 * float(np.mean([p["t"][2] for p in bp])) if bp else 1000.0
     for d in rc.devices:
-        R, T = np.asarray(d.R), np.asarray(d.T)
+        R = np.asarray(d.R)
         c = d.center
-        K, (W, H) = np.asarray(d.device.K), d.device.image_size
+        K, W = np.asarray(d.device.K), d.device.image_size[0]
         ends = []
         for u in (-0.5, W - 0.5):
             ray = R.T @ np.array([(u - K[0, 2]) / K[0, 0], 0.0, 1.0])
@@ -37,7 +37,6 @@ def rig_figure(rc, agreement=(), *, title: str = "", depth: float | None = None)
         ax.plot(c[0], c[2], "s" if d.kind == "camera" else "^", color=col, ms=9)
         ax.annotate(f"{d.name}\n{d.kind}, {d.verdict}", (c[0], c[2]), textcoords="offset points", xytext=(0, -28),
                     ha="center", fontsize=8)
-        del T
     for p in rc.info.get("board_poses") or []:
         t = np.asarray(p["t"])
         ax.plot(t[0], t[2], "k+", ms=8)

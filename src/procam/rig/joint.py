@@ -206,14 +206,14 @@ def refine_rig(devices, observations, board_r, board_t, *, sigma=None, max_nfev:
     weights = np.ones(len(devices)) if sigma is None else np.maximum(np.asarray(sigma, float), 1e-3)
     sol = None
     for _ in range(2):  # solve, re-estimate each device's sigma from its residuals, solve again
-        cache = {}
+        cache: dict = {}
 
-        def fun(x, w=weights):
+        def fun(x, w=weights, cache=cache):
             r, J = _model(x, lay, obs, dist0, w, True)
             cache["x"], cache["J"] = x.copy(), J
             return r
 
-        def jac(x, w=weights):
+        def jac(x, w=weights, cache=cache):
             if "x" in cache and np.array_equal(cache["x"], x):
                 return cache["J"]
             return _model(x, lay, obs, dist0, w, True)[1]
