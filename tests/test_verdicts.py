@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import expect_warning, fake_pose_folders, run_cli, verdict_warnings
+from conftest import expect_warning, fake_pose_folders, run_cli
 
 from procam import multi_pose, plausibility, simulate
 from procam.board import Board

@@ -77,7 +77,8 @@ def calibrate_cmd(
     board: BoardOpt,
     square: SquareOpt,
     poses: list[Path] = typer.Argument(..., help="One pose folder (single-pose), several (multi-pose), or with "
-                                               "--camera-only one image."),
+                                               "--camera-only one image; rig pose folders (one sub-folder per "
+                                               "camera-projector pair, docs/rigs.md) calibrate every device of a rig."),
     out: Path = typer.Option(..., "-o", "--out", help="Calibration file (.json, or .yml for OpenCV YAML)."),
     method: Method = typer.Option(None, "--method", help="Default: single for one pose, multi for several."),
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from photos of the board: one "
@@ -140,6 +141,18 @@ def calibrate_cmd(
     outs = [p.resolve() for p in (out, yaml, png, report) if p is not None]
     if len(set(outs)) < len(outs):
         fail("-o, --yaml, --png and --report must be different files")
+    from ..capture import is_rig_pose
+
+    if not camera_only and camera_file is None and any(is_rig_pose(p) for p in poses):
+        from . import _rig
+
+        distinct_poses(poses)
+        if report is not None:
+            fail("--report: a rig has no HTML report yet; --png draws the rig, its verdicts and its agreement")
+        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, brd=brd, method=_METHODS[value(method)],
+                              options=opts, camera=camera, background=BackgroundOptions(mode=value(background)),
+                              cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine, force=force,
+                              projector=optional_size(projector), order=value(order), step=step)
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
