@@ -23,6 +23,14 @@ SHARED = Path(__file__).resolve().parents[2] / "shared"
 OPENCV_DIR = SHARED / "data" / "opencv-left-right"
 
 
+def _calibrate(view, **kw):
+    """:func:`procam.single_pose.calibrate` told that the projector's u0p is at the panel's centre, as the simulated
+    rigs of these tests are built (``RatingOptions.u0p_spread_fraction = 0``): these tests are of the solver; what
+    assuming it costs a real projector is tested in ``test_an_assumed_u0p_costs_what_it_can``."""
+    kw.setdefault("rating_options", sp.RatingOptions(u0p_spread_fraction=0.0))
+    return sp.calibrate(view, **kw)
+
+
 def _view(scene, sigma_cam=0.0, sigma_proj=0.0, seed=0, name="sim"):
     obj, cam, proj = simulate.correspondences(scene, sigma_cam, sigma_proj, seed=seed)
     return View(obj, cam, proj, name, tuple(scene.cam_size), tuple(scene.proj_size))
@@ -39,7 +47,7 @@ def ideal():
 
 @pytest.mark.parametrize("refine", ["joint", "none"])
 def test_noise_free_ideal_preset_reproduces_truth(ideal, refine):
-    cal = sp.calibrate(_view(ideal), camera=sp.CameraOptions(refine=refine))
+    cal = _calibrate(_view(ideal), camera=sp.CameraOptions(refine=refine))
     Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
     np.testing.assert_allclose(cal.camera.K, Kc, rtol=1e-6)
     np.testing.assert_allclose(cal.projector.K, Kp, rtol=1e-6)
@@ -67,7 +75,7 @@ def bounds(ideal):
 @pytest.mark.parametrize("seed", [0, 1])
 def test_noisy_recovery_within_cramer_rao_tolerances(ideal, bounds, seed):
     cb, pb, eb = bounds
-    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=seed))
+    cal = _calibrate(_view(ideal, 0.1, 0.2, seed=seed))
     Kc, Kp = np.asarray(ideal.K_cam), np.asarray(ideal.K_proj)
     assert abs(cal.camera.K[0, 0] - Kc[0, 0]) < 5 * cb.std["f_c"]
     assert abs(cal.camera.K[1, 1] / cal.camera.K[0, 0] - Kc[1, 1] / Kc[0, 0]) < 5 * cb.std["alpha_c"]
@@ -91,7 +99,7 @@ def test_reported_std_matches_monte_carlo_spread(ideal):
     """mrcal-style check: the Jacobian std predicts the spread of repeated calibrations."""
     fs, fps, pred = [], [], []
     for seed in range(12):
-        cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=100 + seed))
+        cal = _calibrate(_view(ideal, 0.1, 0.2, seed=100 + seed))
         fs.append(cal.camera.K[0, 0])
         fps.append(cal.projector.K[0, 0])
         pred.append((cal.std["f_c"], cal.std["f_p"]))
@@ -129,26 +137,26 @@ def test_fronto_parallel_or_single_axis_camera_pose_is_flagged(ideal, angles):
     scene = simulate.with_board_pose(ideal, angles)
     view = _view(scene, 0.1, 0.2, seed=3)
     with expect_warning(DegeneratePoseWarning, match="camera: degenerate pose"):
-        cal = sp.calibrate(view)
+        cal = _calibrate(view)
     adv = cal.poses[0]["advice"]
     assert adv["degenerate"] and adv["camera"]["degenerate"] and not adv["ok"]
     assert cal.verdict == "degenerate"
     assert any("degenerate" in w and "camera" in w for w in cal.warnings)
     with pytest.raises(CalibrationError, match="degenerate"):
-        sp.calibrate(view, strict=True)
+        _calibrate(view, strict=True)
 
 
 def test_projector_pose_without_nu_is_flagged(ideal):
     scene = simulate.with_board_pose(ideal, (20.0, 0.0, 0.0), frame="projector")
     view = _view(scene, 0.1, 0.2, seed=4)
     with expect_warning(DegeneratePoseWarning, match="projector: degenerate pose"):
-        cal = sp.calibrate(view)
+        cal = _calibrate(view)
     adv = cal.poses[0]["advice"]
     assert adv["projector"]["level"] == "degenerate" and adv["camera"]["level"] != "degenerate"
     assert cal.verdict == "degenerate" and not cal.trusted
     assert any("projector" in w and "degenerate" in w for w in cal.warnings)
     with pytest.raises(DegeneratePoseError, match="degenerate pose"):
-        sp.calibrate(view, strict=True)
+        _calibrate(view, strict=True)
 
 
 @pytest.mark.parametrize("preset,nu_p", [("paper", -1.4), ("paper", -1.5), ("ideal", 0.5), ("ideal", -0.5)])
@@ -165,7 +173,7 @@ def test_near_degenerate_projector_pose_has_one_verdict_whatever_the_fit_does(pr
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ProcamWarning)
             try:
-                cal = sp.calibrate(view)
+                cal = _calibrate(view)
                 levels.add(cal.verdict)
                 adv = cal.poses[0]["advice"]["projector"]
                 assert "turn the board left/right" in adv["message"]
@@ -175,7 +183,7 @@ def test_near_degenerate_projector_pose_has_one_verdict_whatever_the_fit_does(pr
                 levels.add("degenerate")
     assert levels == {"degenerate"}
     with pytest.raises(DegeneratePoseError):
-        sp.calibrate(_view(scene, 0.1, 0.2, seed=0), strict=True)
+        _calibrate(_view(scene, 0.1, 0.2, seed=0), strict=True)
 
 
 def test_advice_flags_an_impossible_focal_length_whatever_its_std():
@@ -207,7 +215,7 @@ def test_never_a_mirror_solution_with_the_board_frame_flipped(ideal):
     flip = obj.copy()
     flip[:, 1] = -flip[:, 1]           # y -> -y with the same corner order: a right-handed frame, z flipped
     flip[:, 2] = 0.0
-    cal = sp.calibrate(View(flip, cam, proj, "flipped", ideal.cam_size, ideal.proj_size))
+    cal = _calibrate(View(flip, cam, proj, "flipped", ideal.cam_size, ideal.proj_size))
     assert cal.camera.K[0, 0] > 0 and cal.camera.K[1, 1] > 0 and cal.projector.K[0, 0] > 0
     np.testing.assert_allclose(cal.camera.K, ideal.K_cam, rtol=1e-6)
     np.testing.assert_allclose(cal.R, ideal.R, atol=1e-6)
@@ -219,19 +227,19 @@ def test_unreliable_cod_falls_back_with_warning_and_wider_std(ideal):
     scene = replace(ideal, cam_dist_coeffs=(0.0, 0.0))
     view = _view(scene, 0.1, 0.2, seed=5)
     with expect_warning(WeakPoseWarning, match="f_c"):    # the prior principal point widens f_c's std
-        cal = sp.calibrate(view)
+        cal = _calibrate(view)
     cam = cal.info["camera"]
     assert cam.principal_point_source == "image-center"
     assert any("centre of distortion unreliable" in w and "image centre" in w for w in cal.warnings)
     with verdict_warnings():
-        given = sp.calibrate(view, camera=sp.CameraOptions(principal_point=(674.0, 512.0)))
+        given = _calibrate(view, camera=sp.CameraOptions(principal_point=(674.0, 512.0)))
     assert given.info["camera"].principal_point_source == "given"
     assert cal.std["f_c"] > 1.5 * given.std["f_c"]
     assert np.isfinite(cal.std["u0c"]) and cal.std["u0c"] > 5.0
     # the paper's behaviour can be forced: it uses the (meaningless) centre and warns
     try:
         with verdict_warnings():
-            forced = sp.calibrate(view, camera=sp.CameraOptions(cod="paper"))
+            forced = _calibrate(view, camera=sp.CameraOptions(cod="paper"))
         assert forced.info["camera"].principal_point_source == "cod"
         assert any("cod='paper'" in w for w in forced.warnings)
     except CalibrationError as e:          # a centre far outside the image can leave no valid solution
@@ -245,14 +253,14 @@ def test_nan_corners_are_ignored(ideal):
     cam[[0, 11]] = np.nan
     proj[[5]] = np.nan
     v2 = View(view.obj_pts, cam, proj, "holes", view.cam_size, view.proj_size)
-    cal = sp.calibrate(v2)
-    ref = sp.calibrate(v2.subset(v2.valid))
+    cal = _calibrate(v2)
+    ref = _calibrate(v2.subset(v2.valid))
     np.testing.assert_allclose(cal.camera.K, ref.camera.K, rtol=1e-9)
     assert cal.poses[0]["n_corners"] == len(cam) - 3
 
 
 def test_calibration_fields(ideal):
-    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=7))
+    cal = _calibrate(_view(ideal, 0.1, 0.2, seed=7))
     assert cal.method == "single-pose"
     for k in ("f_c", "alpha_c", "u0c", "v0c", "k1", "k2", "f_p", "v0p"):
         assert np.isfinite(cal.std[k]) and cal.std[k] > 0, k
@@ -280,7 +288,7 @@ def test_too_few_points_and_missing_sizes_are_clear_errors(ideal):
     with pytest.raises(CalibrationError, match="image size"):
         sp.calibrate_camera(obj, cam, None)
     with pytest.raises(CalibrationError, match="projector size"):
-        sp.calibrate(View(obj, cam, proj, "p2", (1280, 800), None))
+        _calibrate(View(obj, cam, proj, "p2", (1280, 800), None))
 
 
 # ------------------------------------------------------------------------------------------
@@ -345,7 +353,7 @@ def test_outlier_corners_are_rejected_and_the_truth_recovered(ideal, bounds, see
     clean_view = _view(ideal, 0.1, 0.2, seed=seed)
     bad_view, ic, ip = _displaced(clean_view, n_cam, n_proj, seed)
     with verdict_warnings():            # the rejected corners can leave f_c weak: the verdict is not the subject
-        clean, cal = sp.calibrate(clean_view), sp.calibrate(bad_view)
+        clean, cal = _calibrate(clean_view), _calibrate(bad_view)
     rej = cal.poses[0]["rejected_corners"]
     assert [r["index"] for r in sorted(rej["camera"], key=lambda r: r["index"])] == list(ic)
     assert [r["index"] for r in sorted(rej["projector"], key=lambda r: r["index"])] == list(ip)
@@ -364,14 +372,14 @@ def test_outlier_corners_are_rejected_and_the_truth_recovered(ideal, bounds, see
     assert cal.cam_rms < 0.2 and cal.proj_rms < 0.4 and cal.stereo_rms < 0.4
     # without the rejection the displaced corners pull the fit
     with verdict_warnings():
-        off = sp.calibrate(bad_view, robust=sp.RobustOptions(reject_outliers=False))
+        off = _calibrate(bad_view, robust=sp.RobustOptions(reject_outliers=False))
     assert off.poses[0]["rejected_corners"] == {"camera": [], "projector": []}
     assert off.cam_rms > 2 * cal.cam_rms and off.proj_rms > 2 * cal.proj_rms
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
 def test_clean_data_rejects_no_corner(ideal, seed):
-    cal = sp.calibrate(_view(ideal, 0.1, 0.2, seed=seed))
+    cal = _calibrate(_view(ideal, 0.1, 0.2, seed=seed))
     assert cal.poses[0]["rejected_corners"] == {"camera": [], "projector": []}
     thr = cal.poses[0]["outlier_threshold_px"]
     assert thr["camera"] >= 0.5 and thr["projector"] >= 0.5
@@ -406,7 +414,7 @@ def test_too_few_valid_corners_in_a_view_is_a_clear_error(ideal):
     cam[6:] = np.nan
     with pytest.raises(CalibrationError, match=r"pose 'few': only 6 of 60 corners .* usable; single-pose "
                                                r"calibration needs at least 8"):
-        sp.calibrate(View(view.obj_pts, cam, view.proj_pts, "few", view.cam_size, view.proj_size))
+        _calibrate(View(view.obj_pts, cam, view.proj_pts, "few", view.cam_size, view.proj_size))
 
 
 @pytest.mark.parametrize("extra", [0, 1])
@@ -424,7 +432,7 @@ def test_collinear_corners_are_a_clear_error(ideal, extra):
     with _w.catch_warnings():
         _w.simplefilter("error")        # no numpy RuntimeWarning either
         with pytest.raises(CalibrationError, match=rf"pose 'row': the {cols + extra} usable corners .* one line"):
-            sp.calibrate(v)
+            _calibrate(v)
         with pytest.raises(CalibrationError, match=rf"the {cols + extra} usable camera corners .* one line"):
             sp.calibrate_camera_only(view.obj_pts, cam, ideal.cam_size, name="row")
 
@@ -434,7 +442,7 @@ def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
     scene = replace(ideal, cam_dist_coeffs=(0.0, 0.0))
     view = _view(scene, 0.1, 0.2, seed=5)
     with verdict_warnings():
-        cal = sp.calibrate(view)
+        cal = _calibrate(view)
     cam = cal.info["camera"]
     assert cam.principal_point_source == "image-center"
     (msg,) = [w for w in cal.warnings if "centre of distortion unreliable" in w]
@@ -443,7 +451,7 @@ def test_fallback_message_states_the_prior_and_the_final_principal_point(ideal):
     assert f"final ({u0:.1f}, {v0:.1f}) +- ({cal.std['u0c']:.1f}, {cal.std['v0c']:.1f}) px" in msg
     assert "assumed at the image centre" not in msg
     with verdict_warnings():
-        staged = sp.calibrate(view, camera=sp.CameraOptions(refine="none"))
+        staged = _calibrate(view, camera=sp.CameraOptions(refine="none"))
     (msg,) = [w for w in staged.warnings if "centre of distortion unreliable" in w]
     assert "fixed at the image centre (639.5, 399.5)" in msg
     np.testing.assert_allclose(staged.camera.K[:2, 2], (639.5, 399.5))
@@ -458,11 +466,11 @@ def test_gross_outliers_that_wreck_the_plain_fit_are_rejected(ideal):
     proj[15] += (-1953.2, 1439.8)
     bad = View(view.obj_pts, cam, proj, "gross", view.cam_size, view.proj_size)
     with pytest.raises(CalibrationError, match="projector LM found no valid"):
-        sp.calibrate(bad, robust=sp.RobustOptions(reject_outliers=False))
-    cal = sp.calibrate(bad)
+        _calibrate(bad, robust=sp.RobustOptions(reject_outliers=False))
+    cal = _calibrate(bad)
     rej = cal.poses[0]["rejected_corners"]
     assert [r["index"] for r in rej["camera"]] == [50] and [r["index"] for r in rej["projector"]] == [15]
-    clean = sp.calibrate(view)
+    clean = _calibrate(view)
     np.testing.assert_allclose(cal.projector.K, clean.projector.K, rtol=2e-3)
     np.testing.assert_allclose(cal.camera.K, clean.camera.K, rtol=5e-3)
 
@@ -479,3 +487,23 @@ def test_outliers_that_send_the_plain_fit_astray_are_still_found(ideal, bounds):
     sol = sp.calibrate_camera(obj, cam, ideal.cam_size)
     assert sol.rejected.tolist() == [36, 41, 54]
     assert abs(sol.K[0, 0] - ideal.K_cam[0, 0]) < 5 * 10.2     # the CRLB of this pose is 10.15 px
+
+
+@pytest.mark.parametrize("angles", [simulate.RECOMMENDED_POSE, (-20.0, 25.0, 5.0), (15.0, -30.0, 0.0)])
+def test_an_assumed_u0p_costs_what_it_can(angles):
+    """The paper's rig (u0p = 1013, the model assumes W/2 = 960) from corners alone: f_p is several % off with a
+    fit ± of tenths of a percent. The rating adds what the assumption can cost (u0p anywhere within 3 % of W) and
+    so never calls the projector good; that cost covers the true error. Given u0p, nothing is added."""
+    scene = simulate.with_board_pose(simulate.preset("paper"), angles)
+    view = _view(scene, 0.1, 0.2, seed=3)
+    with verdict_warnings():
+        cal = sp.calibrate(view)
+    rating = cal.poses[0]["advice"]["projector"]
+    err = abs(cal.projector.K[0, 0] - scene.K_proj[0, 0]) / scene.K_proj[0, 0]
+    assert err > 3 * cal.std["f_p"] / cal.projector.K[0, 0]          # the fit's ± alone does not cover it
+    assert rating["level"] != "good" and "assumed u0p" in rating["message"]
+    assert rating["assumption_rel_f"] >= 0.7 * err                   # 0.84-0.9 of it at these poses
+    with verdict_warnings():
+        told = sp.calibrate(view, projector=sp.ProjectorOptions(u0=float(scene.K_proj[0, 2])))
+    assert "assumption_rel_f" not in told.poses[0]["advice"]["projector"]
+    assert abs(told.projector.K[0, 0] - scene.K_proj[0, 0]) / scene.K_proj[0, 0] < err

@@ -14,6 +14,7 @@ from procam import evaluate, io, multi_pose, simulate, single_pose
 from procam.board import Board
 from procam.calibration import Distortion
 from procam.errors import CalibrationError, DegeneratePoseWarning, ProcamWarning, WeakPoseWarning
+from procam.single_pose import RatingOptions
 from procam.view import View
 
 B = Board(10, 6, 24.0)
@@ -55,7 +56,11 @@ def test_degenerate_pose_is_not_written_exit_3(fake_folders, tmp_path):
     assert io.load_calibration(tmp_path / "calib.yml").verdict == "degenerate"
 
 
-def test_good_and_weak_poses_are_written_with_their_verdict(fake_folders, tmp_path):
+def test_good_and_weak_poses_are_written_with_their_verdict(fake_folders, tmp_path, monkeypatch):
+    from procam import single_pose as sp
+
+    # the simulated rig's u0p is at the panel's centre: said so (the CLI cannot; corners alone never say it)
+    monkeypatch.setattr(sp, "_u0p_assumption", lambda *a, **k: {})
     good = fake_folders("good", _view("ideal", simulate.RECOMMENDED_POSE))
     code, stdout, stderr, out = _calibrate([good], tmp_path)
     assert code == 0, stderr
@@ -78,7 +83,8 @@ def test_python_api_warns_with_procam_warning_classes():
     assert cal.verdict == "weak" and cal.trusted
     with warnings.catch_warnings():
         warnings.simplefilter("error", ProcamWarning)
-        cal = single_pose.calibrate(_view("ideal", simulate.RECOMMENDED_POSE))
+        cal = single_pose.calibrate(_view("ideal", simulate.RECOMMENDED_POSE),
+                                    rating_options=RatingOptions(u0p_spread_fraction=0.0))  # u0p known: W/2
     assert cal.verdict == "good" and cal.verdict_reasons == ()
 
 
@@ -194,8 +200,8 @@ def _bent(bend_mm, seed=0):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_no_model_error_when_the_model_holds(seed):
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", WeakPoseWarning)
         warnings.simplefilter("error", ProcamWarning)
+        warnings.simplefilter("ignore", WeakPoseWarning)     # the later filter is matched first
         cal = single_pose.calibrate(_bent(0.0, seed))
     assert not any(m["model_error"] for m in cal.poses[0]["misfit"].values())
 

@@ -12,11 +12,13 @@ The modules, from the captures up (each imports only those above it in this list
                   and camera folders, the names of a sequence's frames
     stream        read pose folders ahead in background threads (the next pose while this one is processed)
     decode        captured stack -> projector column/row per camera pixel, validity, reasons
-    plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns)
+    plausibility  does a decoded capture look like the projector it claims (size, swapped or mirrored patterns,
+                  rows first), and the plausibility gates every calibration passes
     board         Board (inner corners, square size), object points, the board region of a camera image
     corners       chessboard corner detection and refinement (the one caller of OpenCV's chessboard detector)
     correspond    camera corners -> projector corners by local homographies
     view          View: one pose's board, camera and projector points; the per-corner reasons
+    labelling     the canonical labelling of a board's corners (no result depends on how they were numbered)
     pipeline      folder(s) / stack / photo -> View(s)
     models        projection, division distortion, homographies, poses, angles (the model every solver fits)
     parameters    one vocabulary of parameter names
@@ -72,7 +74,7 @@ _SUBMODULES = ("errors", "patterns", "capture", "stream", "decode", "board", "co
                "parameters", "distortion", "uncertainty", "crlb", "calibration", "verdict", "residuals", "stats",
                "single_pose", "advisor", "multi_pose", "method", "evaluate", "summary", "io", "simulate", "paper",
                "plots", "report", "plausibility", "triangulate", "verify", "reconstruct", "export", "check",
-               "acquire", "corners", "datasheet")
+               "acquire", "corners", "datasheet", "labelling")
 
 #: Public names re-exported here: name -> module.
 _EXPORTS = {"ProcamError": "errors", "Board": "board", "View": "view", "Calibration": "calibration",

@@ -6,8 +6,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .patterns import PatternSet
 
 
 #: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.

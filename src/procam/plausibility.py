@@ -1,4 +1,5 @@
-"""Is a decoded capture a plausible picture of a projector? Checks that blame the capture, not the pose.
+"""Is a decoded capture a plausible picture of a projector, and is a calibration possible for a real rig? Checks
+that blame the capture, not the pose; and the plausibility gates every calibration method passes.
 
 A capture can pass every frame-level check and still be wrong in a way that gives a confident wrong
 calibration: the projector size given is not the projector's, a pattern was swapped with its own inverse
@@ -14,12 +15,26 @@ the decoded maps or the corners:
   onto each other preserving orientation; a mirrored camera image, a mirroring projector setting, or the most
   significant pattern swapped with its inverse (which mirrors the codes) reverses it.
 
+* **columns and rows exchanged** (:func:`check_projector_size`): codes that fit the projector only with its
+  columns and rows exchanged are a sequence captured rows first when the decoded "columns" change along the
+  camera's vertical, a projector size given the wrong way round when they change along its horizontal;
+* **several swapped pairs**: found one at a time, each from the map with the ones before flipped back, and all
+  named.
+
 The checks raise :class:`~procam.errors.CaptureError` naming the frames or the setting to check;
 :func:`check_decoded` runs those of the capture's family (a phase family's: :func:`check_phase_maps`).
+
+**The gates** (:func:`gate_failures`, :func:`apply_gates`): a calibration whose focal length is impossible for
+its image (or not positive), whose ``R`` is not a rotation, whose boards lie behind a device, whose stereo RMS is
+far above the devices' own or whose baseline is absurd against the boards' distance is ``failed`` -- from every
+method and every fallback (single-pose, multi-pose with or without the joint refinement, camera-only). The gates
+read only what the calibration carries; they assume a real rig (a lens of 11-136 deg diagonal field of view,
+boards in front of both devices).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -84,14 +99,19 @@ def check_projector_size(maps: DecodeResult, name: str, files=None) -> list[str]
         flips = [(_flipped_beyond(hist, size, b, ps.step, offset), b) for b in range(nbits)]
         f2, b = min(flips)
         if f2 < MAX_BEYOND / 4:
-            a, i = ps.pair_indices(axis)[nbits - 1 - b]
+            pairs = _code_pairs(maps, 4).get(axis)  # other pairs swapped too: each named, not only this one
+            more = [] if pairs is None else [c for c, _ in _swapped(*pairs[:4], nbits, ps.step, flipped=(b,))]
             raise CaptureError(
-                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: as captured "
-                f"{f:.0%} of the decoded pixels point to projector {label}s beyond the {size} of the projector, with "
-                f"that pair the other way round {f2:.1%} — a pattern and its inverse were exchanged (or come from "
-                "another capture); re-capture, or check that the file names sort in capture order")
+                f"{name}: {_pairs_text(ps, axis, label, [b] + more, files)} look swapped: as captured {f:.0%} of the "
+                f"decoded pixels point to projector {label}s beyond the {size} of the projector, with "
+                f"{'those pairs' if more else 'that pair'} the other way round {f2:.1%}"
+                + (" and the map continuous" if more else "") + " — a pattern and its inverse were exchanged (or "
+                "come from another capture); re-capture, or check that the file names sort in capture order")
         bad.append((label, f, code_extent(hist), size))
     if bad:
+        transposed = _transposed(maps)
+        if transposed is not None:
+            raise CaptureError(f"{name}: {transposed}")
         what = "; ".join(f"{f:.0%} of the decoded pixels point to projector {label}s beyond the given {size} "
                          f"(up to {e - 1})" for label, f, e, size in bad)
         real = [ps.width, ps.height]
@@ -114,6 +134,43 @@ def _extent_warnings(maps: DecodeResult, name: str) -> list[str]:
                        f"projector has {e} {label}s (not {size}), pass the right --projector; otherwise part of "
                        "the projection is outside the camera's view")
     return out
+
+
+def _slopes(m: np.ndarray, sample: int = 4) -> tuple[float, float]:
+    """Median |change| of a decoded map per camera pixel along x and along y (every ``sample``-th line)."""
+    v = m[::sample, ::sample]
+    dx, dy = np.diff(v, axis=1) / sample, np.diff(v, axis=0) / sample
+    dx, dy = dx[np.isfinite(dx)], dy[np.isfinite(dy)]
+    return (float(np.median(np.abs(dx))) if dx.size else 0.0, float(np.median(np.abs(dy))) if dy.size else 0.0)
+
+
+def _transposed(maps: DecodeResult) -> str | None:
+    """Why the decoded codes point beyond the projector when the reason is the axes, not the size: the codes fit
+    the projector with columns and rows exchanged. Rows captured first (the decoded "columns" then hold row codes
+    and change along the camera's vertical, the "rows" along its horizontal), or the projector's size given
+    the wrong way round (the maps change as a camera and projector side by side make them). None otherwise."""
+    ps = maps.pattern_set
+    total_c = maps.codes_col.sum() if maps.codes_col is not None else 0
+    total_r = maps.codes_row.sum() if maps.codes_row is not None else 0
+    if not (total_c and total_r):
+        return None
+    swapped_c = float(maps.codes_col[ps.height:].sum() / total_c)
+    swapped_r = float(maps.codes_row[ps.width:].sum() / total_r)
+    if max(swapped_c, swapped_r) > MAX_BEYOND:
+        return None
+    ec, er = code_extent(maps.codes_col), code_extent(maps.codes_row)
+    (cx, cy), (rx, ry) = _slopes(maps.col), _slopes(maps.row)
+    if cy > cx and rx > ry:
+        cp, rp = ps.pair_indices("col"), ps.pair_indices("row")
+        return (f"the column and row patterns look exchanged (captured rows first?): the codes decoded as projector "
+                f"columns span 0-{ec - 1} and change along the camera's vertical, those decoded as rows span "
+                f"0-{er - 1} and change along its horizontal -- a {ps.width}x{ps.height} projector's rows and columns "
+                f"the other way round. procam reads frames #{cp[0][0]}-#{cp[-1][1]} as the column pairs and "
+                f"#{rp[0][0]}-#{rp[-1][1]} as the row pairs ({ps.order} order); put the column frames first (rename "
+                "the files so they sort in capture order) or re-capture columns first; --projector is not the problem")
+    return (f"the projector's size looks given the wrong way round: the decoded columns span 0-{ec - 1} and the rows "
+            f"0-{er - 1}, which fit a {ps.height}x{ps.width} projector, not {ps.width}x{ps.height}; pass --projector "
+            f"{ps.height}x{ps.width} (width x height) if that is the panel")
 
 
 def _median_of_hist(h: np.ndarray, lo: int) -> float:
@@ -167,6 +224,30 @@ def _neighbour_pairs(code: np.ndarray, ok: np.ndarray, axis: int, reach: int = 3
             np.concatenate([h[k], np.ones(int(far.sum()), np.int64)]).astype(float))
 
 
+def _code_pairs(maps: DecodeResult, sample: int):
+    """Per axis: the distinct pairs of neighbouring codes of the decoded map (full-precision pixels only) and
+    their counts ``(c1, c2, w, n_pixels, dv)`` (``dv`` the decoded values' differences, twice over), or None when
+    fewer than 2000 pixels count (see :func:`swap_scores`)."""
+    ps = maps.pattern_set
+    out = {}
+    for axis, vals, dropped, offset, cam_axis in (("col", maps.col, maps.dropped_col, ps.col_offset, 1),
+                                                 ("row", maps.row, maps.dropped_row, ps.row_offset, 0)):
+        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
+        ok = np.isfinite(v)
+        if dropped is not None:
+            ok &= (dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0
+        n_ok = int(np.count_nonzero(ok))
+        if n_ok < 2000:
+            out[axis] = None
+            continue
+        # twice the decoded values are integers (block centres are whole or half pixels)
+        v1, v2, w = _neighbour_pairs(np.rint(2.0 * np.where(ok, v, 0.0)).astype(np.int64), ok, cam_axis)
+        # the codes of the pairs' ends (a decoded value is its block's centre)
+        c1, c2 = (np.rint((x - (ps.step - 1)) / (2.0 * ps.step)).astype(np.int64) + offset for x in (v1, v2))
+        out[axis] = (c1, c2, w, n_ok, v2 - v1)
+    return out
+
+
 def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     """The smoothness of the decoded maps as decoded and with each Gray-code bit decoded the other way round.
 
@@ -181,26 +262,15 @@ def swap_scores(maps: DecodeResult, sample: int = 4) -> dict:
     """
     ps = maps.pattern_set
     out = {}
-    for axis, vals, dropped, nbits, offset, cam_axis in (
-            ("col", maps.col, maps.dropped_col, ps.col_bits, ps.col_offset, 1),
-            ("row", maps.row, maps.dropped_row, ps.row_bits, ps.row_offset, 0)):
-        v = vals[::sample, :] if cam_axis == 1 else vals[:, ::sample]
-        ok = np.isfinite(v)
-        if dropped is not None:
-            ok &= (dropped[::sample, :] if cam_axis == 1 else dropped[:, ::sample]) == 0
-        n_ok = int(np.count_nonzero(ok))
-        if n_ok < 2000:
+    for axis, pairs in _code_pairs(maps, sample).items():
+        if pairs is None:
             out[axis] = None
             continue
-        # twice the decoded values are integers (block centres are whole or half pixels)
-        v1, v2, w = _neighbour_pairs(np.rint(2.0 * np.where(ok, v, 0.0)).astype(np.int64), ok, cam_axis)
-        # the codes of the pairs' ends (a decoded value is its block's centre)
-        c1, c2 = (np.rint((x - (ps.step - 1)) / (2.0 * ps.step)).astype(np.int64) + offset for x in (v1, v2))
-        flipped = []
-        for b in range(nbits - 1):
-            m = (1 << (b + 1)) - 1
-            flipped.append(_hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * ps.step), w))
-        out[axis] = {"n": n_ok, "scores": _hist_scores(v2 - v1, w), "flipped": flipped}
+        c1, c2, w, n_ok, dv = pairs
+        nbits = ps.col_bits if axis == "col" else ps.row_bits
+        out[axis] = {"n": n_ok, "scores": _hist_scores(dv, w),
+                     "flipped": [_hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * ps.step), w)
+                                 for m in ((1 << (b + 1)) - 1 for b in range(nbits - 1))]}
     return out
 
 
@@ -243,43 +313,73 @@ def check_phase_maps(maps: DecodeResult, name: str) -> list[str]:
                 "'procam decode' on the pose folder names the frames that disagree; fix patterns.json "
                 "(docs/patterns.md)")
     return out + _extent_warnings(maps, name)
+def _swapped(c1, c2, w, n, nbits, step, flipped=()) -> list[tuple[int, str]]:
+    """The Gray-code bits decoded the wrong way round, found one at a time: the bit whose flip makes the map
+    clearly smoother (1.6 times) or removes two thirds of its breaks is taken, and the search goes on from the map
+    with it flipped (two swapped pairs each hide the other's improvement). ``[(bit, how)]``."""
+    found = []
+    mask = 0
+    for b in flipped:
+        mask ^= (1 << (b + 1)) - 1
+    while len(found) < nbits - 1:
+        rough0, breaks0 = _hist_scores(((c2 ^ mask) - (c1 ^ mask)) * (2 * step), w)
+        candidates = []
+        for b in range(nbits - 1):
+            if b in flipped or any(b == f for f, _ in found):
+                continue
+            m = mask ^ ((1 << (b + 1)) - 1)
+            rough, breaks = _hist_scores(((c2 ^ m) - (c1 ^ m)) * (2 * step), w)
+            smoother = rough * 1.6 < rough0 and rough0 - rough > 0.2 * step
+            fewer = breaks * 3 < breaks0 and breaks0 - breaks > 0.002 * n
+            if smoother or fewer:
+                how = (f"{rough0 / max(rough, 1e-9):.0f} times smoother" if smoother else
+                       f"continuous ({breaks} breaks instead of {breaks0})")
+                candidates.append((breaks, rough, b, how))
+        if not candidates:
+            break
+        _, _, b, how = min(candidates)
+        found.append((b, how))
+        mask ^= (1 << (b + 1)) - 1
+    return found
+
+
+def _pairs_text(ps, axis, label, bits, files) -> str:
+    nbits = ps.col_bits if axis == "col" else ps.row_bits
+    parts = []
+    for b in bits:
+        a, i = ps.pair_indices(axis)[nbits - 1 - b]
+        parts.append(f"{_frame(a, files)} and {_frame(i, files)} ({label} bit {b})")
+    return ("images " + " and ".join(parts) if len(parts) == 1 else
+            f"{len(parts)} pairs of images: " + "; ".join(parts))
 
 
 def check_swapped_bits(maps: DecodeResult, name: str, files=None, *, sample: int = 4) -> None:
-    """Raise when decoding one Gray-code bit the other way round makes the decoded map clearly continuous:
-    that bit's pattern and inverse were swapped in the capture (or one of them comes from another sequence).
+    """Raise when decoding Gray-code bits the other way round makes the decoded map clearly continuous: those
+    bits' patterns and inverses were swapped in the capture (or one of them comes from another sequence).
 
     A swapped bit ``b`` reverses the order of the codes inside every block of ``2^(b+1)`` codes. Small blocks
     make the map rough (neighbouring differences far from the slope); large blocks leave it smooth inside and
     break it at every block boundary. A correct decoding only gets worse when a bit is flipped; a swapped bit
-    gets at least 1.6 times smoother, or loses two thirds of its breaks, when it is flipped back (the bit whose
-    flip leaves the fewest breaks is named). (The most
-    significant bits are also caught by :func:`check_projector_size`, the most significant alone by
-    :func:`check_orientation`.) The maps are read on every ``sample``-th line (:func:`swap_scores`).
+    gets at least 1.6 times smoother, or loses two thirds of its breaks, when it is flipped back. Bits are found
+    one at a time, each from the map with the ones before flipped back (:func:`_swapped`), so that every swapped
+    pair is named, not only the first. (The most significant bits are also caught by
+    :func:`check_projector_size`, the most significant alone by :func:`check_orientation`.) The maps are read on
+    every ``sample``-th line.
     """
     ps = maps.pattern_set
-    scores = swap_scores(maps, sample)
-    for label, axis, nbits in (("column", "col", ps.col_bits), ("row", "row", ps.row_bits)):
-        sc = scores[axis]
-        if sc is None:
+    for axis, pairs in _code_pairs(maps, sample).items():
+        if pairs is None:
             continue
-        rough0, breaks0 = sc["scores"]
-        candidates = []
-        for b, (rough, breaks) in enumerate(sc["flipped"]):
-            smoother = rough * 1.6 < rough0 and rough0 - rough > 0.2 * ps.step
-            fewer = breaks * 3 < breaks0 and breaks0 - breaks > 0.002 * sc["n"]
-            if smoother or fewer:
-                candidates.append((breaks, rough, b, smoother))
-        if candidates:
-            breaks, rough, b, smoother = min(candidates)
-            a, i = ps.pair_indices(axis)[nbits - 1 - b]
-            how = (f"{rough0 / max(rough, 1e-9):.0f} times smoother" if smoother else
-                   f"continuous ({breaks} breaks instead of {breaks0})")
+        label = "column" if axis == "col" else "row"
+        c1, c2, w, n, _ = pairs
+        found = _swapped(c1, c2, w, n, ps.col_bits if axis == "col" else ps.row_bits, ps.step)
+        if found:
+            how = ", then ".join(h for _, h in found)
             raise CaptureError(
-                f"{name}: images {_frame(a, files)} and {_frame(i, files)} ({label} bit {b}) look swapped: the "
-                f"decoded projector {label}s are {how} with that pair the other way round — a pattern and its "
-                "inverse were exchanged (or come from another capture); re-capture, or check that the file names "
-                "sort in capture order")
+                f"{name}: {_pairs_text(ps, axis, label, [b for b, _ in found], files)} look swapped: the decoded "
+                f"projector {label}s are {how} with {'those pairs' if len(found) > 1 else 'that pair'} the other way "
+                "round — a pattern and its inverse were exchanged (or come from another capture); re-capture, or "
+                "check that the file names sort in capture order")
 
 
 def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows: int, name: str, maps=None,
@@ -319,3 +419,140 @@ def check_orientation(cam_pts: np.ndarray, proj_pts: np.ndarray, cols: int, rows
         f"of {len(s)} squares reversed): the camera image looks mirrored (some webcams flip left-right: turn the "
         "mirror/flip setting off), or the projector mirrors its image (rear-projection setting), or the most "
         f"significant pattern of an axis was swapped with its inverse{hint}")
+
+
+# --------------------------------------------------------------------------------------------------
+# the plausibility gates of a calibration (every method, every fallback)
+# --------------------------------------------------------------------------------------------------
+
+#: Focal lengths outside this range x the image diagonal (diagonal fields of view of ~136 deg down to ~11 deg)
+#: are impossible for a real device (the single-pose rating's ``plausible_f_range`` is this range).
+FOCAL_RANGE = (0.2, 5.0)
+
+
+@dataclass(frozen=True)
+class GateOptions:
+    """Thresholds of :func:`gate_failures`.
+
+    Attributes
+    ----------
+    focal_range : a focal length outside this range x the image diagonal is impossible (:data:`FOCAL_RANGE`).
+    stereo_ratio, stereo_floor_px : a stereo RMS above ``max(stereo_ratio x the devices' own RMS,
+        stereo_floor_px)`` means the two devices' views of the boards disagree: ``R, T`` do not describe the rig.
+    baseline_range : ``|T|`` outside this range x the boards' median distance from the camera is no real rig.
+    """
+
+    focal_range: tuple = FOCAL_RANGE
+    stereo_ratio: float = 4.0
+    stereo_floor_px: float = 1.0
+    baseline_range: tuple = (1e-3, 20.0)
+
+
+def focal_failure(key: str, f, size, focal_range=FOCAL_RANGE) -> str | None:
+    """``"<key> = ... px is impossible for a WxH image (plausible ...)"`` when the focal length ``f`` is not
+    positive or outside ``focal_range`` x the image diagonal; None when it is possible."""
+    lo, hi = (focal_range[0] * float(np.hypot(*size)), focal_range[1] * float(np.hypot(*size)))
+    if np.isfinite(f) and lo <= f <= hi:
+        return None
+    why = "not positive" if np.isfinite(f) and f <= 0 else f"plausible {lo:.0f}-{hi:.0f} px"
+    return f"{key} = {f:.4g} px is impossible for a {size[0]}x{size[1]} image ({why})"
+
+
+def _board_poses(calib):
+    """``[(name, obj (N, 3), R_cb, t_cb, R_pb or None, t_pb or None)]``: the calibration's own board poses (a
+    multi-pose calibration's ``R_cam, t_cam``; a single-pose one's device solutions); empty when it keeps none."""
+    out = []
+    views = list(calib.views)
+    for k, p in enumerate(calib.poses):
+        if "R_cam" in p and "t_cam" in p and k < len(views):
+            R_cb, t_cb = np.asarray(p["R_cam"], float), np.asarray(p["t_cam"], float)
+            obj = views[k].obj_pts[views[k].valid]
+            out.append((str(p.get("name", f"pose{k + 1}")), obj, R_cb, t_cb, None, None))
+    if out or len(views) != 1:
+        return out
+    cam, proj = calib.info.get("camera"), calib.info.get("projector")
+    if getattr(cam, "R", None) is None:
+        return out
+    obj = views[0].obj_pts[np.isfinite(views[0].obj_pts).all(1)]
+    R_pb = getattr(proj, "R", None)
+    return [(str(views[0].name), obj, np.asarray(cam.R, float), np.asarray(cam.t, float),
+             None if R_pb is None else np.asarray(R_pb, float), None if R_pb is None else np.asarray(proj.t, float))]
+
+
+def gate_failures(calib, options: GateOptions = GateOptions()) -> list[str]:
+    """What makes a calibration impossible for a real rig, one message each (empty: it passes).
+
+    The gates, for every method: each focal length positive and possible for its image size
+    (:func:`focal_failure`); ``R`` a rotation (``det R = +1``); every board in front of both devices; the stereo
+    RMS not far above the devices' own RMS (the corners' noise); ``|T|`` neither zero nor absurd against the
+    boards' distance. Reads only what the calibration carries (no refit).
+    """
+    from pathlib import Path
+
+    msgs = []
+    devices = [("camera", "c", calib.camera)]
+    if calib.projector is not None:
+        devices.append(("projector", "p", calib.projector))
+    for device, d, dev in devices:
+        K = np.asarray(dev.K, float)
+        for key, f in ((f"f_{d}", K[0, 0]), (f"fy_{d}", K[1, 1])):
+            why = focal_failure(key, float(f), tuple(dev.image_size), options.focal_range)
+            if why:
+                msgs.append(f"{device}: FAILED estimate: {why}")
+    if calib.R is None or calib.T is None:
+        return msgs
+    R, T = np.asarray(calib.R, float), np.asarray(calib.T, float).ravel()
+    det = float(np.linalg.det(R))
+    if not (np.isfinite(det) and abs(det - 1.0) < 1e-3 and np.allclose(R @ R.T, np.eye(3), atol=1e-3)):
+        msgs.append(f"FAILED estimate: R is not a rotation (det R = {det:+.3f}"
+                    + ("; a mirror" if det < 0 else "") + "): no rig turns the camera into the projector so")
+    dist = []
+    for name, obj, R_cb, t_cb, R_pb, t_pb in _board_poses(calib):
+        X = obj @ R_cb.T + t_cb
+        dist.append(float(np.median(np.linalg.norm(X, axis=1))))
+        Xp = X @ R.T + T if R_pb is None else obj @ R_pb.T + t_pb
+        for device, P in (("camera", X), ("projector", Xp)):
+            if not np.all(P[:, 2] > 0):
+                msgs.append(f"pose {Path(name).name!r}: FAILED estimate: the board is behind the {device} ("
+                            f"{int(np.sum(P[:, 2] <= 0))} of {len(P)} corners at z <= 0 in its frame): R, T put "
+                            f"the {device} on the wrong side of the board")
+    own = max((v for v in (calib.cam_rms, calib.proj_rms) if v is not None and np.isfinite(v)), default=np.nan)
+    s = calib.stereo_rms
+    if s is not None and np.isfinite(s) and np.isfinite(own) and s > max(options.stereo_ratio * own,
+                                                                         options.stereo_floor_px):
+        msgs.append(f"FAILED estimate: stereo RMS {s:.3g} px is {s / max(own, 1e-12):.0f} times the devices' own "
+                    f"fits ({own:.2g} px, the corners' noise): the boards' poses seen by the camera and by the "
+                    "projector disagree, so R, T do not describe the rig")
+    if dist:
+        d0, n = float(np.median(dist)), float(np.linalg.norm(T))
+        lo, hi = options.baseline_range
+        if not (np.isfinite(n) and lo * d0 <= n <= hi * d0):
+            msgs.append(f"FAILED estimate: the baseline |T| = {n:.4g} is {n / d0:.3g} times the boards' distance "
+                        f"from the camera ({d0:.4g}): no real rig (plausible {lo:g}-{hi:g} times)")
+    return msgs
+
+
+def apply_gates(calib, options: GateOptions = GateOptions(), *, over_degenerate: bool = True, stacklevel: int = 2):
+    """The calibration with the verdict ``failed`` when a gate fails (:func:`gate_failures`): the failures lead
+    its ``verdict_reasons``, join its ``warnings`` and are emitted as one
+    :class:`~procam.errors.FailedEstimateWarning`. A calibration that passes is returned unchanged (as is a
+    failure a solver already gave as a reason).
+
+    ``over_degenerate=False`` keeps a ``degenerate`` verdict (the failures join only its warnings): where the
+    stable prediction already says the numbers may be anything, where the optimiser stopped -- and so whether
+    they are also impossible -- must not change the verdict (single-pose, :mod:`procam.single_pose.rating`).
+    """
+    import warnings as _warnings
+
+    from .errors import FailedEstimateWarning
+
+    failures = [m for m in gate_failures(calib, options)
+                if not any(m.split("FAILED estimate: ", 1)[-1] in r for r in calib.verdict_reasons)]
+    if not failures:
+        return calib
+    warnings = tuple(calib.warnings) + tuple(w for w in failures if w not in calib.warnings)
+    if calib.verdict == "degenerate" and not over_degenerate:
+        return calib.replace(warnings=warnings)
+    _warnings.warn("; ".join(failures), FailedEstimateWarning, stacklevel=stacklevel + 1)
+    return calib.replace(verdict="failed", verdict_reasons=tuple(failures) + tuple(calib.verdict_reasons),
+                         warnings=warnings)

@@ -14,7 +14,7 @@ the calibration's ``T`` (the board's square unit, e.g. mm).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,6 +37,11 @@ class PointCloud:
     both : (N,) bool -- projector column and row both used (else one of them).
     residual_px : (N,) projector reprojection error where both were used (pixels), else 0.
     image_size : (width, height) of the camera image.
+    accounting : what :func:`reconstruct` did with the decoded pixels (:func:`dropped_lines` says it in words):
+        ``decoded`` (camera pixels with a decoded column or row), ``not_in_front`` (no point in front of both
+        devices), ``disagree`` (dropped: column and row disagree by more than ``max_residual_px``), ``kept``,
+        ``max_residual_px``, and over the pixels with both coordinates ``median_disagreement_px`` and
+        ``p90_disagreement_px`` (before dropping); empty for a subset.
     """
 
     points: np.ndarray
@@ -45,6 +50,7 @@ class PointCloud:
     both: np.ndarray
     residual_px: np.ndarray
     image_size: tuple
+    accounting: dict = field(default_factory=dict, compare=False)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -53,7 +59,7 @@ class PointCloud:
         """The points where ``mask`` (N,) is True."""
         m = np.asarray(mask, bool)
         return PointCloud(self.points[m], None if self.colours is None else self.colours[m], self.pixels[m],
-                          self.both[m], self.residual_px[m], self.image_size)
+                          self.both[m], self.residual_px[m], self.image_size)  # no accounting: a subset
 
     def image_mask(self, region) -> np.ndarray:
         """(N,) bool: points whose camera pixel is True in the (H, W) bool image ``region``."""
@@ -118,6 +124,13 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
     keep = np.ones(len(out["points"]), bool)
     if max_residual_px is not None:
         keep = out["residual_px"] <= float(max_residual_px)
+    decoded = int(np.count_nonzero((vc & (use != "row")) | (vr & (use != "col"))))  # as triangulate_dense reads them
+    both_res = out["residual_px"][out["both"]]
+    accounting = {"decoded": decoded, "not_in_front": decoded - len(out["points"]),
+                  "disagree": int(np.count_nonzero(~keep)), "kept": int(np.count_nonzero(keep)),
+                  "max_residual_px": None if max_residual_px is None else float(max_residual_px),
+                  "median_disagreement_px": float(np.median(both_res)) if both_res.size else float("nan"),
+                  "p90_disagreement_px": float(np.percentile(both_res, 90)) if both_res.size else float("nan")}
     pix = out["pixels"][keep]
     cols = None
     if colour is not None:
@@ -125,7 +138,50 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
         if rgb.shape[:2] != (H, W):
             raise ProcamError(f"the colour image is {rgb.shape[1]}x{rgb.shape[0]}, the maps {W}x{H}")
         cols = rgb[pix[:, 1], pix[:, 0]]
-    return PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H))
+    return PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H),
+                      accounting)
+
+
+def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> tuple[list[str], list[str]]:
+    """What :func:`reconstruct` dropped, and why, in words: ``(lines, warnings)``.
+
+    The lines account for every decoded camera pixel (kept; dropped because its projector column and row
+    disagree; no point in front of both devices) and give the median column/row disagreement. A pixel's
+    disagreement is the distance (projector pixels) between its decoded (column, row) and the projection of its
+    least-squares point: with a right calibration and a right decode it is the decoding noise (well under a
+    pixel). A warning when more than ``warn_fraction`` of the decoded pixels were dropped, saying what the
+    median means: far above the threshold, the calibration does not describe this rig or the decoded maps are
+    wrong (swapped pattern pairs, another capture's patterns); near it, noisy decoding at edges and in shadow.
+    """
+    a = cloud.accounting
+    if not a:
+        return [], []
+    n = max(a["decoded"], 1)
+    thr = a["max_residual_px"]
+    lines = [f"decoded camera pixels: {a['decoded']}; kept {a['kept']} ({a['kept'] / n:.0%})"]
+    if thr is not None:
+        lines.append(f"dropped, projector column and row disagree by more than {thr:g} px: {a['disagree']} "
+                     f"({a['disagree'] / n:.0%})")
+    lines.append(f"dropped, no point in front of both devices: {a['not_in_front']} ({a['not_in_front'] / n:.0%})")
+    med, p90 = a["median_disagreement_px"], a["p90_disagreement_px"]
+    if np.isfinite(med):
+        lines.append(f"column/row disagreement (pixels with both): median {med:.2f} px, 90th percentile {p90:.2f} px")
+    warnings = []
+    dropped = a["disagree"] + a["not_in_front"]
+    if dropped > warn_fraction * n:
+        if thr is not None and np.isfinite(med) and med > thr:
+            why = (f"the median disagreement ({med:.1f} px) is above the {thr:g} px limit: for most pixels the decoded "
+                   "column and row do not meet on one point -- the calibration does not describe this camera and "
+                   "projector (another rig, a moved projector, a wrong --projector size), or the decoded maps are "
+                   "wrong (swapped pattern pairs, patterns from another capture: procam decode --png shows them)")
+        elif a["not_in_front"] > a["disagree"]:
+            why = ("most of them triangulate behind a device: the calibration's R, T do not describe this rig (or the "
+                   "capture is of another one)")
+        else:
+            why = (f"the median disagreement ({med:.2f} px) is small: the dropped pixels are the noisy ones (edges, "
+                   "shadows, dark or glossy surfaces); --max-residual keeps more of them")
+        warnings.append(f"{dropped} of {a['decoded']} decoded pixels ({dropped / n:.0%}) were dropped: {why}")
+    return lines, warnings
 
 
 @dataclass(frozen=True)

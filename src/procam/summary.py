@@ -68,30 +68,77 @@ def projector_freed(calib) -> frozenset:
     return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
 
 
+#: The default std of the prior ``alpha_p = 1 +- std`` of a single-pose projector fit with the background
+#: (``procam.single_pose.background.BackgroundOptions.alpha_prior_std``; a test holds the two equal). Here as a
+#: number, not an import: the file writers read this module and sit below the solvers.
+ALPHA_PRIOR_STD = 0.003
+
+
+def _alpha_prior_std(calib) -> float:
+    """The std of the prior ``alpha_p = 1 +- std`` a single-pose projector fit with the background used (the
+    calibration's ``info["alpha_prior_std"]`` when it records it)."""
+    return float(calib.info.get("alpha_prior_std", ALPHA_PRIOR_STD))
+
+
+def parameter_status(calib) -> dict:
+    """What each parameter of a calibration IS, by name (:mod:`procam.parameters`): ``(kind, words)`` with kind
+    ``"estimated"`` (from the data, with the fit's ``±``), ``"prior"`` (estimated but held near a value given
+    with a tolerance), ``"assumed"`` (a fixed value of the model, not estimated) or ``"given"`` (the user's,
+    e.g. ``--camera``). A solver may record its own in ``info["parameter_status"]`` (same form); they win.
+
+    Only the parameters that are not plainly estimated are listed (and ``u0p`` / ``alpha_p`` of a single-pose
+    projector, always).
+    """
+    out = {}
+    W = calib.projector.image_size[0] if calib.projector is not None else None
+    if "camera given" in calib.method:
+        for k in ("f_c", "fy_c", "alpha_c", "u0c", "v0c", "k1", "k2", "cam_dist"):
+            out[k] = ("given", "given (--camera), not estimated from this pose")
+    elif calib.method in ("single-pose", "camera-only") and calib.info.get("principal_point_source") == "image-center":
+        for k in ("u0c", "v0c"):
+            out[k] = ("prior", "a PRIOR: the image centre ± 32 px per axis (the centre of distortion was not "
+                               "reliable), refined by the fit")
+    if "projector given" in calib.method:
+        for k in ("f_p", "fy_p", "alpha_p", "u0p", "v0p", "proj_dist"):
+            out[k] = ("given", "given (--projector-intrinsics), not estimated from this pose")
+    elif calib.method.startswith("single-pose") and calib.projector is not None and calib.info.get("dense") is None:
+        freed = projector_freed(calib)
+        K = calib.projector.K
+        u0, f, fy = float(K[0, 2]), float(K[0, 0]), float(K[1, 1])
+        if "u0p" in freed:
+            out["u0p"] = ("estimated", f"u0p = {pm(u0, _std(calib, 'u0p'), '.1f')} px is ESTIMATED from the "
+                                       "background behind the board")
+        elif abs(u0 - W / 2) < 1e-6:
+            out["u0p"] = ("assumed", f"u0p = W/2 = {W / 2:g} px is ASSUMED, not estimated")
+        else:
+            out["u0p"] = ("given", f"u0p = {u0:g} px is GIVEN, not estimated")
+        if "alpha_p" in freed:
+            out["alpha_p"] = ("estimated", f"alpha_p = fy_p / f_p = {pm(fy / f, _std(calib, 'alpha_p'), '.4f')} is "
+                                           "ESTIMATED from the background")
+        elif fy != f or _std(calib, "alpha_p"):
+            prior = _alpha_prior_std(calib)
+            out["alpha_p"] = ("prior", f"alpha_p = fy_p / f_p = {pm(fy / f, _std(calib, 'alpha_p'), '.4f')} rests on "
+                                       f"a PRIOR of 1 ± {prior:g} (the background refines it within that; not "
+                                       "estimated freely)")
+        else:
+            out["alpha_p"] = ("assumed", "alpha_p = 1 (fy_p = f_p) is ASSUMED")
+        out["proj_dist"] = ("assumed", "the projector has NO lens distortion (ASSUMED)")
+    out.update(calib.info.get("parameter_status") or {})
+    return out
+
+
 def projector_assumptions(calib) -> list[str]:
-    """What a single-pose calibration's projector numbers assume, in words (empty for other methods): the
-    paper's u0p = W/2 and alpha_p = 1 where they were kept, what the background estimated instead, and no
-    projector lens distortion."""
+    """What a single-pose calibration's projector numbers rest on, in words (empty for other methods): with the
+    pose's dense samples what each intrinsic rests on (:func:`_dense_assumptions`); otherwise the paper's u0p = W/2
+    and alpha_p = 1 where they were kept, a prior where it held them, what the background estimated instead, and no
+    projector lens distortion (:func:`parameter_status`)."""
     if not calib.method.startswith("single-pose") or calib.projector is None:
         return []
     dense = calib.info.get("dense")
     if dense is not None:
         return _dense_assumptions(calib, dense)
-    freed = projector_freed(calib)
-    W = calib.projector.image_size[0]
-    u0 = float(calib.projector.K[0, 2])
-    if "u0p" in freed:
-        out = [f"u0p = {pm(u0, _std(calib, 'u0p'), '.1f')} px is ESTIMATED from the background behind the board"]
-    elif abs(u0 - W / 2) < 1e-6:
-        out = [f"u0p = W/2 = {W / 2:g} px is ASSUMED, not estimated"]
-    else:
-        out = [f"u0p = {u0:g} px is GIVEN, not estimated"]
-    if "alpha_p" in freed:
-        out.append("alpha_p is ESTIMATED from the background")
-    else:
-        out.append("alpha_p = 1 (fy_p = f_p) is ASSUMED")
-    out.append("the projector has NO lens distortion (ASSUMED)")
-    return out
+    st = parameter_status(calib)
+    return [st[k][1] for k in ("u0p", "alpha_p", "proj_dist") if k in st]
 
 
 def _dense_assumptions(calib, dense) -> list[str]:
@@ -144,14 +191,21 @@ def pm(value, std, fmt=".2f") -> str:
 
 
 def parameter_rows(calib) -> list[tuple[str, str, str]]:
-    """``(parameter, camera, projector)`` rows: intrinsics ± std, distortion, RMS, extrinsics."""
+    """``(parameter, camera, projector)`` rows: intrinsics ± std (a given value as given, never ``± 0``), distortion,
+    RMS, extrinsics."""
     rows = []
     cK = calib.camera.K
     pK = calib.projector.K if calib.projector is not None else None
+    status = parameter_status(calib)
+
+    def cell(key, val, fmt):
+        if status.get(key, ("estimated",))[0] == "given":
+            return f"{val:{fmt}} (given)"
+        return pm(val, _std(calib, key) or None, fmt)  # a fixed value has no ±, not "± 0"
 
     def row(name, ckey, cval, pkey=None, pval=None, fmt=".2f"):
-        rows.append((name, pm(cval, _std(calib, ckey), fmt) if cval is not None else "",
-                     pm(pval, _std(calib, pkey), fmt) if pval is not None else ""))
+        rows.append((name, cell(ckey, cval, fmt) if cval is not None else "",
+                     cell(pkey, pval, fmt) if pval is not None else ""))
 
     row("f (px)", "f_c", cK[0, 0], "f_p", None if pK is None else pK[0, 0])
     row("fy (px)", "fy_c", cK[1, 1], "fy_p", None if pK is None else pK[1, 1])
@@ -161,12 +215,15 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
     p_dist = ""  # the projector's distortion shares the camera's row
     if calib.projector is not None and calib.projector.distortion.model == "opencv":
         p_dist = "opencv " + " ".join(f"{c:.4g}" for c in calib.projector.distortion.coeffs)
+    given = status.get("k1", ("",))[0] == "given"
     if d.model == "division":
-        rows.append(("distortion", f"division c=({d.center[0]:.1f}, {d.center[1]:.1f})", p_dist))
+        rows.append(("distortion", f"division c=({d.center[0]:.1f}, {d.center[1]:.1f})" + (" (given)" if given else ""),
+                     p_dist))
         row("k1 (px^-2)", "k1", d.k1, fmt=".4g")
         row("k2 (px^-4)", "k2", d.k2, fmt=".4g")
     elif d.model == "opencv":
-        rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs), p_dist))
+        rows.append(("distortion", "opencv " + " ".join(f"{c:.4g}" for c in d.coeffs) + (" (given)" if given else ""),
+                     p_dist))
     elif p_dist:
         rows.append(("distortion", "none", p_dist))
     if p_dist and calib.method.startswith("single-pose") and _std(calib, "proj_dist", 0) is not None:
@@ -177,8 +234,8 @@ def parameter_rows(calib) -> list[tuple[str, str, str]]:
     rows.append(("RMS reprojection (px)", f"{calib.cam_rms:.3f}", "" if pK is None else f"{calib.proj_rms:.3f}"))
     if calib.R is not None:
         eul = models.euler_deg(calib.R)
-        for i, n in enumerate(("psi", "nu", "phi")):
-            rows.append((f"R {n} (deg)", pm(eul[i], _std(calib, "R_euler_deg", i)), ""))
+        for i, n in enumerate(("ψ", "ν", "φ")):  # the Euler angles of R: not a board's angles
+            rows.append((f"R {n}_R (deg, XYZ Euler of R)", pm(eul[i], _std(calib, "R_euler_deg", i)), ""))
         for i, n in enumerate("XYZ"):
             rows.append((f"T {n}", pm(float(calib.T[i]), _std(calib, "T", i)), ""))
         rows.append(("|T| (baseline)", f"{np.linalg.norm(calib.T):.2f}", ""))
@@ -197,18 +254,24 @@ def pose_verdict(rating: dict) -> str:
 
 
 def parameter_table(calib) -> TextTable:
-    """The parameters with their ± (:func:`parameter_rows`); for a single-pose calibration each projector number
-    the paper's model assumes says so, or that the background estimated it, and a row says the projector has
-    no lens distortion. No projector column for a camera-only calibration."""
+    """The parameters with their ± (:func:`parameter_rows`); a parameter that is not plainly estimated says what
+    it is (:func:`parameter_status`): for a single-pose projector whether ``u0p`` / ``alpha_p`` were assumed,
+    held by a prior or estimated from the background, and a row says the projector has no lens distortion. No
+    projector column for a camera-only calibration."""
     rows = [list(r) for r in parameter_rows(calib)]
+    st = parameter_status(calib)
     if calib.method == "single-pose" and calib.projector is not None and calib.info.get("dense") is None:
-        freed = projector_freed(calib)
         for r in rows:
             if r[0].startswith("u0"):
-                r[2] += " (from the background)" if "u0p" in freed else " (assumed W/2)"
+                r[2] += {"estimated": " (from the background)", "assumed": " (assumed W/2)",
+                         "given": " (given)"}[st["u0p"][0]]
             elif r[0].startswith("fy"):
-                r[2] += " (from the background)" if "alpha_p" in freed else " (assumed = f)"
+                r[2] += {"estimated": " (from the background)", "assumed": " (assumed = f)",
+                         "prior": f" (prior alpha_p = 1 ± {_alpha_prior_std(calib):g})"}[st["alpha_p"][0]]
         rows.append(["projector distortion", "", "none (assumed)"])
+    for r in rows:
+        if r[0].startswith(("u0", "v0")) and st.get("u0c" if r[0].startswith("u0") else "v0c", ("",))[0] == "prior":
+            r[1] += " (prior: the image centre)"
     header = ("parameter", "camera") + (("projector",) if calib.projector is not None else ())
     return TextTable(header, tuple(tuple(r[:len(header)]) for r in rows))
 

@@ -18,14 +18,22 @@ Its evidence, in order:
 
 No statistics are computed here: the verdict only reads what the solvers measured. A file with no poses and
 no recorded verdict stays ``unknown`` -- the word says there is no evidence, not that the calibration is bad.
+
+The metric verification (:mod:`procam.verify`) is evidence too: :func:`evidence_reasons` reads it (the
+triangulated board's scale error, in-sample and held out; the held-out reprojection RMS against the in-sample
+one) and :func:`with_evidence` makes the verdict worse where it says so -- ``procam calibrate`` does this before
+it writes anything, the report before it shows the verdict. :func:`flagged` lists everything a careful reader
+should know, the list the report prints under the verdict.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import isfinite
 from pathlib import Path
 
-__all__ = ["LEVELS", "VERDICTS", "MEANING", "Verdict", "calibration_verdict"]
+__all__ = ["LEVELS", "VERDICTS", "MEANING", "Verdict", "calibration_verdict", "EvidenceOptions", "evidence_reasons",
+           "with_evidence", "flagged"]
 
 #: The verdict levels a solver gives, from best to worst.
 LEVELS = ("good", "weak", "degenerate", "failed")
@@ -137,3 +145,136 @@ def calibration_verdict(calib) -> Verdict:
             if not rated and word != "unknown":  # a multi-pose calibration's warnings are all weaknesses
                 worse("weak")
     return Verdict(word, tuple(reasons))
+
+
+# --------------------------------------------------------------------------------------------------
+# the verdict with the metric verification's evidence, and what was flagged
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class EvidenceOptions:
+    """Thresholds of :func:`evidence_reasons`.
+
+    Attributes
+    ----------
+    weak_scale_pct, failed_scale_pct : a triangulated board whose squares are this many percent off the printed
+        size (in-sample or held out) makes the calibration weak / failed.
+    weak_reproj_ratio, degenerate_reproj_ratio : held-out reprojection RMS over the in-sample one above which the
+        calibration does not carry to other poses (weak), or not at all (degenerate) ...
+    min_reproj_px : ... when the held-out RMS is also above this (noise-free data have ratios of tiny numbers).
+    """
+
+    weak_scale_pct: float = 2.0
+    failed_scale_pct: float = 10.0
+    weak_reproj_ratio: float = 3.0
+    degenerate_reproj_ratio: float = 10.0
+    min_reproj_px: float = 1.0
+
+
+def evidence_reasons(check, options: EvidenceOptions = EvidenceOptions()) -> list[tuple[str, str]]:
+    """``[(level, reason)]`` from a calibration's metric verification (a
+    :class:`procam.verify.CalibrationVerification`): the triangulated board's scale error, in-sample and on poses
+    the calibration was not fitted to (given held-out poses, or leave-one-pose-out), and the held-out
+    reprojection RMS against the in-sample one. Empty when nothing is off or there is no verification."""
+    if check is None:
+        return []
+    out = []
+    o = options
+    held = [(label, ver) for label, ver in (("on the held-out poses", check.held_out),
+                                            ("leaving each pose out", check.leave_one_out.held_out
+                                             if check.leave_one_out is not None else None)) if ver is not None]
+    for label, ver in [("on its own poses", check.in_sample)] + held:
+        if ver is None:
+            continue
+        s = ver.overall.scale_error_pct
+        if isfinite(s) and abs(s) > o.weak_scale_pct:
+            level = "failed" if abs(s) > o.failed_scale_pct else "weak"
+            out.append((level, f"metric verification {label}: the triangulated board's squares are {s:+.1f} % off "
+                               f"the printed size (a calibration fit to use measures within a few tenths of a %)"))
+    if check.in_sample is not None:
+        r_in = check.in_sample.overall.reproj_rms
+        for label, ver in held:
+            r = ver.overall.reproj_rms
+            if not (isfinite(r) and isfinite(r_in) and r > o.min_reproj_px and r_in > 0):
+                continue
+            ratio = r / r_in
+            if ratio > o.weak_reproj_ratio:
+                level = "degenerate" if ratio > o.degenerate_reproj_ratio else "weak"
+                out.append((level, f"{label}, the reprojection RMS is {r:.2f} px, {ratio:.0f} times the in-sample "
+                                   f"{r_in:.2f} px: the calibration does not carry over to other poses of this rig"))
+    return out
+
+
+def with_evidence(calib, check, options: EvidenceOptions = EvidenceOptions()):
+    """The calibration with its verdict made worse where its metric verification says so
+    (:func:`evidence_reasons`): the reasons join ``verdict_reasons`` and ``warnings`` and are emitted as the procam
+    warning of their level. Unchanged when the evidence finds nothing (or only what it already says)."""
+    import warnings as _warnings
+
+    from .errors import DegeneratePoseWarning, FailedEstimateWarning, WeakPoseWarning
+
+    new = [(lvl, r) for lvl, r in evidence_reasons(check, options) if r not in calib.verdict_reasons]
+    if not new:
+        return calib
+    rank = LEVELS.index
+    word = max([calib.verdict if calib.verdict in LEVELS else "good"] + [lvl for lvl, _ in new], key=rank)
+    worst = [r for lvl, r in new if lvl == word]
+    rest = [r for lvl, r in new if lvl != word]
+    category = {"weak": WeakPoseWarning, "degenerate": DegeneratePoseWarning, "failed": FailedEstimateWarning}
+    for lvl in ("failed", "degenerate", "weak"):
+        msgs = [r for level, r in new if level == lvl]
+        if msgs:
+            _warnings.warn("; ".join(msgs), category[lvl], stacklevel=2)
+    return calib.replace(verdict=word, verdict_reasons=tuple(worst) + tuple(calib.verdict_reasons) + tuple(rest),
+                         warnings=tuple(calib.warnings) + tuple(r for _, r in new if r not in calib.warnings))
+
+
+def _pose_name(p, n_poses) -> str:
+    name = Path(str(p.get("name", ""))).name
+    return f"pose {name!r}: " if name and n_poses > 1 else ""
+
+
+def flagged(calib, check=None, views=None) -> list[str]:
+    """Everything about a calibration a careful reader should know, one short line each: its verdict's reasons
+    (other than a good pose's "pose OK"), every warning it carries, the warnings of the poses' capture (e.g.
+    saturation), corners rejected as outliers, a principal point taken from a prior, and the metric
+    verification's notes and evidence (:func:`evidence_reasons`). The report's verdict lists them; "nothing was
+    flagged" is said only when this is empty.
+
+    Parameters
+    ----------
+    calib : :class:`~procam.calibration.Calibration`; check : its :class:`procam.verify.CalibrationVerification`
+        (optional); views : the poses shown with it (default: its own).
+    """
+    out: list[str] = []
+
+    def add(line):
+        line = str(line)
+        if line and not any(line in o or o in line for o in out):
+            out.append(line)
+
+    verdict = calibration_verdict(calib)
+    if verdict.word != "good":
+        for r in verdict.reasons:
+            add(r)
+    for w in calib.warnings:
+        add(w)
+    own = list(calib.views)
+    for v in own + [v for v in (views or ()) if not any(v is w for w in own)]:
+        for w in (getattr(v, "diagnostics", None) or {}).get("warnings", []):
+            add(w)
+    n = len(calib.poses)
+    for p in calib.poses:
+        for device, rej in (p.get("rejected_corners") or {}).items():
+            if rej:
+                add(f"{_pose_name(p, n)}{len(rej)} {device} corner{'s' if len(rej) != 1 else ''} rejected as outliers "
+                    f"(#{', #'.join(str(r['index'] if isinstance(r, dict) else r) for r in rej[:8])}"
+                    + (" ..." if len(rej) > 8 else "") + ")")
+    if calib.info.get("principal_point_source") == "image-center":
+        add("the camera's principal point is a prior (the image centre), not measured from this pose")
+    if check is not None:
+        for note in check.notes:
+            add(f"note: {note}")
+        for _, r in evidence_reasons(check):
+            add(r)
+    return out

@@ -37,6 +37,7 @@ from typing import Sequence
 import numpy as np
 
 from . import multi_pose, single_pose
+from .multi_pose.evidence import parameter_spread, refit_each  # noqa: F401 -- parameter_spread: here before
 from .errors import CalibrationError, ProcamError, ProcamWarning
 from .stats import rms, tls_plane
 from .triangulate import triangulate_points
@@ -299,23 +300,20 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
         raise CalibrationError(f"leave-one-out needs at least {min_train + 1} poses ({min_train} to calibrate, "
                                f"1 to verify), got {len(views)}; only the in-sample verification is available")
     names = [v.name or f"pose{k + 1}" for k, v in enumerate(views)]
-    full = calibration if calibration is not None else multi_pose.calibrate(views, **multi_pose_options)
+    options = {**multi_pose_options, "leave_one_out": False}
+    if calibration is None:
+        with warnings.catch_warnings():  # the calibration's own verdict is not this function's subject
+            warnings.simplefilter("ignore", ProcamWarning)
+            calibration = multi_pose.calibrate(views, **multi_pose_options)
+    full = calibration
     in_raws = [_pose_raw(full, v, n, min_corners) for v, n in zip(views, names)]
     out_raws, failures, refits = [], [], []
-
-    def refit(i):
-        try:
-            return multi_pose.calibrate(views[:i] + views[i + 1:], **multi_pose_options)
-        except ProcamError as e:
-            return e
-
-    # the refits are independent and mostly OpenCV (which releases the GIL): two at a time
-    from concurrent.futures import ThreadPoolExecutor
-
-    with warnings.catch_warnings():  # a refit's warnings are the full calibration's, minus a pose
-        warnings.simplefilter("ignore", ProcamWarning)
-        with ThreadPoolExecutor(2) as ex:
-            results = list(ex.map(refit, range(len(views))))
+    results = full.info.get("leave_one_out_refits")
+    same = (results is not None and len(results) == len(views) == len(full.views)
+            and all(same_pose(a, b) for a, b in zip(views, full.views))
+            and {k: v for k, v in multi_pose_options.items() if k != "leave_one_out"} == _options_of(full))
+    if not same:  # the refits the calibration made (same poses, same options), else made here
+        results = refit_each(views, multi_pose.calibrate, **options)
     for v, n, calib_i in zip(views, names, results):
         try:
             if isinstance(calib_i, ProcamError):
@@ -326,39 +324,6 @@ def leave_one_out(views: Sequence[View], *, min_train: int = 3, min_corners: int
             failures.append((n, str(e)))
     return CrossVerification("leave-one-out", _verify_raws(in_raws), _verify_raws(out_raws) if out_raws else None,
                              tuple(failures), tuple(refits))
-
-
-def parameter_spread(calib, refits) -> dict:
-    """The spread of the leave-one-out refits' parameters next to the calibration's own ± (Jacobian std).
-
-    Returns ``{name: (value, jacobian_std, refit_std)}`` for the intrinsics and ``T`` (named as in
-    :mod:`procam.parameters`). ``refit_std`` is the jackknife standard error
-    ``sqrt((n - 1) / n * sum (x_i - mean)^2)`` over the ``n`` refits: what the data say the parameter's
-    uncertainty is, with no model of the noise; a Jacobian std much smaller than it means the ± is
-    optimistic (correlated or non-Gaussian corner errors, a model that does not fit).
-    """
-    def params(c):
-        Kc, Kp = c.camera.K, c.projector.K
-        out = {"f_c": Kc[0, 0], "fy_c": Kc[1, 1], "u0c": Kc[0, 2], "v0c": Kc[1, 2], "f_p": Kp[0, 0], "fy_p": Kp[1, 1],
-               "u0p": Kp[0, 2], "v0p": Kp[1, 2]}
-        out.update({f"T[{i}]": float(c.T[i]) for i in range(3)})
-        return out
-
-    n = len(refits)
-    if n < 2:
-        return {}
-    base = params(calib)
-    sets = [params(r) for r in refits]
-    out = {}
-    for k, v in base.items():
-        xs = np.array([p[k] for p in sets], float)
-        jack = float(np.sqrt((n - 1) / n * np.sum((xs - xs.mean()) ** 2)))
-        js = calib.std.get(k)
-        if k.startswith("T["):
-            t = calib.std.get("T")
-            js = t[int(k[2])] if t is not None else None
-        out[k] = (float(v), None if js is None else float(js), jack)
-    return out
 
 
 def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_pose_options) -> CrossVerification:
@@ -426,6 +391,10 @@ class CalibrationVerification:
                 "notes": list(self.notes)}
 
 
+def _options_of(calib) -> dict:
+    return multi_pose_options(calib)
+
+
 def multi_pose_options(calib) -> dict:
     """The :func:`procam.multi_pose.calibrate` options a multi-pose calibration was made with (from its
     ``info``: distortion models and whether it was refined), for refits such as :func:`leave_one_out`."""
@@ -440,7 +409,7 @@ def multi_pose_options(calib) -> dict:
     return out
 
 
-def _same_pose(a: View, b: View) -> bool:
+def same_pose(a: View, b: View) -> bool:
     """The same capture: identical camera and projector corners (NaN where the other has NaN)."""
     return (a.cam_pts.shape == b.cam_pts.shape and a.proj_pts.shape == b.proj_pts.shape
             and np.array_equal(a.cam_pts, b.cam_pts, equal_nan=True)
@@ -483,7 +452,7 @@ def verify_calibration(calib, views=None, *, leave_one_out_poses: int = 4, min_c
     own_names = {str(p.get("name", "")) for p in calib.poses}
 
     def fitted(v):
-        return any(_same_pose(v, w) for w in own) if own else str(v.name) in own_names
+        return any(same_pose(v, w) for w in own) if own else str(v.name) in own_names
 
     ins = [v for v in views if fitted(v)]
     outs = [v for v in views if not fitted(v)]

@@ -11,7 +11,7 @@ from ._app import app, console, err_console  # noqa: F401
 
 # Sub-commands register themselves on import, in the order `procam --help` lists them.
 from . import (advise, capture, check, patterns, decode, simulate, correspond, calibrate, evaluate, report, reconstruct,  # noqa: F401,E402
-               export, experiment, study, demo)
+               export, blend, experiment, study, demo)
 
 
 def main(argv: list[str] | None = None) -> None:

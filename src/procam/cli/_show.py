@@ -46,8 +46,11 @@ def cross_table(cross) -> Table:
                       f"metric verification: in-sample vs {summary.CROSS_LABELS[cross.kind]} (board units)")
 
 
-def print_calibration(calib) -> None:
-    """Print a calibration's parameters and poses, its warnings and its verdict."""
+def print_calibration(calib, check=None) -> None:
+    """Print a calibration's parameters and poses, its warnings and its verdict: the word, what it means and, for a
+    usable one, how many things were flagged (:func:`procam.verdict.flagged`, the list the report shows)."""
+    from ..verdict import MEANING, flagged
+
     console.print(rich_table(summary.parameter_table(calib),
                              plain(f"procam calibration ({calib.method}); {summary.plus_minus(calib)}")))
     for line in summary.projector_assumptions(calib):
@@ -60,7 +63,10 @@ def print_calibration(calib) -> None:
         console.print(rich_table(poses, "poses"))
     for w in calib.warnings:
         warn(w)
-    say(f"verdict: {calib.verdict}")
+    n = len(flagged(calib, check))
+    tail = "" if not calib.trusted else (f"; {n} thing{'s' if n != 1 else ''} flagged (above)" if n else
+                                         "; nothing flagged")
+    say(f"verdict: {calib.verdict} ({MEANING.get(calib.verdict, '')}{tail})")
 
 
 def print_verification(check) -> None:

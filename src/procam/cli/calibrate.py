@@ -77,7 +77,8 @@ def calibrate_cmd(
     board: BoardOpt,
     square: SquareOpt,
     poses: list[Path] = typer.Argument(..., help="One pose folder (single-pose), several (multi-pose), or with "
-                                               "--camera-only one image."),
+                                               "--camera-only one image; rig pose folders (one sub-folder per "
+                                               "camera-projector pair, docs/rigs.md) calibrate every device of a rig."),
     out: Path = typer.Option(..., "-o", "--out", help="Calibration file (.json, or .yml for OpenCV YAML)."),
     method: Method = typer.Option(None, "--method", help="Default: single for one pose, multi for several."),
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from photos of the board: one "
@@ -140,6 +141,18 @@ def calibrate_cmd(
     outs = [p.resolve() for p in (out, yaml, png, report) if p is not None]
     if len(set(outs)) < len(outs):
         fail("-o, --yaml, --png and --report must be different files")
+    from ..capture import is_rig_pose
+
+    if not camera_only and camera_file is None and any(is_rig_pose(p) for p in poses):
+        from . import _rig
+
+        distinct_poses(poses)
+        if report is not None:
+            fail("--report: a rig has no HTML report yet; --png draws the rig, its verdicts and its agreement")
+        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, brd=brd, method=_METHODS[value(method)],
+                              options=opts, camera=camera, background=BackgroundOptions(mode=value(background)),
+                              cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine, force=force,
+                              projector=optional_size(projector), order=value(order), step=step)
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
@@ -174,25 +187,34 @@ def calibrate_cmd(
         from ..io import load_projector_intrinsics
 
         known_projector = load_projector_intrinsics(projector_file, views[0].proj_size)
-    calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
-                                         background=BackgroundOptions(mode=value(background)),
-                                         cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine,
-                                         known_projector=known_projector, dense=dense_options)
-    _show.print_calibration(calib)
+    from ..errors import DegeneratePoseError
+    from ..verdict import with_evidence
+
+    try:
+        calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
+                                             background=BackgroundOptions(mode=value(background)),
+                                             cam_dist=value(cam_dist), proj_dist=value(proj_dist),
+                                             refine=not no_refine, known_projector=known_projector,
+                                             dense=dense_options)
+    except DegeneratePoseError as e:  # no result at all: nothing to write, even with --force
+        fail(f"degenerate: {e}", code=3, label="not trusted")
+    check = None
+    if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
+        from ..verify import verify_calibration
+
+        check = verify_calibration(calib)
+        calib = with_evidence(calib, check)  # its verdict consults the verification before anything is written
+    _show.print_calibration(calib, check)
+    if check is not None:
+        _show.print_verification(check)
+        if check.leave_one_out is not None and check.leave_one_out.refits:
+            _show.print_spread(calib, check.leave_one_out.refits)
     trusted = calib.trusted
     if not trusted and not force:
         fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
              "(--force writes it anyway, marked as such)", code=3, label="not trusted")
     io.save_calibration(calib, out)
     say(f"wrote {out}" + ("" if trusted else f" (marked {calib.verdict})"))
-    check = None
-    if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
-        from ..verify import verify_calibration
-
-        check = verify_calibration(calib)
-        _show.print_verification(check)
-        if check.leave_one_out is not None and check.leave_one_out.refits:
-            _show.print_spread(calib, check.leave_one_out.refits)
     if yaml is not None:
         io.save_opencv_yaml(calib, yaml)
         say(f"wrote {yaml}")

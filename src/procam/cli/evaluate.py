@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import typer
 
 from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, assumed_size, console, distinct_poses,
-                   fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value,
+                   fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value, warn,
                    with_pose_options)
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
@@ -95,10 +95,22 @@ def evaluate_cmd(
 
     check = verify_calibration(calib, views)
     _show.print_verification(check)
+    from ..verdict import evidence_reasons  # what these poses say about the calibration's own verdict
+
+    evidence = evidence_reasons(check)
+    for level, reason in evidence:
+        warn(f"{level}: {reason}")
+    if evidence:
+        from ..verdict import LEVELS
+
+        worst = max([calib.verdict if calib.verdict in LEVELS else "good"] + [lv for lv, _ in evidence],
+                    key=LEVELS.index)
+        say(f"verdict on these poses: {worst} (the file says {calib.verdict})")
     if out is not None:
         from ..io.formats import EVALUATION_FORMAT
 
         d = {"format": EVALUATION_FORMAT, "version": 1, "calibration": str(calibration), "method": calib.method,
-             **ev.to_dict(), "verification": check.to_dict()}
+             **ev.to_dict(), "verification": check.to_dict(),
+             "evidence": [{"level": lv, "reason": r} for lv, r in evidence]}
         _files.write_text(out, json.dumps(_files.portable_names(_files.to_jsonable(d), out.parent), indent=1))
         say(f"wrote {out}")

@@ -133,6 +133,9 @@ def export_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
+    pair: Optional[str] = typer.Option(None, "--pair", help="A rig calibration: the pair to export (camera/projector, "
+                                                           "or a device's name); each pair in its camera's frame, "
+                                                           "the rig's reference camera for a one-camera rig."),
     force: ForceOpt = False,
 ):
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
@@ -150,7 +153,7 @@ def export_cmd(
     clip = _clip(fmt, near, far, unit) if fmt in ENGINES else (None, None)
     if fmt == "maps":
         number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
-    calib = io.load_calibration(calibration)
+    calib = io.load_calibration(calibration, pair=pair)
     if projector is not None and fmt != "projector-view":
         calib = io.complete_sizes(calib, proj_size=optional_size(projector))
     for w in calib.warnings:

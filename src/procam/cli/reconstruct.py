@@ -10,7 +10,7 @@ import typer
 
 from .. import choices
 from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, load_pose, output_path,
-                   parse_size, plain, say, user_errors, value)
+                   parse_size, plain, say, user_errors, value, warn)
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 
@@ -74,6 +74,11 @@ def reconstruct_cmd(
              f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
              + (assumed_size(calib, "proj_size") or "; check --projector"))
     maps = decode.decode(cap.stack, ps)
+    from .. import plausibility  # the capture's own faults first: they, not the calibration, explain a bad cloud
+
+    for w in plausibility.check_projector_size(maps, str(pose_dir), cap.files):
+        warn(w)
+    plausibility.check_swapped_bits(maps, str(pose_dir), cap.files)
     colour = _files.read_image(cap.files[ps.white], gray=False)
     cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
     if len(cloud) == 0:
@@ -86,6 +91,10 @@ def reconstruct_cmd(
     t.add_column("quantity")
     t.add_column("value", justify="right")
     t.add_row("points", f"{len(cloud)}")
+    accounted, dropped_warnings = rc.dropped_lines(cloud)
+    for line in accounted:
+        name, val = line.split(": ", 1)
+        t.add_row(name, val)
     t.add_row("from column and row", f"{np.mean(cloud.both):.1%}")
     t.add_row("median depth z", f"{np.median(cloud.points[:, 2]):.1f}")
     if pattern is not None:
@@ -103,6 +112,8 @@ def reconstruct_cmd(
             res = rc.residual_map(cloud.subset(on_board), plane)
             _files.write_image(residuals, rc.residual_image(res))
     console.print(t)
+    for w in dropped_warnings:
+        warn(w)
     say(f"wrote {out}")
     if residuals is not None:
         say(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")

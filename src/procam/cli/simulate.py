@@ -64,6 +64,10 @@ def simulate_cmd(
     white_black: WhiteBlackOpt = True,
     proj_gamma: float = typer.Option(None, "--proj-gamma", help="The projector's gamma: a pattern value v emits "
                                      "(v/255)^gamma of white (default 1, linear; fringes are distorted by it)."),
+    rig: str = typer.Option(None, "--rig", help="Render a rig instead (two_projectors: one camera, two projectors "
+                            "overlapping on a wall; two_cameras: one projector between two cameras) as a rig pose "
+                            "folder: one pose folder per camera-projector pair, rig.json and the rig's truth.json "
+                            "(Gray codes; --pose in the reference camera's frame; --preset and --frame do not apply)."),
     force: ForceOpt = False,
 ):
     """Render a synthetic capture of a chessboard (Gray codes, or a phase family with --family), with its ground
@@ -71,6 +75,10 @@ def simulate_cmd(
     from .. import simulate as sim
 
     preset, frame, order = value(preset), value(frame), value(order)
+    if rig is not None and rig not in sim.RIG_PRESETS:
+        fail(f"--rig must be one of {', '.join(sim.RIG_PRESETS)}, got {rig!r}")
+    if rig is not None and frame != "camera":
+        fail("--frame does not apply to a rig: --pose is in the reference camera's frame")
     if preset not in sim.PRESETS:
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):
@@ -84,6 +92,18 @@ def simulate_cmd(
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
     number(proj_gamma, "--proj-gamma", lo=0.2, hi=5, what="a projector gamma")
     angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
+    if rig is not None:
+        from . import _rig
+
+        if value(family) != "gray" or proj_gamma is not None:
+            fail("--rig renders Gray codes with a linear projector: leave out --family and --proj-gamma")
+        changes = {"bits": bits, **({} if noise is None else {"read_noise": noise})}
+        if noise == 0:
+            changes["full_well"] = 0.0
+        try:
+            return _rig.simulate(out_dir, rig, angles, distance, changes, seed, order, force)
+        except OutputError as e:
+            fail(str(e))
     from .. import capture
 
     scene = sim.preset(preset)

@@ -29,7 +29,7 @@ from pathlib import Path
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from . import kamino410, opencv, procam
-from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV
+from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV, RIG_CALIBRATION_FORMAT
 from .validate import check_size, validate_calibration
 
 #: What :func:`load_calibration` reads, as its errors say it.
@@ -104,8 +104,32 @@ def _storage_calibration(fs, path) -> Calibration:
                                f"or {KAMINO410.cam_K}/{KAMINO410.proj_K}); {CALIBRATION_FORMATS}")
 
 
-def load_calibration(path) -> Calibration:
+def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
+    """The procam calibration document of one pair of a rig calibration (``procam-rig-calibration``): ``pair`` is
+    ``"camera/projector"`` or a device name that is in one pair only; None for a rig of one pair."""
+    pairs = doc.get("pairs")
+    if not isinstance(pairs, dict) or not pairs:
+        raise CalibrationFileError(f"{path}: a rig calibration without pairs")
+    if pair is None and len(pairs) == 1:
+        return next(iter(pairs.values()))
+    hits = [k for k in pairs if pair is not None and (k == pair or pair in k.split("/"))]
+    if len(hits) != 1:
+        what = "names no pair" if pair is not None and not hits else "is ambiguous" if pair is not None else ""
+        raise CalibrationFileError(f"{path}: a rig calibration of {len(pairs)} pairs ({', '.join(pairs)})"
+                                   + (f"; pair {pair!r} {what}" if what else "") + "; name one pair "
+                                   "(camera/projector or a device's name: procam export --pair, "
+                                   "load_calibration(path, pair=...))")
+    if not isinstance(pairs[hits[0]], dict) or pairs[hits[0]].get("format") != CALIBRATION_FORMAT:
+        raise CalibrationFileError(f"{path}: pair {hits[0]!r} is not a procam calibration document")
+    return pairs[hits[0]]
+
+
+def load_calibration(path, pair: str | None = None) -> Calibration:
     """Read a calibration in any format procam writes or reads (module docstring), recognised by content.
+
+    A rig calibration (``procam-rig-calibration``, :mod:`procam.rig.file`) holds one calibration per
+    (camera, projector) pair: ``pair`` names it (``"camera/projector"``, or a device name in one pair only); it
+    is required for a rig of several pairs and refused for any other file.
 
     Every field is checked (:func:`procam.io.validate.validate_calibration`): shapes, finiteness, positive focal
     lengths, plausible magnitudes, a rotation ``R`` and non-zero ``T``, a known distortion model (an unknown one
@@ -122,6 +146,10 @@ def load_calibration(path) -> Calibration:
     kind = _kind(path)
     if kind == "json":
         doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)
+        if isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT:
+            return validate_calibration(procam.calibration_from_json(path, _rig_pair(path, doc, pair)), path)
+        if pair is not None:
+            raise CalibrationFileError(f"{path}: not a rig calibration, so it has no pair {pair!r}")
         if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:
             return validate_calibration(procam.calibration_from_json(path, doc), path)
         if not _is_storage(doc):
@@ -129,6 +157,9 @@ def load_calibration(path) -> Calibration:
             raise CalibrationFileError(f"{path}: not a procam calibration JSON file ({why}); {CALIBRATION_FORMATS}")
     elif kind is None:
         raise CalibrationFileError(f"{path}: unknown file type {path.suffix!r}; {CALIBRATION_FORMATS}")
+    elif pair is not None:
+        raise CalibrationFileError(f"{path}: an OpenCV file holds the rig's reference pair only; read pair {pair!r} "
+                                   "from the rig's JSON file")
     return validate_calibration(_read_storage(path, CALIBRATION_FORMATS, _storage_calibration), path)
 
 

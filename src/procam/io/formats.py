@@ -47,6 +47,9 @@ EVALUATION_FORMAT = "procam-evaluation"
 #: The simulator's ``truth.json`` of one scene, and of a rig.
 SIM_TRUTH_FORMAT = "procam-sim-truth"
 SIM_RIG_TRUTH_FORMAT = "procam-sim-rig-truth"
+#: ``rig.json`` of a rig pose folder (:mod:`procam.capture.rig`) and a rig's calibration (:mod:`procam.rig`).
+RIG_POSE_FORMAT = "procam-rig-pose"
+RIG_CALIBRATION_FORMAT = "procam-rig-calibration"
 
 
 # ------------------------------------------------------------------------------------------------

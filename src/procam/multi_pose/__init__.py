@@ -30,8 +30,9 @@ from .. import uncertainty as unc
 from .._threads import deterministic
 from ..board import board_region
 from ..calibration import Calibration, Device, Distortion
-from ..errors import CalibrationError, WeakPoseWarning
+from ..errors import CalibrationError, DegeneratePoseError, DegeneratePoseWarning, WeakPoseWarning
 from ..stats import rms
+from ..verdict import LEVELS
 from ..view import View
 from .device import DIST_MODELS, DeviceCalibration, _as_cv, _check_dist, _criteria, calibrate_device, zhang_intrinsics
 from .refine import StereoRefinement, refine_stereo
@@ -115,9 +116,9 @@ DIST_CHOICES = choices.DIST_CHOICES
 
 @deterministic()
 def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str = "auto", refine: bool = True,
-              **options) -> Calibration:
+              strict: bool = False, leave_one_out: bool = True, **options) -> Calibration:
     """Multi-pose procam calibration (Zhang / Moreno–Taubin, optionally jointly refined), with the distortion
-    models the poses can determine.
+    models the poses can determine, and its verdict from the evidence.
 
     ``cam_dist`` / ``proj_dist``: an OpenCV distortion model of :data:`DIST_MODELS`, or ``"auto"`` (default):
     start from ``"k1k2p1p2k3"`` (OpenCV's and Moreno & Taubin's) and, for a device whose poses do not determine
@@ -125,10 +126,92 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
     step down :data:`AUTO_MODELS` until they do. Without the joint refinement there is no covariance to judge
     by, and ``"auto"`` is ``"k1k2p1p2k3"``. The models used are in ``info["cam_dist_model"]`` /
     ``info["proj_dist_model"]``, the steps taken in ``info["auto_dist"]``. Other options: :func:`calibrate_models`.
+
+    The verdict (worst first): ``failed`` when the result is impossible for a real rig
+    (:func:`procam.plausibility.gate_failures`); ``degenerate`` when the pose set cannot determine the
+    intrinsics, judged before the fit (:func:`procam.multi_pose.poseset.check_pose_set`, in
+    ``info["pose_set"]``), or when a parameter moves far more than its ``±`` as each pose is left out
+    (``leave_one_out``, with 4 or more poses: :mod:`procam.multi_pose.evidence`, in ``info["leave_one_out"]``;
+    the refits are kept in ``info["leave_one_out_refits"]`` for :func:`procam.verify.leave_one_out`); ``weak``
+    with warnings (or fewer than 3 poses); else ``good``. A verdict other than good is also a procam warning.
+
+    ``strict`` raises :class:`~procam.errors.DegeneratePoseError` for a degenerate pose set without fitting it;
+    otherwise the set is fitted and the result marked (and a fit that finds no solution raises that error,
+    with the reason).
     """
+    from . import evidence, poseset
+    from .. import plausibility
+
+    given = list(views)
+    views, labellings = _canonical(given)  # no step may depend on how each board's corners were numbered
     for name, d in (("cam_dist", cam_dist), ("proj_dist", proj_dist)):
         if d not in DIST_CHOICES:
             raise CalibrationError(f"unknown distortion model {d!r} for {name}; choose one of {', '.join(DIST_CHOICES)}")
+    cam_size = options.get("cam_size") or (views[0].cam_size if views else None)
+    proj_size = options.get("proj_size") or (views[0].proj_size if views else None)
+    pre = poseset.check_pose_set(views, cam_size, proj_size) if len(views) >= 2 and cam_size else None
+    degenerate_set = pre is not None and pre.level == "degenerate"
+    if strict and degenerate_set:
+        raise DegeneratePoseError("; ".join(pre.reasons))
+    try:
+        calib = _calibrate_auto(views, cam_dist, proj_dist, refine, options)
+    except CalibrationError as e:
+        if degenerate_set and not isinstance(e, DegeneratePoseError):
+            raise DegeneratePoseError("; ".join(pre.reasons) + f" (the fit found no solution: {e})") from None
+        raise
+    info = dict(calib.info)
+    level, reasons = calib.verdict, list(calib.verdict_reasons)
+    if pre is not None:
+        info["pose_set"] = pre.to_dict()
+        if degenerate_set:
+            level, reasons = "degenerate", list(pre.reasons) + reasons
+    if leave_one_out and len(views) >= evidence.MIN_POSES:
+        refits = evidence.refit_each(views, calibrate, cam_dist=info["cam_dist_model"],
+                                     proj_dist=info["proj_dist_model"], refine=refine, leave_one_out=False,
+                                     **options)
+        lvl, why, details = evidence.judge_spread(calib, refits, info["pose_names"])
+        info["leave_one_out"] = details
+        info["leave_one_out_refits"] = tuple(refits)
+        if not degenerate_set:  # a set already called degenerate before the fit: the spread only confirms it
+            reasons = [r for r in why if lvl == "degenerate"] + reasons + [r for r in why if lvl != "degenerate"]
+            level = max(level, lvl, key=LEVELS.index)
+    calib = calib.replace(info=info, verdict=level, verdict_reasons=tuple(reasons),
+                          warnings=tuple(calib.warnings) + tuple(r for r in reasons if r not in calib.warnings))
+    calib = plausibility.apply_gates(_given(calib, given, labellings), stacklevel=2)
+    if calib.verdict in ("weak", "degenerate"):
+        category = WeakPoseWarning if calib.verdict == "weak" else DegeneratePoseWarning
+        _warnings.warn("; ".join(calib.verdict_reasons), category, stacklevel=2)
+    return calib
+
+
+def _canonical(views):
+    """Each view in the canonical labelling of its board (:func:`procam.labelling.canonical_view`)."""
+    from ..labelling import canonical_view
+
+    out = [canonical_view(v) for v in views]
+    return [v for v, _ in out], [lab for _, lab in out]
+
+
+def _given(calib, views, labellings) -> Calibration:
+    """A calibration of canonical views as the given ``views``': each pose's board pose and angles in its given
+    board frame, ``views`` the given ones."""
+    if all(lab is None or lab.identity for lab in labellings):
+        return calib.replace(views=tuple(views))
+    poses = []
+    for p, lab in zip(calib.poses, labellings):
+        p = dict(p)
+        if lab is not None and "R_cam" in p:
+            R_cb, t_cb = np.asarray(p["R_cam"], float) @ lab.G, np.asarray(p["t_cam"], float)
+            p["R_cam"] = R_cb.tolist()
+            p["camera_angles_deg"] = models.board_angles_deg(R_cb, t_cb).tolist()
+            if calib.R is not None and p.get("projector_angles_deg") is not None:
+                p["projector_angles_deg"] = models.board_angles_deg(*models.compose(calib.R, calib.T, R_cb, t_cb)).tolist()
+        poses.append(p)
+    return calib.replace(views=tuple(views), poses=tuple(poses))
+
+
+def _calibrate_auto(views, cam_dist, proj_dist, refine, options) -> Calibration:
+    """:func:`calibrate_models` with ``"auto"`` distortion models stepped down while undetermined."""
     models_ = {"camera": cam_dist, "projector": proj_dist}
     auto = {k: v == "auto" for k, v in models_.items()}
     # "auto" starts at the richest model the corner count can determine at all (check_counts)
@@ -138,10 +221,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
     steps = [] if first == AUTO_MODELS[0] else [f"{first} (fewer terms than {AUTO_MODELS[0]}: {sum(counts)} corners)"]
     models_ = {k: (first if v == "auto" else v) for k, v in models_.items()}
     while True:
-        with _warnings.catch_warnings():
-            _warnings.simplefilter("ignore", WeakPoseWarning)
-            calib = calibrate_models(views, cam_dist=models_["camera"], proj_dist=models_["projector"], refine=refine,
-                                     **options)
+        calib = calibrate_models(views, cam_dist=models_["camera"], proj_dist=models_["projector"], refine=refine,
+                                 **options)
         bad = [d for d in ("camera", "projector") if auto[d] and calib.info.get("undetermined", {}).get(d)]
         if not bad or not refine:
             break
@@ -152,8 +233,6 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
             models_[d] = AUTO_MODELS[min(i + 1, len(AUTO_MODELS) - 1)]
     if any(auto.values()):
         calib = calib.replace(info={**calib.info, "auto_dist": steps})
-    if calib.verdict == "weak":
-        _warnings.warn("; ".join(calib.verdict_reasons), WeakPoseWarning, stacklevel=2)
     return calib
 
 
@@ -265,7 +344,9 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
             warnings.append("joint refinement stopped at its evaluation limit; the result may not be converged")
         if not (Kc[0, 0] > 0 and Kc[1, 1] > 0 and Kp[0, 0] > 0 and Kp[1, 1] > 0):
             raise CalibrationError("joint refinement diverged (non-positive focal length); "
-                                   "try --no-refine or more varied poses")
+                                   + _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init,
+                                                         fix_aspect_ratio, iterations, stereo_iterations,
+                                                         min_corners))
     else:
         R, T = R0, T0
         rv_board, tv_board = rvc, tvc
@@ -305,6 +386,27 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
                        method="multi-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo_rms, std=std,
                        poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info, verdict=verdict,
                        verdict_reasons=tuple(warnings))
+
+
+def _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init, fix_aspect_ratio, iterations,
+                        stereo_iterations, min_corners) -> str:
+    """What to do when the joint refinement diverges: ``--no-refine`` only when its result passes the plausibility
+    gates (:func:`procam.plausibility.gate_failures`) -- advice never points at a failed result."""
+    from .. import plausibility
+
+    try:
+        frozen = calibrate_models(views, cam_size=cam_size, proj_size=proj_size, cam_dist=cam_dist,
+                                  proj_dist=proj_dist, refine=False, init=init, fix_aspect_ratio=fix_aspect_ratio,
+                                  iterations=iterations, stereo_iterations=stereo_iterations, min_corners=min_corners)
+        failures = plausibility.gate_failures(frozen)
+    except CalibrationError as e:
+        failures = [str(e)]
+    if not failures:
+        return ("the calibration without it (--no-refine) passes the plausibility checks: use it, or capture more "
+                "varied poses")
+    return (f"without it (--no-refine) the result is impossible too ({failures[0].split('FAILED estimate: ')[-1]}): "
+            "these poses do not determine a calibration; capture 3 or more poses tilted 15-30 deg about different "
+            "axes")
 
 
 def check_distinct(views: Sequence[View], min_px: float = 1.0) -> None:
@@ -400,7 +502,8 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
     """
     import cv2
 
-    views = list(views)
+    given = list(views)
+    views, labellings = _canonical(given)  # independent of how each board's corners were numbered
     if len(views) < 2:
         raise CalibrationError(f"camera-only calibration from photos needs at least 2 (5-20 recommended), got "
                                f"{len(views)}; one photo: the single-pose method (procam.single_pose)")
@@ -458,7 +561,7 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
            "cam_dist": [float(v) for v in sd_dist]}
     poses = []
     for j, n in enumerate(names):
-        R = models.rvec_to_matrix(dev.rvecs[j])
+        R = models.rvec_to_matrix(dev.rvecs[j]) @ (labellings[j].G if labellings[j] is not None else np.eye(3))
         poses.append({"name": n, "n_corners": int(len(objs[j])), "cam_rms": float(per_view[j]),
                       "camera_angles_deg": models.board_angles_deg(R, dev.tvecs[j]).tolist(),
                       "projector_angles_deg": None})
@@ -469,5 +572,5 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
             "photos": len(views)}
     return Calibration(camera=Device(dev.K, size, Distortion("opencv", coeffs=tuple(float(c) for c in dev.coeffs))),
                        projector=None, R=None, T=None, method="camera-only", cam_rms=dev.rms, std=std,
-                       poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info, verdict=verdict,
+                       poses=tuple(poses), views=tuple(given), warnings=tuple(warnings), info=info, verdict=verdict,
                        verdict_reasons=tuple(warnings))

@@ -178,7 +178,7 @@ def run(views: Sequence[View], proj_size=None, *, min_set: int = 3, progress: Pr
         row = {"set": k + 1, "poses": _label(s), "size": len(s)}
         try:
             calib = multi_pose.calibrate([views[i] for i in s], proj_size=proj_size, cam_dist=cam_dist,
-                                         proj_dist=proj_dist, refine=refine)
+                                         proj_dist=proj_dist, refine=refine, leave_one_out=False)
             if len(s) == n:
                 set_a_calib = calib
             ev = _evaluate.evaluate(calib, views)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from .gray import ORDERS, PatternSet, pattern_set
+from .gray import ORDERS, pattern_set
 from .phase import AXES, KINDS, PHASE_FAMILIES, Block, Fringe, PhaseSet
 
 _FRINGE_KEYS = ("sign", "origin", "pixel_center", "shift", "start", "levels", "gamma")

@@ -3,12 +3,14 @@ document, :func:`write_report` writes it."""
 
 from __future__ import annotations
 
+import warnings
 from html import escape
 from pathlib import Path
 
+from ..errors import ProcamWarning
 from ..residuals import calibration_residuals
-from ..verdict import calibration_verdict
-from ..verify import CalibrationVerification, verify_calibration
+from ..verdict import calibration_verdict, flagged, with_evidence
+from ..verify import CalibrationVerification, same_pose, verify_calibration
 from .elements import CSP, CSS
 from .sections import (coverage_section, loo_section, parameters_section, residuals_section, rig_section, section,
                        verdict_section, verification_section)
@@ -41,20 +43,29 @@ def build_report(calib, views=None, *, decodes=None, check: CalibrationVerificat
     views = list(calib.views) if views is None else list(views)
     if check is None and verify and calib.projector is not None:
         check = verify_calibration(calib, views)
+    with warnings.catch_warnings():  # the page shows the evidence's reasons; it is not a new result
+        warnings.simplefilter("ignore", ProcamWarning)
+        calib = with_evidence(calib, check)
     verdict = calibration_verdict(calib)
     own = list(calib.views)
     per_pose = calibration_residuals(calib) if own else (calibration_residuals(calib, views) if views else [])
     shown = own or views
+    # every pose in the coverage figure: the calibration's own and the given ones it was not fitted to
+    given = list(views) if views else []
+    cover = own + [v for v in given if not any(same_pose(v, w) for w in own)] if own else given
+    cover_decodes = None
+    if decodes:
+        cover_decodes = [next((d for g, d in zip(given, decodes) if g is v or same_pose(g, v)), None) for v in cover]
     multi = calib.method == "multi-pose"
-    sections = [verdict_section(calib, verdict, check),
+    sections = [verdict_section(calib, verdict, check, flagged(calib, check, views)),
                 section("parameters", parameters_section(calib)),
-                section("coverage", coverage_section(calib, shown if not decodes else views, decodes)),
+                section("coverage", coverage_section(calib, cover, cover_decodes)),
                 section("residuals", residuals_section(calib, per_pose, verdict))]
     if calib.projector is not None:
         sections.append(section("verification", verification_section(calib, check)))
     sections.append(section("rig", rig_section(calib, shown)))
     if multi:
-        sections.append(section("leave-one-out", loo_section(check)))
+        sections.append(section("leave-one-out", loo_section(check, calib)))
     head = (f'<p class="meta">{escape(calib.method)} calibration of a {calib.camera.image_size[0]}x'
             f'{calib.camera.image_size[1]} camera'
             + (f" and a {calib.projector.image_size[0]}x{calib.projector.image_size[1]} projector"

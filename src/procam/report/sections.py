@@ -14,7 +14,7 @@ from html import escape
 import numpy as np
 
 from ..summary import (PLUS_MINUS, datasheet_table, mounting_lines, parameter_table, plus_minus, pose_table,
-                       projector_assumptions, short_name, verification_table)
+                       projector_assumptions, short_name, spread_table, verification_table)
 from ..verdict import Verdict
 from ..verify import CalibrationVerification
 from .coverage import coverage_fractions
@@ -33,11 +33,23 @@ def section(sid: str, body: str, cls: str = "") -> str:
     return f'<section id="{sid}"{c}>\n<h2>{escape(SECTIONS[sid])}</h2>\n{body}\n</section>'
 
 
-def verdict_section(calib, verdict: Verdict, check: CalibrationVerification | None) -> str:
+def verdict_section(calib, verdict: Verdict, check: CalibrationVerification | None, flags=()) -> str:
+    """The verdict in words: what it means, its reasons, and everything that was flagged
+    (:func:`procam.verdict.flagged`: every warning the command line printed, rejected corners, priors, the
+    verification's evidence); "nothing was flagged" only when that list is empty."""
     meaning = verdict.meaning
     parts = [f'<p><strong>{escape(meaning[:1].upper() + meaning[1:])}.</strong></p>']
     if verdict.reasons:
         parts.append("<ul>" + "".join(f"<li>{escape(r)}</li>" for r in verdict.reasons) + "</ul>")
+    flags = [f for f in flags if f not in verdict.reasons]
+    if flags:
+        parts.append(f'<p class="warn"><strong>Flagged ({len(flags)}):</strong></p><ul class="warn" id="flagged">'
+                     + "".join(f"<li>{escape(f)}</li>" for f in flags) + "</ul>")
+    elif verdict.word != "good" and verdict.reasons:
+        parts.append('<p id="flagged">Nothing else was flagged.</p>')
+    else:
+        parts.append('<p id="flagged">Nothing was flagged: no warning, no rejected corner, no prior, no verification '
+                     "figure out of line.</p>")
     facts = [f"camera RMS {fmt(calib.cam_rms)} px"]
     if calib.projector is not None:
         facts += [f"projector RMS {fmt(calib.proj_rms)} px", f"stereo RMS {fmt(calib.stereo_rms)} px"]
@@ -65,7 +77,8 @@ def _assumptions(calib) -> list[str]:
     if calib.method in ("single-pose", "camera-only"):
         src = calib.info.get("principal_point_source")
         pp = {"cod": "the centre of distortion", "joint": "the joint fit of all camera parameters",
-              "image-center": "the image centre, ASSUMED (a prior: the centre of distortion was not reliable)",
+              "image-center": "a PRIOR: the image centre ± 32 px per axis, refined by the fit (the centre of "
+                              "distortion was not reliable)",
               "given": "given"}.get(src, None)
         out.append("Camera: pinhole, zero skew, division-model distortion (k1, k2) about the principal point"
                    + (f"; the principal point comes from {pp}" if pp else "") + ".")
@@ -207,11 +220,28 @@ def verification_section(calib, check: CalibrationVerification | None) -> str:
     return "\n".join(parts)
 
 
-def loo_section(check: CalibrationVerification | None) -> str:
+def spread_html(calib, refits) -> str:
+    """The leave-one-pose-out spread of each parameter next to its ± from the fit (the table the command line
+    prints, :func:`procam.summary.spread_table`), or "" without refits."""
+    from ..multi_pose.evidence import parameter_spread
+
+    spread = parameter_spread(calib, refits or ())
+    if not spread:
+        return ""
+    return ("<h3>Uncertainty: ± from the fit vs the spread of the leave-one-pose-out refits</h3>"
+            "<p>± fit: 1σ from the fit's Jacobian (assumes the model and i.i.d. corner noise). ± leave-one-out: the "
+            "jackknife standard error of the refits without each pose (no noise model). A spread many times the "
+            "fit's ± means the poses do not determine the parameter.</p>" + text_table(spread_table(spread)))
+
+
+def loo_section(check: CalibrationVerification | None, calib=None) -> str:
     loo = check.leave_one_out if check is not None else None
     if loo is None or loo.held_out is None:
         why = [n for n in (check.notes if check is not None else ()) if "leave-one" in n]
-        return '<p class="note">' + escape(why[0] if why else "Not available.") + "</p>"
+        refits = [r for r in (calib.info.get("leave_one_out_refits") or ()) if not isinstance(r, BaseException)] \
+            if calib is not None else []
+        return '<p class="note">' + escape(why[0] if why else "Not available.") + "</p>" + \
+            (spread_html(calib, refits) if refits else "")
     held = {p.name: p for p in loo.held_out.poses}
     rows, classes = [], []
     for p in loo.in_sample.poses:
@@ -240,6 +270,8 @@ def loo_section(check: CalibrationVerification | None) -> str:
     if loo.failures:
         parts.append("<ul class=\"warn\">" + "".join(f"<li>refit without {escape(short_name(n))} failed: "
                                                       f"{escape(m)}</li>" for n, m in loo.failures) + "</ul>")
+    if calib is not None and loo.refits:
+        parts.append(spread_html(calib, loo.refits))
     return "\n".join(parts)
 
 

@@ -33,7 +33,8 @@ Its modules:
 * :mod:`~procam.simulate.truth` - the exact ground truth and the corner fast path;
 * :mod:`~procam.simulate.geometry` - the per-ray geometry oracle and the dense fast path;
 * :mod:`~procam.simulate.renderer` - the renderer and the capture writer;
-* :mod:`~procam.simulate.rig` - several cameras and projectors (:class:`Rig`, :func:`rig_preset`).
+* :mod:`~procam.simulate.rig` - several cameras and projectors (:class:`Rig`, :func:`rig_preset`);
+  :mod:`~procam.simulate.rig_capture` renders and writes them as rig pose folders.
 
 Conventions (see ``procam`` README): pixels ``(x, y)`` = (column, row), origin at the centre of the
 top-left pixel; a pose ``(R, t)`` maps board -> device; board corner ``k = j*cols + i`` is at
@@ -50,6 +51,7 @@ from .poses import fit_margin, with_board_pose
 from .presets import PRESETS, RECOMMENDED_POSE, preset
 from .renderer import Renderer, render, write_capture
 from .rig import RIG_PRESETS, Device, Rig, rig_preset
+from .rig_capture import render_rig, write_rig_capture
 from .scene import DEFAULT_DISTANCE, Scene, board_corners, board_extent
 from .truth import corner_truth, correspondences, truth, truth_calibration
 
@@ -58,5 +60,5 @@ __all__ = [
     "truth", "truth_calibration", "correspondences", "true_projector_maps", "ProjectorMaps", "render", "Renderer",
     "write_capture", "board_corners", "board_extent", "corner_truth", "fit_margin", "project", "project_points",
     "distort", "undistort", "euler_matrix", "matrix_euler", "Lens", "Background", "Plane", "Box", "Sphere",
-    "Rig", "Device", "rig_preset", "RIG_PRESETS",
+    "Rig", "Device", "rig_preset", "RIG_PRESETS", "render_rig", "write_rig_capture",
 ]

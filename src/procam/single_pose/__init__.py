@@ -37,10 +37,12 @@ from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..residuals import pnp, stereo_pose
 from ..stats import rms, robust_sigma
+from ..plausibility import apply_gates
+from ..labelling import canonical_points, canonical_view, given_labelling
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .misfit import misfit
-from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector
+from .projector import ProjectorOptions, ProjectorSolution, calibrate_projector, u0_cost
 from .rating import Prediction, RatingOptions, judge, predict, rate_pose
 
 __all__ = ["calibrate", "calibrate_camera_only", "calibrate_camera", "calibrate_projector", "known_camera_pose",
@@ -65,6 +67,21 @@ def _stereo_rms(obj, cam_und, proj, Kc, Kp, R, T, R0, t0) -> float:
     """Stereo RMS (px) over camera and projector points (:func:`procam.residuals.stereo_pose`)."""
     _, _, rc, rp = stereo_pose(obj, cam_und, proj, Kc, Kp, R, T, R0, t0)
     return rms([rc, rp])
+
+
+def _u0p_assumption(view, obj, proj_pts, proj: ProjectorSolution, options: ProjectorOptions,
+                    rating_options: RatingOptions) -> dict:
+    """What the paper's assumed ``u0p = W/2`` can cost ``f_p`` (:func:`.projector.u0_cost` over a real projector's
+    range, ``rating_options.u0p_spread_fraction`` of W), for the rating: none when the user gave ``u0p`` or when the
+    view carries a background (:mod:`.background` then checks the assumption against it, or lifts it)."""
+    if options.u0 is not None or getattr(view, "background", None) is not None:
+        return {}
+    spread = rating_options.u0p_spread_fraction * proj.image_size[0]
+    if not spread > 0:
+        return {}
+    cost = u0_cost(obj, proj_pts, proj, spread, view.name)
+    return {"projector": (cost, f"the assumed u0p = W/2 (a real projector's u0p may sit {spread:.0f} px, "
+                                f"{100 * rating_options.u0p_spread_fraction:g} % of W, off the centre)")}
 
 
 def extrinsics(cam: CameraSolution, proj: ProjectorSolution):
@@ -277,6 +294,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
         line, no valid solution (:class:`~procam.errors.DegeneratePoseError` when the pose is degenerate), or a
         degenerate or failed pose with ``strict``.
     """
+    # no step may depend on how the board's corners were numbered: solve the canonical labelling (issue 24)
+    given_view, (view, labelling) = view, canonical_view(view)
     cam_size = cam_size or view.cam_size
     proj_size = proj_size or view.proj_size
     name = view.name
@@ -312,7 +331,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                  for (k, v), d in zip(predicted.items(), (cam, proj))}
     adv = rate_pose(None if known_camera is not None else cam.angles_deg, proj.angles_deg, std,
                     values={"f_c": cam.K[0, 0], "f_p": proj.K[0, 0]}, cam_size=cam.image_size,
-                    proj_size=proj.image_size, predicted=predicted, options=rating_options)
+                    proj_size=proj.image_size, predicted=predicted, options=rating_options,
+                    assumed=_u0p_assumption(view, obj_all, only_valid(view.proj_pts), proj, projector, rating_options))
     if known_camera is not None:
         adv["camera"] = {"level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
                          "message": "camera: intrinsics given, not estimated from this pose"}
@@ -352,7 +372,8 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
                             "cod_score": None if cam.cod is None else cam.cod.score,
                             "refine": cam.info["refine"]}, verdict=verdict, verdict_reasons=reasons)
     if fit is not None:
-        return _dense_result.apply(cal, fit, view, known_camera=known_camera, known_projector=known_projector)
+        cal = _dense_result.apply(cal, fit, view, known_camera=known_camera, known_projector=known_projector)
+        return apply_gates(given_labelling(cal, given_view, labelling), over_degenerate=False, stacklevel=3)
     if known_projector is not None:
         raise CalibrationError(f"pose {name!r}: given projector intrinsics need the pose's dense samples (a pose "
                                "folder decoded by procam, not a correspondences file)")
@@ -361,7 +382,7 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     bg = getattr(view, "background", None)
     if bg is not None:
         cal = _background.apply(cal, bg.cam_pts, bg.proj_pts, background or _background.BackgroundOptions())
-    return cal
+    return apply_gates(given_labelling(cal, given_view, labelling), over_degenerate=False, stacklevel=3)
 
 
 def _relevel(adv: dict) -> None:
@@ -398,6 +419,7 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
     (PnP RMS on this pose, outliers excluded), ``std`` and one pose entry (with
     ``rejected_corners``).
     """
+    obj_pts, cam_pts, labelling = canonical_points(obj_pts, cam_pts)  # independent of the corners' numbering
     obj, pts, finite = clean(obj_pts, cam_pts, name)
     # too few or collinear corners are that error, whatever the prediction (the first thing the fit checks)
     check_corners(obj, finite, robust.min_points, name, "camera corners", "check the board detection")
@@ -420,8 +442,9 @@ def calibrate_camera_only(obj_pts, cam_pts, image_size, *, camera: CameraOptions
             "n_used": {"camera": int(mask.sum())}, "rejected_corners": {"camera": _rejected_list(cam)},
             "outlier_threshold_px": {"camera": cam.outlier_threshold_px},
             "misfit": {k: _misfit_dict(v) for k, v in fits.items()}}
-    return Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
-                       method="camera-only", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
-                       info={"camera": cam, "principal_point_source": cam.principal_point_source,
-                             "cod_score": None if cam.cod is None else cam.cod.score, "refine": cam.info["refine"]},
-                       verdict=verdict, verdict_reasons=reasons)
+    cal = Calibration(camera=Device(cam.K, tuple(cam.image_size), cam.distortion), projector=None, R=None, T=None,
+                      method="camera-only", cam_rms=cam_rms, std=std, poses=(pose,), warnings=tuple(warnings),
+                      info={"camera": cam, "principal_point_source": cam.principal_point_source,
+                            "cod_score": None if cam.cod is None else cam.cod.score, "refine": cam.info["refine"]},
+                      verdict=verdict, verdict_reasons=reasons)
+    return apply_gates(given_labelling(cal, None, labelling), over_degenerate=False, stacklevel=3)

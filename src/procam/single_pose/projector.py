@@ -79,6 +79,26 @@ def calibrate_projector(obj_pts, proj_pts, proj_size, options: ProjectorOptions 
     return rejection_report(sol, predict, pp, mask, used, thr, notes, name, "projector", robust)
 
 
+def u0_cost(obj_pts, proj_pts, sol: ProjectorSolution, spread_px: float, name: str = "view") -> float:
+    """What the assumed ``u0p`` can cost ``f_p``: the largest relative change of ``f_p`` when the same corners
+    (``sol.mask``) are refitted with ``u0p`` moved by ``-spread_px`` and ``+spread_px``.
+
+    Any ``u0p`` fits one board exactly (see the module docstring), so the fit's ``±`` cannot see this: at a pose
+    turned little about the projector's vertical axis ``f_p`` follows ``u0p`` closely. ``inf`` when a refit
+    finds no solution.
+    """
+    obj, pp, _ = clean(obj_pts, proj_pts, f"pose {name!r}")
+    f0 = float(sol.K[0, 0])
+    worst = 0.0
+    for du in (-spread_px, spread_px):
+        try:
+            f = _projector_fit(obj, pp, sol.mask, sol.image_size, ProjectorOptions(u0=sol.u0 + du), name).K[0, 0]
+        except CalibrationError:
+            return float("inf")
+        worst = max(worst, abs(float(f) - f0) / abs(f0))
+    return worst
+
+
 def _projector_fit(obj, pp, mask, proj_size, o: ProjectorOptions, name: str) -> ProjectorSolution:
     """One single-pose projector fit on the corners ``mask`` (see :func:`calibrate_projector`)."""
     W, Hh = proj_size

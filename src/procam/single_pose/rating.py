@@ -31,6 +31,7 @@ import numpy as np
 from .. import crlb, distortion, models
 from ..errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning,
                       WeakPoseWarning)
+from ..plausibility import FOCAL_RANGE, focal_failure
 from ..verdict import LEVELS
 from ._principal_axis import homography, zhang_camera, zhang_projector
 
@@ -47,8 +48,15 @@ class RatingOptions:
     weak_angle_deg : an angle below this makes the pose weak (poorly conditioned).
     degenerate_rel_std, weak_rel_std : relative std of f above which the pose is degenerate / weak.
     plausible_f_range : focal lengths outside this range x the image diagonal (diagonal fields of view of
-        ~136 deg down to ~11 deg) are impossible for a real device.
+        ~136 deg down to ~11 deg) are impossible for a real device (:data:`procam.plausibility.FOCAL_RANGE`).
     camera_noise_px, projector_noise_px : the least corner noise (px) the stable prediction assumes.
+    data_alarm : corners that scatter about the fitted model more than this many times that noise are bad data
+        (a wrong decode or detection), not a bad pose: the rating says so instead of asking for another pose.
+    u0p_spread_fraction : how far from the panel's centre a real projector's ``u0p`` may lie, as a fraction of
+        its width (horizontal lens shift; the rigs issue 23 measured and the simulator's presets sit within 3 %).
+        The paper's projector assumes ``u0p = W/2``; what that assumption can cost ``f_p`` over this range
+        (:func:`procam.single_pose.projector.u0_cost`) joins the fit's ``±`` in the rating, so a pose is not
+        rated good when the assumption alone may put ``f_p`` several % off.
     """
 
     camera_rule_deg: float = 10.0
@@ -57,9 +65,11 @@ class RatingOptions:
     weak_angle_deg: float = 4.0
     degenerate_rel_std: float = 0.10
     weak_rel_std: float = 0.02
-    plausible_f_range: tuple = (0.2, 5.0)
+    plausible_f_range: tuple = FOCAL_RANGE
     camera_noise_px: float = 0.1
     projector_noise_px: float = 0.2
+    data_alarm: float = 10.0
+    u0p_spread_fraction: float = 0.03
 
 
 @dataclass(frozen=True)
@@ -152,8 +162,50 @@ def _pct(r) -> str:
     return "±inf" if r is None or not np.isfinite(r) else f"±{100 * r:.1f} %"
 
 
-def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, size, o: RatingOptions) -> dict:
-    """One device's rating (see the module docstring)."""
+def _uncertainty_words(key, pred_rel, fit_rel, prediction) -> tuple[float, str]:
+    """The relative ``±`` a rating rests on and its label: the bound predicted at this pose, or the fit's own ``±``
+    (they are different numbers under different assumptions; never printed unlabelled)."""
+    if pred_rel is not None and (fit_rel is None or pred_rel >= fit_rel):
+        fit = f"; the fit's own ± is {_pct(fit_rel)[1:]}" if fit_rel is not None else ""
+        return pred_rel, (f"{key} {_pct(pred_rel)} predicted at this pose (Cramer-Rao bound for "
+                          f"{prediction.sigma_px:.2g} px corner noise{fit})")
+    if fit_rel is not None:
+        return fit_rel, f"{key} {_pct(fit_rel)} from the fit"
+    return 0.0, f"{key} ± not known"
+
+
+def _angle_words(device, angles, prediction) -> str:
+    """The board's angles as the pose table prints them (signed, the fit's), and the homography's where the rating
+    rests on those and they read otherwise."""
+    d = "c" if device == "camera" else "p"
+    shown = np.asarray(angles, float) if angles is not None else prediction.angles_deg
+    keys = (0, 1) if device == "camera" else (1,)
+    txt = ", ".join(f"{('psi', 'nu')[i]}_{d} = {shown[i]:.1f}" for i in keys) + " deg"
+    if angles is not None and prediction is not None:
+        pa = prediction.angles_deg
+        if any(abs(abs(pa[i]) - abs(shown[i])) >= 0.05 for i in keys):
+            txt += (" (" + ", ".join(f"|{('psi', 'nu')[i]}_{d}| = {abs(pa[i]):.1f}" for i in keys)
+                    + " from the board's homography with nominal intrinsics, which the rating uses)")
+    return txt
+
+
+def _with_assumption(key, rel, rel_txt, fit_rel, assumed) -> tuple[float, str, bool]:
+    """The rating's relative ``±`` with what an assumption can cost (``assumed = (cost_rel, words)``) added in
+    quadrature to the fit's, when that is the larger; labelled as such."""
+    if not assumed or assumed[0] is None:
+        return rel, rel_txt, False
+    cost, words = assumed
+    total = float(np.hypot(fit_rel or 0.0, cost)) if np.isfinite(cost) else float("inf")
+    if total <= rel:
+        return rel, rel_txt, False
+    own = f"; the fit's own ± is {_pct(fit_rel)[1:]}" if fit_rel is not None else ""
+    return total, f"{key} {_pct(total)} with what {words} can cost ({_pct(cost)[1:]}{own})", True
+
+
+def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, size, o: RatingOptions,
+                 assumed=None) -> dict:
+    """One device's rating (see the module docstring); ``assumed``: ``(cost_rel, words)``, what an assumption of
+    the model can cost the focal length (:func:`_with_assumption`)."""
     key = "f_c" if device == "camera" else "f_p"
     a = prediction.angles_deg if prediction is not None else np.asarray(angles, float)
     psi, nu = abs(float(a[0])), abs(float(a[1]))
@@ -161,62 +213,81 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
     if std_f is not None and f is not None and f:
         fit_rel = float(std_f) / abs(float(f)) if np.isfinite(std_f) else float("inf")
     pred_rel = prediction.rel_std_f if prediction is not None else None
+    angle_txt = _angle_words(device, angles, prediction)
+    floor = o.camera_noise_px if device == "camera" else o.projector_noise_px
     if device == "camera":
-        angle, angle_txt = min(psi, nu), f"|psi_c| = {psi:.1f}, |nu_c| = {nu:.1f} deg"
+        angle = min(psi, nu)
         paper_ok = psi + nu > o.camera_rule_deg
         rule = f"the paper's rule wants |psi_c| + |nu_c| > {o.camera_rule_deg:g} deg"
         turn = "tilt the board about both image axes (e.g. 15-25 deg each)"
         unseen = "f_c and alpha_c are not determined when the board is not tilted about BOTH image axes"
+        check_data = ("check the corner detection (a blurred or moved capture, a wrong --board, a board that is not "
+                      "flat)")
     else:
-        angle, angle_txt = nu, f"|nu_p| = {nu:.1f} deg"
+        angle = nu
         paper_ok = nu > o.projector_rule_deg
         rule = f"the paper's rule wants |nu_p| > {o.projector_rule_deg:g} deg"
         turn = "turn the board left/right about the projector's vertical axis (|nu_p| 15-30 deg)"
         unseen = "with u0p fixed, f_p and v0p are not determined without a rotation about the projector's vertical axis"
+        check_data = ("check the decoded maps (procam decode --png): a pattern and its inverse swapped, patterns from "
+                      "another capture, or the wrong --projector size")
+    sigma = prediction.sigma_px if prediction is not None else None
+    bad_data = sigma is not None and np.isfinite(sigma) and sigma > o.data_alarm * floor and angle >= o.weak_angle_deg
+    if bad_data:  # the data, not the pose: never ask for another pose the user already has
+        turn = (f"the corners scatter {sigma:.2g} px about the model, {sigma / floor:.0f} times a sound capture's "
+                f"{floor:g} px, at a pose that is fine ({angle_txt}): the data, not the pose, limit this result; "
+                + check_data)
     impossible = None
     if f is not None and size is not None:
-        lo, hi = (o.plausible_f_range[0] * np.hypot(*size), o.plausible_f_range[1] * np.hypot(*size))
-        if not (np.isfinite(f) and lo <= f <= hi):
-            impossible = (f"{key} = {f:.4g} px is impossible for a {size[0]}x{size[1]} image (plausible {lo:.0f}-"
-                          f"{hi:.0f} px)")
-    noise = f"for {prediction.sigma_px:.2g} px corner noise" if prediction is not None else ""
+        impossible = focal_failure(key, float(f), tuple(size), o.plausible_f_range)
     # 1. stable quantities decide degeneracy
     if angle < o.degenerate_angle_deg:
         level, msg = "degenerate", f"{device}: degenerate pose ({angle_txt}): {unseen}; {turn}"
     elif pred_rel is not None and pred_rel > o.degenerate_rel_std:
         level = "degenerate"
-        msg = (f"{device}: degenerate pose: here {key} can only be known to {_pct(pred_rel)} (predicted {noise}; "
-               f"{angle_txt}); {turn}")
+        msg = (f"{device}: degenerate pose: here {key} can only be known to {_pct(pred_rel)} (predicted for "
+               f"{prediction.sigma_px:.2g} px corner noise; {angle_txt}); {turn}")
     # 2. then the estimate
     elif impossible:
         level, msg = "failed", f"{device}: FAILED estimate: {impossible}; {turn}"
     elif fit_rel is not None and fit_rel > o.degenerate_rel_std:
         level = "degenerate"
-        msg = f"{device}: degenerate pose: {key} = {f:.1f} ± {fit_rel * abs(f):.3g} px ({_pct(fit_rel)}); {turn}"
+        msg = (f"{device}: degenerate pose: {key} = {f:.1f} ± {fit_rel * abs(f):.3g} px ({_pct(fit_rel)} from the "
+               f"fit); {turn}")
     else:
         reasons = []
-        rel = max(r for r in (pred_rel, fit_rel, 0.0) if r is not None)
+        rel, rel_txt = _uncertainty_words(key, pred_rel, fit_rel, prediction)
+        rel, rel_txt, by_assumption = _with_assumption(key, rel, rel_txt, fit_rel, assumed)
         if rel > o.weak_rel_std:
-            reasons.append(f"{key} {_pct(rel)} (aim for under {_pct(o.weak_rel_std)[1:]})")
+            reasons.append(f"{rel_txt} (aim for under {_pct(o.weak_rel_std)[1:]})")
+            if by_assumption and not bad_data:
+                turn = ("the board's corners alone cannot measure u0p: calibrate from the decoded pose folder (its "
+                        "dense samples and the wall behind the board measure u0p, lens shift and distortion), give "
+                        "u0p if it is known (Python: ProjectorOptions(u0=...)), or calibrate from several poses")
         if angle < o.weak_angle_deg:
             reasons.append(f"an angle is close to zero ({angle_txt})")
-        if not paper_ok:
+        if not paper_ok and not bad_data:
             reasons.append(rule)
+        if bad_data and not reasons:
+            reasons.append("its corners do not fit the model")
         if reasons:
             level = "weak"
-            msg = f"{device}: weak pose: " + "; ".join(reasons) + f" -- {turn}"
+            msg = f"{device}: weak pose ({angle_txt}): " + "; ".join(reasons) + f" -- {turn}"
         else:
-            level, msg = "good", f"{device}: pose OK ({key} {_pct(rel)}; {angle_txt})"
+            level, msg = "good", f"{device}: pose OK ({rel_txt}; {angle_txt})"
     out = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), level=level,
                degenerate=level in ("degenerate", "failed"), weak=level == "weak", failed=level == "failed",
-               rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, message=msg)
+               rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, bad_data=bool(bad_data), message=msg)
+    if assumed and assumed[0] is not None:
+        out["assumption_rel_f"] = float(assumed[0])
     if device == "camera":
         out.update(sum_abs_deg=psi + nu, min_abs_deg=min(psi, nu))
     return out
 
 
 def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, values=None, cam_size=None,
-              proj_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions()) -> dict:
+              proj_size=None, predicted: dict | None = None, options: RatingOptions = RatingOptions(),
+              assumed: dict | None = None) -> dict:
     """Is this pose good for single-pose calibration? A rating per device and for the pose.
 
     Parameters
@@ -231,6 +302,9 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
         quantities; their angles replace the fitted ones in the rules. Without them the rating rests on
         the given angles and the fit's std alone (as for angles typed in by hand).
     options : :class:`RatingOptions`, the thresholds.
+    assumed : ``{"projector": (cost_rel, words)}``: what an assumption of the model (the paper's ``u0p = W/2``)
+        can cost the focal length, relative; it joins the fit's ``±`` (in quadrature) where that is larger, labelled
+        (``assumption_rel_f`` in the device's rating).
 
     Returns
     -------
@@ -248,7 +322,7 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
         if angles is None and predicted.get(device) is None:
             continue
         out[device] = _rate_device(device, angles, predicted.get(device), std.get(key), values.get(key), size,
-                                   options)
+                                   options, (assumed or {}).get(device))
     subs = [v for v in out.values() if isinstance(v, dict)]
     level = max((s["level"] for s in subs), key=LEVELS.index, default="good")
     out["level"] = level

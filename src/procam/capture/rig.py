@@ -1,0 +1,179 @@
+"""The capture-folder layout of a rig: several projectors (or cameras) seeing one board pose.
+
+A **rig pose folder** holds one sub-folder per (camera, projector) pair, each an ordinary pose folder (the
+projector's whole sequence as that camera recorded it, :func:`procam.capture.load_capture` reads it), and
+``rig.json`` naming the devices::
+
+    pose1/
+      rig.json       {"format": "procam-rig-pose", "version": 1, "reference": "cam",
+                      "cameras": ["cam"], "projectors": ["left", "right"],
+                      "pairs": {"left": ["cam", "left"], "right": ["cam", "right"]}}
+      left/          00.png ... 45.png, patterns.json     (camera cam, projector left)
+      right/         00.png ... 45.png, patterns.json     (camera cam, projector right)
+
+A sub-folder is named after the projector when the rig has one camera, after the camera when it has one
+projector, and ``<camera>_<projector>`` otherwise (:func:`pair_folder_name`).  The reference camera (the
+frame every device's pose is given in) is the first camera.  A folder without ``rig.json`` whose
+sub-folders are pose folders (each with ``patterns.json``) and that holds no images itself is read as one
+camera called ``camera`` and one projector per sub-folder, named after it.
+
+Device names are identifiers (a letter, then letters, digits or ``_``): they become keys of the OpenCV
+YAML file of a rig calibration.
+
+Failure modes: a missing sub-folder, a device named twice, a pair naming an unknown device, or a manifest
+that is not procam's are :class:`~procam.errors.CaptureError` with one line naming the file.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import CaptureError
+from ..io.formats import RIG_POSE_FORMAT
+
+__all__ = ["RIG_MANIFEST", "RigPair", "RigPose", "is_rig_pose", "read_rig_pose", "rig_manifest", "pair_folder_name",
+           "check_device_name", "prepare_rig_dir"]
+
+#: The manifest of a rig pose folder.
+RIG_MANIFEST = "rig.json"
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+_IMAGES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm")
+
+
+def check_device_name(name: str, where: str = "device name") -> str:
+    """``name`` if it is a device name (a letter, then up to 31 letters, digits or ``_``), else ``ValueError``."""
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"{where} {name!r}: a device name is a letter then letters, digits or '_' (at most 32)")
+    return name
+
+
+def pair_folder_name(camera: str, projector: str, n_cameras: int, n_projectors: int) -> str:
+    """The sub-folder of the pair (``camera``, ``projector``) in a rig of ``n_cameras`` and ``n_projectors``."""
+    if n_cameras == 1:
+        return projector
+    if n_projectors == 1:
+        return camera
+    return f"{camera}_{projector}"
+
+
+@dataclass(frozen=True)
+class RigPair:
+    """One pair of a rig pose: its pose ``folder``, the ``camera`` and the ``projector`` (names)."""
+
+    folder: Path
+    camera: str
+    projector: str
+
+    @property
+    def key(self) -> str:
+        """``"camera/projector"``: the pair's name in a rig calibration."""
+        return f"{self.camera}/{self.projector}"
+
+
+@dataclass(frozen=True)
+class RigPose:
+    """A rig pose folder (:func:`read_rig_pose`): ``cameras`` and ``projectors`` (names, the reference camera
+    first) and the ``pairs`` (:class:`RigPair`) captured at this board pose."""
+
+    folder: Path
+    cameras: tuple
+    projectors: tuple
+    pairs: tuple
+
+    @property
+    def reference(self) -> str:
+        return self.cameras[0]
+
+    @property
+    def name(self) -> str:
+        return str(self.folder)
+
+
+def rig_manifest(cameras, projectors, pairs=None) -> dict:
+    """The ``rig.json`` document of a rig pose: ``cameras``, ``projectors`` (names; the first camera is the
+    reference) and ``pairs`` (sub-folder -> [camera, projector]; default every pair, named by
+    :func:`pair_folder_name`)."""
+    cameras, projectors = [check_device_name(c) for c in cameras], [check_device_name(p) for p in projectors]
+    if len(set(cameras + projectors)) != len(cameras + projectors):
+        raise ValueError(f"device names must be unique, got {cameras + projectors}")
+    if pairs is None:
+        pairs = {pair_folder_name(c, p, len(cameras), len(projectors)): [c, p] for c in cameras for p in projectors}
+    return {"format": RIG_POSE_FORMAT, "version": 1, "reference": cameras[0], "cameras": cameras,
+            "projectors": projectors, "pairs": {k: list(v) for k, v in pairs.items()},
+            "layout": "one sub-folder per (camera, projector) pair, each an ordinary pose folder"}
+
+
+def prepare_rig_dir(out_dir, writer: str, *, force: bool = False, option: str | None = None):
+    """Make ``out_dir`` ready to take a rig pose (:func:`procam.io.folders.prepare_output_dir`: new, empty or this
+    writer's earlier output; ``force`` as there).  Returns its path; raises :class:`~procam.errors.OutputError`."""
+    from ..io.folders import prepare_output_dir
+
+    return prepare_output_dir(out_dir, writer, force=force, option=option)
+
+
+def _pose_like(d: Path) -> bool:
+    return d.is_dir() and (d / "patterns.json").is_file()
+
+
+def is_rig_pose(folder) -> bool:
+    """Is ``folder`` a rig pose folder: it holds ``rig.json``, or no images and at least one sub-folder that is a
+    pose folder (holds ``patterns.json``)?"""
+    f = Path(folder)
+    if not f.is_dir():
+        return False
+    if (f / RIG_MANIFEST).is_file():
+        return True
+    if (f / "patterns.json").is_file() or any(p.suffix.lower() in _IMAGES for p in f.iterdir() if p.is_file()):
+        return False
+    return any(_pose_like(d) for d in f.iterdir())
+
+
+def read_rig_pose(folder) -> RigPose:
+    """The :class:`RigPose` of a rig pose folder (module docstring), checked: every pair's sub-folder exists,
+    the names are device names, each used once as a camera or a projector.  Raises
+    :class:`~procam.errors.CaptureError` with one line naming the folder or file."""
+    f = Path(folder)
+    man = f / RIG_MANIFEST
+    if not man.is_file():
+        if not is_rig_pose(f):
+            raise CaptureError(f"{f}: not a rig pose folder (no {RIG_MANIFEST}, no sub-folders with patterns.json)")
+        subs = sorted(d.name for d in f.iterdir() if _pose_like(d))
+        try:
+            doc = rig_manifest(["camera"], subs)
+        except ValueError as e:
+            raise CaptureError(f"{f}: {e} (sub-folders are read as projectors; add {RIG_MANIFEST} to name them)") \
+                from None
+    else:
+        try:
+            doc = json.loads(man.read_text())
+        except (OSError, UnicodeDecodeError, ValueError) as e:
+            raise CaptureError(f"{man}: not a readable rig manifest ({e})") from None
+        if not isinstance(doc, dict) or doc.get("format") != RIG_POSE_FORMAT:
+            raise CaptureError(f"{man}: not a procam rig manifest (missing format: {RIG_POSE_FORMAT})")
+    try:
+        cams, projs = list(doc["cameras"]), list(doc["projectors"])
+        pairs_doc = dict(doc["pairs"])
+        rig_manifest(cams, projs, pairs_doc)  # the names' checks
+    except (KeyError, TypeError, ValueError) as e:
+        raise CaptureError(f"{man}: {e if isinstance(e, ValueError) else 'needs cameras, projectors and pairs'}") \
+            from None
+    if not cams or not projs or not pairs_doc:
+        raise CaptureError(f"{man}: a rig needs at least one camera, one projector and one pair")
+    pairs = []
+    for sub, cp in pairs_doc.items():
+        if not (isinstance(cp, list) and len(cp) == 2 and cp[0] in cams and cp[1] in projs):
+            raise CaptureError(f"{man}: pair {sub!r} must be [camera, projector] of the rig's devices, got {cp!r}")
+        if "/" in sub or "\\" in sub or sub in ("", ".", ".."):
+            raise CaptureError(f"{man}: pair folder {sub!r} must be a plain sub-folder name")
+        d = f / sub
+        if not d.is_dir():
+            raise CaptureError(f"{d}: the pair ({cp[0]}, {cp[1]}) has no folder; capture it or remove it from "
+                               f"{RIG_MANIFEST}")
+        pairs.append(RigPair(d, cp[0], cp[1]))
+    keys = [p.key for p in pairs]
+    if len(set(keys)) != len(keys):
+        raise CaptureError(f"{man}: a (camera, projector) pair is listed twice")
+    return RigPose(f, tuple(cams), tuple(projs), tuple(pairs))

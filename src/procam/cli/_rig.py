@@ -1,0 +1,119 @@
+"""What ``procam calibrate``, ``procam simulate`` and ``procam export`` do with a rig (several projectors or
+cameras, :mod:`procam.rig`): a helper of those commands, not a command; it parses nothing, it calls the library
+and prints its tables."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ._app import console, fail, plain, say, warn
+
+
+def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, method: str | None, options, camera,
+              background, cam_dist: str, proj_dist: str, refine: bool, force: bool, projector=None, order=None,
+              step=None) -> None:
+    """Calibrate the rig of rig pose folders ``poses``, print it, verify it, write ``out`` (and ``yaml``, the
+    rig's drawing ``png``); exit 3 when it must not be trusted."""
+    from .. import capture
+    from ..rig import calibrate_rig, rig_views_from_folders
+    from ..rig.file import save_rig_calibration
+    from ..rig.verify import verify_rig
+
+    not_rig = [str(p) for p in poses if not capture.is_rig_pose(p)]
+    if not_rig:
+        fail(f"{not_rig[0]}: not a rig pose folder, while {poses[0] if str(poses[0]) != not_rig[0] else 'another'} "
+             "is; give rig pose folders only (one sub-folder per camera-projector pair) or ordinary ones only")
+    if method == "multi-pose" and len(poses) < 2:
+        fail("--method multi needs at least two rig pose folders (three or more recommended)")
+    if method == "single-pose" and len(poses) != 1:
+        fail(f"--method single takes one rig pose folder, got {len(poses)}; use --method multi")
+    views = rig_views_from_folders(poses, brd, projector, order, options=options, step=step)
+    for pv in views:
+        for (c, p), v in pv.views.items():
+            say(f"{pv.name} ({c}, {p}): {int(v.valid.sum())} of {len(v.valid)} corners")
+            for w in v.diagnostics.get("warnings", []):
+                warn(w)
+    rc = calibrate_rig(views, method=method, camera=camera, background=background, cam_dist=cam_dist,
+                       proj_dist=proj_dist, refine=refine)
+    print_rig(rc)
+    agreement = verify_rig(rc, views)
+    print_agreement(agreement)
+    if not rc.trusted and not force:
+        fail(f"{rc.verdict} rig calibration, not written: {'; '.join(rc.verdict_reasons) or rc.verdict} "
+             "(--force writes it anyway, marked as such)", code=3, label="not trusted")
+    save_rig_calibration(rc, out)
+    say(f"wrote {out}" + ("" if rc.trusted else f" (marked {rc.verdict})"))
+    if yaml is not None:
+        save_rig_calibration(rc, yaml)
+        say(f"wrote {yaml}")
+    if png is not None:
+        from ..plots import save_figure
+        from ..rig.draw import rig_figure
+
+        save_figure(rig_figure(rc, agreement, title=out.name), png)
+        say(f"wrote {png}")
+    if not rc.trusted:
+        fail(f"{rc.verdict} rig calibration (written because of --force): "
+             f"{'; '.join(rc.verdict_reasons) or rc.verdict}", code=3, label="not trusted")
+
+
+def _pm(v, s, fmt=".1f") -> str:
+    return f"{v:{fmt}}" if s is None else f"{v:{fmt}} ± {s:{fmt}}"
+
+
+def print_rig(rc) -> None:
+    """The rig's devices (intrinsics ± std, centre, verdict) and relative poses (baseline, T, angles ± std)."""
+    from rich.table import Table
+
+    t = Table(title=plain(f"rig calibration ({rc.method}); reference camera {rc.reference}; ± 1 sigma"))
+    for c in ("device", "kind", "f (px)", "fy (px)", "u0 (px)", "v0 (px)", "centre (ref frame)", "verdict"):
+        t.add_column(c, justify="left" if c in ("device", "kind", "verdict") else "right")
+    for d in rc.devices:
+        K, s = d.device.K, d.std
+        t.add_row(*map(plain, (d.name + (" (ref)" if d.name == rc.reference else ""), d.kind,
+                               _pm(K[0, 0], s.get("f")), _pm(K[1, 1], s.get("fy")), _pm(K[0, 2], s.get("u0")),
+                               _pm(K[1, 2], s.get("v0")), "(" + ", ".join(f"{v:.1f}" for v in d.center) + ")",
+                               d.verdict)))
+    console.print(t)
+    r = Table(title=plain("relative poses x_b = R x_a + T (board units, degrees)"))
+    for c in ("a -> b", "baseline", "T", "angles (psi, nu, phi)"):
+        r.add_column(c, justify="left" if c == "a -> b" else "right")
+    for k, rel in rc.relative.items():
+        r.add_row(*map(plain, (k, _pm(rel.baseline, rel.std_baseline, ".2f"),
+                               ", ".join(_pm(v, s, ".2f") for v, s in zip(rel.T, rel.std_T)),
+                               ", ".join(_pm(v, s, ".3f") for v, s in zip(rel.angles_deg, rel.std_angles_deg)))))
+    console.print(r)
+    say(rc.uncertainty)
+    for w in rc.warnings:
+        warn(w)
+
+
+def print_agreement(agreement) -> None:
+    """The pairs' 3-D agreement (:func:`procam.rig.verify.verify_rig`)."""
+    if not agreement:
+        return
+    from rich.table import Table
+
+    t = Table(title=plain("rig verification: the same corners triangulated by two pairs (reference frame)"))
+    for c in ("pose", "pairs", "n", "rms (mm)", "max (mm)", "rms (% depth)", "depth (mm)"):
+        t.add_column(c, justify="left" if c in ("pose", "pairs") else "right")
+    for a in agreement:
+        t.add_row(*map(plain, (Path(a.pose).name, f"{a.a} vs {a.b}", a.n, f"{a.rms_mm:.3f}", f"{a.max_mm:.3f}",
+                               f"{a.rms_pct:.3f}", f"{a.mean_depth_mm:.0f}")))
+    console.print(t)
+
+
+def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed: int, order: str, force: bool) -> None:
+    """Render the preset rig ``rig_name`` at board ``angles`` (reference camera frame) and write it as a rig pose
+    folder (:func:`procam.simulate.write_rig_capture`)."""
+    from .. import simulate as sim
+
+    rig = sim.rig_preset(rig_name)
+    rig = rig.with_board_pose(angles, distance=distance)
+    if rig.fit_margin() < 0:
+        warn(f"part of the board is outside some device's image (by {-rig.fit_margin():.0f} px); some corners may "
+             "be missing - try a larger --distance or smaller angles")
+    rendered = sim.render_rig(rig, order=order, seed=seed, changes=changes)
+    folders = sim.write_rig_capture(out_dir, rig, rendered, order=order, force=force)
+    names = ", ".join(f"{f.name} ({c}, {p})" for f, (c, p, _, _) in zip(folders, rendered.values()))
+    say(f"wrote rig {rig_name} to {out_dir}: rig.json, truth.json and one pose folder per pair: {names}")
