@@ -9,11 +9,11 @@ from pathlib import Path
 from ._app import console, fail, plain, say, warn
 
 
-def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, method: str | None, options, camera,
+def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, report: Path | None = None, method: str | None, options, camera,
               background, cam_dist: str, proj_dist: str, refine: bool, force: bool, projector=None, order=None,
               step=None) -> None:
     """Calibrate the rig of rig pose folders ``poses``, print it, verify it, write ``out`` (and ``yaml``, the
-    rig's drawing ``png``); exit 3 when it must not be trusted."""
+    rig's drawing ``png``, the HTML ``report``); exit 3 when it must not be trusted."""
     from .. import capture
     from ..rig import calibrate_rig, rig_views_from_folders
     from ..rig.file import save_rig_calibration
@@ -52,37 +52,21 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, met
 
         save_figure(rig_figure(rc, agreement, title=out.name), png)
         say(f"wrote {png}")
+    if report is not None:
+        write_report(rc, report, agreement=agreement, name=out.name)
     if not rc.trusted:
         fail(f"{rc.verdict} rig calibration (written because of --force): "
              f"{'; '.join(rc.verdict_reasons) or rc.verdict}", code=3, label="not trusted")
 
 
-def _pm(v, s, fmt=".1f") -> str:
-    return f"{v:{fmt}}" if s is None else f"{v:{fmt}} ± {s:{fmt}}"
-
-
 def print_rig(rc) -> None:
     """The rig's devices (intrinsics ± std, centre, verdict) and relative poses (baseline, T, angles ± std)."""
-    from rich.table import Table
+    from ..rig.tables import device_table, relative_table
+    from ._show import rich_table
 
-    t = Table(title=plain(f"rig calibration ({rc.method}); reference camera {rc.reference}; ± 1 sigma"))
-    for c in ("device", "kind", "f (px)", "fy (px)", "u0 (px)", "v0 (px)", "centre (ref frame)", "verdict"):
-        t.add_column(c, justify="left" if c in ("device", "kind", "verdict") else "right")
-    for d in rc.devices:
-        K, s = d.device.K, d.std
-        t.add_row(*map(plain, (d.name + (" (ref)" if d.name == rc.reference else ""), d.kind,
-                               _pm(K[0, 0], s.get("f")), _pm(K[1, 1], s.get("fy")), _pm(K[0, 2], s.get("u0")),
-                               _pm(K[1, 2], s.get("v0")), "(" + ", ".join(f"{v:.1f}" for v in d.center) + ")",
-                               d.verdict)))
-    console.print(t)
-    r = Table(title=plain("relative poses x_b = R x_a + T (board units, degrees)"))
-    for c in ("a -> b", "baseline", "T", "angles (psi, nu, phi)"):
-        r.add_column(c, justify="left" if c == "a -> b" else "right")
-    for k, rel in rc.relative.items():
-        r.add_row(*map(plain, (k, _pm(rel.baseline, rel.std_baseline, ".2f"),
-                               ", ".join(_pm(v, s, ".2f") for v, s in zip(rel.T, rel.std_T)),
-                               ", ".join(_pm(v, s, ".3f") for v, s in zip(rel.angles_deg, rel.std_angles_deg)))))
-    console.print(r)
+    console.print(rich_table(device_table(rc), plain(f"rig calibration ({rc.method}); reference camera "
+                                                     f"{rc.reference}; ± 1 sigma")))
+    console.print(rich_table(relative_table(rc), plain("relative poses x_b = R x_a + T (board units, degrees)")))
     say(rc.uncertainty)
     for w in rc.warnings:
         warn(w)
@@ -92,15 +76,45 @@ def print_agreement(agreement) -> None:
     """The pairs' 3-D agreement (:func:`procam.rig.verify.verify_rig`)."""
     if not agreement:
         return
-    from rich.table import Table
+    from ..rig.tables import agreement_table
+    from ._show import rich_table
 
-    t = Table(title=plain("rig verification: the same corners triangulated by two pairs (reference frame)"))
-    for c in ("pose", "pairs", "n", "rms (mm)", "max (mm)", "rms (% depth)", "depth (mm)"):
-        t.add_column(c, justify="left" if c in ("pose", "pairs") else "right")
-    for a in agreement:
-        t.add_row(*map(plain, (Path(a.pose).name, f"{a.a} vs {a.b}", a.n, f"{a.rms_mm:.3f}", f"{a.max_mm:.3f}",
-                               f"{a.rms_pct:.3f}", f"{a.mean_depth_mm:.0f}")))
-    console.print(t)
+    console.print(rich_table(agreement_table(agreement),
+                             plain("rig verification: the same corners triangulated by two pairs (reference frame)")))
+
+
+def write_report(rc, path: Path, *, poses=None, agreement=None, name: str | None = None) -> None:
+    """Build and write the HTML page of the rig calibration ``rc`` (:func:`procam.report.build_rig_report`)."""
+    from ..report import build_rig_report
+    from ..report import write_report as write_page
+
+    text = build_rig_report(rc, poses, agreement=agreement, name=name or path.stem)
+    write_page(text, path)
+    say(f"wrote {path} ({len(text.encode('utf-8')) / 1e6:.2f} MB)")
+
+
+def report(calibration: Path, poses, *, out: Path, brd, projector=None, order=None, step=None, options=None) -> None:
+    """``procam report`` of a rig calibration file: its page, verified on the rig pose folders ``poses`` when
+    given (else on the poses its pairs keep)."""
+    from ..rig.file import load_rig_calibration
+
+    rc = load_rig_calibration(calibration)
+    views = None
+    if poses:
+        from .. import capture
+        from ..rig import rig_views_from_folders
+
+        not_rig = [str(p) for p in poses if not capture.is_rig_pose(p)]
+        if not_rig:
+            fail(f"{not_rig[0]}: not a rig pose folder; {calibration} is a rig calibration, so give rig pose folders "
+                 "(one sub-folder per camera-projector pair)")
+        views = rig_views_from_folders(poses, brd, projector, order, options=options, step=step)
+        names = {d.name for d in rc.devices}
+        for pv in views:
+            unknown = [n for n in pv.cameras + pv.projectors if n not in names]
+            if unknown:
+                fail(f"{pv.name}: device {unknown[0]!r} is not in {calibration} (devices: {', '.join(sorted(names))})")
+    write_report(rc, out, poses=views, name=calibration.name)
 
 
 def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed: int, order: str, force: bool) -> None:
