@@ -117,6 +117,40 @@ def report(calibration: Path, poses, *, out: Path, brd, projector=None, order=No
     write_report(rc, out, poses=views, name=calibration.name)
 
 
+def capture_projectors(spec: str, virtual: bool, display, poses: int, advise: bool):
+    """The projectors of ``procam capture --rig SPEC`` (:func:`procam.acquire.rig.parse_rig_projectors`), every
+    option that cannot go with a rig refused first (one line, exit 2)."""
+    from ..acquire.rig import parse_rig_projectors
+
+    for flag, given in (("--display", display is not None), ("--poses", poses != 1), ("--advise", advise)):
+        if given:
+            fail(f"--rig captures one rig pose with each projector on its own display: leave out {flag} "
+                 "(NAME=DISPLAY gives the displays; capture the next pose into another folder)")
+    try:
+        projectors = parse_rig_projectors(spec)
+    except ValueError as e:
+        fail(f"--rig {spec}: {e}")
+    if virtual and len(projectors) != 2:
+        fail(f"--rig {spec}: the virtual rig has two projectors; name two")
+    missing = [p.name for p in projectors if p.display is None]
+    if missing and not virtual:
+        fail(f"--rig {spec}: give {missing[0]}'s display (NAME=DISPLAY; --list-devices lists them)")
+    return projectors
+
+
+def capture(out_dir: Path, projectors, rig, options, *, board, hooks) -> None:
+    """Capture one rig pose (:func:`procam.acquire.rig.capture_rig_pose`), saying which projector's turn it is."""
+    from ..acquire.rig import capture_rig_pose
+
+    def announce(i, n, p):
+        where = "virtual" if rig.virtual else f"display {p.display}"
+        say(f"projector {i + 1}/{n}: {p.name} ({where}) -- the board and the camera stay still")
+
+    capture_rig_pose(out_dir, projectors, rig, options, board=board, hooks=hooks, announce=announce)
+    say(f"wrote rig pose {out_dir}: rig.json and one pose folder per projector "
+        f"({', '.join(p.name for p in projectors)}); procam calibrate reads it")
+
+
 def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed: int, order: str, force: bool) -> None:
     """Render the preset rig ``rig_name`` at board ``angles`` (reference camera frame) and write it as a rig pose
     folder (:func:`procam.simulate.write_rig_capture`)."""
