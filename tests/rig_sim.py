@@ -57,3 +57,31 @@ def bare_wall():
     rig = sim.rig_preset("two_projectors")
     t = np.asarray(rig.template.t_board, float)
     return dataclasses.replace(rig, template=rig.template.replace(t_board=(t[0] + 8000.0, t[1], t[2])))
+
+
+def fake_rig_folders(monkeypatch, root, name="two_projectors", n_poses=3):
+    """Rig pose folders whose pairs' views are the fast path's (pipeline.view_from_folder patched)."""
+    import json
+    from pathlib import Path
+
+    from procam import capture, pipeline
+    from procam.view import View
+
+    rig, poses = fast_views(name, n_poses)
+    by_path, folders = {}, []
+    for pv in poses:
+        f = Path(root) / pv.name
+        man = capture.rig_manifest(pv.cameras, pv.projectors)
+        for sub, (c, p) in man["pairs"].items():
+            (f / sub).mkdir(parents=True)
+            (f / sub / "patterns.json").write_text("{}")
+            by_path[(f / sub).resolve()] = pv.views[(c, p)]
+        (f / "rig.json").write_text(json.dumps(man))
+        folders.append(f)
+
+    def fake(folder, board, projector=None, order=None, **kw):
+        v = by_path[Path(folder).resolve()]
+        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size, board=board), None
+
+    monkeypatch.setattr(pipeline, "view_from_folder", fake)
+    return rig, folders

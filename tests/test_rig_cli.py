@@ -4,38 +4,11 @@ path (the folders' decoding replaced by the simulator's views) and a rendered en
 from __future__ import annotations
 
 import json
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from conftest import run_cli
-from rig_sim import ANGLES, fast_views
-
-
-def _fake_rig_folders(monkeypatch, root, name="two_projectors", n_poses=3):
-    """Rig pose folders whose pairs' views are the fast path's (pipeline.view_from_folder patched)."""
-    from procam import capture, pipeline
-    from procam.view import View
-
-    rig, poses = fast_views(name, n_poses)
-    by_path, folders = {}, []
-    for pv in poses:
-        f = Path(root) / pv.name
-        man = capture.rig_manifest(pv.cameras, pv.projectors)
-        for sub, (c, p) in man["pairs"].items():
-            (f / sub).mkdir(parents=True)
-            (f / sub / "patterns.json").write_text("{}")
-            by_path[(f / sub).resolve()] = pv.views[(c, p)]
-        (f / "rig.json").write_text(json.dumps(man))
-        folders.append(f)
-
-    def fake(folder, board, projector=None, order=None, **kw):
-        v = by_path[Path(folder).resolve()]
-        return View(v.obj_pts, v.cam_pts, v.proj_pts, str(folder), v.cam_size, v.proj_size, board=board), None
-
-    monkeypatch.setattr(pipeline, "view_from_folder", fake)
-    return rig, folders
+from rig_sim import ANGLES, fake_rig_folders as _fake_rig_folders
 
 
 def test_calibrate_rig_folders_writes_one_file_of_every_device(monkeypatch, tmp_path):

@@ -51,6 +51,9 @@ class Rig:
     cam_size, exposure_ms, gain, timeout_s : the camera's settings
         (:func:`~procam.acquire.cameras.open_camera`; the simulator takes the gain only).
     seed : the simulator's noise seed (pose ``i`` is rendered with ``seed + i``).
+    scene : virtual: the :class:`procam.simulate.Scene` every pose renders (its ``proj_size`` the patterns'),
+        e.g. one pair of a simulated rig (:mod:`procam.acquire.rig`); None = the demo scene at the poses'
+        angles.
     """
 
     camera: str = "opencv:0"
@@ -62,6 +65,7 @@ class Rig:
     gain: float | None = None
     timeout_s: float = 60.0
     seed: int = 0
+    scene: object = None
 
     @property
     def camera_kind(self) -> str:
@@ -177,6 +181,8 @@ class _Session:
         return lambda event: self.hooks.progress(i, event)
 
     def _scene(self, i: int):
+        if self.rig.scene is not None:
+            return self.rig.scene
         if i not in self._scenes:
             from .cameras import VIRTUAL_POSES, demo_scene
 

@@ -9,11 +9,11 @@ from pathlib import Path
 from ._app import console, fail, plain, say, warn
 
 
-def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, method: str | None, options, camera,
+def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, report: Path | None = None, method: str | None, options, camera,
               background, cam_dist: str, proj_dist: str, refine: bool, force: bool, projector=None, order=None,
               step=None) -> None:
     """Calibrate the rig of rig pose folders ``poses``, print it, verify it, write ``out`` (and ``yaml``, the
-    rig's drawing ``png``); exit 3 when it must not be trusted."""
+    rig's drawing ``png``, the HTML ``report``); exit 3 when it must not be trusted."""
     from .. import capture
     from ..rig import calibrate_rig, rig_views_from_folders
     from ..rig.file import save_rig_calibration
@@ -52,37 +52,21 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, met
 
         save_figure(rig_figure(rc, agreement, title=out.name), png)
         say(f"wrote {png}")
+    if report is not None:
+        write_report(rc, report, agreement=agreement, name=out.name)
     if not rc.trusted:
         fail(f"{rc.verdict} rig calibration (written because of --force): "
              f"{'; '.join(rc.verdict_reasons) or rc.verdict}", code=3, label="not trusted")
 
 
-def _pm(v, s, fmt=".1f") -> str:
-    return f"{v:{fmt}}" if s is None else f"{v:{fmt}} ± {s:{fmt}}"
-
-
 def print_rig(rc) -> None:
     """The rig's devices (intrinsics ± std, centre, verdict) and relative poses (baseline, T, angles ± std)."""
-    from rich.table import Table
+    from ..rig.tables import device_table, relative_table
+    from ._show import rich_table
 
-    t = Table(title=plain(f"rig calibration ({rc.method}); reference camera {rc.reference}; ± 1 sigma"))
-    for c in ("device", "kind", "f (px)", "fy (px)", "u0 (px)", "v0 (px)", "centre (ref frame)", "verdict"):
-        t.add_column(c, justify="left" if c in ("device", "kind", "verdict") else "right")
-    for d in rc.devices:
-        K, s = d.device.K, d.std
-        t.add_row(*map(plain, (d.name + (" (ref)" if d.name == rc.reference else ""), d.kind,
-                               _pm(K[0, 0], s.get("f")), _pm(K[1, 1], s.get("fy")), _pm(K[0, 2], s.get("u0")),
-                               _pm(K[1, 2], s.get("v0")), "(" + ", ".join(f"{v:.1f}" for v in d.center) + ")",
-                               d.verdict)))
-    console.print(t)
-    r = Table(title=plain("relative poses x_b = R x_a + T (board units, degrees)"))
-    for c in ("a -> b", "baseline", "T", "angles (psi, nu, phi)"):
-        r.add_column(c, justify="left" if c == "a -> b" else "right")
-    for k, rel in rc.relative.items():
-        r.add_row(*map(plain, (k, _pm(rel.baseline, rel.std_baseline, ".2f"),
-                               ", ".join(_pm(v, s, ".2f") for v, s in zip(rel.T, rel.std_T)),
-                               ", ".join(_pm(v, s, ".3f") for v, s in zip(rel.angles_deg, rel.std_angles_deg)))))
-    console.print(r)
+    console.print(rich_table(device_table(rc), plain(f"rig calibration ({rc.method}); reference camera "
+                                                     f"{rc.reference}; ± 1 sigma")))
+    console.print(rich_table(relative_table(rc), plain("relative poses x_b = R x_a + T (board units, degrees)")))
     say(rc.uncertainty)
     for w in rc.warnings:
         warn(w)
@@ -92,15 +76,79 @@ def print_agreement(agreement) -> None:
     """The pairs' 3-D agreement (:func:`procam.rig.verify.verify_rig`)."""
     if not agreement:
         return
-    from rich.table import Table
+    from ..rig.tables import agreement_table
+    from ._show import rich_table
 
-    t = Table(title=plain("rig verification: the same corners triangulated by two pairs (reference frame)"))
-    for c in ("pose", "pairs", "n", "rms (mm)", "max (mm)", "rms (% depth)", "depth (mm)"):
-        t.add_column(c, justify="left" if c in ("pose", "pairs") else "right")
-    for a in agreement:
-        t.add_row(*map(plain, (Path(a.pose).name, f"{a.a} vs {a.b}", a.n, f"{a.rms_mm:.3f}", f"{a.max_mm:.3f}",
-                               f"{a.rms_pct:.3f}", f"{a.mean_depth_mm:.0f}")))
-    console.print(t)
+    console.print(rich_table(agreement_table(agreement),
+                             plain("rig verification: the same corners triangulated by two pairs (reference frame)")))
+
+
+def write_report(rc, path: Path, *, poses=None, agreement=None, name: str | None = None) -> None:
+    """Build and write the HTML page of the rig calibration ``rc`` (:func:`procam.report.build_rig_report`)."""
+    from ..report import build_rig_report
+    from ..report import write_report as write_page
+
+    text = build_rig_report(rc, poses, agreement=agreement, name=name or path.stem)
+    write_page(text, path)
+    say(f"wrote {path} ({len(text.encode('utf-8')) / 1e6:.2f} MB)")
+
+
+def report(calibration: Path, poses, *, out: Path, brd, projector=None, order=None, step=None, options=None) -> None:
+    """``procam report`` of a rig calibration file: its page, verified on the rig pose folders ``poses`` when
+    given (else on the poses its pairs keep)."""
+    from ..rig.file import load_rig_calibration
+
+    rc = load_rig_calibration(calibration)
+    views = None
+    if poses:
+        from .. import capture
+        from ..rig import rig_views_from_folders
+
+        not_rig = [str(p) for p in poses if not capture.is_rig_pose(p)]
+        if not_rig:
+            fail(f"{not_rig[0]}: not a rig pose folder; {calibration} is a rig calibration, so give rig pose folders "
+                 "(one sub-folder per camera-projector pair)")
+        views = rig_views_from_folders(poses, brd, projector, order, options=options, step=step)
+        names = {d.name for d in rc.devices}
+        for pv in views:
+            unknown = [n for n in pv.cameras + pv.projectors if n not in names]
+            if unknown:
+                fail(f"{pv.name}: device {unknown[0]!r} is not in {calibration} (devices: {', '.join(sorted(names))})")
+    write_report(rc, out, poses=views, name=calibration.name)
+
+
+def capture_projectors(spec: str, virtual: bool, display, poses: int, advise: bool):
+    """The projectors of ``procam capture --rig SPEC`` (:func:`procam.acquire.rig.parse_rig_projectors`), every
+    option that cannot go with a rig refused first (one line, exit 2)."""
+    from ..acquire.rig import parse_rig_projectors
+
+    for flag, given in (("--display", display is not None), ("--poses", poses != 1), ("--advise", advise)):
+        if given:
+            fail(f"--rig captures one rig pose with each projector on its own display: leave out {flag} "
+                 "(NAME=DISPLAY gives the displays; capture the next pose into another folder)")
+    try:
+        projectors = parse_rig_projectors(spec)
+    except ValueError as e:
+        fail(f"--rig {spec}: {e}")
+    if virtual and len(projectors) != 2:
+        fail(f"--rig {spec}: the virtual rig has two projectors; name two")
+    missing = [p.name for p in projectors if p.display is None]
+    if missing and not virtual:
+        fail(f"--rig {spec}: give {missing[0]}'s display (NAME=DISPLAY; --list-devices lists them)")
+    return projectors
+
+
+def capture(out_dir: Path, projectors, rig, options, *, board, hooks) -> None:
+    """Capture one rig pose (:func:`procam.acquire.rig.capture_rig_pose`), saying which projector's turn it is."""
+    from ..acquire.rig import capture_rig_pose
+
+    def announce(i, n, p):
+        where = "virtual" if rig.virtual else f"display {p.display}"
+        say(f"projector {i + 1}/{n}: {p.name} ({where}) -- the board and the camera stay still")
+
+    capture_rig_pose(out_dir, projectors, rig, options, board=board, hooks=hooks, announce=announce)
+    say(f"wrote rig pose {out_dir}: rig.json and one pose folder per projector "
+        f"({', '.join(p.name for p in projectors)}); procam calibrate reads it")
 
 
 def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed: int, order: str, force: bool) -> None:

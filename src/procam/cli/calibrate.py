@@ -147,9 +147,7 @@ def calibrate_cmd(
         from . import _rig
 
         distinct_poses(poses)
-        if report is not None:
-            fail("--report: a rig has no HTML report yet; --png draws the rig, its verdicts and its agreement")
-        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, brd=brd, method=_METHODS[value(method)],
+        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, report=report, brd=brd, method=_METHODS[value(method)],
                               options=opts, camera=camera, background=BackgroundOptions(mode=value(background)),
                               cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine, force=force,
                               projector=optional_size(projector), order=value(order), step=step)

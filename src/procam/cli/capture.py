@@ -113,6 +113,9 @@ def capture_cmd(
                                  "and f_p are at most this % of f."),
     max_frames: Optional[int] = typer.Option(None, "--max-frames", help="--advise: capture after N frames of advice "
                                              "at the latest (default: no limit; 30 with --virtual)."),
+    rig_spec: Optional[str] = typer.Option(None, "--rig", help="A rig pose: projectors NAME=DISPLAY,... shown in "
+                                           "turn, the board still; OUT_DIR gets one sub-folder per projector and "
+                                           "rig.json (docs/rigs.md). --virtual: two names."),
 ):
     """Show the pattern sequence full screen on the projector (Gray codes, or a phase family with --family,
     docs/patterns.md), grab and check one camera frame per pattern, and write a pose folder that decode/calibrate
@@ -147,6 +150,10 @@ def capture_cmd(
         fail(f"--step must be between 1 and 64, got {step}")
     board_size = parse_size(board, "--board") if board else None
     brd = parse_board(board, 1.0 if square is None else square) if board else None
+    # --rig (issue 27): checked here, captured by procam.acquire.rig (cli/_rig.py)
+    from . import _rig
+
+    rig_projectors = _rig.capture_projectors(rig_spec, virtual, display, poses, advise) if rig_spec else None
     live = _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual)
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
@@ -165,6 +172,8 @@ def capture_cmd(
     rig = Rig(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
               exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
     with text_on_stderr(json_lines), _Printer() as printer:     # --json: stdout carries the advice only
+        if rig_projectors:  # --rig: one rig pose, each projector's session in turn (procam.acquire.rig)
+            return _rig.capture(out_dir, rig_projectors, rig, options, board=brd, hooks=printer)
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 

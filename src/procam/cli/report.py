@@ -17,7 +17,8 @@ REPORT_SUFFIXES = (".html", ".htm")
 @user_errors
 @with_pose_options
 def report_cmd(
-    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, or OpenCV YAML with pose folders)."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, a rig's JSON, or OpenCV YAML with "
+                                                          "pose folders)."),
     poses: Optional[list[Path]] = typer.Argument(None, help="Pose folders to show and verify (default: the poses "
                                                             "stored in the calibration JSON)."),
     out: Path = typer.Option(..., "-o", "--out", help="The report (.html): one self-contained file."),
@@ -43,6 +44,13 @@ def report_cmd(
             fail("give --board COLSxROWS and --square with the pose folders (the board they show)")
         brd = parse_board(board, square)
         opts = pose_options(**pose_args)
+    from ..rig.file import is_rig_calibration
+
+    if is_rig_calibration(calibration):  # several projectors / cameras (procam.rig): the rig's page
+        from . import _rig
+
+        return _rig.report(calibration, poses, out=out, brd=brd if poses else None, projector=optional_size(projector),
+                           order=value(order), step=step, options=opts if poses else None)
     calib = io.load_calibration(calibration)
     if poses:
         size = optional_size(projector)

@@ -11,7 +11,8 @@ are inline, and a Content-Security-Policy forbids every other source, so the pag
 Every user string (file and pose names, messages) is HTML-escaped.
 
 The rooms: :mod:`.page` (the page), :mod:`.sections` (its sections), :mod:`.elements` (style sheet, tables,
-inline figures), :mod:`.rig` (the rig in 3-D and its SVG view), :mod:`.coverage` (of the image planes). The
+inline figures), :mod:`.rig` (the rig in 3-D and its SVG view), :mod:`.rig_page` (the page of a calibration of
+several projectors and cameras, :mod:`procam.rig`), :mod:`.coverage` (of the image planes). The
 verdict the page opens with is :mod:`procam.verdict`'s.
 """
 
@@ -19,6 +20,7 @@ from ..verdict import Verdict, calibration_verdict  # noqa: F401 -- here before 
 from .coverage import coverage_fractions
 from .page import build_report, write_report
 from .rig import rig_geometry, rig_svg
+from .rig_page import build_rig_report
 from .sections import SECTIONS
 
-__all__ = ["SECTIONS", "build_report", "coverage_fractions", "rig_geometry", "rig_svg", "write_report"]
+__all__ = ["SECTIONS", "build_report", "build_rig_report", "coverage_fractions", "rig_geometry", "rig_svg", "write_report"]

@@ -15,7 +15,7 @@ from .elements import CSP, CSS
 from .sections import (coverage_section, loo_section, parameters_section, residuals_section, rig_section, section,
                        verdict_section, verification_section)
 
-__all__ = ["build_report", "write_report"]
+__all__ = ["build_report", "html_page", "write_report"]
 
 
 def build_report(calib, views=None, *, decodes=None, check: CalibrationVerification | None = None, verify: bool = True,
@@ -72,12 +72,18 @@ def build_report(calib, views=None, *, decodes=None, check: CalibrationVerificat
                if calib.projector is not None else "")
             + f", {len(calib.poses)} pose{'s' if len(calib.poses) != 1 else ''}; procam {escape(__version__)}.</p>")
     extra = "".join(f'<p class="note">{escape(n)}</p>' for n in notes)
+    return html_page(f"procam report: {name}", f"procam calibration report: {name}", [head, extra, *sections])
+
+
+def html_page(title: str, heading: str, parts) -> str:
+    """The self-contained page around ``parts`` (HTML): the style sheet, the Content-Security-Policy, ``title``
+    and the ``<h1>`` ``heading`` (both escaped here)."""
     return "\n".join([
         "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
         f'<meta http-equiv="Content-Security-Policy" content="{CSP}">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>procam report: {escape(name)}</title>", f"<style>{CSS}</style>", "</head>", "<body>", "<main>",
-        f"<h1>procam calibration report: {escape(name)}</h1>", head, extra, *sections,
+        f"<title>{escape(title)}</title>", f"<style>{CSS}</style>", "</head>", "<body>", "<main>",
+        f"<h1>{escape(heading)}</h1>", *parts,
         '<p class="meta">Self-contained page: every figure is inline; it loads nothing from anywhere.</p>',
         "</main>", "</body>", "</html>", ""])
 

@@ -24,9 +24,10 @@ import numpy as np
 from .. import models
 from ..errors import CalibrationFileError
 from ..io.formats import RIG_CALIBRATION_FORMAT
-from .result import RigCalibration
+from .result import RigCalibration, RigDevice
 
-__all__ = ["rig_to_dict", "save_rig_calibration", "load_rig_document", "RIG_CONVENTIONS"]
+__all__ = ["rig_to_dict", "save_rig_calibration", "load_rig_document", "load_rig_calibration", "is_rig_calibration",
+           "RIG_CONVENTIONS"]
 
 RIG_CONVENTIONS = ("reference frame: the first camera's; a device's pose X_dev = R X_ref + T (board units, mm for "
                    "a board in mm); relative 'a->b': X_b = R X_a + T; angles: intrinsic XYZ Euler (psi, nu, phi) in "
@@ -103,6 +104,19 @@ def save_rig_calibration(rc: RigCalibration, path) -> Path:
     return path
 
 
+def is_rig_calibration(path) -> bool:
+    """Whether ``path`` is a JSON file whose ``format`` is a rig calibration's (False for anything unreadable:
+    the calibration reader then says what is wrong with it)."""
+    path = Path(path)
+    if not path.is_file() or path.suffix.lower() in (".yml", ".yaml", ".xml"):
+        return False
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT
+
+
 def load_rig_document(path) -> dict:
     """The JSON document of a rig calibration file, checked to be one (:class:`CalibrationFileError` otherwise);
     its pairs are read by :func:`procam.io.load_calibration` with ``pair=``."""
@@ -118,3 +132,52 @@ def load_rig_document(path) -> dict:
         if not isinstance(doc.get(key), dict):
             raise CalibrationFileError(f"{path}: {key} must be an object")
     return doc
+
+
+def _device_from(path, name: str, kind: str, d) -> RigDevice:
+    from ..calibration import Device, Distortion
+
+    try:
+        dev = Device(np.asarray(d["K"], float).reshape(3, 3), tuple(int(v) for v in d["image_size"]),
+                     Distortion.from_dict(d.get("distortion") or {}))
+        R, T = np.asarray(d["R"], float).reshape(3, 3), np.asarray(d["T"], float).reshape(3)
+    except (KeyError, TypeError, ValueError) as e:
+        raise CalibrationFileError(f"{path}: {kind} {name!r}: {e}; give a file written by 'procam calibrate' "
+                                   "from rig pose folders") from None
+    if not (np.isfinite(dev.K).all() and np.isfinite(R).all() and np.isfinite(T).all()):
+        raise CalibrationFileError(f"{path}: {kind} {name!r}: K, R and T must be finite")
+    verdict = d.get("verdict") or {}
+    std = {k: v for k, v in (d.get("std") or {}).items()}
+    return RigDevice(name, kind, dev, R, T, std, str(verdict.get("level", "failed")),
+                     tuple(str(r) for r in verdict.get("reasons", ())))
+
+
+def load_rig_calibration(path) -> RigCalibration:
+    """The :class:`~procam.rig.result.RigCalibration` a rig calibration JSON file holds (every device, relative
+    pose and pair as written; the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
+    like any calibration).  :class:`CalibrationFileError` naming the file and the field otherwise."""
+    from ..io import load_calibration
+    from .result import RelativePose
+
+    path = Path(path)
+    doc = load_rig_document(path)
+    cams = tuple(_device_from(path, n, "camera", d) for n, d in doc["cameras"].items())
+    projs = tuple(_device_from(path, n, "projector", d) for n, d in doc["projectors"].items())
+    if not cams:
+        raise CalibrationFileError(f"{path}: a rig calibration without cameras")
+    rel = {}
+    for key, r in doc["relative"].items():
+        a, _, b = key.partition("->")
+        try:
+            s = r.get("std") or {}
+            rel[key] = RelativePose(a, b, np.asarray(r["R"], float).reshape(3, 3), np.asarray(r["T"], float).reshape(3),
+                                    np.asarray(s.get("angles_deg", [np.nan] * 3), float),
+                                    np.asarray(s.get("T", [np.nan] * 3), float), float(s.get("baseline", np.nan)))
+        except (KeyError, TypeError, ValueError, AttributeError) as e:
+            raise CalibrationFileError(f"{path}: relative pose {key!r}: {e}") from None
+    pairs = {key: load_calibration(path, pair=key) for key in doc["pairs"]}
+    verdict = doc.get("verdict") or {}
+    return RigCalibration(str(doc.get("method", "")), cams, projs, rel, pairs, tuple(doc.get("poses") or ()),
+                          str(doc.get("uncertainty", "")), dict(doc.get("info") or {}),
+                          tuple(doc.get("warnings") or ()), str(verdict.get("level", "failed")),
+                          tuple(str(r) for r in verdict.get("reasons", ())))
