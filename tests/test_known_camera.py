@@ -34,6 +34,7 @@ def _calibrations(sc, dev, trials):
     return known, free
 
 
+@pytest.mark.slow    # its fast siblings: the other known-camera tests
 def test_known_camera_reaches_its_bound_and_beats_the_free_camera(rig):
     sc, dev = rig
     obj = simulate.board_corners(sc)

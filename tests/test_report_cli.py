@@ -130,6 +130,7 @@ def test_report_of_a_file_without_poses_says_so(views, tmp_path):
     assert "Verdict: <span class=\"word\">unknown</span>" in (tmp_path / "o.html").read_text(encoding="utf-8")
 
 
+@pytest.mark.slow    # fast sibling: test_experiment's report test
 def test_experiment_report(folders, tmp_path):
     rep = tmp_path / "exp.html"
     code, stdout, err = run_cli(["experiment", *folders, "-o", tmp_path / "exp", *BOARD, "--projector", "1920x1080",

@@ -79,6 +79,7 @@ def test_rendered_rig_end_to_end(tmp_path):
     assert a.dtype == np.uint16 and a.shape == (1080, 1920) and a.min() < 1000 and a.max() == 65535
 
 
+@pytest.mark.slow    # fast sibling: test_rig_cli's calibrate test
 def test_export_covers_every_device_of_a_rig(monkeypatch, tmp_path):
     _, folders = _fake_rig_folders(monkeypatch, tmp_path)
     out = tmp_path / "rig.json"

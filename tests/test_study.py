@@ -147,6 +147,7 @@ def test_dask_backend_on_a_local_cluster():
     assert _strip(res.rows) == _strip(run_study(cfg).rows)
 
 
+@pytest.mark.slow    # fast sibling: test_cli
 def test_csv_round_trip_and_figures(tmp_path):
     from procam.plots.study import save_study_figures
 
