@@ -1,9 +1,10 @@
 """Calibrate a rig: every camera and projector in the reference camera's frame.
 
 * **One rig pose** (single-pose): each (camera, projector) pair by the single-pose method
-  (:func:`procam.single_pose.calibrate`), in the rig pose's pair order.  A camera already calibrated by an
-  earlier pair of the same pose is given to the next pairs as known intrinsics (it saw the same board at the
-  same pose), so the rig has one camera and each projector its own verdict.  Device poses are composed along
+  (:func:`procam.single_pose.calibrate`), in the rig pose's pair order.  Every pair estimates the camera with
+  its projector (a camera taken from an earlier pair as exact would leave its error out of the projector's
+  numbers and ``±``); the rig reports the camera of its first pair, and each projector its own verdict.  Device
+  poses are composed along
   the pairs from the reference camera; their std by the delta method from the pairs' std, **taken as
   independent** (the pairs share the camera's corners, so the ± of a projector-to-projector pose is an
   approximation).
@@ -188,14 +189,14 @@ def _single(pose: RigPoseViews, camera, background) -> RigCalibration:
     from .. import single_pose
 
     camera = single_pose.CameraOptions() if camera is None else camera
-    pairs, known = {}, {}
+    # every pair with its own estimate of the camera: the camera's error then reaches each projector's numbers and
+    # their ± (a camera taken from the first pair as exact would put it in neither)
+    pairs = {}
     for (c, p), view in pose.views.items():
         try:
-            cal = single_pose.calibrate(view, camera=camera, known_camera=known.get(c), background=background)
+            cal = single_pose.calibrate(view, camera=camera, background=background)
         except CalibrationError as e:
             raise CalibrationError(f"pair ({c}, {p}) of {pose.name}: {e}") from None
-        if c not in known and cal.trusted:
-            known[c] = cal.camera
         pairs[(c, p)] = cal
     names = list(pose.cameras) + list(pose.projectors)
     edges = [(c, p, cal.R, cal.T, _std3(cal.std, "R_euler_deg"), _std3(cal.std, "T")) for (c, p), cal in pairs.items()]
