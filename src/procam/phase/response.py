@@ -80,23 +80,25 @@ def waveform(fringe, gamma: float, period: float, blur: float) -> np.ndarray:
 def samples(c: np.ndarray, phase: np.ndarray, shifts: np.ndarray) -> np.ndarray:
     """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift: ``sum_h c_h (cos h phase cos h d_k -
     sin h phase sin h d_k)``, the harmonics of the phase by the angle-addition recurrence (once per pixel, not
-    per shift) and the sum over them a matrix product."""
+    per shift) and the sum over them one matrix product."""
     phase = np.asarray(phase, np.float64)
     d = np.asarray(shifts, np.float64)
     n = len(c)
     x = phase.reshape(1, -1)
-    ch, sh = np.empty((n, x.shape[1])), np.empty((n, x.shape[1]))
+    X = np.empty((2 * n, x.shape[1]))  # cos (h t) over sin (h t): the sum over harmonics is one matrix product
+    ch, sh = X[:n], X[n:]
     ch[0], sh[0] = 1.0, 0.0
     if n > 1:
         ch[1], sh[1] = np.cos(x[0]), np.sin(x[0])
+    t = np.empty(x.shape[1])
     for h in range(2, n):  # cos (h t) and sin (h t) from those of (h - 1) t and t
         np.multiply(ch[h - 1], ch[1], out=ch[h])
-        ch[h] -= sh[h - 1] * sh[1]
+        ch[h] -= np.multiply(sh[h - 1], sh[1], out=t)
         np.multiply(sh[h - 1], ch[1], out=sh[h])
-        sh[h] += ch[h - 1] * sh[1]
+        sh[h] += np.multiply(ch[h - 1], sh[1], out=t)
     hd = np.arange(n)[None] * d[:, None]
     cw = np.asarray(c, np.float64)[None]
-    out = (cw * np.cos(hd)) @ ch - (cw * np.sin(hd)) @ sh
+    out = np.concatenate([cw * np.cos(hd), -(cw * np.sin(hd))], axis=1) @ X
     return out.reshape((len(d),) + phase.shape)
 
 
@@ -262,11 +264,15 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
             row = data["rows"][i]
             G[row:row + ref.steps] = values[:, j]
     G[data["nphase"]:] = data["fixed"]
-    Gm, Ym = G.mean(0), Y.mean(0)
-    dG, dY = G - Gm, Y - Ym
+    if "dY" not in data:  # the samples' own terms, the same at every evaluation
+        Ym = Y.mean(0)
+        dY = Y - Ym
+        data.update(Ym=Ym, dY=dY, syy=np.einsum("sn,sn->n", dY, dY))
+    Ym, dY = data["Ym"], data["dY"]
+    dG = G - G.mean(0)
     sgg = np.einsum("sn,sn->n", dG, dG)
     beta = np.einsum("sn,sn->n", dG, dY) / np.maximum(sgg, 1e-12)
-    rss = np.maximum(np.einsum("sn,sn->n", dY, dY) - beta ** 2 * sgg, 0.0)
+    rss = np.maximum(data["syy"] - beta ** 2 * sgg, 0.0)
     r = rss / np.maximum(beta ** 2, 1e-12)
     keep = np.sort(r)[: max(1, int(0.9 * len(r)))]
     cost = float(np.mean(keep))
