@@ -185,8 +185,9 @@ def phase_lut(c: np.ndarray, shifts: np.ndarray, size: int = LUT_SIZE) -> PhaseL
     # (exp(i h phi) sum_k exp(i (h-1) d_k) + exp(-i h phi) sum_k exp(-i (h+1) d_k)) / 2
     a, b, a0 = _shift_sums(tuple(np.asarray(shifts, np.float64).tolist()), len(c) - 1)
     c = np.asarray(c, np.float64)
-    z = (E * (c[1:] * a)).sum(axis=1) + (np.conj(E) * (c[1:] * b)).sum(axis=1) + c[0] * a0
-    err = np.angle(z * np.conj(E[:, 0]))  # estimate - phase, wrapped
+    z = E @ (c[1:] * a) + np.conj(E @ np.conj(c[1:] * b)) + c[0] * a0
+    z *= np.conj(E[:, 0])
+    err = np.arctan2(z.imag, z.real)  # estimate - phase, wrapped
     est = phi + err
     if not np.all(np.diff(est) > 0):
         return None
