@@ -80,24 +80,35 @@ def waveform(fringe, gamma: float, period: float, blur: float) -> np.ndarray:
 def samples(c: np.ndarray, phase: np.ndarray, shifts: np.ndarray) -> np.ndarray:
     """(N, ...) the waveform ``c`` at ``phase + shift_k`` for every shift: ``sum_h c_h (cos h phase cos h d_k -
     sin h phase sin h d_k)``, the harmonics of the phase by the angle-addition recurrence (once per pixel, not
-    per shift) and the sum over them a matrix product."""
+    per shift: :func:`_harmonic_table`) and the sum over them one matrix product."""
     phase = np.asarray(phase, np.float64)
-    d = np.asarray(shifts, np.float64)
-    n = len(c)
-    x = phase.reshape(1, -1)
-    ch, sh = np.empty((n, x.shape[1])), np.empty((n, x.shape[1]))
+    out = _shift_weights(c, shifts) @ _harmonic_table(phase.reshape(-1), len(c))
+    return out.reshape((len(shifts),) + phase.shape)
+
+
+def _harmonic_table(x: np.ndarray, n: int) -> np.ndarray:
+    """(2 n, P) ``cos (h x)`` over ``sin (h x)``, ``h = 0 .. n - 1``, of the phases ``x`` (P,) by the
+    angle-addition recurrence."""
+    X = np.empty((2 * n, x.size))
+    ch, sh = X[:n], X[n:]
     ch[0], sh[0] = 1.0, 0.0
     if n > 1:
-        ch[1], sh[1] = np.cos(x[0]), np.sin(x[0])
+        ch[1], sh[1] = np.cos(x), np.sin(x)
+    t = np.empty(x.size)
     for h in range(2, n):  # cos (h t) and sin (h t) from those of (h - 1) t and t
         np.multiply(ch[h - 1], ch[1], out=ch[h])
-        ch[h] -= sh[h - 1] * sh[1]
+        ch[h] -= np.multiply(sh[h - 1], sh[1], out=t)
         np.multiply(sh[h - 1], ch[1], out=sh[h])
-        sh[h] += ch[h - 1] * sh[1]
-    hd = np.arange(n)[None] * d[:, None]
+        sh[h] += np.multiply(ch[h - 1], sh[1], out=t)
+    return X
+
+
+def _shift_weights(c: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+    """(N, 2 n) the waveform ``c``'s weights of :func:`_harmonic_table` at the shifts: ``c_h cos h d_k`` and
+    ``-c_h sin h d_k``."""
+    hd = np.arange(len(c))[None] * np.asarray(shifts, np.float64)[:, None]
     cw = np.asarray(c, np.float64)[None]
-    out = (cw * np.cos(hd)) @ ch - (cw * np.sin(hd)) @ sh
-    return out.reshape((len(d),) + phase.shape)
+    return np.concatenate([cw * np.cos(hd), -(cw * np.sin(hd))], axis=1)
 
 
 def nstep(values: np.ndarray, shifts: np.ndarray):
@@ -183,8 +194,9 @@ def phase_lut(c: np.ndarray, shifts: np.ndarray, size: int = LUT_SIZE) -> PhaseL
     # (exp(i h phi) sum_k exp(i (h-1) d_k) + exp(-i h phi) sum_k exp(-i (h+1) d_k)) / 2
     a, b, a0 = _shift_sums(tuple(np.asarray(shifts, np.float64).tolist()), len(c) - 1)
     c = np.asarray(c, np.float64)
-    z = (E * (c[1:] * a)).sum(axis=1) + (np.conj(E) * (c[1:] * b)).sum(axis=1) + c[0] * a0
-    err = np.angle(z * np.conj(E[:, 0]))  # estimate - phase, wrapped
+    z = E @ (c[1:] * a) + np.conj(E @ np.conj(c[1:] * b)) + c[0] * a0
+    z *= np.conj(E[:, 0])
+    err = np.arctan2(z.imag, z.real)  # estimate - phase, wrapped
     est = phi + err
     if not np.all(np.diff(est) > 0):
         return None
@@ -249,6 +261,7 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     Y = data["Y"]
     G = np.empty_like(Y)
     blocks = [b for b, _ in data["blocks"]]
+    waves, phis = [], []
     for period, members in data["groups"]:
         ref = blocks[members[0]]
         c = waveform(ref.fringe, gamma, period, blur)
@@ -256,21 +269,54 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
         if lut is None:
             return (np.inf, None, None, None) if per_pixel else np.inf
         # the members share the shifts: one lookup and one evaluation for all of them
-        phi, _ = lut(np.concatenate([data["blocks"][i][1] for i in members]), slope=False)
-        values = samples(c, phi, ref.shifts()).reshape(ref.steps, len(members), -1)
+        if "psi" not in data:  # the estimates' places on the tables' grid, the same at every evaluation
+            data["psi"] = [_grid_place(np.concatenate([data["blocks"][i][1] for i in m]), FIT_LUT_SIZE)
+                           for _, m in data["groups"]]
+        psi, j, f = data["psi"][len(phis)]
+        # the table's linear interpolation at the estimates (as np.interp computes it)
+        corr = lut.correction
+        phi = corr[j + 1] - corr[j]
+        phi *= f
+        phi += corr[j]
+        phi += psi
+        waves.append(c)
+        phis.append(phi)
+    # the harmonics of every group's phases at once (one recurrence), each group its own weights
+    X = _harmonic_table(np.concatenate(phis), len(waves[0])) if len({len(c) for c in waves}) == 1 else None
+    at = 0
+    for (period, members), c, phi in zip(data["groups"], waves, phis):
+        ref = blocks[members[0]]
+        if X is None:
+            values = samples(c, phi, ref.shifts())
+        else:
+            values = _shift_weights(c, ref.shifts()) @ X[:, at:at + phi.size]
+        at += phi.size
+        values = values.reshape(ref.steps, len(members), -1)
         for j, i in enumerate(members):
             row = data["rows"][i]
             G[row:row + ref.steps] = values[:, j]
     G[data["nphase"]:] = data["fixed"]
-    Gm, Ym = G.mean(0), Y.mean(0)
-    dG, dY = G - Gm, Y - Ym
+    if "dY" not in data:  # the samples' own terms, the same at every evaluation
+        Ym = Y.mean(0)
+        dY = Y - Ym
+        data.update(Ym=Ym, dY=dY, syy=np.einsum("sn,sn->n", dY, dY))
+    Ym, dY = data["Ym"], data["dY"]
+    dG = G - G.mean(0)
     sgg = np.einsum("sn,sn->n", dG, dG)
     beta = np.einsum("sn,sn->n", dG, dY) / np.maximum(sgg, 1e-12)
-    rss = np.maximum(np.einsum("sn,sn->n", dY, dY) - beta ** 2 * sgg, 0.0)
+    rss = np.maximum(data["syy"] - beta ** 2 * sgg, 0.0)
     r = rss / np.maximum(beta ** 2, 1e-12)
     keep = np.sort(r)[: max(1, int(0.9 * len(r)))]
     cost = float(np.mean(keep))
     return (cost, rss, beta, Ym) if per_pixel else cost
+
+
+def _grid_place(psi: np.ndarray, size: int):
+    """``(psi, j, f)``: estimates ``psi`` (radians in [0, 2 pi)) at ``j + f`` on the grid of a
+    :class:`PhaseLUT` of ``size`` entries (``j`` the entry below, ``f`` in [0, 1])."""
+    q = np.asarray(psi, np.float64) * (size / (2.0 * np.pi))
+    j = np.clip(np.floor(q), 0, size - 1).astype(np.intp)
+    return psi, j, q - j
 
 
 def _sandwich_std(data, gamma: float, blur: float, step: float = 0.02) -> float:
