@@ -163,14 +163,10 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
     if not isinstance(pattern_set, PatternSet):  # a phase family: its own decoder, with the default options
         return decode_with(stack, pattern_set, DecodeOptions(method, shadow_threshold, contrast_threshold),
                            extras=extras)
-    stack = np.asarray(stack)
     ps = pattern_set
-    if stack.ndim != 3 or stack.shape[0] != ps.count:
-        raise ValueError(f"stack must be ({ps.count}, H, W) for this pattern set, got {stack.shape}")
+    stack = _decoded.checked_stack(stack, ps.count)
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    if stack.dtype not in (np.uint8, np.uint16):
-        raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
     fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape

@@ -129,3 +129,14 @@ class DecodeResult:
             counts = np.bincount(r.ravel(), minlength=len(REASONS))
             out[axis] = {REASONS[k]: int(c) for k, c in enumerate(counts) if c}
         return out
+
+
+def checked_stack(stack, count: int) -> np.ndarray:
+    """``stack`` as an array, refused (``ValueError``) unless it is ``(count, H, W)`` of uint8 or uint16: the input
+    check of every decoder."""
+    stack = np.asarray(stack)
+    if stack.ndim != 3 or stack.shape[0] != count:
+        raise ValueError(f"stack must be ({count}, H, W) for this pattern set, got {stack.shape}")
+    if stack.dtype not in (np.uint8, np.uint16):
+        raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
+    return stack

@@ -252,11 +252,7 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     ``modulation_col``/``row`` and ``phase`` (:class:`PhaseInfo`).  Warns (:class:`~procam.errors.ProcamWarning`)
     with what ``phase.warnings`` holds.
     """
-    stack = np.asarray(stack)
-    if stack.ndim != 3 or stack.shape[0] != ps.count:
-        raise ValueError(f"stack must be ({ps.count}, H, W) for this pattern set, got {stack.shape}")
-    if stack.dtype not in (np.uint8, np.uint16):
-        raise ValueError(f"stack must be uint8 or uint16, got {stack.dtype}")
+    stack = _d.checked_stack(stack, ps.count)
     fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape

@@ -206,10 +206,9 @@ def _single(pose: RigPoseViews, camera, background) -> RigCalibration:
     for (c, p), cal in pairs.items():  # each device's intrinsics and verdict from the first pair that has it
         s = cal.std
         if c not in devices:
-            given = cal.info.get("known_camera") is not None or "camera given" in cal.method
             devices[c] = RigDevice(c, "camera", cal.camera, *P[c],
-                                   {"f": s.get("f_c"), "fy": s.get("fy_c"), "u0": s.get("u0c"), "v0": s.get("v0c")}
-                                   if not given else {}, cal.verdict, tuple(cal.verdict_reasons))
+                                   {"f": s.get("f_c"), "fy": s.get("fy_c"), "u0": s.get("u0c"), "v0": s.get("v0c")},
+                                   cal.verdict, tuple(cal.verdict_reasons))
         if p not in devices:
             devices[p] = RigDevice(p, "projector", cal.projector, *P[p],
                                    {"f": s.get("f_p"), "fy": s.get("fy_p"), "u0": s.get("u0p"), "v0": s.get("v0p")},
