@@ -53,6 +53,8 @@ LUT_SIZE = 1024
 FINE_SIZE = 16384
 #: Pixels of the sample the response is measured on.
 FIT_PIXELS = 1200
+#: Of them, the pixels the search for gamma and the blur evaluates its cost on (the noise uses all).
+SEARCH_PIXELS = 600
 #: Candidate gammas of the coarse search (at a blur of 1 projector pixel), refined by golden sections.
 GAMMA_GRID = (0.6, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5)
 
@@ -116,11 +118,10 @@ def nstep(values: np.ndarray, shifts: np.ndarray):
     phase)``, phase in [0, 2 pi); least squares for equally spaced shifts: ``phase = atan2(-sum I_k sin d_k,
     sum I_k cos d_k)``, ``modulation = 2 / N |sum I_k exp(-i d_k)|``."""
     v = np.asarray(values, np.float64)
-    d = np.asarray(shifts, np.float64).reshape((-1,) + (1,) * (v.ndim - 1))
-    C = np.sum(v * np.cos(d), axis=0)
-    S = np.sum(v * np.sin(d), axis=0)
+    d = np.asarray(shifts, np.float64)
     n = v.shape[0]
-    return v.mean(axis=0), 2.0 / n * np.hypot(C, S), np.mod(np.arctan2(-S, C), 2.0 * np.pi)
+    A, C, S = (np.stack([np.full(n, 1.0 / n), np.cos(d), np.sin(d)]) @ v.reshape(n, -1)).reshape((3,) + v.shape[1:])
+    return A, 2.0 / n * np.hypot(C, S), np.mod(np.arctan2(-S, C), 2.0 * np.pi)
 
 
 @dataclass(frozen=True)
@@ -188,28 +189,40 @@ def _shift_sums(shifts: tuple, n: int):
 def phase_lut(c: np.ndarray, shifts: np.ndarray, size: int = LUT_SIZE) -> PhaseLUT | None:
     """The :class:`PhaseLUT` (``size`` entries) of waveform ``c`` sampled at ``shifts``; None when the N-step
     estimate is not monotonic in the phase (the waveform cannot be corrected)."""
+    table = _correction(c, tuple(np.asarray(shifts, np.float64).tolist()), size)
+    if table is None:
+        return None
+    correction, err = table
+    grid = np.arange(size + 1) * (2.0 * np.pi / size)
+    true = grid + correction
+    slope = np.empty_like(true)
+    slope[1:-1] = (true[2:] - true[:-2]) / (grid[2:] - grid[:-2])
+    slope[0] = slope[-1] = 0.5 * (slope[1] + slope[-2])
+    return PhaseLUT(correction, slope, float(np.max(np.abs(err))))
+
+
+def _correction(c: np.ndarray, shifts: tuple, size: int):
+    """``(correction, err)``: the phase minus the estimate on the estimate grid ``2 pi k / size`` (``size + 1``
+    entries) and the estimate minus the phase on the phase grid (``2 size`` entries), of waveform ``c`` sampled at
+    ``shifts``; None when the estimate is not monotonic in the phase."""
     m = 2 * size
     phi, E = _basis(m, len(c) - 1)
     # sum_k w(phi + d_k) exp(-i d_k), harmonic by harmonic: cos h(phi + d) exp(-i d) sums to
     # (exp(i h phi) sum_k exp(i (h-1) d_k) + exp(-i h phi) sum_k exp(-i (h+1) d_k)) / 2
-    a, b, a0 = _shift_sums(tuple(np.asarray(shifts, np.float64).tolist()), len(c) - 1)
+    a, b, a0 = _shift_sums(shifts, len(c) - 1)
     c = np.asarray(c, np.float64)
     z = E @ (c[1:] * a) + np.conj(E @ np.conj(c[1:] * b)) + c[0] * a0
     z *= np.conj(E[:, 0])
     err = np.arctan2(z.imag, z.real)  # estimate - phase, wrapped
     est = phi + err
-    if not np.all(np.diff(est) > 0):
+    if not np.all(est[1:] > est[:-1]):
         return None
     grid = np.arange(size + 1) * (2.0 * np.pi / size)
     # a few samples of the neighbouring periods either side, so the interpolation covers [0, 2 pi]
     k = 8
     ext_est = np.concatenate([est[-k:] - 2 * np.pi, est, est[:k] + 2 * np.pi])
     ext_phi = np.concatenate([phi[-k:] - 2 * np.pi, phi, phi[:k] + 2 * np.pi])
-    true = np.interp(grid, ext_est, ext_phi)
-    slope = np.empty_like(true)
-    slope[1:-1] = (true[2:] - true[:-2]) / (grid[2:] - grid[:-2])
-    slope[0] = slope[-1] = 0.5 * (slope[1] + slope[-2])
-    return PhaseLUT(true - grid, slope, float(np.max(np.abs(err))))
+    return np.interp(grid, ext_est, ext_phi) - grid, err
 
 
 #: Entries of the lookup tables the fit uses (coarser: the fit needs the phase to about 1e-3 rad).
@@ -262,19 +275,20 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     G = np.empty_like(Y)
     blocks = [b for b, _ in data["blocks"]]
     waves, phis = [], []
-    for period, members in data["groups"]:
+    if "psi" not in data:  # what every evaluation reuses: the estimates' places on the tables' grid, the shifts
+        data["psi"] = [_grid_place(np.concatenate([data["blocks"][i][1] for i in m]), FIT_LUT_SIZE)
+                       for _, m in data["groups"]]
+        data["shifts"] = [tuple(blocks[m[0]].shifts().tolist()) for _, m in data["groups"]]
+    for g, (period, members) in enumerate(data["groups"]):
         ref = blocks[members[0]]
         c = waveform(ref.fringe, gamma, period, blur)
-        lut = phase_lut(c, ref.shifts(), FIT_LUT_SIZE)
-        if lut is None:
+        table = _correction(c, data["shifts"][g], FIT_LUT_SIZE)
+        if table is None:
             return (np.inf, None, None, None) if per_pixel else np.inf
         # the members share the shifts: one lookup and one evaluation for all of them
-        if "psi" not in data:  # the estimates' places on the tables' grid, the same at every evaluation
-            data["psi"] = [_grid_place(np.concatenate([data["blocks"][i][1] for i in m]), FIT_LUT_SIZE)
-                           for _, m in data["groups"]]
-        psi, j, f = data["psi"][len(phis)]
+        psi, j, f = data["psi"][g]
         # the table's linear interpolation at the estimates (as np.interp computes it)
-        corr = lut.correction
+        corr = table[0]
         phi = corr[j + 1] - corr[j]
         phi *= f
         phi += corr[j]
@@ -284,12 +298,12 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     # the harmonics of every group's phases at once (one recurrence), each group its own weights
     X = _harmonic_table(np.concatenate(phis), len(waves[0])) if len({len(c) for c in waves}) == 1 else None
     at = 0
-    for (period, members), c, phi in zip(data["groups"], waves, phis):
+    for (period, members), c, phi, shifts in zip(data["groups"], waves, phis, data["shifts"]):
         ref = blocks[members[0]]
         if X is None:
-            values = samples(c, phi, ref.shifts())
+            values = samples(c, phi, np.asarray(shifts))
         else:
-            values = _shift_weights(c, ref.shifts()) @ X[:, at:at + phi.size]
+            values = _shift_weights(c, np.asarray(shifts)) @ X[:, at:at + phi.size]
         at += phi.size
         values = values.reshape(ref.steps, len(members), -1)
         for j, i in enumerate(members):
@@ -335,21 +349,12 @@ def _sandwich_std(data, gamma: float, blur: float, step: float = 0.02) -> float:
     return float(np.sqrt(np.sum(d1[keep] ** 2)) / curv) if curv > 0 else float("inf")
 
 
-def _golden(f, lo: float, hi: float, iters: int = 14) -> float:
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = lo, hi
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = f(c), f(d)
-    for _ in range(iters):
-        if fc < fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = f(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = f(d)
-    return (a + b) / 2.0
+def _brent(f, lo: float, hi: float, tol: float) -> float:
+    """The minimum of ``f`` on ``[lo, hi]`` to ``tol`` (Brent's bounded method: golden sections with parabolic steps,
+    a third of the evaluations of golden sections alone on a smooth cost)."""
+    from scipy.optimize import minimize_scalar
+
+    return float(minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": tol}).x)
 
 
 def _noise(rss, beta, level, dof: int, floor: float):
@@ -406,20 +411,24 @@ def fit_response(blocks, white=None, black=None, *, gamma: float | None = None, 
             "blocks": [(b, nstep(y, b.shifts())[2]) for (b, _), y in zip(blocks, ys)],
             "fixed": np.array(fixed) if fixed else np.zeros((0, len(take))),
             "groups": _groups([b for b, _ in blocks])}
+    # the search for gamma and the blur on every other pixel (its cost is per evaluation, its precision ample);
+    # the noise from all of them
+    search = dict(data, Y=data["Y"][:, ::2], fixed=data["fixed"][:, ::2],
+                  blocks=[(b, psi[::2]) for b, psi in data["blocks"]]) if len(take) >= 2 * SEARCH_PIXELS else data
     dof = sum(b.steps for b, _ in blocks) + len(fixed) - 2 - len(blocks)
     floor = quantum ** 2 / 12.0
     note, measurable, std = "", True, 0.0
     if gamma is None:
-        costs = np.array([_fit_cost(data, g, 1.0) for g in GAMMA_GRID])
+        costs = np.array([_fit_cost(search, g, 1.0) for g in GAMMA_GRID])
         gi = int(np.argmin(costs))
         g0 = float(GAMMA_GRID[gi])
         lo, hi = max(0.3, g0 - 0.3), g0 + 0.3
         # gamma and blur trade off against each other a little: refine them in turn
-        blur = _golden(lambda s: _fit_cost(data, g0, s), 0.0, 3.0, 8)
-        g_hat = _golden(lambda g: _fit_cost(data, g, blur), lo, hi, 12)
-        blur = _golden(lambda s: _fit_cost(data, g_hat, s), 0.0, 3.0, 8)
-        g_hat = _golden(lambda g: _fit_cost(data, g, blur), g_hat - 0.04, g_hat + 0.04, 6)
-        std = _sandwich_std(data, g_hat, blur)
+        blur = _brent(lambda s: _fit_cost(search, g0, s), 0.0, 3.0, 0.02)
+        g_hat = _brent(lambda g: _fit_cost(search, g, blur), lo, hi, 0.002)
+        blur = _brent(lambda s: _fit_cost(search, g_hat, s), 0.0, 3.0, 0.01)
+        g_hat = _brent(lambda g: _fit_cost(search, g, blur), g_hat - 0.04, g_hat + 0.04, 0.001)
+        std = _sandwich_std(search, g_hat, blur)
         finite = costs[np.isfinite(costs)]
         flat = float(np.ptp(finite)) if finite.size else 0.0
         if dof <= 0 or not std < 0.25 or flat < 0.05 * max(float(costs[gi]), 1e-12):
@@ -428,7 +437,7 @@ def fit_response(blocks, white=None, black=None, *, gamma: float | None = None, 
                     "level across blocks, no white and black frames)")
         gamma_out = g_hat if measurable else float("nan")
     else:
-        blur = _golden(lambda s: _fit_cost(data, float(gamma), s), 0.0, 3.0, 8)
+        blur = _brent(lambda s: _fit_cost(search, float(gamma), s), 0.0, 3.0, 0.01)
         gamma_out = float(gamma)
     g_use = gamma_out if np.isfinite(gamma_out) else 1.0
     _, rss, beta, level = _fit_cost(data, g_use, blur, per_pixel=True)
