@@ -9,7 +9,7 @@ from procam import decode, patterns
 from procam.decoded import LOW_MODULATION, OK, ORDER_DISAGREE, SATURATED, SHADOW
 from procam.errors import ProcamWarning
 from procam.phase import PhaseOptions, decode_phase, response, unwrap
-from procam.phase.wrapped import sum_plan, weighted_sum
+from procam.phase.wrapped import Scratch, block_sums, sum_plan
 from conftest import expect_warning
 
 W, H = 256, 160
@@ -48,12 +48,14 @@ def test_nstep_phase_of_any_steps_and_conventions_is_exact(steps, start, shift, 
     A, B, psi = response.nstep(values, block.shifts())
     assert np.allclose(A, 120) and np.allclose(B, 90)
     assert np.allclose(np.angle(np.exp(1j * (psi - phi))), 0, atol=1e-12)
-    # the decoder's integer-grouped sums are the same sums
+    # the decoder's integer-grouped sums (in reused buffers, 8- and 16-bit frames) are the same sums
     c, s = np.cos(block.shifts()), np.sin(block.shifts())
-    frames = [np.full((1, 3), v, np.uint8) for v in np.rint(values[:, 7]).astype(np.uint8)]
-    for w in (c, -s):
-        got = weighted_sum(frames, sum_plan(w), np.int16)
-        assert np.allclose(got, np.sum(w * np.rint(values[:, 7])), atol=1e-4)
+    for dtype in (np.uint8, np.uint16):
+        frames = [np.full((2, 3), v, dtype) for v in np.rint(values[:, 7]).astype(dtype)]
+        got = block_sums(frames, (sum_plan(c), sum_plan(-s)), Scratch(4, 3, steps, dtype), mean=True)
+        for g, w in zip(got, (c, -s, np.full(steps, 1.0 / steps))):
+            assert g.shape == (2, 3)
+            assert np.allclose(g, np.sum(w * np.rint(values[:, 7])), atol=1e-3)
 
 
 def test_cv2_phase_is_within_2e_4_rad_of_atan2():

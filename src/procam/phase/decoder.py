@@ -259,14 +259,18 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     idx = sample_index(H * W, SAMPLE)
     sub = stack.reshape(K, -1)[:, idx].astype(np.float64)
     resp, measured, used, err_px, noise, luts, notes, lit, nsteps = _response(sub, ps, options, fs, scale)
-    ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts, plan=_plan(ps, luts, noise))
+    from .wrapped import Scratch
+
+    plan = _plan(ps, luts, noise)
+    ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts, plan=plan)
     out = {k: np.empty((H, W), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
     out["rcol"], out["rrow"] = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
     out["conf"] = np.empty((H, W), np.float32) if extras else None
     hists = {"col": np.zeros(2 * W + 2, np.int64), "row": np.zeros(2 * H + 2, np.int64)}
+    scratch = Scratch(min(band, H), W, plan["steps"], stack.dtype)
     for y0 in range(0, H, band):
         sl = slice(y0, min(H, y0 + band))
-        _band(stack[:, sl, :], sl, out, hists, **ctx)
+        _band(stack[:, sl, :], sl, out, hists, scratch=scratch, **ctx)
     # the sample's own decode, for the description checks (procam.phase.diagnose)
     sample = {"index": idx}
     view = np.ascontiguousarray(sub.astype(stack.dtype)[:, None, :])
@@ -303,9 +307,8 @@ def _block_stats(ps: PhaseSet, lit, nsteps: dict) -> tuple:
 
 
 def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
-    """What every band reuses: per phase block the groups of its sums ``sum I cos d`` and ``-sum I sin d``
-    (:func:`procam.phase.wrapped.sum_plan`), the constant of its noise, its lookup table; per axis its blocks
-    coarsest first."""
+    """What every band reuses: per phase block the groups of its sums (:func:`procam.phase.wrapped.sum_plan`),
+    the constant of its noise, its lookup table; per axis its blocks coarsest first."""
     from .wrapped import sum_plan, weights
 
     blocks = {}
@@ -313,33 +316,33 @@ def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
         if b.kind != "phase":
             continue
         c, s = weights(b.shifts())
-        blocks[b.first] = {"C": sum_plan(c), "S": sum_plan(-s),
+        blocks[b.first] = {"sums": (sum_plan(c), sum_plan(-s)),
                            "k": np.float32(math.sqrt(2.0 / b.steps) / (2.0 * math.pi)),
                            "turn": np.float32(b.fringe.sign / (2.0 * math.pi)), "lut": luts.get(b.first)}
     return {"blocks": blocks, "axes": {a: ps.phase_blocks(a) for a in ("col", "row")},
+            "steps": max(b.steps for b in ps.blocks if b.kind == "phase"),
             "a": np.float32(noise[0]), "b": np.float32(noise[1]), "sd0": np.float32(math.sqrt(noise[0]))}
 
 
-def _phase_of(blk, bl, pb, wide):
-    """``(B, u, slope)`` float32 of one phase block's frames in the band ``blk`` (``slope`` None without a
-    lookup table)."""
+def _phase_of(blk, bl, pb, scratch, mean: bool = False):
+    """``(B, u, slope, A)`` float32 of one phase block's frames in the band ``blk`` (``slope`` None without a
+    lookup table, ``A`` the frames' mean when ``mean``, else None)."""
     import cv2
 
-    from .wrapped import weighted_sum
+    from .wrapped import block_sums
 
-    frames = [blk[k] for k in bl.frames]
-    C = weighted_sum(frames, pb["C"], wide)
-    S = weighted_sum(frames, pb["S"], wide)
+    C, S, M = block_sums([blk[k] for k in bl.frames], pb["sums"], scratch, mean)
     u = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
     B = cv2.magnitude(C, S)
     B *= np.float32(2.0 / bl.steps)
+    A = M.copy() if mean else None
     slope = None
     if pb["lut"] is not None:
         u, slope = pb["lut"].apply(u)
     u *= pb["turn"]
     np.floor(u, out=C)  # C is spent: its buffer takes the floor
     u -= C
-    return B, u, slope
+    return B, u, slope, A
 
 
 def _level_noise(A, plan):
@@ -366,24 +369,19 @@ def _noise_of(B, sd, slope, pb):
     return su
 
 
-def _mean_of(blk, bl, wide) -> np.ndarray:
-    acc = np.zeros(blk.shape[1:], wide)
-    for k in bl.frames:
-        acc += blk[k]
-    return acc.astype(np.float32) * np.float32(1.0 / bl.steps)
-
-
 def _mark(reason, code, mask):
     """``reason = code`` where ``mask`` and the pixel is still OK (in place)."""
     mask &= reason == _d.OK
     np.copyto(reason, np.uint8(code), where=mask)
 
 
-def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, noise, luts, plan):
+def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, noise, luts, plan, scratch=None):
     """Decode the rows ``sl`` (frames ``blk`` (K, h, W)) into ``out`` (see :func:`decode_phase`)."""
     h, w = blk.shape[1:]
-    wide = np.int16 if blk.dtype == np.uint8 and max(b.steps for b in ps.blocks if b.kind == "phase") <= 128 \
-        else np.int32
+    if scratch is None:
+        from .wrapped import Scratch
+
+        scratch = Scratch(h, w, plan["steps"], blk.dtype)
     span = dark = None
     shadow_t = np.float32(opts.shadow_threshold * scale / 2.0)
     if ps.white is not None and ps.black is not None:
@@ -396,17 +394,16 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
             n = ps.size(axis)
             blocks = plan["axes"][axis]  # coarsest first
             peak = blk[blocks[0].first].copy()
-            A = _mean_of(blk, blocks[-1], wide)  # the pixel's level (the finest fringes' mean)
-            sd = _level_noise(A, plan)
-            levels = []
+            phases = []
             for bl in blocks:
                 for k in bl.frames:
                     np.maximum(peak, blk[k], out=peak)
-                pb = plan["blocks"][bl.first]
-                B, u, slope = _phase_of(blk, bl, pb, wide)
-                if not levels:
-                    shadow = B < shadow_t
-                levels.append((u, _noise_of(B, sd, slope, pb), bl.period, bl.fringe.x0))
+                phases.append(_phase_of(blk, bl, plan["blocks"][bl.first], scratch, mean=bl is blocks[-1]))
+            B, A = phases[-1][0], phases[-1][3]  # the pixel's level: the finest fringes' mean
+            shadow = phases[0][0] < shadow_t
+            sd = _level_noise(A, plan)
+            levels = [(u, _noise_of(Bk, sd, slope, plan["blocks"][bl.first]), bl.period, bl.fringe.x0)
+                      for bl, (Bk, u, slope, _) in zip(blocks, phases)]
             reason = np.zeros((h, w), np.uint8)
             if dark is not None:
                 shadow |= dark
@@ -424,8 +421,7 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
             bad = reason != _d.OK
             fin = bad & (reason != _d.OUT_OF_RANGE) & (reason != _d.ORDER_DISAGREE)
             np.logical_not(fin, out=fin)  # OK, OUT_OF_RANGE or ORDER_DISAGREE: a coordinate was decoded
-            hists[axis] += np.bincount(np.clip(np.rint(x[fin]), 0, len(hists[axis]) - 1).astype(np.intp),
-                                       minlength=len(hists[axis]))
+            _count(hists[axis], x, fin)
             xo, so = out[key][sl], out[skey][sl]
             np.copyto(xo, x, casting="unsafe")
             np.copyto(so, sx, casting="unsafe")
@@ -438,6 +434,14 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
                 conf = c if conf is None else np.minimum(conf, c)
     if out["conf"] is not None:
         out["conf"][sl] = conf
+
+
+def _count(hist: np.ndarray, x: np.ndarray, where: np.ndarray) -> None:
+    """``hist[k] +=`` the number of pixels ``where`` whose ``x`` rounds to ``k`` (clipped to the histogram's
+    ends)."""
+    v = x[where]
+    np.clip(v, 0, len(hist) - 1, out=v)
+    hist += np.bincount(np.rint(v, out=v).astype(np.intp), minlength=len(hist))
 
 
 def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
@@ -457,7 +461,8 @@ def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
         p = blk[g.first:g.first + 2 * nb:2]
         q = blk[g.first + 1:g.first + 2 * nb:2]
         bits = p > q
-        contrast = np.abs(p.astype(np.float32) - q)
+        contrast = np.maximum(p, q)
+        contrast -= np.minimum(p, q)  # |p - q|, exact in the frames' own type
         sd = sd * np.float32(math.sqrt(2.0))
         need = np.maximum(np.float32(t), 3.0 * sd)
     else:
@@ -477,4 +482,8 @@ def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
         comp, comp_c = bits[-1], certain[-1]
         bits, contrast, certain = bits[:-1], contrast[:-1], certain[:-1]
     m = _unwrap.gray_orders(bits, contrast, certain, u, reason, comp, comp_c, margin=4.0 * sd, su=su)
-    return x0 + period * (m + u), period * su
+    x = m.astype(np.float32)
+    x += u
+    x *= np.float32(period)
+    x += np.float32(x0)
+    return x, period * su

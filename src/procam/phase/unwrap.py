@@ -103,57 +103,96 @@ def _frac(v):
 
 def heterodyne(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, max_sigma: float = MAX_SIGMA):
     """``(x, sigma_x)`` from three ``levels`` ``(u, su, period, x0)`` (any order; one ``x0``); ``reason`` updated in
-    place (see the module docstring)."""
+    place (see the module docstring).  Coordinates are computed relative to ``x0`` and in place where the arrays
+    allow (the decoder's band pass calls it per band)."""
     (u1, s1, p1, x0), (u2, s2, p2, _), (u3, s3, p3, _) = sorted(levels, key=lambda lv: lv[2])
     l12 = p1 * p2 / (p2 - p1)
     l23 = p2 * p3 / (p3 - p2)
     l123 = l12 * l23 / (l23 - l12)
     f = np.asarray(u1).dtype.type
-    u12 = _frac(u1 - u2)
-    u23 = _frac(u2 - u3)
-    u123 = _frac(u12 - u23)
-    x = f(x0) + f(l123) * u123
-    s123 = f(l123) * np.sqrt(s1 * s1 + f(4.0) * s2 * s2 + s3 * s3)
-    s12 = np.sqrt(s1 * s1 + s2 * s2)
+    q1, q2, q3 = s1 * s1, s2 * s2, s3 * s3  # the fractions' variances
+    u12 = _frac_inplace(u1 - u2)
+    u23 = _frac_inplace(u2 - u3)
+    x = _frac_inplace(u12 - u23)  # u123
+    x *= f(l123)  # x - x0 of the beat of the beats
+    var = q2 * f(4.0)
+    var += q1
+    var += q3
+    bad_sigma = var > f((max_sigma * l12 / l123) ** 2)
     # level 1: the beat of the beats orders the first beat
-    t = (x - f(x0)) * f(1.0 / l12) - u12
-    m = np.rint(t)
-    bad_sigma = s123 > f(max_sigma * l12)
-    bad_order = np.abs(t - m) > f(tolerance)
-    x12 = f(x0) + f(l12) * (m + u12)
-    sx12 = f(l12) * s12
-    # level 2: the first beat orders each fringe
-    xs, ws = [], []
-    bad_sigma |= sx12 > f(max_sigma * p3)
-    for u, s, p in ((u1, s1, p1), (u2, s2, p2), (u3, s3, p3)):
-        t = (x12 - f(x0)) * f(1.0 / p) - u
-        m = np.rint(t)
-        bad_order |= np.abs(t - m) > f(tolerance)
-        xs.append(f(x0) + f(p) * (m + u))
-        ps = f(p) * s
-        ws.append(f(1.0) / np.maximum(ps * ps, f(1e-12)))
+    x *= f(1.0 / l12)
+    x -= u12
+    bad_order = _order_off(x, tolerance)  # x is now the order m12
+    x += u12
+    x *= f(l12)  # x12 - x0
+    np.add(q1, q2, out=var)
+    bad_sigma |= var > f((max_sigma * p3 / l12) ** 2)
+    # level 2: the first beat orders each fringe; the result is their inverse-variance mean
+    lo = hi = None
+    num = wsum = None
+    for u, q, p in ((u1, q1, p1), (u2, q2, p2), (u3, q3, p3)):
+        t = x * f(1.0 / p)
+        t -= u
+        bad_order |= _order_off(t, tolerance)
+        t += u
+        t *= f(p)  # x_i - x0
+        w = np.maximum(q, f(1e-12 / p ** 2))
+        np.divide(f(1.0 / p ** 2), w, out=w)  # 1 / var(x_i)
+        if num is None:
+            num, wsum, lo, hi = t * w, w, t.copy(), t
+        else:
+            num += t * w
+            wsum += w
+            np.minimum(lo, t, out=lo)
+            np.maximum(hi, t, out=hi)
     # the three fringes must land on one coordinate
-    for a in range(3):
-        for b in range(a + 1, 3):
-            bad_order |= np.abs(xs[a] - xs[b]) > f(tolerance * p1)
-    wsum = ws[0] + ws[1] + ws[2]
-    x = (xs[0] * ws[0] + xs[1] * ws[1] + xs[2] * ws[2]) / wsum
+    hi -= lo
+    bad_order |= hi > f(tolerance * p1)
+    num /= wsum
+    num += f(x0)
+    x = num
     if all(abs(l123 / p - round(l123 / p)) < 1e-6 for p in (p1, p2, p3)):
         x = _seam(x, x0, l123, p1)
-    reason[bad_sigma & (reason == OK)] = LOW_MODULATION
-    reason[bad_order & (reason == OK)] = ORDER_DISAGREE
-    return x, 1.0 / np.sqrt(wsum)
+    ok = reason == OK
+    np.copyto(reason, np.uint8(LOW_MODULATION), where=bad_sigma & ok)
+    np.copyto(reason, np.uint8(ORDER_DISAGREE), where=bad_order & ok & ~bad_sigma)
+    np.sqrt(wsum, out=wsum)
+    return x, np.divide(f(1.0), wsum, out=wsum)
+
+
+def _frac_inplace(v):
+    """``v - floor(v)`` in place."""
+    v -= np.floor(v)
+    return v
+
+
+def _order_off(t, tolerance: float):
+    """Round ``t`` to the nearest order in place; where it was further than ``tolerance`` from it (bool)."""
+    m = np.rint(t)
+    t -= m
+    np.abs(t, out=t)
+    off = t > tolerance
+    np.copyto(t, m)
+    return off
 
 
 def gray_value(bits: np.ndarray) -> np.ndarray:
-    """Binary value of Gray-code bits ``bits`` (n, ...) bool, most significant first."""
-    out = np.zeros(bits.shape[1:], np.int64)
-    prev = np.zeros(bits.shape[1:], bool)
+    """Binary value (int32) of Gray-code bits ``bits`` (n <= 31, ...) bool, most significant first: the code as an
+    integer of the narrowest unsigned type, then the prefix XOR ``b = g ^ (g >> 1) ^ (g >> 2) ...`` in ``log2 n``
+    shifts."""
+    n = len(bits)
+    if n > 31:
+        raise ValueError(f"at most 31 Gray bits, got {n}")
+    kind = np.uint8 if n <= 8 else np.uint16 if n <= 16 else np.uint32
+    g = np.zeros(bits.shape[1:], kind)
     for b in bits:
-        prev ^= b
-        out <<= 1
-        out |= prev
-    return out
+        g += g  # a shift by one, faster than numpy's shift of small integers
+        g |= b.view(np.uint8) if kind is np.uint8 else b
+    shift = 1
+    while shift < n:
+        g ^= g >> shift
+        shift <<= 1
+    return g.astype(np.int32)
 
 
 def _low_bit(m: np.ndarray) -> np.ndarray:
@@ -169,7 +208,7 @@ def _low_bit(m: np.ndarray) -> np.ndarray:
 
 def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: np.ndarray, reason: np.ndarray,
                 comp=None, comp_certain=None, margin=0.0, su=None) -> np.ndarray:
-    """The fringe order ``m`` (int64) of every pixel from its Gray bits (see the module docstring).
+    """The fringe order ``m`` (int32) of every pixel from its Gray bits (see the module docstring).
 
     Parameters
     ----------
@@ -189,22 +228,40 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     near = (u < 0.25) | (u > 0.75)
     if comp is not None:
         unsure = ~certain
-        n_unsure = unsure.sum(axis=0)
-        which = np.zeros(u.shape, np.int64)  # the first unsure bit, most significant first (0 when none)
+        n_unsure = unsure[0].astype(np.uint8)
+        for b in unsure[1:]:
+            n_unsure += b.view(np.uint8)
+        which = np.zeros(u.shape, np.int32)  # the first unsure bit, most significant first (0 when none)
         for b in range(n - 1, 0, -1):
             np.copyto(which, b, where=unsure[b])
         np.copyto(which, 0, where=unsure[0])
-        m1_alt = m1 ^ ((np.int64(1) << (n - which).astype(np.int64)) - 1)  # that bit read the other way round
-        v2 = (m1 << 1) | (comp ^ _parity(m1))
-        v2_alt = (m1_alt << 1) | (comp ^ _parity(m1_alt))
-        k2, k2_alt = (v2 + 1) >> 1, (v2_alt + 1) >> 1
-        m = np.where(u < 0.25, k2, np.where(u > 0.75, k2 - 1, m1))
+        np.subtract(n, which, out=which)
+        m1_alt = np.left_shift(np.int32(1), which)
+        m1_alt -= 1
+        m1_alt ^= m1  # that bit read the other way round
+        # the order from all n + 1 bits, k2 = (v2 + 1) >> 1 with v2 = 2 m1 + (comp ^ parity(m1)), is m1 + e with
+        # e = comp ^ parity(m1)
+        c = comp.view(np.uint8) if comp.dtype == bool else comp.astype(np.uint8)
+        e = (m1 & 1).astype(np.uint8)
+        e ^= c
+        e_alt = (m1_alt & 1).astype(np.uint8)
+        e_alt ^= c
+        k2_moved = (m1 + e) != (m1_alt + e_alt)  # k2 depends on the unsure bit
+        # m = k2 for u < 1/4, k2 - 1 for u > 3/4, m1 between
+        low8, high8 = (u < 0.25).view(np.uint8), (u > 0.75).view(np.uint8)
+        m = m1 + (e & low8)
+        m -= (e ^ 1) & high8
         # near a boundary k2 must not depend on an unsure bit and the complementary bit must be sure; mid-period
         # every ordinary bit must be sure
-        unsure_near = near & ((n_unsure > 1) | ((n_unsure == 1) & (k2 != k2_alt)) | ~comp_certain)
-        reason[(unsure_near | (~near & (n_unsure > 0))) & (reason == OK)] = LOW_CONTRAST
+        unsure_near = near & ((n_unsure > 1) | ((n_unsure == 1) & k2_moved) | ~comp_certain)
+        ok = reason == OK
+        np.copyto(reason, np.uint8(LOW_CONTRAST), where=(unsure_near | (~near & (n_unsure > 0))) & ok)
         both = (n_unsure == 0) & comp_certain & (((u > 0.1) & (u < 0.4)) | ((u > 0.6) & (u < 0.9)))
-        reason[both & (m1 != np.where(u < 0.5, k2, k2 - 1)) & (reason == OK)] = ORDER_DISAGREE
+        # where both orders are sure they must agree: m1 is k2 (e = 0) below the middle of the period, k2 - 1
+        # (e = 1) above
+        e ^= (u >= 0.5).view(np.uint8)
+        both &= e.view(bool)
+        np.copyto(reason, np.uint8(ORDER_DISAGREE), where=both & (reason == OK))
         return m
     # plain Gray code: which of the interval's two boundaries is the pixel at? The bit that changes there is
     # partway through its blurred edge: its contrast under 0.7 of the pixel's typical one and clearly (by
@@ -236,8 +293,3 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     other_unsure = (~certain & ~boundary).any(axis=0)
     reason[(other_unsure | (~near & ~certain.all(axis=0))) & (reason == OK)] = LOW_CONTRAST
     return m
-
-
-def _parity(v: np.ndarray) -> np.ndarray:
-    """The parity of the bits of ``gray(v) = v ^ (v >> 1)``, which is the lowest bit of ``v`` (bool)."""
-    return (v & 1).astype(bool)

@@ -5,10 +5,9 @@ Least squares for N >= 3 equally spaced shifts: ``C = sum I_k cos d_k``, ``S = s
 ``psi = atan2(-S, C)`` in [0, 2 pi), ``B = 2 / N sqrt(C^2 + S^2)``, ``A = mean I_k``.  With camera noise of
 variance ``sigma_I^2`` per sample, ``psi`` has the standard deviation ``sigma_I sqrt(2 / N) / B`` (radians).
 
-The sums are taken band by band of camera rows (the band stays in the cache) and in integers where the weights
-allow (:func:`sum_plan`: frames with equal ``|weight|`` are added and subtracted as integers, each group scaled
-once: a 4-step block is two integer differences); the phase and the magnitude are OpenCV's (``cv2.phase``: error
-below 2e-4 rad, measured in ``tests/test_phase.py``).
+The sums are taken band by band of camera rows (the band stays in the cache): the block's frames converted to
+float32 once into a reused buffer, and the three sums one matrix product (:func:`block_sums`); the phase and the
+magnitude are OpenCV's (``cv2.phase``: error below 2e-4 rad, measured in ``tests/test_phase.py``).
 """
 
 from __future__ import annotations
@@ -23,43 +22,6 @@ def weights(shifts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = np.where(np.abs(c) < 1e-12, 0.0, np.where(np.abs(np.abs(c) - 1) < 1e-12, np.sign(c), c))
     s = np.where(np.abs(s) < 1e-12, 0.0, np.where(np.abs(np.abs(s) - 1) < 1e-12, np.sign(s), s))
     return c.astype(np.float32), s.astype(np.float32)
-
-
-def block_band(frames, shifts: np.ndarray, buf: np.ndarray | None = None):
-    """``(A, B, psi)`` float32 (h, W) of one block's frames ``frames`` (N, h, W) (uint8/uint16/float); ``buf`` an
-    optional (3, h, W) float32 scratch."""
-    import cv2
-
-    n = len(frames)
-    h, w = frames[0].shape
-    if buf is None:
-        buf = np.empty((4, h, w), np.float32)
-    A, C, S, tmp = buf[0], buf[1], buf[2], buf[3]
-    cw, sw = weights(np.asarray(shifts, np.float64))
-    A[...] = 0.0
-    C[...] = 0.0
-    S[...] = 0.0
-    for k in range(n):
-        np.copyto(tmp, frames[k], casting="unsafe")
-        A += tmp
-        if cw[k] == 1.0:
-            C += tmp
-        elif cw[k] == -1.0:
-            C -= tmp
-        elif cw[k] != 0.0:
-            C += tmp * cw[k]
-        if sw[k] == 1.0:
-            S += tmp
-        elif sw[k] == -1.0:
-            S -= tmp
-        elif sw[k] != 0.0:
-            S += tmp * sw[k]
-    A *= np.float32(1.0 / n)
-    np.negative(S, out=S)
-    psi = cv2.phase(C, S)  # atan2(-S, C) in [0, 2 pi)
-    B = cv2.magnitude(C, S)
-    B *= np.float32(2.0 / n)
-    return A.copy(), B, psi
 
 
 def sum_plan(weights_row: np.ndarray, tol: float = 1e-6) -> list:
@@ -78,23 +40,65 @@ def sum_plan(weights_row: np.ndarray, tol: float = 1e-6) -> list:
     return groups
 
 
-def weighted_sum(frames, groups: list, wide) -> np.ndarray:
-    """float32 ``sum_k w_k frames[k]`` by :func:`sum_plan` ``groups``: integer sums (dtype ``wide``) per group."""
-    out = None
-    for w, plus, minus in groups:
-        if len(plus) == 1 and len(minus) == 1:
-            acc = np.subtract(frames[plus[0]], frames[minus[0]], dtype=wide)
-        else:
-            acc = np.zeros(frames[0].shape, wide)
+class Scratch:
+    """Buffers the band pass reuses for one block's sums: the frames widened to a signed integer type (int16 for
+    8-bit frames, which holds sums of up to 128 of them; int32 otherwise), an integer accumulator and three float32
+    results, for ``rows`` x ``width`` pixels and blocks of up to ``steps`` frames."""
+
+    def __init__(self, rows: int, width: int, steps: int, dtype):
+        self.wide = np.int16 if np.dtype(dtype) == np.uint8 and steps <= 128 else np.int32
+        self.ints = np.empty((steps, rows * width), self.wide)
+        self.acc = np.empty(rows * width, self.wide)
+        self.sums = np.empty((3, rows * width), np.float32)
+        self.tmp = np.empty(rows * width, np.float32)
+
+
+def block_sums(frames, plans, scratch: Scratch, mean: bool = False):
+    """``(C, S, A)`` float32 (h, W) of one block's frames ``frames`` (N arrays (h, W), uint8 or uint16): the sums
+    of ``plans`` (two :func:`sum_plan` groups, for ``sum I cos d`` and ``-sum I sin d``) and, when ``mean``, the
+    frames' mean (else None).  The frames are widened once; each group is added and subtracted in integers (exact)
+    and scaled once.  C, S and A are views into ``scratch``: valid until its next use."""
+    n = len(frames)
+    h, width = frames[0].shape
+    P = h * width
+    ints = scratch.ints[:n, :P]
+    for k, f in enumerate(frames):
+        np.copyto(ints[k].reshape(h, width), f, casting="unsafe")
+    acc, tmp = scratch.acc[:P], scratch.tmp[:P]
+    out = []
+    for r, groups in enumerate(plans):
+        res = scratch.sums[r, :P]
+        first = True
+        for w, plus, minus in groups:
+            # acc = sum of plus - sum of minus, in integers
+            if plus and minus:
+                np.subtract(ints[plus[0]], ints[minus[0]], out=acc)
+                plus, minus = plus[1:], minus[1:]
+            elif plus:
+                np.copyto(acc, ints[plus[0]])
+                plus = plus[1:]
+            else:
+                np.negative(ints[minus[0]], out=acc)
+                minus = minus[1:]
             for k in plus:
-                acc += frames[k]
+                acc += ints[k]
             for k in minus:
-                acc -= frames[k]
-        f = acc.astype(np.float32)
-        if w != 1.0:
-            f *= np.float32(w)
-        if out is None:
-            out = f
-        else:
-            out += f
-    return out if out is not None else np.zeros(frames[0].shape, np.float32)
+                acc -= ints[k]
+            dst = res if first else tmp
+            np.copyto(dst, acc, casting="unsafe")
+            if w != 1.0:
+                dst *= np.float32(w)
+            if not first:
+                res += tmp
+            first = False
+        if first:
+            res[...] = 0.0
+        out.append(res.reshape(h, width))
+    A = None
+    if mean:
+        np.add.reduce(ints, axis=0, out=acc)
+        A = scratch.sums[2, :P]
+        np.copyto(A, acc, casting="unsafe")
+        A *= np.float32(1.0 / n)
+        A = A.reshape(h, width)
+    return out[0], out[1], A
