@@ -791,3 +791,18 @@ def test_ctrl_c_prints_one_line_and_leaves_no_output_folder(cmd, poses, tmp_path
             "study": ["study", "camera", "-o", out, "--grid", "0", "--trials", "1"]}[cmd]
     bad(args, "interrupted", code=130)
     assert not out.exists() and not leftovers(tmp_path)
+
+
+def test_procam_debug_shows_the_internal_error_itself(tmp_path, monkeypatch):
+    """PROCAM_DEBUG=1 lets an internal error through with its own traceback (the command group's handlers of
+    typer's errors must not fail on it instead)."""
+    def boom(*a, **k):
+        raise RuntimeError("boom from the renderer")
+
+    monkeypatch.setattr(simulate, "render", boom)
+    monkeypatch.setenv("PROCAM_DEBUG", "1")
+    with pytest.raises(RuntimeError, match="boom from the renderer"):
+        run_cli(["simulate", tmp_path / "out"])
+    monkeypatch.delenv("PROCAM_DEBUG")
+    code, _, err = run_cli(["simulate", tmp_path / "out2"])
+    assert code != 0 and "internal error (RuntimeError: boom from the renderer)" in err

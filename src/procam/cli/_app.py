@@ -31,7 +31,13 @@ class _OneLineErrors(TyperGroup):
     with exit code 2, like procam's own errors, instead of a framed usage panel."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        from typer import _click
+        try:  # typer vendors click since 0.20-something; before, it used click itself
+            from typer import _click
+        except ImportError:  # pragma: no cover - older typer
+            import click as _click
+        Abort = getattr(_click.exceptions, "Abort", None)
+        if Abort is None:  # typer's vendored click raises typer's own
+            from typer.exceptions import Abort
 
         try:
             rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False,
@@ -45,7 +51,7 @@ class _OneLineErrors(TyperGroup):
             err_console.print(f"[bold red]error:[/bold red] {escape(e.format_message())}", highlight=False,
                               soft_wrap=True)
             rv = e.exit_code
-        except _click.exceptions.Abort:
+        except (Abort, KeyboardInterrupt):
             err_console.print("interrupted", highlight=False)
             rv = 130
         if not standalone_mode:
