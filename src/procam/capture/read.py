@@ -52,6 +52,15 @@ class Capture:
 
         return board_image(self.stack, self.pattern_set)
 
+    def picture(self) -> np.ndarray:
+        """The board as a person sees it: the white frame's file read again in colour when it is colour, else
+        :attr:`white` (a phase family without a white frame: the mean of its fringes, grey)."""
+        if self.pattern_set.white is None:
+            return self.white
+        from ..io import files as _files
+
+        return _files.read_image(self.files[self.pattern_set.white], gray=False)
+
     @property
     def black(self) -> np.ndarray | None:
         """The black frame, or None when the sequence has none."""

@@ -80,10 +80,10 @@ def _distortion(calib, out):
 def _projector_view(calib, out, pose, maps_file, projector, order, step):
     from .. import decode, io
     from ..export.projector_view import projector_view
-    from ..io import files as _files
 
     if pose is None:
-        fail("--format projector-view needs --pose POSE_DIR (the captured pose whose white frame it remaps)")
+        fail("--format projector-view needs --pose POSE_DIR (the captured pose whose white frame, or mean of the "
+             "fringes without one, it remaps)")
     cap = load_pose(pose, projector, calib, order, step)
     ps = cap.pattern_set
     if maps_file is not None:
@@ -94,8 +94,7 @@ def _projector_view(calib, out, pose, maps_file, projector, order, step):
     else:
         d = decode.decode(cap.stack, ps)
         col, row, valid = d.col, d.row, d.valid_col & d.valid_row
-    white = _files.read_image(cap.files[ps.white], gray=False)
-    view = projector_view(col, row, valid, white, (ps.width, ps.height))
+    view = projector_view(col, row, valid, cap.picture(), (ps.width, ps.height))
     if not view.mask.any():
         fail(f"{pose}: nothing was decoded; check the decode picture (procam decode --png)")
     written = io.engines.save_projector_view(view, out)
@@ -127,7 +126,8 @@ def export_cmd(
     rectify: bool = typer.Option(False, "--rectify", help="maps: also the stereo rectification maps of both devices."),
     scale: float = typer.Option(1.0, "--scale", help="maps --rectify: rectified focal length in units of the "
                                                      "camera's."),
-    pose: Optional[Path] = typer.Option(None, "--pose", help="projector-view: the pose folder (its white frame)."),
+    pose: Optional[Path] = typer.Option(None, "--pose", help="projector-view: the pose folder (its white frame, or "
+                                                             "the mean of the fringes without one)."),
     maps_file: Optional[Path] = typer.Option(None, "--maps", help="projector-view: the pose's decoded maps (procam "
                                                                  "decode -o), instead of decoding it again."),
     projector: ProjectorOpt = None,

@@ -76,11 +76,9 @@ def reconstruct_cmd(
     maps = decode.decode(cap.stack, ps)
     from .. import plausibility  # the capture's own faults first: they, not the calibration, explain a bad cloud
 
-    for w in plausibility.check_projector_size(maps, str(pose_dir), cap.files):
+    for w in plausibility.check_decoded(maps, str(pose_dir), cap.files):
         warn(w)
-    plausibility.check_swapped_bits(maps, str(pose_dir), cap.files)
-    colour = _files.read_image(cap.files[ps.white], gray=False)
-    cloud = rc.reconstruct(calib, maps, colour, use=use, max_residual_px=max_residual)
+    cloud = rc.reconstruct(calib, maps, cap.picture(), use=use, max_residual_px=max_residual)
     if len(cloud) == 0:
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
              "check the decode picture (procam decode --png)")
