@@ -9,7 +9,7 @@ from procam import decode, patterns
 from procam.decoded import LOW_MODULATION, OK, ORDER_DISAGREE, SATURATED, SHADOW
 from procam.errors import ProcamWarning
 from procam.phase import PhaseOptions, decode_phase, response, unwrap
-from procam.phase.wrapped import Scratch, block_sums, sum_plan
+from procam.phase.wrapped import Scratch, SumPlan, block_sums
 from conftest import expect_warning
 
 W, H = 256, 160
@@ -39,7 +39,7 @@ def truth():
     return np.meshgrid(np.arange(W, dtype=float), np.arange(H, dtype=float))
 
 
-@pytest.mark.parametrize("steps", [3, 4, 5, 7, 9])
+@pytest.mark.parametrize("steps", [3, 4, 5, 7, 8, 9])
 @pytest.mark.parametrize("start, shift, sign", [(0.0, 1, 1), (1.3, -1, 1), (-np.pi / 2, 1, -1)])
 def test_nstep_phase_of_any_steps_and_conventions_is_exact(steps, start, shift, sign):
     block = patterns.Block("phase", "col", 0, steps, 20.0, fringe=patterns.Fringe(sign=sign, shift=shift, start=start))
@@ -50,12 +50,15 @@ def test_nstep_phase_of_any_steps_and_conventions_is_exact(steps, start, shift, 
     assert np.allclose(np.angle(np.exp(1j * (psi - phi))), 0, atol=1e-12)
     # the decoder's integer-grouped sums (in reused buffers, 8- and 16-bit frames) are the same sums
     c, s = np.cos(block.shifts()), np.sin(block.shifts())
-    for dtype in (np.uint8, np.uint16):
-        frames = [np.full((2, 3), v, dtype) for v in np.rint(values[:, 7]).astype(dtype)]
-        got = block_sums(frames, (sum_plan(c), sum_plan(-s)), Scratch(4, 3, steps, dtype), mean=True)
+    pixels = np.rint(values[:, 7:13])  # (steps, 6): six pixels of different phases
+    for dtype, scale in ((np.uint8, 1), (np.uint16, 257)):
+        frames = [(p * scale).astype(dtype).reshape(2, 3) for p in pixels]
+        plan = SumPlan(block.shifts())
+        assert (plan.pairs is not None) == (steps % 2 == 0)  # even steps: sums over the half-turn pairs
+        got = block_sums(frames, plan, Scratch(4, 3, steps, dtype), mean=True)
         for g, w in zip(got, (c, -s, np.full(steps, 1.0 / steps))):
             assert g.shape == (2, 3)
-            assert np.allclose(g, np.sum(w * np.rint(values[:, 7])), atol=1e-3)
+            assert np.allclose(g.ravel(), scale * (w @ pixels), rtol=1e-6, atol=1e-3)
 
 
 def test_cv2_phase_is_within_2e_4_rad_of_atan2():

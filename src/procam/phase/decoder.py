@@ -307,16 +307,15 @@ def _block_stats(ps: PhaseSet, lit, nsteps: dict) -> tuple:
 
 
 def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
-    """What every band reuses: per phase block the groups of its sums (:func:`procam.phase.wrapped.sum_plan`),
+    """What every band reuses: per phase block how to form its sums (:class:`procam.phase.wrapped.SumPlan`),
     the constant of its noise, its lookup table; per axis its blocks coarsest first."""
-    from .wrapped import sum_plan, weights
+    from .wrapped import SumPlan
 
     blocks = {}
     for b in ps.blocks:
         if b.kind != "phase":
             continue
-        c, s = weights(b.shifts())
-        blocks[b.first] = {"sums": (sum_plan(c), sum_plan(-s)),
+        blocks[b.first] = {"sums": SumPlan(b.shifts()),
                            "k": np.float32(math.sqrt(2.0 / b.steps) / (2.0 * math.pi)),
                            "turn": np.float32(b.fringe.sign / (2.0 * math.pi)), "lut": luts.get(b.first)}
     return {"blocks": blocks, "axes": {a: ps.phase_blocks(a) for a in ("col", "row")},
@@ -383,6 +382,9 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
 
         scratch = Scratch(h, w, plan["steps"], blk.dtype)
     span = dark = None
+    # the pixel's level (the finest fringes' mean) is needed for shot noise, the confidence and the hybrid's Gray
+    # thresholds only
+    need_level = plan["b"] > 0 or out["conf"] is not None or ps.family == "gray-phase"
     shadow_t = np.float32(opts.shadow_threshold * scale / 2.0)
     if ps.white is not None and ps.black is not None:
         span = blk[ps.white].astype(np.float32) - blk[ps.black]
@@ -398,7 +400,8 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
             for bl in blocks:
                 for k in bl.frames:
                     np.maximum(peak, blk[k], out=peak)
-                phases.append(_phase_of(blk, bl, plan["blocks"][bl.first], scratch, mean=bl is blocks[-1]))
+                phases.append(_phase_of(blk, bl, plan["blocks"][bl.first], scratch,
+                                        mean=bl is blocks[-1] and need_level))
             B, A = phases[-1][0], phases[-1][3]  # the pixel's level: the finest fringes' mean
             shadow = phases[0][0] < shadow_t
             sd = _level_noise(A, plan)

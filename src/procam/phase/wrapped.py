@@ -5,9 +5,11 @@ Least squares for N >= 3 equally spaced shifts: ``C = sum I_k cos d_k``, ``S = s
 ``psi = atan2(-S, C)`` in [0, 2 pi), ``B = 2 / N sqrt(C^2 + S^2)``, ``A = mean I_k``.  With camera noise of
 variance ``sigma_I^2`` per sample, ``psi`` has the standard deviation ``sigma_I sqrt(2 / N) / B`` (radians).
 
-The sums are taken band by band of camera rows (the band stays in the cache): the block's frames converted to
-float32 once into a reused buffer, and the three sums one matrix product (:func:`block_sums`); the phase and the
-magnitude are OpenCV's (``cv2.phase``: error below 2e-4 rad, measured in ``tests/test_phase.py``).
+The sums are taken band by band of camera rows (the band stays in the cache), in buffers reused from band to band
+(:class:`Scratch`): the block's frames widened to a signed integer type once, frames of equal ``|weight|`` added
+and subtracted in integers (exact; a 4-step block is two differences) and each such group scaled once
+(:func:`sum_plan`, :func:`block_sums`).  The phase and the magnitude are OpenCV's (``cv2.phase``: error below
+2e-4 rad, measured in ``tests/test_phase.py``).
 """
 
 from __future__ import annotations
@@ -40,6 +42,37 @@ def sum_plan(weights_row: np.ndarray, tol: float = 1e-6) -> list:
     return groups
 
 
+class SumPlan:
+    """How :func:`block_sums` forms one block's sums ``C = sum I_k cos d_k`` and ``S = -sum I_k sin d_k``.
+
+    When every shift has a partner half a turn away (N even and equally spaced, in any frame order), both weights
+    change sign between partners, so the sums are taken over the ``N / 2`` differences ``I_k - I_j`` of the
+    ``pairs`` (half the additions); otherwise over the frames themselves.  ``c`` and ``s`` are the :func:`sum_plan`
+    groups over those terms.
+    """
+
+    def __init__(self, shifts: np.ndarray, tol: float = 1e-6):
+        c, s = weights(np.asarray(shifts, np.float64))
+        n = len(c)
+        partner = {}
+        for k in range(n):
+            if k in partner:
+                continue
+            j = next((j for j in range(k + 1, n) if j not in partner and abs(c[j] + c[k]) < tol
+                      and abs(s[j] + s[k]) < tol), None)
+            if j is None:
+                break
+            partner[k], partner[j] = j, k
+        self.steps = n
+        if len(partner) == n:
+            self.pairs = tuple((k, j) for k, j in sorted(partner.items()) if k < j)
+            first = [k for k, _ in self.pairs]
+            self.c, self.s = sum_plan(c[first]), sum_plan(-s[first])
+        else:
+            self.pairs = None
+            self.c, self.s = sum_plan(c), sum_plan(-s)
+
+
 class Scratch:
     """Buffers the band pass reuses for one block's sums: the frames widened to a signed integer type (int16 for
     8-bit frames, which holds sums of up to 128 of them; int32 otherwise), an integer accumulator and three float32
@@ -53,39 +86,58 @@ class Scratch:
         self.tmp = np.empty(rows * width, np.float32)
 
 
-def block_sums(frames, plans, scratch: Scratch, mean: bool = False):
+def block_sums(frames, plan: SumPlan, scratch: Scratch, mean: bool = False):
     """``(C, S, A)`` float32 (h, W) of one block's frames ``frames`` (N arrays (h, W), uint8 or uint16): the sums
-    of ``plans`` (two :func:`sum_plan` groups, for ``sum I cos d`` and ``-sum I sin d``) and, when ``mean``, the
-    frames' mean (else None).  The frames are widened once; each group is added and subtracted in integers (exact)
-    and scaled once.  C, S and A are views into ``scratch``: valid until its next use."""
+    of ``plan`` (:class:`SumPlan`) and, when ``mean``, the frames' mean (else None).  The terms (the frames
+    widened to a signed integer type, or the differences of their pairs) are formed once; each group of equal
+    ``|weight|`` is added and subtracted in integers (exact) and scaled once.  C, S and A are views into
+    ``scratch``: valid until its next use."""
     n = len(frames)
     h, width = frames[0].shape
     P = h * width
-    ints = scratch.ints[:n, :P]
-    for k, f in enumerate(frames):
-        np.copyto(ints[k].reshape(h, width), f, casting="unsafe")
+    wide = scratch.wide
+    if plan.pairs is not None:
+        terms = scratch.ints[:len(plan.pairs), :P]
+        for i, (k, j) in enumerate(plan.pairs):
+            np.subtract(frames[k], frames[j], out=terms[i].reshape(h, width), dtype=wide)
+    else:
+        terms = scratch.ints[:n, :P]
+        for k, f in enumerate(frames):
+            np.copyto(terms[k].reshape(h, width), f, casting="unsafe")
     acc, tmp = scratch.acc[:P], scratch.tmp[:P]
     out = []
-    for r, groups in enumerate(plans):
+    for r, groups in enumerate((plan.c, plan.s)):
         res = scratch.sums[r, :P]
         first = True
         for w, plus, minus in groups:
-            # acc = sum of plus - sum of minus, in integers
-            if plus and minus:
-                np.subtract(ints[plus[0]], ints[minus[0]], out=acc)
-                plus, minus = plus[1:], minus[1:]
-            elif plus:
-                np.copyto(acc, ints[plus[0]])
-                plus = plus[1:]
-            else:
-                np.negative(ints[minus[0]], out=acc)
-                minus = minus[1:]
-            for k in plus:
-                acc += ints[k]
-            for k in minus:
-                acc -= ints[k]
             dst = res if first else tmp
-            np.copyto(dst, acc, casting="unsafe")
+            if len(plus) + len(minus) <= 2:  # straight into float32
+                if plus and minus:
+                    np.subtract(terms[plus[0]], terms[minus[0]], out=dst, dtype=np.float32)
+                elif len(plus) == 2 or len(minus) == 2:
+                    a, b = plus or minus
+                    np.add(terms[a], terms[b], out=dst, dtype=np.float32)
+                    if minus:
+                        np.negative(dst, out=dst)
+                else:
+                    np.copyto(dst, terms[(plus or minus)[0]], casting="unsafe")
+                    if minus:
+                        np.negative(dst, out=dst)
+            else:  # acc = sum of plus - sum of minus, in integers
+                if plus and minus:
+                    np.subtract(terms[plus[0]], terms[minus[0]], out=acc)
+                    rest_p, rest_m = plus[1:], minus[1:]
+                elif plus:
+                    np.copyto(acc, terms[plus[0]])
+                    rest_p, rest_m = plus[1:], ()
+                else:
+                    np.negative(terms[minus[0]], out=acc)
+                    rest_p, rest_m = (), minus[1:]
+                for k in rest_p:
+                    acc += terms[k]
+                for k in rest_m:
+                    acc -= terms[k]
+                np.copyto(dst, acc, casting="unsafe")
             if w != 1.0:
                 dst *= np.float32(w)
             if not first:
@@ -96,8 +148,10 @@ def block_sums(frames, plans, scratch: Scratch, mean: bool = False):
         out.append(res.reshape(h, width))
     A = None
     if mean:
-        np.add.reduce(ints, axis=0, out=acc)
         A = scratch.sums[2, :P]
+        np.copyto(acc, frames[0].reshape(-1), casting="unsafe")
+        for f in frames[1:]:
+            np.add(acc, f.reshape(-1), out=acc, dtype=wide)
         np.copyto(A, acc, casting="unsafe")
         A *= np.float32(1.0 / n)
         A = A.reshape(h, width)
