@@ -22,6 +22,7 @@ the Gray decode per frame (median of ``--repeat`` runs).
     python benchmarks/phase.py                 # both parts (about 10 minutes on one core)
     python benchmarks/phase.py --quick         # Gray and the defaults at the base condition only
     python benchmarks/phase.py --skip-accuracy --repeat 5
+    python benchmarks/phase.py --skip-accuracy --repeat 8 --base aff1dfd   # and against an older decoder
 """
 
 from __future__ import annotations
@@ -190,6 +191,54 @@ def _speed_stack(ps, cam, rng):
     return out
 
 
+def _base_package(rev: str, tmp: Path):
+    """procam's source at commit ``rev`` imported beside the current one, as the package ``procam_base`` (the
+    package imports itself relatively, so the renamed copy is self-contained)."""
+    import importlib
+    import io
+    import subprocess
+    import tarfile
+
+    root = Path(__file__).resolve().parent.parent
+    data = subprocess.run(["git", "archive", rev, "src/procam"], cwd=root, capture_output=True, check=True).stdout
+    tarfile.open(fileobj=io.BytesIO(data)).extractall(tmp, filter="data")
+    (tmp / "src" / "procam").rename(tmp / "procam_base")
+    sys.path.insert(0, str(tmp))
+    return importlib.import_module("procam_base.decode"), importlib.import_module("procam_base.patterns")
+
+
+def _speed_base(args, stacks, cam):
+    """Per frame against the Gray decode, this commit's decoders and those of ``args.base`` alternated in one
+    process on the same stacks (the fastest of ``args.repeat`` rounds each: the least disturbed by other jobs)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        base_decode, base_patterns = _base_package(args.base, Path(tmp))
+        versions = {"this commit": (decode, patterns), f"base {args.base}": (base_decode, base_patterns)}
+        times = {}
+        for _ in range(args.repeat):
+            for family, (label, ps, st) in stacks.items():
+                kw = next(kw for lab, fam, kw in SEQUENCES if lab == label)
+                for name, (dec, pat) in versions.items():
+                    ps_v = pat.pattern_set(1920, 1080, family=family, **kw)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        t = time.perf_counter()
+                        dec.decode_with(st, ps_v, dec.DecodeOptions(), extras=False)
+                        times.setdefault((name, family), []).append((time.perf_counter() - t) / ps.count)
+    print(f"## Part 2b: against {args.base}, in one process (per frame, fastest of {args.repeat} rounds, default "
+          "options)\n")
+    print("| sequence | " + " | ".join(f"{n}: ms per frame | {n}: vs its Gray" for n in versions) + " |")
+    print("|---|" + "---|---|" * len(versions))
+    for family, (label, ps, _) in stacks.items():
+        cells = []
+        for name in versions:
+            best, gray = min(times[name, family]), min(times[name, "gray"])
+            cells.append(f"{1000 * best:.2f} | {best / gray:.2f}")
+        print(f"| {label} | " + " | ".join(cells) + " |")
+    print()
+
+
 def speed(args):
     cam = (1688, 1352)
     rng = np.random.default_rng(args.seed)
@@ -198,6 +247,8 @@ def speed(args):
         if family not in stacks:  # each family's default sequence (the first listed)
             ps = patterns.pattern_set(1920, 1080, family=family, **kw)
             stacks[family] = (label, ps, _speed_stack(ps, cam, rng))
+    if args.base:
+        _speed_base(args, stacks, cam)
     times = {(f, m): [] for f in stacks for m in (("simple", "robust") if f == "gray" else ("auto", "none"))}
     valid = {}
     for _ in range(args.repeat):  # interleaved: every decoder sees the same machine load
@@ -232,6 +283,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="the default sequences at the base condition only")
     ap.add_argument("--skip-accuracy", action="store_true")
     ap.add_argument("--skip-speed", action="store_true")
+    ap.add_argument("--base", help="speed: also alternate with the decoders of this commit in one process")
     args = ap.parse_args()
     print(header("phase: the phase families against Gray codes (accuracy vs the simulator's truth, decode speed)"))
     if not args.skip_accuracy:

@@ -97,10 +97,6 @@ def _seam(x, x0: float, span: float, period: float):
     return v
 
 
-def _frac(v):
-    return v - np.floor(v)
-
-
 def heterodyne(levels, reason: np.ndarray, *, tolerance: float = TOLERANCE, max_sigma: float = MAX_SIGMA):
     """``(x, sigma_x)`` from three ``levels`` ``(u, su, period, x0)`` (any order; one ``x0``); ``reason`` updated in
     place (see the module docstring).  Coordinates are computed relative to ``x0`` and in place where the arrays
