@@ -228,6 +228,9 @@ def test_patterns_json_round_trips_for_every_family(family, tmp_path):
     ({"family": "heterodyne", "width": 700, "height": 48, "sequence": [
         {"kind": "phase", "axis": a, "steps": 4, "period": p} for a in ("col", "row") for p in (10, 11, 12)]},
      "beat to 660.0 px, less than the panel's 700"),
+    ({"family": "heterodyne", "width": 256, "height": 48, "sequence": [  # counts 8, 7, 6: equal beats, none longer
+        {"kind": "phase", "axis": a, "steps": 4, "periods": c} for a in ("col", "row") for c in (8, 7, 6)]},
+     "give beats of 256.0 and 256.0 px: the second must be longer"),
     ({"family": "spiral", "width": 64, "height": 48}, "unknown family"),
     ({"family": "phase", "width": 64, "height": 48, "fringe": {"sign": 2}, "sequence": []}, "sign must be"),
 ])

@@ -390,6 +390,11 @@ def _check_set(ps: PhaseSet) -> None:
                 raise ValueError(f"the three heterodyne fringes along the {name} must share origin, pixel_center and "
                                  "sign (their beats are taken from the phase differences)")
             l12, l23, l123 = heterodyne_beats(periods)
+            if not (math.isfinite(l12) and math.isfinite(l23) and l23 > l12 * (1 + 1e-9)):
+                raise ValueError(f"the heterodyne periods along the {name} ({', '.join(_num(p) for p in periods)} px) "
+                                 f"give beats of {l12:.1f} and {l23:.1f} px: the second must be longer than the "
+                                 "first for their beat to order them (counts c1 > c2 > c3 across the panel with "
+                                 "c1 - c2 = c2 - c3 + 1, such as 70, 64, 59)")
             if not l123 >= n - 1e-6:
                 raise ValueError(f"the heterodyne periods along the {name} ({', '.join(_num(p) for p in periods)} px) "
                                  f"beat to {l123:.1f} px, less than the panel's {n}: the coordinate would not be "
