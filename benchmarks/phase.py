@@ -207,7 +207,7 @@ def _base_package(rev: str, tmp: Path):
     return importlib.import_module("procam_base.decode"), importlib.import_module("procam_base.patterns")
 
 
-def _speed_base(args, stacks, cam):
+def _speed_base(args, stacks):
     """Per frame against the Gray decode, this commit's decoders and those of ``args.base`` alternated in one
     process on the same stacks (the fastest of ``args.repeat`` rounds each: the least disturbed by other jobs)."""
     import tempfile
@@ -248,7 +248,7 @@ def speed(args):
             ps = patterns.pattern_set(1920, 1080, family=family, **kw)
             stacks[family] = (label, ps, _speed_stack(ps, cam, rng))
     if args.base:
-        _speed_base(args, stacks, cam)
+        _speed_base(args, stacks)
     times = {(f, m): [] for f in stacks for m in (("simple", "robust") if f == "gray" else ("auto", "none"))}
     valid = {}
     for _ in range(args.repeat):  # interleaved: every decoder sees the same machine load

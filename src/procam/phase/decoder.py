@@ -42,6 +42,7 @@ from ..io import files as _files
 from ..patterns.phase import PhaseSet
 from . import response as _resp
 from . import unwrap as _unwrap
+from . import wrapped as _wrapped
 
 #: Pixels of the sample the response and the noise are measured on (and :mod:`procam.phase.diagnose` judges).
 SAMPLE = 20000
@@ -259,15 +260,13 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     idx = sample_index(H * W, SAMPLE)
     sub = stack.reshape(K, -1)[:, idx].astype(np.float64)
     resp, measured, used, err_px, noise, luts, notes, lit, nsteps = _response(sub, ps, options, fs, scale)
-    from .wrapped import Scratch
-
     plan = _plan(ps, luts, noise)
     ctx = dict(ps=ps, opts=options, fs=fs, scale=scale, noise=noise, luts=luts, plan=plan)
     out = {k: np.empty((H, W), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
     out["rcol"], out["rrow"] = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
     out["conf"] = np.empty((H, W), np.float32) if extras else None
     hists = {"col": np.zeros(2 * W + 2, np.int64), "row": np.zeros(2 * H + 2, np.int64)}
-    scratch = Scratch(min(band, H), W, plan["steps"], stack.dtype)
+    scratch = _wrapped.Scratch(min(band, H), W, plan["steps"], stack.dtype)
     for y0 in range(0, H, band):
         sl = slice(y0, min(H, y0 + band))
         _band(stack[:, sl, :], sl, out, hists, scratch=scratch, **ctx)
@@ -309,13 +308,11 @@ def _block_stats(ps: PhaseSet, lit, nsteps: dict) -> tuple:
 def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
     """What every band reuses: per phase block how to form its sums (:class:`procam.phase.wrapped.SumPlan`),
     the constant of its noise, its lookup table; per axis its blocks coarsest first."""
-    from .wrapped import SumPlan
-
     blocks = {}
     for b in ps.blocks:
         if b.kind != "phase":
             continue
-        blocks[b.first] = {"sums": SumPlan(b.shifts()),
+        blocks[b.first] = {"sums": _wrapped.SumPlan(b.shifts()),
                            "k": np.float32(math.sqrt(2.0 / b.steps) / (2.0 * math.pi)),
                            "turn": np.float32(b.fringe.sign / (2.0 * math.pi)), "lut": luts.get(b.first)}
     return {"blocks": blocks, "axes": {a: ps.phase_blocks(a) for a in ("col", "row")},
@@ -328,9 +325,7 @@ def _phase_of(blk, bl, pb, scratch, mean: bool = False):
     lookup table, ``A`` the frames' mean when ``mean``, else None)."""
     import cv2
 
-    from .wrapped import block_sums
-
-    C, S, M = block_sums([blk[k] for k in bl.frames], pb["sums"], scratch, mean)
+    C, S, M = _wrapped.block_sums([blk[k] for k in bl.frames], pb["sums"], scratch, mean)
     u = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
     B = cv2.magnitude(C, S)
     B *= np.float32(2.0 / bl.steps)
@@ -378,9 +373,7 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
     """Decode the rows ``sl`` (frames ``blk`` (K, h, W)) into ``out`` (see :func:`decode_phase`)."""
     h, w = blk.shape[1:]
     if scratch is None:
-        from .wrapped import Scratch
-
-        scratch = Scratch(h, w, plan["steps"], blk.dtype)
+        scratch = _wrapped.Scratch(h, w, plan["steps"], blk.dtype)
     span = dark = None
     # the pixel's level (the finest fringes' mean) is needed for shot noise, the confidence and the hybrid's Gray
     # thresholds only
