@@ -23,6 +23,11 @@ the Gray decode per frame (median of ``--repeat`` runs).
     python benchmarks/phase.py --quick         # Gray and the defaults at the base condition only
     python benchmarks/phase.py --skip-accuracy --repeat 5
     python benchmarks/phase.py --skip-accuracy --repeat 8 --base aff1dfd   # and against an older decoder
+    python benchmarks/phase.py --skip-accuracy --command     # and `procam decode` on folders, as a user runs it
+
+Part 2c (``--command``): the same stacks written as capture folders (PNG frames and patterns.json) and decoded by
+``procam decode FOLDER -o maps.npz`` in a fresh process each time: what a user waits for, reading the frames,
+starting Python and writing the maps included.
 """
 
 from __future__ import annotations
@@ -239,6 +244,43 @@ def _speed_base(args, stacks):
     print()
 
 
+def _speed_command(args, stacks):
+    """Per frame against the Gray decode, the ``procam decode`` command on capture folders (fresh processes,
+    interleaved; the median of ``args.repeat`` runs)."""
+    import shutil
+    import subprocess
+    import tempfile
+
+    from procam.capture.write import write_sequence
+
+    exe = shutil.which("procam")
+    if exe is None:
+        print("## Part 2c: skipped (no `procam` command on PATH)\n")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        folders = {}
+        for family, (_, ps, st) in stacks.items():
+            folders[family] = Path(tmp) / family
+            write_sequence(folders[family], st, ps, writer="benchmark")
+        times = {f: [] for f in stacks}
+        for _ in range(args.repeat):
+            for family, folder in folders.items():
+                t = time.perf_counter()
+                subprocess.run([exe, "decode", str(folder), "-o", str(Path(tmp) / f"{family}.npz")], check=True,
+                               capture_output=True)
+                times[family].append(time.perf_counter() - t)
+    gray_pf = np.median(times["gray"]) / stacks["gray"][1].count
+    print(f"## Part 2c: `procam decode FOLDER -o maps.npz`, fresh process, PNG frames (median of {args.repeat} runs, "
+          "interleaved)\n")
+    print("| sequence | frames | seconds | ms per frame | per frame vs Gray |")
+    print("|---|---|---|---|---|")
+    for family, ts in times.items():
+        label, ps, _ = stacks[family]
+        m = np.median(ts)
+        print(f"| {label} | {ps.count} | {m:.2f} | {1000 * m / ps.count:.1f} | {m / ps.count / gray_pf:.2f} |")
+    print()
+
+
 def speed(args):
     cam = (1688, 1352)
     rng = np.random.default_rng(args.seed)
@@ -249,6 +291,8 @@ def speed(args):
             stacks[family] = (label, ps, _speed_stack(ps, cam, rng))
     if args.base:
         _speed_base(args, stacks)
+    if args.command:
+        _speed_command(args, stacks)
     times = {(f, m): [] for f in stacks for m in (("simple", "robust") if f == "gray" else ("auto", "none"))}
     valid = {}
     for _ in range(args.repeat):  # interleaved: every decoder sees the same machine load
@@ -284,6 +328,7 @@ def main():
     ap.add_argument("--skip-accuracy", action="store_true")
     ap.add_argument("--skip-speed", action="store_true")
     ap.add_argument("--base", help="speed: also alternate with the decoders of this commit in one process")
+    ap.add_argument("--command", action="store_true", help="speed: also time `procam decode` on capture folders")
     args = ap.parse_args()
     print(header("phase: the phase families against Gray codes (accuracy vs the simulator's truth, decode speed)"))
     if not args.skip_accuracy:

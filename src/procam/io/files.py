@@ -387,19 +387,25 @@ def write_text(path, text: str, record: bool = True) -> Path:
     return Path(path)
 
 
+#: zlib level of :func:`write_npz`: level 1 writes a camera's decoded maps 1.5-2 times faster than the default 6, to
+#: the same size for a phase decode's noisy sub-pixel floats and 25 % larger for a Gray decode's.
+NPZ_LEVEL = 1
+
+
 def write_npz(path, compress: bool = True, **arrays) -> Path:
     """Write ``arrays`` as a NumPy ``.npz`` atomically, byte for byte the same for the same arrays (the zip
-    entries carry a fixed date, unlike ``np.savez``'s)."""
+    entries carry a fixed date, unlike ``np.savez``'s; deflated at :data:`NPZ_LEVEL` when ``compress``)."""
+    import io
     import zipfile
 
     path = Path(path)
     mode = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
-    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", mode) as zf:
+    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", mode, allowZip64=True) as zf:
         for name, a in arrays.items():
             info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = mode
-            with zf.open(info, "w", force_zip64=True) as f:
-                np.lib.format.write_array(f, np.asanyarray(a), allow_pickle=False)
+            buf = io.BytesIO()
+            np.lib.format.write_array(buf, np.asanyarray(a), allow_pickle=False)
+            zf.writestr(info, buf.getbuffer(), compress_type=mode, compresslevel=NPZ_LEVEL if compress else None)
     return path
 
 
