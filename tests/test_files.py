@@ -50,11 +50,25 @@ def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
         written.append(io.write_ply(tmp_path / "p.ply", np.zeros((2, 3)), comments=["procam reconstruct"]))
     except ImportError:
         pass
+    from matplotlib.figure import Figure
+
+    from procam.plots import save_figure
+    from procam.report.page import html_page, write_report
+
+    written += [save_figure(Figure(figsize=(1, 1)), tmp_path / f"f.{ext}") for ext in ("png", "jpg", "jpeg", "pdf",
+                                                                                         "svg")]
+    written.append(write_report(html_page("t", "h", ["<p>x</p>"]), tmp_path / "r.html"))
     for path in written:
         assert _files.procam_wrote(path), path.name
     np.savez(tmp_path / "theirs.npz", col=np.zeros(2))
     (tmp_path / "theirs.yml").write_text("%YAML:1.0\nK: 1\n")
-    for name in ("theirs.npz", "theirs.yml"):
+    # a page of the user's that only mentions the mark outside its head, and a photo (no comment)
+    (tmp_path / "theirs.html").write_text('<html><head><title>x</title></head><body><meta name="generator" '
+                                          'content="procam"></body></html>')
+    import cv2
+
+    cv2.imwrite(str(tmp_path / "theirs.jpg"), np.zeros((8, 8), np.uint8))
+    for name in ("theirs.npz", "theirs.yml", "theirs.html", "theirs.jpg"):
         assert not _files.procam_wrote(tmp_path / name), name
 
 

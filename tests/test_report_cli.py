@@ -101,6 +101,13 @@ def test_report_command(folders, views, tmp_path):
     code, stdout, err = run_cli(["report", cpath, "-o", rep])  # the poses stored in the calibration
     assert code == 0, err
     assert _sections(rep)[0] == "verdict" and "leave-one-out" in _sections(rep)
+    # procam knows its own page: a second run writes over it (a page of the user's it refuses, below)
+    code, _, err = run_cli(["report", cpath, "-o", rep])
+    assert code == 0, err
+    (tmp_path / "theirs.html").write_text("<html><head><title>my notes</title></head><body></body></html>")
+    code, _, err = run_cli(["report", cpath, "-o", tmp_path / "theirs.html"])
+    assert code == 2 and "procam did not write" in err
+    assert "my notes" in (tmp_path / "theirs.html").read_text()
     code, stdout, err = run_cli(["report", cpath, *folders[:2], *BOARD, "-o", tmp_path / "r2.html"])
     assert code == 0, err
     assert "pose1: 60 of 60 corners" in stdout

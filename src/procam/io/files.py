@@ -109,14 +109,29 @@ def _png_texts(data: bytes) -> dict:
     return out
 
 
+def _jpeg_comment(data: bytes) -> bytes | None:
+    """The first comment (``COM`` segment) of the JPEG ``data`` before its image data, or None."""
+    if data[:2] != b"\xff\xd8":
+        return None
+    pos = 2
+    while pos + 4 <= len(data) and data[pos] == 0xFF:
+        marker, n = data[pos + 1], int.from_bytes(data[pos + 2:pos + 4], "big")
+        if marker == 0xFE:
+            return data[pos + 4:pos + 2 + n]
+        if marker == 0xDA:  # start of scan: the image data follows
+            return None
+        pos += 2 + n
+    return None
+
+
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
     Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
     :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a calibration FileStorage file
-    (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/PDF/SVG
-    marked ``procam`` (every figure and image procam writes is), a script whose first line is procam's mark, or
-    an empty file.
+    (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/JPEG/PDF/SVG
+    marked ``procam`` (every figure and image procam writes is), an HTML page whose head names procam its
+    generator (the report), a script whose first line is procam's mark, or an empty file.
     """
     path = Path(path)
     man = read_manifest(path.parent)
@@ -154,6 +169,12 @@ def procam_wrote(path) -> bool:
         return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix in (".pdf", ".svg", ".ps", ".eps"):
         return formats.SOFTWARE.encode() in head
+    if suffix in (".jpg", ".jpeg"):
+        return _jpeg_comment(head) == formats.SOFTWARE.encode()
+    if suffix in (".html", ".htm"):
+        low = head.lower()
+        end = low.find(b"</head>")
+        return end > 0 and formats.HTML_GENERATOR.encode() in low[:end]
     if suffix == ".py":
         return head.startswith(formats.SCRIPT_MARK.encode())
     return False

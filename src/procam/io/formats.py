@@ -15,7 +15,9 @@ FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) holding a dev
 PLY                 a header comment that starts with :data:`PLY_COMMENT`
 PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
 Python script       a first line that starts with :data:`SCRIPT_MARK` (the Blender script of an export)
+JPEG                a comment (``COM``) segment :data:`SOFTWARE` (a figure written as ``.jpg``)
 PDF, SVG, PS, EPS   :data:`SOFTWARE` as the figure's Creator
+HTML                ``<meta name="generator" content="procam">`` (:data:`HTML_GENERATOR`) in the page's head
 ==================  ===========================================================================================
 """
 
@@ -90,6 +92,9 @@ REMAP_MARK = ("map_x", "map_y")
 # PLY and PNG
 #: The first word of the first header comment of a PLY procam writes (``procam reconstruct``).
 PLY_COMMENT = "procam"
+#: The ``<head>`` element of every HTML page procam writes (the report), by which it knows the page is its own.
+HTML_GENERATOR = f'<meta name="generator" content="{SOFTWARE}">'
+
 #: The PNG ``tEXt`` key procam's signature stands under (value :data:`SOFTWARE`).
 PNG_TEXT_KEY = "Software"
 #: The first line of a script procam writes (``procam export --format blender``) starts with this.

@@ -70,7 +70,10 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
 
         # SVG element ids come from a random salt unless one is given
         with atomic_path(path) as tmp, matplotlib.rc_context({"svg.hashsalt": "procam"}):
-            fig.savefig(tmp, dpi=dpi, format=fmt, **({"metadata": meta} if meta else {}))
+            extra = {"metadata": meta} if meta else {}
+            if fmt in ("jpg", "jpeg"):  # JPEG has no metadata dict in matplotlib: the mark is a comment segment
+                extra = {"pil_kwargs": {"comment": SOFTWARE.encode()}}
+            fig.savefig(tmp, dpi=dpi, format=fmt, **extra)
     finally:
         _close(fig)
     return path

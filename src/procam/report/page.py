@@ -8,6 +8,7 @@ from html import escape
 from pathlib import Path
 
 from ..errors import ProcamWarning
+from ..io.formats import HTML_GENERATOR
 from ..residuals import calibration_residuals
 from ..verdict import calibration_verdict, flagged, with_evidence
 from ..verify import CalibrationVerification, same_pose, verify_calibration
@@ -79,7 +80,7 @@ def html_page(title: str, heading: str, parts) -> str:
     """The self-contained page around ``parts`` (HTML): the style sheet, the Content-Security-Policy, ``title``
     and the ``<h1>`` ``heading`` (both escaped here)."""
     return "\n".join([
-        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">', HTML_GENERATOR,
         f'<meta http-equiv="Content-Security-Policy" content="{CSP}">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>{escape(title)}</title>", f"<style>{CSS}</style>", "</head>", "<body>", "<main>",
