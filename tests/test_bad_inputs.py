@@ -228,6 +228,32 @@ def test_single_file_outputs_never_overwrite_the_users_files(tmp_path, calib_fil
         assert rc == 0, err
 
 
+def test_a_second_run_writes_over_its_own_figures_pictures_and_page(tmp_path, calib_file, poses):
+    """A PDF figure, the check's overlay picture as JPEG and the report: the same command twice succeeds (each
+    carries procam's mark, a PDF's at its end; tests/test_files.py has every format), and the same names of the
+    user's are refused."""
+    runs = [["decode", poses[0], "--png", tmp_path / "d.pdf"], ["check", poses[0], *BOARD, "--png", tmp_path / "c.jpg"],
+            ["report", calib_file, "-o", tmp_path / "r.html"]]
+    for args in runs:
+        for _ in range(2):
+            rc, _, err = run_cli(args)
+            assert rc == 0, (args, err)
+    assert (tmp_path / "d.pdf").stat().st_size > 1 << 16  # the PDF's Creator lies beyond the first 64 KiB
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    for name in ("d.pdf", "c.jpg", "r.html"):
+        shutil.copy(tmp_path / name, mine / name)
+    (mine / "d.pdf").write_bytes((mine / "d.pdf").read_bytes().replace(b"/Creator (procam)", b"/Creator (editor)"))
+    (mine / "r.html").write_text("<html><head><title>my notes</title></head></html>")
+    cv2.imwrite(str(mine / "c.jpg"), np.zeros((8, 8), np.uint8))
+    before = snapshot(mine)
+    bad(["decode", poses[0], "--png", mine / "d.pdf"], "procam did not write")
+    bad(["check", poses[0], *BOARD, "--png", mine / "c.jpg"], "procam did not write")
+    bad(["report", calib_file, "-o", mine / "r.html"], "procam did not write")
+    bad(["check", poses[0], *BOARD, "--png", tmp_path / "o.pdf"], "must end in")  # the overlay is a picture
+    assert snapshot(mine) == before
+
+
 def test_remove_stale_deletes_only_listed_frames(tmp_path):
     user_folder(tmp_path, ["44.png", "pattern_44.png"])
     ps = patterns.pattern_set(37, 19)

@@ -43,6 +43,7 @@ def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
                io.save_decoded_maps(tmp_path / "d.npz", decode.decode(camera_view_of_patterns(64, 32), ps)),
                io.save_maps(tmp_path / "m.npz", *export.undistort_maps(calib.camera)),
                io.write_image(tmp_path / "i.png", np.zeros((4, 4), np.uint8)),
+               io.write_image(tmp_path / "i.jpg", np.zeros((4, 4, 3), np.uint8)),
                _files.write_text(tmp_path / "gl.json", json.dumps(export.opengl_document(calib, 10, 100)))]
     try:
         import plyfile  # noqa: F401

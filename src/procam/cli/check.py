@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
+from ._app import (BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
                    StepOpt, app, fail, optional_size, output_path, parse_board, pose_options, user_errors, value,
                    with_pose_options)
 
@@ -33,7 +33,7 @@ def check_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(**pose_args)
-    output_path(png, "--png", FIGURE_SUFFIXES)
+    output_path(png, "--png", (".png", ".jpg", ".jpeg"))  # the overlay is a picture, not a plot
     check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step,
                        background=value(background))
     _show.print_pose_check(check, png)

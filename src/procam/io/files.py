@@ -124,6 +124,14 @@ def _jpeg_comment(data: bytes) -> bytes | None:
     return None
 
 
+def _jpeg_with_comment(data: bytes, text: bytes) -> bytes:
+    """The JPEG ``data`` with a comment segment ``text`` after its JFIF header (or its start marker)."""
+    pos = 2
+    if data[2:4] == b"\xff\xe0":  # APP0 (JFIF) must stay first
+        pos = 4 + int.from_bytes(data[4:6], "big")
+    return data[:pos] + b"\xff\xfe" + (len(text) + 2).to_bytes(2, "big") + text + data[pos:]
+
+
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
@@ -167,7 +175,15 @@ def procam_wrote(path) -> bool:
         return f"\ncomment {formats.PLY_COMMENT}".encode() in head[:4096]
     if suffix == ".png":
         return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
-    if suffix in (".pdf", ".svg", ".ps", ".eps"):
+    if suffix == ".pdf":  # the document information (its Creator) comes last
+        try:
+            with open(path, "rb") as f:
+                f.seek(max(0, f.seek(0, 2) - (1 << 16)))
+                tail = f.read()
+        except OSError:
+            return False
+        return head.startswith(b"%PDF") and f"/Creator ({formats.SOFTWARE})".encode() in tail + head
+    if suffix in (".svg", ".ps", ".eps"):
         return formats.SOFTWARE.encode() in head
     if suffix in (".jpg", ".jpeg"):
         return _jpeg_comment(head) == formats.SOFTWARE.encode()
@@ -442,6 +458,8 @@ def write_image(path, img: np.ndarray, record: bool = True) -> Path:
         data = buf.tobytes()
         if data[:8] == _PNG_SIGNATURE:
             data = _png_with_text(data, formats.PNG_TEXT_KEY, formats.SOFTWARE)
+        elif data[:2] == b"\xff\xd8":
+            data = _jpeg_with_comment(data, formats.SOFTWARE.encode())
         Path(tmp).write_bytes(data)
     return path
 
