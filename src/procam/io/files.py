@@ -447,7 +447,8 @@ def write_npz(path, compress: bool = True, **arrays) -> Path:
 
 
 def write_image(path, img: np.ndarray, record: bool = True) -> Path:
-    """Write an image atomically with OpenCV (format from the extension; ``record``: see :func:`atomic_path`)."""
+    """Write an image atomically with OpenCV (format from the extension; ``record``: see :func:`atomic_path`); a PNG
+    or JPEG carries procam's mark (:mod:`procam.io.formats`)."""
     import cv2
 
     path = Path(path)

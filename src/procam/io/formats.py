@@ -89,7 +89,7 @@ REMAP_MARK = ("map_x", "map_y")
 
 
 # ------------------------------------------------------------------------------------------------
-# PLY and PNG
+# PLY, PNG and HTML
 #: The first word of the first header comment of a PLY procam writes (``procam reconstruct``).
 PLY_COMMENT = "procam"
 #: The ``<head>`` element of every HTML page procam writes (the report), by which it knows the page is its own.
