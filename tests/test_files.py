@@ -79,4 +79,5 @@ def test_importing_the_file_plumbing_imports_no_format_code():
 
     code = ("import sys, procam.io.files; print(sorted(m for m in sys.modules if m.startswith('procam')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert eval(out) == ["procam", "procam.errors", "procam.io", "procam.io.files", "procam.io.formats"]
+    assert eval(out) == ["procam", "procam.errors", "procam.io", "procam.io.files", "procam.io.formats",
+                         "procam.io.image_marks"]

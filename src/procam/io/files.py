@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import CaptureError
 from . import formats
+from .image_marks import PNG_SIGNATURE, jpeg_comment, jpeg_with_comment, png_texts, png_with_text
 
 IMAGE_EXTS = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm", ".webp", ".jp2"}
 
@@ -83,55 +84,6 @@ def _not_a_file(p: Path) -> str:
     return "no such file"
 
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def _png_with_text(data: bytes, key: str, text: str) -> bytes:
-    """A PNG with a ``tEXt`` chunk ``key = text`` after its header chunk."""
-    body = b"tEXt" + key.encode("latin-1") + b"\x00" + text.encode("latin-1")
-    chunk = (len(body) - 4).to_bytes(4, "big") + body + (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big")
-    end = 8 + 12 + int.from_bytes(data[8:12], "big")  # signature + IHDR
-    return data[:end] + chunk + data[end:]
-
-
-def _png_texts(data: bytes) -> dict:
-    """The ``tEXt`` chunks of a PNG's first 64 KiB: ``{key: text}``."""
-    out, pos = {}, 8
-    while pos + 12 <= len(data):
-        n = int.from_bytes(data[pos:pos + 4], "big")
-        kind = data[pos + 4:pos + 8]
-        if kind == b"tEXt":
-            key, _, val = data[pos + 8:pos + 8 + n].partition(b"\x00")
-            out[key.decode("latin-1")] = val.decode("latin-1")
-        if kind in (b"IDAT", b"IEND"):
-            break
-        pos += 12 + n
-    return out
-
-
-def _jpeg_comment(data: bytes) -> bytes | None:
-    """The first comment (``COM`` segment) of the JPEG ``data`` before its image data, or None."""
-    if data[:2] != b"\xff\xd8":
-        return None
-    pos = 2
-    while pos + 4 <= len(data) and data[pos] == 0xFF:
-        marker, n = data[pos + 1], int.from_bytes(data[pos + 2:pos + 4], "big")
-        if marker == 0xFE:
-            return data[pos + 4:pos + 2 + n]
-        if marker == 0xDA:  # start of scan: the image data follows
-            return None
-        pos += 2 + n
-    return None
-
-
-def _jpeg_with_comment(data: bytes, text: bytes) -> bytes:
-    """The JPEG ``data`` with a comment segment ``text`` after its JFIF header (or its start marker)."""
-    pos = 2
-    if data[2:4] == b"\xff\xe0":  # APP0 (JFIF) must stay first
-        pos = 4 + int.from_bytes(data[4:6], "big")
-    return data[:pos] + b"\xff\xfe" + (len(text) + 2).to_bytes(2, "big") + text + data[pos:]
-
-
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
@@ -174,7 +126,7 @@ def procam_wrote(path) -> bool:
     if suffix == ".ply":
         return f"\ncomment {formats.PLY_COMMENT}".encode() in head[:4096]
     if suffix == ".png":
-        return head[:8] == _PNG_SIGNATURE and _png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
+        return head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix == ".pdf":  # the document information (its Creator) comes last
         try:
             with open(path, "rb") as f:
@@ -186,7 +138,7 @@ def procam_wrote(path) -> bool:
     if suffix in (".svg", ".ps", ".eps"):
         return formats.SOFTWARE.encode() in head
     if suffix in (".jpg", ".jpeg"):
-        return _jpeg_comment(head) == formats.SOFTWARE.encode()
+        return jpeg_comment(head) == formats.SOFTWARE.encode()
     if suffix in (".html", ".htm"):
         low = head.lower()
         end = low.find(b"</head>")
@@ -204,7 +156,7 @@ def check_image_bytes(path, data: bytes) -> None:
     """
     head = data[:8]
     what = None
-    if head == _PNG_SIGNATURE:
+    if head == PNG_SIGNATURE:
         pos, n = 8, len(data)
         mv = memoryview(data)
         last = b""
@@ -457,10 +409,10 @@ def write_image(path, img: np.ndarray, record: bool = True) -> Path:
         if not ok:
             raise CaptureError(f"{path}: could not encode image")
         data = buf.tobytes()
-        if data[:8] == _PNG_SIGNATURE:
-            data = _png_with_text(data, formats.PNG_TEXT_KEY, formats.SOFTWARE)
+        if data[:8] == PNG_SIGNATURE:
+            data = png_with_text(data, formats.PNG_TEXT_KEY, formats.SOFTWARE)
         elif data[:2] == b"\xff\xd8":
-            data = _jpeg_with_comment(data, formats.SOFTWARE.encode())
+            data = jpeg_with_comment(data, formats.SOFTWARE.encode())
         Path(tmp).write_bytes(data)
     return path
 
