@@ -46,8 +46,6 @@ class Capture:
     def white(self) -> np.ndarray:
         """The board image: the white frame, or without one the mean of the phase frames
         (:func:`procam.capture.phase.board_image`)."""
-        if self.pattern_set.white is not None:
-            return self.stack[self.pattern_set.white]
         from .phase import board_image
 
         return board_image(self.stack, self.pattern_set)

@@ -268,6 +268,15 @@ def _groups(blocks) -> list:
     return out
 
 
+def _with_places(data: dict) -> dict:
+    """``data`` with what every evaluation of :func:`_fit_cost` reuses: per group the estimates' places on the
+    tables' grid (``psi``) and the shared shifts (``shifts``)."""
+    blocks = data["blocks"]
+    return dict(data, psi=[_grid_place(np.concatenate([blocks[i][1] for i in m]), FIT_LUT_SIZE)
+                           for _, m in data["groups"]],
+                shifts=[tuple(blocks[m[0]][0].shifts().tolist()) for _, m in data["groups"]])
+
+
 def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     """The cost of ``(gamma, blur)`` on ``data`` (see :func:`fit_response`); with ``per_pixel``, the residual sums
     of squares, the fitted beta and the pixels' levels as well."""
@@ -275,10 +284,6 @@ def _fit_cost(data, gamma: float, blur: float, per_pixel: bool = False):
     G = np.empty_like(Y)
     blocks = [b for b, _ in data["blocks"]]
     waves, phis = [], []
-    if "psi" not in data:  # what every evaluation reuses: the estimates' places on the tables' grid, the shifts
-        data["psi"] = [_grid_place(np.concatenate([data["blocks"][i][1] for i in m]), FIT_LUT_SIZE)
-                       for _, m in data["groups"]]
-        data["shifts"] = [tuple(blocks[m[0]].shifts().tolist()) for _, m in data["groups"]]
     for g, (period, members) in enumerate(data["groups"]):
         ref = blocks[members[0]]
         c = waveform(ref.fringe, gamma, period, blur)
@@ -415,6 +420,7 @@ def fit_response(blocks, white=None, black=None, *, gamma: float | None = None, 
     # the noise from all of them
     search = dict(data, Y=data["Y"][:, ::2], fixed=data["fixed"][:, ::2],
                   blocks=[(b, psi[::2]) for b, psi in data["blocks"]]) if len(take) >= 2 * SEARCH_PIXELS else data
+    data, search = _with_places(data), _with_places(search)
     dof = sum(b.steps for b, _ in blocks) + len(fixed) - 2 - len(blocks)
     floor = quantum ** 2 / 12.0
     note, measurable, std = "", True, 0.0
