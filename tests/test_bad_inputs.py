@@ -746,17 +746,37 @@ def test_every_pose_option_choice(opt, poses, tmp_path):
     from procam import corners, correspond, decode
 
     allowed = {"--decode": decode.METHODS, "--detector": corners.DETECTORS, "--estimator": correspond.ESTIMATORS}[opt]
+    rc, _, err = run_cli(["correspond", poses[0], *BOARD, "-o", tmp_path / "ref.json"])
+    assert rc == 0, err
+    ref = json.loads((tmp_path / "ref.json").read_text())
     for v in allowed:
         rc, _, err = run_cli(["correspond", poses[0], *BOARD, opt, v, "-o", tmp_path / "c.json"])
         assert rc == 0, (v, err)
+        got = json.loads((tmp_path / "c.json").read_text())
+        used = {"--decode": got["options"]["decode"]["method"], "--detector": got["options"]["detector"],
+                "--estimator": got["options"]["corners"]["estimator"]}[opt]
+        assert used == v
+        # every choice finds the same corners of the same pose, to a fraction of a pixel in both devices
+        for key, tol in (("camera_points", 0.5), ("projector_points", 2.0)):
+            a = np.array(got[key], float)
+            b = np.array(ref[key], float)
+            both = np.isfinite(a).all(1) & np.isfinite(b).all(1)
+            assert both.sum() >= 0.9 * np.isfinite(b).all(1).sum(), (v, key)
+            assert np.median(np.linalg.norm(a[both] - b[both], axis=1)) < tol, (v, key)
 
 
 @pytest.mark.parametrize("order", ["opencv", "moreno"])
 def test_every_order_choice(order, tmp_path):
     rc, _, err = run_cli(["patterns", "-p", "64x48", "--order", order, "-o", tmp_path / "p"])
     assert rc == 0, err
-    rc, _, err = run_cli(["decode", tmp_path / "p", "--order", order])
+    rc, _, err = run_cli(["decode", tmp_path / "p", "--order", order, "-o", tmp_path / "maps.npz"])
     assert rc == 0, err
+    # the patterns themselves, seen pixel for pixel, decode to every projector pixel's own coordinates
+    maps = io.load_decoded_maps(tmp_path / "maps.npz")
+    yy, xx = np.mgrid[0:48, 0:64]
+    assert maps["valid_col"].all() and maps["valid_row"].all()
+    np.testing.assert_allclose(maps["col"], xx, atol=1e-6)
+    np.testing.assert_allclose(maps["row"], yy, atol=1e-6)
 
 
 # ------------------------------------------------------------------------------------------------

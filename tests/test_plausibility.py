@@ -28,12 +28,18 @@ def test_clean_capture_passes(stack):
     assert view.valid.all() and view.diagnostics["warnings"] == []
 
 
-@pytest.mark.parametrize("size", [(1500, 1080), (1920, 1050), (1100, 600)])
+@pytest.mark.parametrize("size", [(1500, 1080), (1920, 1050)])
 def test_wrong_projector_size_names_the_size_the_codes_point_to(stack, size):
     ps = patterns.pattern_set(*size)
-    if ps.count != PS.count:
-        pytest.skip("another bit count: the image count check catches it")
+    assert ps.count == PS.count  # the same number of images: only the codes can tell
     with pytest.raises(CaptureError, match=r"the projector is larger than .*about 1920x1080 — check --projector"):
+        pipeline.view_from_stack(stack, ps, B)
+
+
+def test_a_projector_size_with_other_bit_counts_is_caught_by_the_image_count(stack):
+    ps = patterns.pattern_set(1100, 600)
+    assert ps.count != PS.count
+    with pytest.raises(ValueError, match=rf"must be \({ps.count}, H, W\).*got \({PS.count}, "):
         pipeline.view_from_stack(stack, ps, B)
 
 
@@ -41,15 +47,29 @@ def test_wrong_projector_size_names_the_size_the_codes_point_to(stack, size):
 FAST_PAIRS = (0, 8, 14, 22, 30, 36)
 
 
+#: The least significant column pair: swapped, the corners move by a few hundredths of a pixel (harmless, not
+#: flagged; :func:`test_the_least_significant_pair_swapped_is_harmless`).
+LSB_PAIR = 20
+
+
 @pytest.mark.parametrize("pair", [p if p in FAST_PAIRS else pytest.param(p, marks=pytest.mark.slow)
-                                  for p in range(0, 42, 2)])
+                                  for p in range(0, 42, 2) if p != LSB_PAIR])
 def test_a_pattern_swapped_with_its_inverse_is_named(stack, pair):
-    if pair in (20, 42):
-        pytest.skip("the least significant pair: swapped, the corners move by ~0.06 px (harmless, not flagged)")
     st = stack.copy()
     st[[pair, pair + 1]] = st[[pair + 1, pair]]
     with pytest.raises(CaptureError, match=rf"images #{pair} and #{pair + 1} \((column|row) bit \d+\) look swapped"):
         pipeline.view_from_stack(st, PS, B)
+
+
+@pytest.mark.slow
+def test_the_least_significant_pair_swapped_is_harmless(stack):
+    clean, _ = pipeline.view_from_stack(stack, PS, B)
+    st = stack.copy()
+    st[[LSB_PAIR, LSB_PAIR + 1]] = st[[LSB_PAIR + 1, LSB_PAIR]]
+    view, _ = pipeline.view_from_stack(st, PS, B)
+    moved = np.abs(view.proj_pts - clean.proj_pts)
+    assert np.isfinite(moved).sum() >= 0.9 * np.isfinite(clean.proj_pts).sum()
+    assert np.nanmax(moved) < 0.25
 
 
 @pytest.mark.parametrize("flip", ["left-right", "top-bottom"])
