@@ -304,6 +304,48 @@ BackgroundOpt = Annotated[BackgroundMode, typer.Option(
     "view without dense samples: free lifts the paper's u0p = W/2 where the background determines it, auto only when "
     "it refutes it, check only says so).")]
 
+# The camera settings and live advice of the commands that open a camera (capture, advise): one definition, one
+# set of bounds each (checked by :func:`camera_settings` and :func:`live_limits` before any device is opened).
+ExposureOpt = Annotated[Optional[float], typer.Option(
+    "--exposure", help="Manual camera exposure in ms (default: leave the camera's setting; switch its auto exposure "
+    "off yourself then).")]
+GainOpt = Annotated[Optional[float], typer.Option("--gain", help="Camera gain in the camera's unit (GenICam: dB).")]
+CameraSizeOpt = Annotated[Optional[str], typer.Option(
+    "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV).")]
+SeedOpt = Annotated[int, typer.Option("--seed", help="The simulator's noise seed (--virtual, --camera virtual): "
+                                      "the same seed gives the same frames.")]
+LiveJsonOpt = Annotated[bool, typer.Option(
+    "--json", help="Live advice: one JSON line per frame on stdout instead of the preview window.")]
+LiveAutoOpt = Annotated[bool, typer.Option(
+    "--auto", help="Live advice: go on by itself as soon as the pose is good and the board still.")]
+LiveCalibrationOpt = Annotated[Optional[Path], typer.Option(
+    "--calibration", help="Live advice: a calibration of this camera (procam JSON or OpenCV YAML): its "
+    "intrinsics, and with R, T the projector side.")]
+LiveTargetOpt = Annotated[float, typer.Option(
+    "--target", help="Live advice: a pose is good when the predicted std of f_c and f_p are at most this % of f.")]
+LiveMaxFramesOpt = Annotated[Optional[int], typer.Option(
+    "--max-frames", help="Live advice: go on after N frames at the latest (scripts).")]
+#: Bounds of the options above (exposure in ms, gain in the camera's unit, frames, seed).
+EXPOSURE_MS = (0.0, 60_000.0)
+GAIN = (0.0, 1000.0)
+MAX_FRAMES = 10_000_000
+MAX_SEED = 2**32 - 1 - 99  # a session of up to 99 poses seeds pose k with seed + k
+
+
+def camera_settings(exposure, gain, camera_size, seed) -> tuple[int, int] | None:
+    """Check the camera options of ``capture``/``advise`` (one line naming the option when one is out of range);
+    returns the camera size ``(width, height)`` or None."""
+    number(exposure, "--exposure", lo=EXPOSURE_MS[0], hi=EXPOSURE_MS[1], lo_open=True, unit=" ms")
+    number(gain, "--gain", lo=GAIN[0], hi=GAIN[1])
+    number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
+    return parse_size(camera_size, "--camera-size") if camera_size else None
+
+
+def live_limits(max_frames) -> None:
+    """Check ``--max-frames`` (the other live-advice numbers: :func:`procam.acquire.live.advisor_options`)."""
+    number(max_frames, "--max-frames", lo=1, hi=MAX_FRAMES, what="a frame count")
+
+
 # The pattern sequence of the commands that write one (patterns, simulate): docs/patterns.md
 Family = choice("Family", choices.PATTERN_FAMILIES)
 FamilyOpt = Annotated[Family, typer.Option(

@@ -12,7 +12,9 @@ from typing import Optional
 
 import typer
 
-from ._app import BoardOpt, app, fail, parse_board, parse_size, say, text_on_stderr, user_errors
+from ._app import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt,
+                   LiveMaxFramesOpt, LiveTargetOpt, SeedOpt, app, camera_settings, fail, live_limits, parse_board, say,
+                   text_on_stderr, user_errors)
 from ._live import live_advice
 
 
@@ -40,23 +42,20 @@ def advise_cmd(
                                            "distances (default: the calibration's, else 1: lengths in squares)."),
     camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | virtual "
                                "(the simulator's view of the board under the projector's white light)."),
-    calibration: Optional[Path] = typer.Option(None, "--calibration", help="A calibration of this camera (procam JSON "
-                                               "or OpenCV YAML): its intrinsics, and with R, T the projector side."),
-    json_lines: bool = typer.Option(False, "--json", help="Print the advice as one JSON line per frame on stdout, "
-                                    "no window."),
-    auto: bool = typer.Option(False, "--auto", help="Stop as soon as the pose is good and the board still."),
-    max_frames: Optional[int] = typer.Option(None, "--max-frames", help="Stop after N frames (scripts)."),
-    target: float = typer.Option(1.0, "--target", help="A pose is good when the predicted std of f_c and f_p are "
-                                 "at most this % of f."),
+    calibration: LiveCalibrationOpt = None,
+    json_lines: LiveJsonOpt = False,
+    auto: LiveAutoOpt = False,
+    max_frames: LiveMaxFramesOpt = None,
+    target: LiveTargetOpt = 1.0,
     still: float = typer.Option(0.5, "--still", help="The board counts as still after this many seconds without "
                                 "moving."),
     still_px: float = typer.Option(1.0, "--still-px", help="... moving more than this many pixels."),
-    exposure: Optional[float] = typer.Option(None, "--exposure", help="Manual camera exposure in ms."),
-    gain: Optional[float] = typer.Option(None, "--gain", help="Camera gain in the camera's unit."),
-    camera_size: Optional[str] = typer.Option(None, "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV)."),
+    exposure: ExposureOpt = None,
+    gain: GainOpt = None,
+    camera_size: CameraSizeOpt = None,
     virtual_pose: Optional[str] = typer.Option(None, "--virtual-pose", help="--camera virtual: the board's angles "
                                                "PSI,NU[,PHI] in the camera frame (default: the recommended pose)."),
-    seed: int = typer.Option(0, "--seed", help="--camera virtual: noise seed."),
+    seed: SeedOpt = 0,
 ):
     """Show the camera's live frames with the detected board, its angles in the camera (and, with a calibration
     that has R, T, in the projector), the predicted std of f_c and f_p for that pose, and which way to turn the
@@ -68,14 +67,8 @@ def advise_cmd(
         square = calibration_square(calibration)
     b = parse_board(board, 1.0 if square is None else square)
     options = advisor_options(target, still, still_px)
-    if max_frames is not None and not 1 <= max_frames <= 10_000_000:
-        fail(f"--max-frames must be >= 1, got {max_frames}")
-    if seed < 0:
-        fail(f"--seed must be >= 0, got {seed}")
-    for opt, v in (("--exposure", exposure), ("--gain", gain)):
-        if v is not None and not (math.isfinite(v) and v > 0 if opt == "--exposure" else math.isfinite(v) and v >= 0):
-            fail(f"{opt} must be a finite number {'> 0' if opt == '--exposure' else '>= 0'}, got {v}")
-    cam_size = parse_size(camera_size, "--camera-size") if camera_size else None
+    live_limits(max_frames)
+    cam_size = camera_settings(exposure, gain, camera_size, seed)
     pose = parse_angles(virtual_pose, "--virtual-pose") if virtual_pose else None
     kind, _ = cams.parse_camera_spec(camera)
     if kind == "folder":

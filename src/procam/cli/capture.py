@@ -13,20 +13,10 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, InverseOpt, Order, PeriodOpt, StepsOpt, app,
-                   console, err_console, fail, is_tty, number, parse_board, parse_size, pattern_sequence,
+from ._app import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
+                   LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
+                   SeedOpt, StepsOpt, app, camera_settings, console, live_limits, err_console, fail, is_tty, number, parse_board, parse_size, pattern_sequence,
                    phase_keywords, plain, text_on_stderr, user_errors, value)
-
-
-def _number(value, option: str, lo: float, hi: float, *, lo_open: bool = False, unit: str = ""):
-    """A finite number within [lo, hi] (or (lo, hi] with ``lo_open``), else a one-line error."""
-    if value is None:
-        return None
-    ok = isinstance(value, (int, float)) and math.isfinite(value) and value <= hi and (value > lo if lo_open else value >= lo)
-    if not ok:
-        low = f"> {lo:g}" if lo_open else f">= {lo:g}"
-        fail(f"{option} must be a finite number {low} and <= {hi:g}{unit}, got {value}")
-    return value
 
 
 def _list_devices(camera: str | None) -> None:
@@ -74,10 +64,9 @@ def capture_cmd(
                               "board between them."),
     settle_ms: Optional[float] = typer.Option(None, "--settle-ms", help="Wait after showing each pattern before "
                                               "grabbing, ms (default 250; 0 with --virtual)."),
-    exposure: Optional[float] = typer.Option(None, "--exposure", help="Manual camera exposure in ms (default: leave "
-                                             "the camera's setting; switch its auto exposure off yourself then)."),
-    gain: Optional[float] = typer.Option(None, "--gain", help="Camera gain in the camera's unit (GenICam: dB)."),
-    camera_size: Optional[str] = typer.Option(None, "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV)."),
+    exposure: ExposureOpt = None,
+    gain: GainOpt = None,
+    camera_size: CameraSizeOpt = None,
     retries: int = typer.Option(3, "--retries", help="Re-grabs allowed per frame before the capture stops."),
     square: Optional[float] = typer.Option(None, "--square", help="Square size, the unit of lengths (the instant "
                                            "verdict; --advise: of --calibration, whose own board is the default); "
@@ -99,20 +88,15 @@ def capture_cmd(
     list_devices: bool = typer.Option(False, "--list-devices", help="List the displays and cameras and exit."),
     virtual: bool = typer.Option(False, "--virtual", help="Demo without devices: a virtual projector and the "
                                  "simulator as the camera (writes truth.json too)."),
-    seed: int = typer.Option(0, "--seed", help="--virtual: noise seed of the rendered frames."),
+    seed: SeedOpt = 0,
     advise: bool = typer.Option(False, "--advise", help="Before each pose, a preview with live advice on the board's "
                                 "pose (needs --board); Space/Enter starts the capture. Each captured pose is "
                                 "calibrated at once: its R, T give the projector side of the next pose's advice."),
-    auto: bool = typer.Option(False, "--auto", help="--advise: start the capture by itself when the pose is good "
-                              "and the board still."),
-    json_lines: bool = typer.Option(False, "--json", help="--advise: the advice as JSON lines on stdout instead of "
-                                    "the preview window (Enter on the terminal, or --auto, starts the capture)."),
-    calibration: Optional[Path] = typer.Option(None, "--calibration", help="--advise: a calibration of this camera "
-                                               "to start from (intrinsics; with R, T the projector side)."),
-    target: float = typer.Option(1.0, "--target", help="--advise: a pose is good when the predicted std of f_c "
-                                 "and f_p are at most this % of f."),
-    max_frames: Optional[int] = typer.Option(None, "--max-frames", help="--advise: capture after N frames of advice "
-                                             "at the latest (default: no limit; 30 with --virtual)."),
+    auto: LiveAutoOpt = False,
+    json_lines: LiveJsonOpt = False,
+    calibration: LiveCalibrationOpt = None,
+    target: LiveTargetOpt = 1.0,
+    max_frames: LiveMaxFramesOpt = None,
     rig_spec: Optional[str] = typer.Option(None, "--rig", help="A rig pose: projectors NAME=DISPLAY,... shown in "
                                            "turn, the board still; OUT_DIR gets one sub-folder per projector and "
                                            "rig.json (docs/rigs.md). --virtual: two names."),
@@ -133,18 +117,16 @@ def capture_cmd(
     size = parse_size(projector, "--projector") if projector else None
     if size and max(size) > 16384:
         fail(f"--projector {projector}: larger than 16384 pixels; give the projector's native resolution")
-    cam_size = parse_size(camera_size, "--camera-size") if camera_size else None
     if display is not None and not 0 <= display <= 64:
         fail(f"--display must be a display index >= 0 (see --list-devices), got {display}")
     if not 1 <= poses <= 99:
         fail(f"--poses must be between 1 and 99, got {poses}")
     if not 0 <= retries <= 20:
         fail(f"--retries must be between 0 and 20, got {retries}")
-    _number(settle_ms, "--settle-ms", 0, 10000, unit=" ms")
-    _number(exposure, "--exposure", 0, 60000, lo_open=True, unit=" ms")
-    _number(gain, "--gain", 0, 1000)
-    _number(timeout, "--timeout", 0, 3600, lo_open=True, unit=" s")
-    number(seed, "--seed", lo=0, hi=2**32 - 1 - 99, what="a seed")
+    number(settle_ms, "--settle-ms", lo=0, hi=10000, unit=" ms")
+    number(timeout, "--timeout", lo=0, hi=3600, lo_open=True, unit=" s")
+    cam_size = camera_settings(exposure, gain, camera_size, seed)
+    live_limits(max_frames)
     order = value(order)
     if not 1 <= step <= 64:
         fail(f"--step must be between 1 and 64, got {step}")
@@ -190,8 +172,6 @@ def _live_advice(advise, auto, json_lines, calibration, square, target, max_fram
 
     if not board:
         fail("--advise needs --board COLSxROWS (the advisor finds and measures the board)")
-    if max_frames is not None and not 1 <= max_frames <= 10_000_000:
-        fail(f"--max-frames must be >= 1, got {max_frames}")
     options = advisor_options(target, 0.5, 1.0)
     calib = None
     if calibration is not None and square is None:
