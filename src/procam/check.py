@@ -18,6 +18,7 @@ import numpy as np
 from . import capture, pipeline, single_pose, summary
 from .board import Board
 from .errors import CalibrationError, DegeneratePoseError, ProcamWarning
+from .style import NEUTRAL, VERDICT_COLOURS, bgr
 
 
 @dataclass(frozen=True)
@@ -94,7 +95,6 @@ def _projector_model(calib) -> str:
     return "single-pose model: " + "; ".join(summary.projector_assumptions(calib)[:2])
 
 
-_COLOUR = {"good": (60, 180, 60), "weak": (0, 190, 230), "degenerate": (40, 40, 220), "failed": (40, 40, 220)}
 
 
 def overlay(check: PoseCheck, max_width: int = 1280) -> np.ndarray:
@@ -116,7 +116,7 @@ def overlay(check: PoseCheck, max_width: int = 1280) -> np.ndarray:
     scale = min(1.0, max_width / img.shape[1])
     if scale < 1.0:
         img = cv2.resize(img, (int(img.shape[1] * scale), int(img.shape[0] * scale)), interpolation=cv2.INTER_AREA)
-    colour = _COLOUR.get(check.verdict, (200, 200, 200))
+    colour = bgr(VERDICT_COLOURS.get(check.verdict, NEUTRAL))
     text = overlay_lines(check, img.shape[1] - 20)
     h = 28 * len(text) + 12
     cv2.rectangle(img, (0, 0), (img.shape[1], h), (30, 30, 30), -1)

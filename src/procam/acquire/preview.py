@@ -23,11 +23,14 @@ import math
 
 import numpy as np
 
+from ..style import VERDICT_COLOURS, on_dark, rgb
 from . import _window
 from ._device import Device
 
-#: Colours (RGB) of the states, and of the text.
-COLOURS = {"ready": (40, 220, 90), "good": (40, 220, 90), "adjust": (255, 190, 0), "no-board": (235, 60, 50)}
+#: Colours (RGB) of the states -- the palette's verdict colours (:mod:`procam.style`): a pose ready or good is
+#: good, one to adjust weak, no board failed; lightened for the dark panel -- and of the text.
+COLOURS = {state: rgb(on_dark(VERDICT_COLOURS[v])) for state, v in
+           (("ready", "good"), ("good", "good"), ("adjust", "weak"), ("no-board", "failed"))}
 TEXT = (255, 255, 255)
 ARROW = (0, 200, 255)
 PANEL = (0, 0, 0, 170)

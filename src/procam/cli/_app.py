@@ -335,8 +335,9 @@ MAX_SEED = 2**32 - 1 - 99  # a session of up to 99 poses seeds pose k with seed 
 def camera_settings(exposure, gain, camera_size, seed) -> tuple[int, int] | None:
     """Check the camera options of ``capture``/``advise`` (one line naming the option when one is out of range);
     returns the camera size ``(width, height)`` or None."""
-    number(exposure, "--exposure", lo=EXPOSURE_MS[0], hi=EXPOSURE_MS[1], lo_open=True, unit=" ms")
-    number(gain, "--gain", lo=GAIN[0], hi=GAIN[1])
+    number(exposure, "--exposure", lo=EXPOSURE_MS[0], hi=EXPOSURE_MS[1], lo_open=True, unit=" ms",
+           what="a finite number")
+    number(gain, "--gain", lo=GAIN[0], hi=GAIN[1], what="a finite number")
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
     return parse_size(camera_size, "--camera-size") if camera_size else None
 

@@ -123,8 +123,8 @@ def capture_cmd(
         fail(f"--poses must be between 1 and 99, got {poses}")
     if not 0 <= retries <= 20:
         fail(f"--retries must be between 0 and 20, got {retries}")
-    number(settle_ms, "--settle-ms", lo=0, hi=10000, unit=" ms")
-    number(timeout, "--timeout", lo=0, hi=3600, lo_open=True, unit=" s")
+    number(settle_ms, "--settle-ms", lo=0, hi=10000, unit=" ms", what="a finite number")
+    number(timeout, "--timeout", lo=0, hi=3600, lo_open=True, unit=" s", what="a finite number")
     cam_size = camera_settings(exposure, gain, camera_size, seed)
     live_limits(max_frames)
     order = value(order)

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from .._fmt import fmt_number
+from ..style import fmt_number
 from ._app import (BoardOpt, DistModel, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
                    err_console, fail, is_tty, optional_size, output_dir, parse_board, plain, pose_options, say,
                    user_errors, value, with_pose_options)

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from .._fmt import fmt_number
+from ..style import fmt_number
 from ..errors import ProcamError
 from ._app import DeviceName, ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors, value
 

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from ..io import files as _files
-from .._fmt import fmt_number
+from ..style import fmt_number
 from .experiment import ExperimentResult
 
 __all__ = ["markdown", "write_report"]

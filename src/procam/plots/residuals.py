@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import stats
+from ..style import VERDICT_COLOURS
 from . import _figure
 
 #: Colour of the verdict line in the figure's title, by the verdict's first word.
-VERDICT_COLOURS = {"good": "tab:green", "weak": "tab:orange", "degenerate": "tab:red", "failed": "tab:red"}
 
 
 def short_name(name) -> str:
@@ -83,7 +83,7 @@ def residual_figure(per_pose, cam_size, proj_size=None, scale: float | None = No
         says what the arrows mean.
     title : first line of the figure's title.
     verdict : the calibration's verdict in words (e.g. ``"degenerate: camera: ..."``), printed under
-        the title, coloured by its first word (:data:`VERDICT_COLOURS`).
+        the title, coloured by its first word (:data:`procam.style.VERDICT_COLOURS`).
 
     Returns
     -------

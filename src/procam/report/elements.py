@@ -12,6 +12,8 @@ from html import escape
 
 import numpy as np
 
+from ..style import DEVICE_COLOURS, VERDICT_BACKGROUNDS, VERDICT_COLOURS
+
 CSS = """
 body{font:15px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;color:#1b1b1b;margin:0;background:#f6f6f4}
 main{max-width:1120px;margin:0 auto;padding:18px 28px 40px;background:#fff}
@@ -23,21 +25,25 @@ th,td{border:1px solid #d4d4d4;padding:3px 8px;text-align:right;vertical-align:t
 th{background:#f0f0ee}th[colspan]{text-align:center}td.l,th.l{text-align:left}tr.all td{font-weight:600;background:#fafaf7}
 .verdict{border-left:10px solid #777;padding:10px 16px;background:#f7f7f7;margin:10px 0}
 .verdict h2{border:0;margin:0 0 .3em;font-size:1.5em}
-.verdict.good{border-color:#2e8b3c;background:#eef8ef}.verdict.weak{border-color:#e0901a;background:#fdf5e7}
-.verdict.degenerate,.verdict.failed{border-color:#c62828;background:#fdecec}
+@VERDICTS@
 .word{text-transform:uppercase;letter-spacing:.04em}
 .note{color:#555;font-size:.9em}.warn{color:#8a4b00}
 figure{margin:.6em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
 figcaption{color:#555;font-size:.88em}
 #rig-svg{border:1px solid #ddd;background:#fcfcfc;cursor:grab;max-width:100%;height:auto;touch-action:none;
 user-select:none;-webkit-user-select:none}
-.rig-camera{stroke:#1f77b4;stroke-width:1.6;fill:none}.rig-projector{stroke:#e07b00;stroke-width:1.6;fill:none}
+.rig-camera{stroke:@camera@;stroke-width:1.6;fill:none}.rig-projector{stroke:@projector@;stroke-width:1.6;fill:none}
 .rig-board{stroke:#555;stroke-width:1.2;fill:rgba(120,120,120,.12)}.rig-board0{stroke:#c62828;stroke-width:2;fill:none}
 .rig-axis{stroke:#999;stroke-width:1;fill:none}
-.rig-label{font-size:12px;stroke:none}text.rig-camera{fill:#1f77b4}text.rig-projector{fill:#e07b00}
+.rig-label{font-size:12px;stroke:none}text.rig-camera{fill:@camera@}text.rig-projector{fill:@projector@}
 text.rig-camera{text-anchor:end}text.rig-board{fill:#333;font-size:11px}text.rig-axis{fill:#888;font-size:11px}
 code{font-size:.92em}
 """
+# the palette's colours (procam.style): one colour per verdict and per device in every picture and page
+CSS = CSS.replace("@VERDICTS@", "".join(
+    f".verdict.{v}{{border-color:{VERDICT_COLOURS[v]};background:{VERDICT_BACKGROUNDS[v]}}}" for v in VERDICT_COLOURS))
+for _device, _colour in DEVICE_COLOURS.items():
+    CSS = CSS.replace(f"@{_device}@", _colour)
 
 CSP = ("default-src 'none'; img-src data:; style-src 'unsafe-inline'; script-src 'unsafe-inline'; "
         "base-uri 'none'; form-action 'none'")

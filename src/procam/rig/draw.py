@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..style import NEUTRAL, VERDICT_COLOURS
+
 __all__ = ["rig_figure"]
 
-_COLOURS = {"good": "#2a9d8f", "weak": "#e9c46a", "degenerate": "#e76f51", "failed": "#d62828"}
 
 
 def rig_figure(rc, agreement=(), *, title: str = "", depth: float | None = None):
@@ -31,7 +32,7 @@ def rig_figure(rc, agreement=(), *, title: str = "", depth: float | None = None)
         for u in (-0.5, W - 0.5):
             ray = R.T @ np.array([(u - K[0, 2]) / K[0, 0], 0.0, 1.0])
             ends.append(c + ray * depth / max(ray[2], 1e-9))
-        col = _COLOURS.get(d.verdict, "grey")
+        col = VERDICT_COLOURS.get(d.verdict, NEUTRAL)
         ax.fill([c[0], ends[0][0], ends[1][0]], [c[2], ends[0][2], ends[1][2]], color=col, alpha=0.15)
         ax.plot([ends[0][0], c[0], ends[1][0]], [ends[0][2], c[2], ends[1][2]], color=col, lw=1)
         ax.plot(c[0], c[2], "s" if d.kind == "camera" else "^", color=col, ms=9)
