@@ -226,7 +226,7 @@ def test_capture_session_runs_a_virtual_rig_through_its_hooks(tmp_path, capsys, 
     """The whole ``capture --virtual [--board]`` session as a library call: it prints nothing, tells its hooks
     every step in order, writes the pose with the simulator's truth, and with a board judges it."""
     from procam.acquire import cameras
-    from procam.acquire.orchestrate import Rig, capture_session
+    from procam.acquire.orchestrate import Devices, capture_session
 
     if board is None:  # a quarter of the camera's resolution (same field of view): the render is 16 times cheaper
         demo = cameras.demo_scene
@@ -237,7 +237,7 @@ def test_capture_session_runs_a_virtual_rig_through_its_hooks(tmp_path, capsys, 
                              cam_dist_coeffs=(s.cam_dist_coeffs[0] / 0.25**2, 0.0))
         monkeypatch.setattr(cameras, "demo_scene", small)
     hooks = _Recorder()
-    results = capture_session(tmp_path / "pose", 1, Rig(virtual=True, proj_size=(320, 200)), FAST,
+    results = capture_session(tmp_path / "pose", 1, Devices(virtual=True, proj_size=(320, 200)), FAST,
                               board=board, hooks=hooks)
     assert capsys.readouterr() == ("", "")
     (res,) = results
@@ -254,7 +254,7 @@ def test_capture_session_runs_a_virtual_rig_through_its_hooks(tmp_path, capsys, 
         assert result is res and check.verdict == "good" and png == tmp_path / "pose.check.png"
         assert not png.exists()  # the picture is the hooks' to draw
     with pytest.raises(ProcamError, match="exists and is not empty"):  # before any device opens
-        capture_session(tmp_path / "pose", 1, Rig(virtual=True), FAST, hooks=(later := _Recorder()))
+        capture_session(tmp_path / "pose", 1, Devices(virtual=True), FAST, hooks=(later := _Recorder()))
     assert later.calls == []
 
 

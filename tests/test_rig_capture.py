@@ -14,7 +14,7 @@ from conftest import run_cli
 from procam import capture as capmod
 from procam import simulate
 from procam.acquire import CaptureOptions
-from procam.acquire.orchestrate import Rig
+from procam.acquire.orchestrate import Devices
 from procam.acquire.rig import RigProjector, capture_rig_pose, parse_rig_projectors, virtual_rig
 
 FAST = CaptureOptions(settle_s=0.0)
@@ -36,7 +36,7 @@ def test_virtual_rig_keeps_the_fields_of_view_when_resized():
 
 def test_rig_pose_capture_writes_each_projector_s_exact_render_and_rig_json(tmp_path):
     out = tmp_path / "pose1"
-    rig = Rig(virtual=True, seed=5, **SMALL)
+    rig = Devices(virtual=True, seed=5, **SMALL)
     results = capture_rig_pose(out, [RigProjector("left"), RigProjector("right")], rig, FAST)
     assert [r.folder for r in results] == [out / "left", out / "right"]
     pose = capmod.read_rig_pose(out)
@@ -72,7 +72,7 @@ def test_a_failed_projector_leaves_no_rig_json(tmp_path, monkeypatch):
 
     monkeypatch.setattr(rigmod, "capture_session", session)
     with pytest.raises(CaptureError, match="never arrived"):
-        capture_rig_pose(tmp_path / "p", [RigProjector("a", 1), RigProjector("b", 2)], Rig(), FAST)
+        capture_rig_pose(tmp_path / "p", [RigProjector("a", 1), RigProjector("b", 2)], Devices(), FAST)
     assert calls == ["a", "b"] and not (tmp_path / "p" / "rig.json").exists()
 
 
@@ -88,7 +88,7 @@ def test_each_real_projector_gets_its_own_display(tmp_path, monkeypatch):
         return []
 
     monkeypatch.setattr(rigmod, "capture_session", session)
-    capture_rig_pose(tmp_path / "p", parse_rig_projectors("east=2,west=1,north=3"), Rig(seed=7), FAST, camera="c0")
+    capture_rig_pose(tmp_path / "p", parse_rig_projectors("east=2,west=1,north=3"), Devices(seed=7), FAST, camera="c0")
     assert seen == [("east", 2, 7, None), ("west", 1, 8, None), ("north", 3, 9, None)]
     assert json.loads((tmp_path / "p" / "rig.json").read_text())["pairs"] == {
         "east": ["c0", "east"], "west": ["c0", "west"], "north": ["c0", "north"]}

@@ -21,7 +21,7 @@ Modules (each with one job):
     (:class:`~procam.acquire.live.LiveAdvice`: the preview window, a quick calibration of each captured pose).
 ``orchestrate``
     A whole capture session as one call (:func:`~procam.acquire.orchestrate.capture_session`): the devices of
-    a :class:`~procam.acquire.orchestrate.Rig` opened, advice before and a verdict after each pose, told to
+    a :class:`~procam.acquire.orchestrate.Devices` opened, advice before and a verdict after each pose, told to
     :class:`~procam.acquire.orchestrate.Hooks` (what ``procam capture`` prints).
 ``preview``
     The advisor's preview window on the operator's screen (:class:`~procam.acquire.preview.PreviewWindow`,
@@ -33,9 +33,17 @@ The capture-folder *format* (reading, validating and writing a pose folder, the 
 :mod:`procam.capture`.  Nothing here imports pygame, screeninfo, harvesters or the simulator until it is used.
 """
 
-from .cameras import (Camera, FolderWatchCamera, Frame, HarvestersCamera, OpenCVCamera,  # noqa: F401
-                      VirtualCamera, open_camera, parse_camera_spec)
+from .cameras import (  # noqa: F401
+                      Camera,
+                      FolderWatchCamera,
+                      Frame,
+                      HarvestersCamera,
+                      OpenCVCamera,
+                      VirtualCamera,
+                      open_camera,
+                      parse_camera_spec,
+)
 from .live import LiveAdvice  # noqa: F401
-from .orchestrate import Hooks, Rig, capture_session  # noqa: F401
+from .orchestrate import Devices, Hooks, capture_session  # noqa: F401
 from .projector import CaptureAborted, Display, ProjectorWindow, VirtualProjector, list_displays  # noqa: F401
 from .session import CaptureFailed, CaptureOptions, CaptureResult, Event, capture_pose, capture_poses  # noqa: F401

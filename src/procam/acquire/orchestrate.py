@@ -40,7 +40,7 @@ from .session import CaptureOptions, CaptureResult, capture_pose, capture_poses,
 
 
 @dataclass(frozen=True)
-class Rig:
+class Devices:
     """The devices of a capture session.
 
     camera : a ``--camera`` spec (:func:`~procam.acquire.cameras.parse_camera_spec`).
@@ -108,7 +108,7 @@ class Hooks:
         """The pose has no verdict: ``error`` stopped it."""
 
 
-def capture_session(out_dir, poses: int, rig: Rig, options: CaptureOptions, *, board=None, live=None,
+def capture_session(out_dir, poses: int, rig: Devices, options: CaptureOptions, *, board=None, live=None,
                     hooks: Hooks | None = None) -> list[CaptureResult]:
     """Run a capture session (see the module docstring).
 
@@ -117,7 +117,7 @@ def capture_session(out_dir, poses: int, rig: Rig, options: CaptureOptions, *, b
     out_dir : the pose folder to create, or with ``poses`` > 1 the folder that gets ``pose01`` ... (each must
         not exist, or be empty).
     poses : number of poses.
-    rig : the devices (:class:`Rig`).
+    rig : the devices (:class:`Devices`).
     options : the capture loop's :class:`~procam.acquire.session.CaptureOptions`.
     board : :class:`procam.board.Board` for each pose's instant verdict, or None (no verdict).
     live : :class:`~procam.acquire.live.LiveAdvice` to run before each pose (closed at the end), or None.
@@ -149,7 +149,7 @@ def capture_session(out_dir, poses: int, rig: Rig, options: CaptureOptions, *, b
                              after_pose=run.after_pose, progress=hooks.progress, extra_files_for=run.extra_files)
 
 
-def _open_projector(rig: Rig):
+def _open_projector(rig: Devices):
     """The (not yet open) projector of ``rig`` and its pattern size."""
     from .projector import ProjectorWindow, VirtualProjector
 
@@ -167,8 +167,8 @@ def _open_projector(rig: Rig):
 class _Session:
     """One session's devices and the steps around each pose (kept out of the public API)."""
 
-    def __init__(self, rig: Rig, projector, size, stack: ExitStack, options: CaptureOptions, poses: int, board, live,
-                 hooks: Hooks):
+    def __init__(self, rig: Devices, projector, size, stack: ExitStack, options: CaptureOptions, poses: int,
+                 board, live, hooks: Hooks):
         self.rig, self.projector, self.size, self.stack = rig, projector, size, stack
         self.order, self.poses, self.board, self.live, self.hooks = options.order, poses, board, live, hooks
         self.options = options

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..capture import RIG_MANIFEST, check_out_dir, pair_folder_name, rig_manifest
 from ..capture.rig import check_device_name
-from .orchestrate import Hooks, Rig, capture_session
+from .orchestrate import Devices, Hooks, capture_session
 from .session import CaptureOptions, CaptureResult
 
 __all__ = ["RigProjector", "parse_rig_projectors", "virtual_rig", "capture_rig_pose"]
@@ -107,7 +107,7 @@ def virtual_rig(names=("left", "right"), camera: str = "cam", proj_size=None, ca
                                name="virtual")
 
 
-def capture_rig_pose(out_dir, projectors, rig: Rig, options: CaptureOptions, *, camera: str = "cam", board=None,
+def capture_rig_pose(out_dir, projectors, rig: Devices, options: CaptureOptions, *, camera: str = "cam", board=None,
                      hooks: Hooks | None = None, simulated=None,
                      announce: Callable[[int, int, RigProjector], None] | None = None) -> list[CaptureResult]:
     """Capture one rig pose (module docstring).
@@ -116,7 +116,7 @@ def capture_rig_pose(out_dir, projectors, rig: Rig, options: CaptureOptions, *, 
     ----------
     out_dir : the rig pose folder to create (must not exist, or be empty).
     projectors : :class:`RigProjector` sequence, in the order they are shown.
-    rig : the session's devices (:class:`~procam.acquire.orchestrate.Rig`); each projector's session gets its
+    rig : the session's devices (:class:`~procam.acquire.orchestrate.Devices`); each projector's session gets its
         ``display`` (and, virtual, the scene of its pair and the seed ``rig.seed + i``).
     options : :class:`~procam.acquire.session.CaptureOptions` of every projector's sequence.
     camera : the camera's device name in ``rig.json``.

@@ -13,10 +13,41 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
-                   LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
-                   SeedOpt, StepsOpt, app, camera_settings, console, live_limits, err_console, fail, is_tty, number, parse_board, parse_size, pattern_sequence,
-                   phase_keywords, plain, text_on_stderr, user_errors, value)
+from ._app import (
+    CameraSizeOpt,
+    ComplementaryOpt,
+    CountsOpt,
+    ExposureOpt,
+    Family,
+    FamilyOpt,
+    GainOpt,
+    InverseOpt,
+    LiveAutoOpt,
+    LiveCalibrationOpt,
+    LiveJsonOpt,
+    LiveMaxFramesOpt,
+    LiveTargetOpt,
+    Order,
+    PeriodOpt,
+    SeedOpt,
+    StepsOpt,
+    app,
+    camera_settings,
+    console,
+    err_console,
+    fail,
+    is_tty,
+    live_limits,
+    number,
+    parse_board,
+    parse_size,
+    pattern_sequence,
+    phase_keywords,
+    plain,
+    text_on_stderr,
+    user_errors,
+    value,
+)
 
 
 def _list_devices(camera: str | None) -> None:
@@ -105,7 +136,7 @@ def capture_cmd(
     docs/patterns.md), grab and check one camera frame per pattern, and write a pose folder that decode/calibrate
     read as is (images, patterns.json, capture.json)."""
     from ..acquire.cameras import parse_camera_spec
-    from ..acquire.orchestrate import Rig, capture_session
+    from ..acquire.orchestrate import Devices, capture_session
     from ..acquire.session import CaptureOptions
 
     if list_devices:
@@ -151,7 +182,7 @@ def capture_cmd(
     phase.pop("white_black", None)  # a captured sequence always ends with white and black
     options = CaptureOptions(order=order, step=step, family=family, phase=phase, retries=retries, board=board_size,
                              keep_failed=keep_failed, settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)
-    rig = Rig(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
+    rig = Devices(camera=camera, proj_size=size, display=display, virtual=virtual, cam_size=cam_size,
               exposure_ms=exposure, gain=gain, timeout_s=timeout, seed=seed)
     with text_on_stderr(json_lines), _Printer() as printer:     # --json: stdout carries the advice only
         if rig_projectors:  # --rig: one rig pose, each projector's session in turn (procam.acquire.rig)
