@@ -19,7 +19,7 @@ verdict the page opens with is :mod:`procam.verdict`'s.
 from ..verdict import Verdict, calibration_verdict  # noqa: F401 -- here before procam.verdict existed
 from .coverage import coverage_fractions
 from .page import build_report, write_report
-from .rig import rig_geometry, rig_svg
+from .scene3d import rig_geometry, rig_svg
 from .rig_page import build_rig_report
 from .sections import SECTIONS
 

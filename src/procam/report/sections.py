@@ -19,7 +19,7 @@ from ..verdict import Verdict
 from ..verify import CalibrationVerification
 from .coverage import coverage_fractions
 from .elements import fmt, png, table, text_table
-from .rig import rig_geometry, rig_svg
+from .scene3d import rig_geometry, rig_svg
 
 #: The page's sections, in order: ``id -> heading`` (``leave-one-out`` only for multi-pose calibrations).
 SECTIONS = {"verdict": "Verdict", "parameters": "Parameters and assumptions", "coverage": "Coverage of the image planes",

@@ -1,5 +1,6 @@
-"""The rig in 3-D (the report's rig section): the board poses and the camera's and the projector's frusta in the
-camera frame, and an inline SVG view of them that a small inline script turns when dragged.
+"""A calibrated pair in 3-D (the report's rig section): the board poses and the camera's and the projector's
+frusta in the camera frame, and an inline SVG view of them that a small inline script turns when dragged (a rig of
+N devices is drawn by :mod:`procam.rig.draw` on its own page, :mod:`procam.report.rig_page`).
 
 A board pose is the calibration's own (a multi-pose calibration keeps them: ``calib.poses[k]["R_cam"]``), else
 PnP of the pose's corners with the calibrated camera (undistorted first); a pose PnP cannot place is left out
