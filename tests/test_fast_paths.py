@@ -371,6 +371,43 @@ print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]
         assert report["code"] in (0, None) and set(report["loaded"]) <= set(allowed), (args, res.stderr[-2000:])
 
 
+def test_version_imports_no_command_line_and_a_command_registers_only_itself():
+    """`procam --version` answers before typer (and pydantic) are imported; `procam calibrate --help` builds only
+    the calibrate command, `procam --help` every command (fresh interpreters, the console-script entry point)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import json, sys
+from procam.cli import main
+code = 0
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+cmds = sorted(m.rsplit(".", 1)[1] for m in sys.modules if m.startswith("procam.cli.") and not m.rsplit(".", 1)[1].startswith("_"))
+print(json.dumps({"code": code, "typer": "typer" in sys.modules, "commands": cmds}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    from procam.cli import COMMANDS
+
+    def run(*args):
+        res = subprocess.run([sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
+                             timeout=300)
+        return res.stdout, json.loads(res.stderr.strip().splitlines()[-1])
+
+    out, rep = run("--version")
+    assert out.strip().startswith("procam ") and rep == {"code": 0, "typer": False, "commands": []}
+    out, rep = run("calibrate", "--help")
+    assert rep["code"] in (0, None) and rep["commands"] == ["calibrate"] and "--board" in out
+    out, rep = run("--help")
+    assert rep["code"] in (0, None) and rep["commands"] == sorted(COMMANDS) and all(c in out for c in COMMANDS)
+
+
 def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):
     """Memory stays bounded: with ahead=1 the pose in use and the next one, never more."""
     from procam import stream

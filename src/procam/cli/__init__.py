@@ -3,17 +3,49 @@
 Each sub-command lives in its own module of this package and registers itself on
 :data:`app` with ``@app.command()``.  User mistakes raise :class:`procam.errors.ProcamError`;
 :func:`main` prints them as one line and exits with code 2 (no traceback).
+
+A command line is built only as far as it is used: ``procam --version`` answers before the command line (typer,
+and through it pydantic) is imported, and ``procam CMD ...`` registers only ``CMD``'s module, so its start-up
+does not pay for building the other fifteen commands' parameters.  ``procam --help``, an unknown command and
+:data:`app` itself (``from procam.cli import app``: the tests' in-process runner) have every command.
 """
 
 from __future__ import annotations
 
-from ._app import app, console, err_console  # noqa: F401
+import importlib
+import sys
 
-# Sub-commands register themselves on import, in the order `procam --help` lists them.
-from . import (advise, capture, check, patterns, decode, simulate, correspond, calibrate, evaluate, report, reconstruct,  # noqa: F401,E402
-               export, blend, experiment, study, demo)
+#: Sub-command -> the module of this package that registers it, in the order ``procam --help`` lists them.
+COMMANDS = {name: name for name in ("advise", "capture", "check", "patterns", "decode", "simulate", "correspond",
+                                    "calibrate", "evaluate", "report", "reconstruct", "export", "blend",
+                                    "experiment", "study", "demo")}
+
+
+def register(names=None) -> None:
+    """Import the modules of the commands ``names`` (all when None), which registers them on :data:`app`."""
+    for name in COMMANDS if names is None else names:
+        importlib.import_module(f"{__name__}.{COMMANDS[name]}")
+
+
+def __getattr__(name: str):
+    if name in ("app", "console", "err_console"):
+        register()
+        from . import _app
+
+        return getattr(_app, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point (errors are handled per command by ``_app.user_errors``)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args == ["--version"]:
+        from .. import __version__
+
+        sys.stdout.write(f"procam {__version__}\n")
+        return
+    first = next((a for a in args if not a.startswith("-")), None)
+    register([first] if first in COMMANDS else None)
+    from ._app import app
+
     app(args=argv, standalone_mode=True)
