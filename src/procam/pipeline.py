@@ -201,13 +201,22 @@ def views_from_folders(folders: Sequence, board: Board, projector=None, order=No
     return views
 
 
-def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOptions()) -> View:
-    """The View of one photo of the board (no projector: ``proj_pts`` NaN, ``proj_size`` None).
+def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOptions(), projector=None,
+                     order=None, step=None) -> View:
+    """The View of one photo of the board, or of a pose folder's board image (no projector: ``proj_pts`` NaN,
+    ``proj_size`` None): the camera calibrated once from photos and the captures of earlier poses, mixed.
 
-    Raises :class:`BoardNotFoundError` naming the file when the board is not found.
+    ``image_path`` is an image file, or a capture folder (Gray or phase; ``projector``, ``order``, ``step`` as
+    for :func:`procam.capture.load_capture` when it has no ``patterns.json``) whose board image is its white frame,
+    or without one the mean of its phase frames (:attr:`procam.capture.Capture.white`).
+
+    Raises :class:`BoardNotFoundError` naming the file or folder when the board is not found.
     """
     board = as_board(board)
-    img = _files.read_image(image_path)
+    if Path(image_path).is_dir():
+        img = _capture.load_capture(image_path, projector, order, step=step).white
+    else:
+        img = _files.read_image(image_path)
     c, hint = _corners.find_corners([img], board.pattern_size, detector=options.detector,
                                     refine_window=options.refine_window, refine=options.refine)
     if hint is not None:
