@@ -140,3 +140,28 @@ def test_real_photos_calibrate_better(shared_data):
     # measured 533.4 (-0.50 %); the published 536.1 comes from 11x11 cornerSubPix corners that are off by up
     # to 5.7 px on left02.jpg (without that image they give 534.1 +- 0.6)
     assert abs(f_new / 536.1 - 1) < 0.01
+
+
+@pytest.mark.parametrize("only", [("classic", False), ("sb", True), ("sb", False)])
+def test_auto_finds_a_board_that_only_one_attempt_of_one_detector_finds(monkeypatch, only):
+    """``auto`` gives up only after every attempt of both detectors (classic and SB, downscaled and full size):
+    a board that only SB on the downscaled copy finds (what ``--detector sb`` tries first) is found."""
+    from sim_small import small_capture
+
+    scene, stack, _, _ = small_capture()
+    ps = patterns.pattern_set(*scene.proj_size)
+    img = np.ascontiguousarray(np.repeat(np.repeat(stack[ps.white], 2, axis=0), 2, axis=1))  # wider than max_width
+    real = corners._find
+    ref = corners.detect_corners(img, (10, 6))
+    tried = []
+
+    def one_detector(g8, size, kind, fast_check=False):
+        small = g8.shape[1] < img.shape[1]
+        tried.append((kind, small))
+        return real(g8, size, kind, fast_check) if (kind, small) == only else None
+
+    monkeypatch.setattr(corners, "_find", one_detector)
+    monkeypatch.setattr(corners, "size_hint", lambda *a, **k: None)
+    c = corners.detect_corners(img, (10, 6))
+    assert c is not None and only in tried
+    assert np.abs(c - ref).max() < 0.05  # the same refined corners, whichever detector found the grid

@@ -52,8 +52,9 @@ class DetectOptions:
     ----------
     detector : ``"classic"`` (``findChessboardCorners``, adaptive threshold + normalisation; on the
         downscaled copy, then at full size), ``"sb"`` (``findChessboardCornersSB``, exhaustive + accuracy:
-        slower, more tolerant of blur and uneven light; likewise) or ``"auto"`` (classic on the downscaled
-        copy, then classic at full size, then SB at full size).  See :func:`find_grid`.
+        slower, more tolerant of blur and uneven light; likewise) or ``"auto"`` (every attempt of both: classic on
+        the downscaled copy and at full size, then SB likewise, so it finds whatever either finds).  See
+        :func:`find_grid`.
     refine : ``"fit"`` (:func:`fit_corners`), ``"subpix"`` (``cornerSubPix`` only) or ``"none"``.
     refine_window : half-size in pixels of the refinement window (0 = no refinement; None = the method's
         :data:`REFINE_WINDOW`); clamped per corner so the window stays clear of the neighbouring corners.
@@ -240,8 +241,10 @@ def _attempts(o: DetectOptions, downscaled: bool):
     """(kind, on the downscaled copy?) in the order tried."""
     if o.detector in ("classic", "sb"):
         out = [(o.detector, True), (o.detector, False)] if downscaled else [(o.detector, False)]
-    else:  # auto: the old chain (classic, then SB, at full size), preceded by classic on the small copy
-        out = ([("classic", True)] if downscaled else []) + [("classic", False), ("sb", False)]
+    else:  # auto: every attempt of both detectors, the quick ones first: classic on the small copy and at full
+        # size, then SB likewise (SB on the small copy finds boards SB at full size misses: what --detector sb does)
+        out = ([("classic", True)] if downscaled else []) + [("classic", False)] + (
+            [("sb", True)] if downscaled else []) + [("sb", False)]
     return out if o.fallback else out[:1]
 
 

@@ -91,9 +91,15 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
     """
     white = _capture.board_image(stack, ps)  # the white frame, or the mean of a phase family's fringes
     black = stack[ps.black] if ps.black is not None and ps.white is not None else None
-    candidates = (white,) if black is None else (  # the white - black image is only built when the white fails
-        white, lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None), black)
-    frame = f"the white frame (#{ps.white})" if ps.white is not None else "the mean of the phase frames"
+    if ps.white is None:  # no white frame: the fringes' mean, then their maximum (each pixel at its brightest:
+        # the board as the projector's full light shows it, with twice the mean's contrast where the fringes are lit)
+        frames = list(ps.phase_frames())
+        candidates = (white, lambda: stack[frames].max(axis=0))
+    elif black is None:
+        candidates = (white,)
+    else:  # the white - black image is only built when the white fails
+        candidates = (white, lambda: np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None), black)
+    frame = f"the white frame (#{ps.white})" if ps.white is not None else "the mean or the maximum of the phase frames"
     c, hint = _corners.find_corners(candidates, pattern_size, detector=detector, refine_window=refine_window,
                                     refine=refine)
     if c is not None:
@@ -103,8 +109,10 @@ def find_board(stack: np.ndarray, ps: PatternSet, pattern_size, detector="auto",
         raise BoardNotFoundError(f"{name}: chessboard with {cols}x{rows} inner corners not found in {frame}; "
                                  f"{_corners.size_hint_text(pattern_size, hint)}")
     raise BoardNotFoundError(
-        f"{name}: chessboard with {cols}x{rows} inner corners not found in {frame}; check --board (inner corners, not squares: {cols + 1}x{rows + 1} squares have "
-        f"{cols}x{rows} inner corners), the exposure of the white frame, and that the whole board is in view")
+        f"{name}: chessboard with {cols}x{rows} inner corners not found in {frame} (OpenCV's classic and SB "
+        f"detectors, full size and downscaled); check --board (inner corners, not squares: {cols + 1}x{rows + 1} "
+        f"squares have {cols}x{rows} inner corners), the exposure of the white frame, and that the whole board is in "
+        "view")
 
 
 def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *, name: str = "pose",
