@@ -23,14 +23,13 @@ cannot be read is refused with one line that names it and the formats read.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from . import kamino410, opencv, procam
 from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV, RIG_CALIBRATION_FORMAT
-from .validate import check_size, validate_calibration
+from .validate import check_size, load_json, validate_calibration
 
 #: What :func:`load_calibration` reads, as its errors say it.
 CALIBRATION_FORMATS = ("procam reads procam calibration JSON, OpenCV FileStorage YAML/XML with procam's keys "
@@ -71,10 +70,7 @@ def _kind(path: Path) -> str | None:
 
 
 def _json(path: Path, what: str, hint: str):
-    try:
-        return json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as e:
-        raise CalibrationFileError(f"{path}: {what} ({e}); {hint}") from None
+    return load_json(path, what, hint)
 
 
 def _is_storage(doc) -> bool:
@@ -127,7 +123,7 @@ def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
 def load_calibration(path, pair: str | None = None) -> Calibration:
     """Read a calibration in any format procam writes or reads (module docstring), recognised by content.
 
-    A rig calibration (``procam-rig-calibration``, :mod:`procam.rig.file`) holds one calibration per
+    A rig calibration (``procam-rig-calibration``, :mod:`procam.io.rig`) holds one calibration per
     (camera, projector) pair: ``pair`` names it (``"camera/projector"``, or a device name in one pair only); it
     is required for a rig of several pairs and refused for any other file.
 
