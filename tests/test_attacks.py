@@ -105,3 +105,35 @@ def test_a_key_given_twice_is_refused_in_json_yaml_and_xml(tmp_path):
                    + text[i:])
     with pytest.raises(CalibrationFileError, match="key 'right' is given twice"):
         load_rig_calibration(rig)
+
+
+# ------------------------------------------------------------------------------------------------
+# item 10: kamino410's img_shape written as (width, height)
+
+
+def test_a_kamino410_file_with_img_shape_as_width_height_is_refused_not_read_as_a_turned_camera(tmp_path):
+    """Their img_shape is [height, width]; [1280, 800] for the paper's 1280x800 camera would read as an 800x1280
+    camera, and be exported so.  The principal point (674, 512) tells: refused by every reader of the file, with
+    both readings and the fix; the file as written (and a square or a centred 4:3 camera) reads as before."""
+    from procam import io, simulate
+    from procam.errors import CalibrationFileError
+
+    cal = simulate.truth_calibration(simulate.preset("paper"))
+    path = io.save_kamino410(cal, tmp_path / "calibration_result.xml")
+    assert io.load_calibration(path).camera.image_size == (1280, 800)
+    text = path.read_text()
+    assert "<data>\n    800. 1280.</data>" in text
+    bad = tmp_path / "transposed.xml"
+    bad.write_text(text.replace("<data>\n    800. 1280.</data>", "<data>\n    1280. 800.</data>", 1))
+    for read in (io.load_calibration, io.load_kamino410, io.load_camera_intrinsics):
+        with pytest.raises(CalibrationFileError, match=r"img_shape \[1280, 800\] reads as a 800x1280 camera .* "
+                                                       r"principal point \(674, 512\) .* 1280x800 camera"):
+            read(bad)
+    code, out, err = run_cli(["export", bad, "--format", "yaml", "-o", tmp_path / "out.yml"])
+    assert code == 2 and "img_shape" in err and not (tmp_path / "out.yml").exists()
+    from procam.calibration import Device
+
+    for size in ((1024, 768), (800, 800)):                 # centred principal points: read as written
+        K = np.array([[900.0, 0, (size[0] - 1) / 2], [0, 900, (size[1] - 1) / 2], [0, 0, 1]])
+        p = io.save_kamino410(cal.replace(camera=Device(K, size)), tmp_path / f"k{size[0]}.xml")
+        assert io.load_calibration(p).camera.image_size == size

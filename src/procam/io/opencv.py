@@ -243,8 +243,9 @@ def read_calibration(fs, path) -> Calibration:
         info={"image_size_assumed": assumed} if assumed else {}, verdict=verdict_level(string(fs, "verdict")))
 
 
-def _camera_size(fs, path, K_key):
-    """The camera's image size as its layout stores it, or None."""
+def _camera_size(fs, path, K_key, K):
+    """The camera's image size as its layout stores it (checked against its matrix ``K`` where the layout's order
+    of width and height is easily mistaken), or None."""
     if K_key == OPENCV.cam_K:
         m = matrix(fs, path, "cam_size")
         return None if m is None else check_size(path, "cam_size", m)
@@ -254,8 +255,10 @@ def _camera_size(fs, path, K_key):
         w, h = real(fs, path, "image_width"), real(fs, path, "image_height")
         return check_size(path, "image_width/image_height", (w, h))
     if K_key == KAMINO410.cam_K:
+        from .kamino410 import camera_size
+
         m = matrix(fs, path, "img_shape")
-        return None if m is None else check_size(path, "img_shape", m.ravel()[::-1])
+        return None if m is None else camera_size(path, m, K)
     return None
 
 
@@ -265,5 +268,5 @@ def read_camera(fs, path) -> tuple[np.ndarray, Distortion, tuple[int, int] | Non
     for K_key, d_key, _ in CAMERA_LAYOUTS:
         if has(fs, K_key):
             K = check_K(path, K_key, matrix(fs, path, K_key))
-            return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key)
+            return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key, K)
     return None
