@@ -33,7 +33,8 @@ def _reflect(R):
 
 
 @pytest.mark.parametrize("edit, field", [
-    (lambda d: d["projectors"]["right"].__setitem__("R", _reflect(d["projectors"]["right"]["R"])), "projectors.right.R"),
+    (lambda d: d["projectors"]["right"].__setitem__("R", _reflect(d["projectors"]["right"]["R"])),
+     "projectors.right.R"),
     (lambda d: d["cameras"]["cam"]["K"][0].__setitem__(0, -5.0), "cameras.cam.K"),
     (lambda d: d["projectors"]["left"].__setitem__("distortion", {"model": "fisheye"}),
      "projectors.left.distortion.model"),
@@ -137,3 +138,73 @@ def test_a_kamino410_file_with_img_shape_as_width_height_is_refused_not_read_as_
         K = np.array([[900.0, 0, (size[0] - 1) / 2], [0, 900, (size[1] - 1) / 2], [0, 0, 1]])
         p = io.save_kamino410(cal.replace(camera=Device(K, size)), tmp_path / f"k{size[0]}.xml")
         assert io.load_calibration(p).camera.image_size == size
+
+
+# ------------------------------------------------------------------------------------------------
+# item 6: one capture seen twice
+
+
+def _pose(folder, seed):
+    """A pose folder of 4 small seeded frames and a patterns.json: refused before anything decodes it."""
+    import cv2
+
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(seed)
+    for i in range(4):
+        cv2.imwrite(str(folder / f"{i:02d}.png"), rng.integers(0, 255, (24, 32), dtype=np.uint8))
+    (folder / "patterns.json").write_text("{}")
+    return folder
+
+
+def _rig_pose(root, right):
+    """A rig pose folder of one camera and projectors left and right; ``right(left_folder, right_folder)`` makes the
+    right pair's folder."""
+    from procam import capture
+
+    root.mkdir()
+    (root / "rig.json").write_text(json.dumps(capture.rig_manifest(["cam"], ["left", "right"])))
+    right(_pose(root / "left", 1), root / "right")
+    return root
+
+
+@pytest.mark.parametrize("how", ["link", "copy"])
+def test_a_rig_pair_that_is_another_pairs_capture_is_refused_naming_both(tmp_path, how):
+    """right/ a symlink of left/ (or a copy of it) calibrated as two projectors 0.00 mm apart, verdict good:
+    now exit 2 before any decoding, naming both folders; two distinct pairs pass the check."""
+    import shutil
+
+    make = (lambda a, b: b.symlink_to(a, target_is_directory=True)) if how == "link" else shutil.copytree
+    pose = _rig_pose(tmp_path / "rig1", make)
+    out = tmp_path / "rig.json"
+    code, stdout, err = run_cli(["calibrate", pose, "--board", "10x6", "--square", "24", "-o", out])
+    why = "one folder once links are resolved" if how == "link" else "the same 4 frames, byte for byte, a copy or a link"
+    assert code == 2 and f"{pose / 'right'}: this pair folder is given twice (also as {pose / 'left'}: {why})" \
+        in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+    from procam import capture
+    from procam.errors import CaptureError
+
+    with pytest.raises(CaptureError, match="given twice"):
+        capture.read_rig_pose(pose)
+    fine = _rig_pose(tmp_path / "rig2", lambda a, b: _pose(b, 2))
+    assert [p.projector for p in capture.read_rig_pose(fine).pairs] == ["left", "right"]
+
+
+def test_a_pose_folder_given_twice_as_a_copy_is_refused_for_multi_pose_and_rig_poses(tmp_path):
+    """A multi-pose list with one pose twice under two names (a copy, a link), and two rig poses that are one:
+    refused, naming both, before any decoding."""
+    import shutil
+
+    a = _pose(tmp_path / "pose1", 1)
+    _pose(tmp_path / "pose2", 2)
+    shutil.copytree(a, tmp_path / "pose3")
+    (tmp_path / "pose4").symlink_to(a, target_is_directory=True)
+    for other, why in (("pose3", "the same 4 frames"), ("pose4", "one folder once links are resolved")):
+        code, _, err = run_cli(["calibrate", a, tmp_path / "pose2", tmp_path / other, "--board", "10x6",
+                                "--square", "24", "-o", tmp_path / "c.json"])
+        assert code == 2 and f"{tmp_path / other}: this pose folder is given twice (also as {a}: {why}" in err
+    r1 = _rig_pose(tmp_path / "rig1", lambda x, y: _pose(y, 2))
+    shutil.copytree(r1, tmp_path / "rig2")
+    code, _, err = run_cli(["calibrate", r1, tmp_path / "rig2", "--board", "10x6", "--square", "24",
+                            "-o", tmp_path / "rig.json"])
+    assert code == 2 and "given twice" in err and str(tmp_path / "rig2") in err and str(r1) in err

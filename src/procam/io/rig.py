@@ -89,11 +89,24 @@ def save_rig_calibration(rc: RigCalibration, path) -> Path:
     from .opencv import device_coeffs, write_devices
 
     first = next(iter(rc.pairs.values()))
+    # the reference pair's keys: a device named cam or proj has keys of the same names (cam_K, ...), written once
+    # when they hold the same numbers (they are the same device's), refused otherwise (a key given twice)
+    ref = {"cam_K": np.asarray(first.camera.K, float), "cam_kc": device_coeffs(first.camera),
+           "cam_size": np.array(first.camera.image_size, np.int32).reshape(1, 2),
+           "proj_K": np.asarray(first.projector.K, float), "proj_kc": device_coeffs(first.projector),
+           "proj_size": np.array(first.projector.image_size, np.int32).reshape(1, 2)}
+    for d in rc.devices:
+        for key, value in _device_keys(d).items():
+            if key in ref and not np.array_equal(ref[key], value):
+                whose = "camera" if key.startswith("cam_") else "projector"
+                raise CalibrationFileError(f"{path}: device {d.name!r} would write {key}, procam's key of the "
+                                           f"reference pair's {whose}, with other numbers; rename the device or "
+                                           "write the rig as JSON")
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
         write_devices(fs, OPENCV, first)
-        fs.write("cam_size", np.array(first.camera.image_size, np.int32).reshape(1, 2))
-        fs.write("proj_size", np.array(first.projector.image_size, np.int32).reshape(1, 2))
+        fs.write("cam_size", ref["cam_size"])
+        fs.write("proj_size", ref["proj_size"])
         fs.write("method", f"rig {rc.method}")
         fs.write("verdict", rc.verdict)
         fs.write("rig_reference", rc.reference)
@@ -101,13 +114,20 @@ def save_rig_calibration(rc: RigCalibration, path) -> Path:
         fs.write("rig_projectors", ",".join(d.name for d in rc.projectors))
         fs.write("rig_conventions", RIG_CONVENTIONS)
         for d in rc.devices:
-            fs.write(f"{d.name}_K", np.asarray(d.device.K, float))
-            fs.write(f"{d.name}_kc", device_coeffs(d.device))
-            fs.write(f"{d.name}_size", np.array(d.device.image_size, np.int32).reshape(1, 2))
-            fs.write(f"{d.name}_R", np.asarray(d.R, float))
-            fs.write(f"{d.name}_T", np.asarray(d.T, float).reshape(3, 1))
+            for key, value in _device_keys(d).items():
+                if key not in ref:
+                    fs.write(key, value)
         fs.release()
     return path
+
+
+def _device_keys(d) -> dict:
+    """A rig device's FileStorage keys and values: ``<name>_K``, ``_kc``, ``_size``, ``_R``, ``_T``."""
+    from .opencv import device_coeffs
+
+    return {f"{d.name}_K": np.asarray(d.device.K, float), f"{d.name}_kc": device_coeffs(d.device),
+            f"{d.name}_size": np.array(d.device.image_size, np.int32).reshape(1, 2),
+            f"{d.name}_R": np.asarray(d.R, float), f"{d.name}_T": np.asarray(d.T, float).reshape(3, 1)}
 
 
 def is_rig_calibration(path) -> bool:
