@@ -208,3 +208,61 @@ def test_a_pose_folder_given_twice_as_a_copy_is_refused_for_multi_pose_and_rig_p
     code, _, err = run_cli(["calibrate", r1, tmp_path / "rig2", "--board", "10x6", "--square", "24",
                             "-o", tmp_path / "rig.json"])
     assert code == 2 and "given twice" in err and str(tmp_path / "rig2") in err and str(r1) in err
+
+
+# ------------------------------------------------------------------------------------------------
+# item 9: an option the calibration would ignore
+
+
+@pytest.mark.parametrize("args, opt, path", [
+    (["--throw-ratio", "1.26"], "--throw-ratio", "rig single-pose"),
+    (["--lens-shift", "0,50"], "--lens-shift", "rig single-pose"),
+    (["--projector-intrinsics", "{tmp}/p.json"], "--projector-intrinsics", "rig single-pose"),
+    (["--camera", "{tmp}/p.json"], "--camera", "rig single-pose"),
+    (["--no-refine"], "--no-refine", "rig single-pose"),
+    (["--cam-dist", "k1"], "--cam-dist", "rig single-pose"),
+    (["--throw-ratio", "1.26", "{rig2}"], "--throw-ratio", "rig multi-pose"),
+    (["--cod", "paper", "{rig2}"], "--cod", "rig multi-pose"),
+    (["--background", "off", "{rig2}"], "--background", "rig multi-pose"),
+])
+def test_an_option_a_rig_calibration_would_ignore_is_refused(tmp_path, args, opt, path):
+    """--throw-ratio and --projector-intrinsics were silently ignored on a rig (and --camera sent the rig down the
+    pair path): every option that does not apply to the calibration the command runs is refused, exit 2, saying
+    what it is and which calibration this is, before any work."""
+    from procam import io, simulate
+
+    io.save_calibration(simulate.truth_calibration(simulate.preset("paper")), tmp_path / "p.json")
+    r1 = _rig_pose(tmp_path / "rig1", lambda a, b: _pose(b, 2))
+    r2 = tmp_path / "rig2"
+    r2.mkdir()
+    args = [a.format(tmp=tmp_path, rig2=r2) for a in args]
+    out = tmp_path / "rig.json"
+    code, _, err = run_cli(["calibrate", r1, *args, "--board", "10x6", "--square", "24", "-o", out])
+    assert code == 2 and err.startswith(f"error: {opt} is ") and f"this is a {path} calibration, which would " \
+        "ignore it: leave it out" in err, err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+@pytest.mark.parametrize("args, opt, path", [
+    (["--cod", "paper"], "--cod", "multi-pose"),
+    (["--background", "off"], "--background", "multi-pose"),
+    (["--throw-ratio", "1.26"], "--throw-ratio", "multi-pose"),
+    (["--camera", "{tmp}/p.json"], "--camera", "multi-pose"),
+    (["--cam-dist", "k1", "--method", "single"], "--cam-dist", "single-pose"),
+    (["--proj-dist", "k1", "--method", "single"], "--proj-dist", "single-pose"),
+    (["--no-refine", "--method", "single"], "--no-refine", "single-pose"),
+    (["--proj-dist", "k1", "--camera-only"], "--proj-dist", "camera-only (several photos)"),
+    (["--background", "off", "--camera-only"], "--background", "camera-only (several photos)"),
+])
+def test_an_option_the_multi_or_single_pose_path_would_ignore_is_refused(tmp_path, args, opt, path):
+    """The same check on the ordinary paths: --cod and --background were ignored by a multi-pose calibration,
+    --cam-dist, --proj-dist and --no-refine by a single-pose one."""
+    from procam import io, simulate
+
+    io.save_calibration(simulate.truth_calibration(simulate.preset("paper")), tmp_path / "p.json")
+    poses = [_pose(tmp_path / f"pose{i}", i) for i in (1, 2)]
+    if "--method" in args:
+        poses = poses[:1]
+    args = [a.format(tmp=tmp_path) for a in args]
+    code, _, err = run_cli(["calibrate", *poses, *args, "--board", "10x6", "--square", "24", "-o", tmp_path / "c.json"])
+    assert code == 2 and err.startswith(f"error: {opt} is ") and f"this is a {path} calibration" in err, err
