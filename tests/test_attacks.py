@@ -303,3 +303,28 @@ def test_a_tight_datasheet_prior_the_data_contradict_is_blamed_not_the_pose(thro
     else:
         assert "contradict" not in reasons and cal.verdict != "failed"
         assert abs(cal.projector.K[0, 0] - scene.K_proj[0][0]) < 0.01 * scene.K_proj[0][0]
+
+
+def test_a_rig_yaml_never_writes_a_key_twice(tmp_path):
+    """A rig whose reference camera is named cam wrote cam_K twice (procam's reference-pair key and the device's):
+    now once (the same numbers); a second projector named proj, whose proj_K would differ from the reference pair's,
+    is refused before anything is written."""
+    import dataclasses
+
+    import cv2
+
+    from procam.errors import CalibrationFileError
+    from procam.io.opencv import _top_level_keys
+    from procam.io.rig import save_rig_calibration
+
+    rc = _rig()
+    y = save_rig_calibration(rc, tmp_path / "rig.yml")
+    keys = _top_level_keys(y)
+    assert len(keys) == len(set(keys)) and "cam_R" in keys and "right_K" in keys
+    fs = cv2.FileStorage(str(y), cv2.FILE_STORAGE_READ)
+    assert np.array_equal(fs.getNode("cam_K").mat(), rc.cameras[0].device.K)
+    fs.release()
+    renamed = dataclasses.replace(rc, projectors=(rc.projectors[0], dataclasses.replace(rc.projectors[1], name="proj")))
+    with pytest.raises(CalibrationFileError, match="device 'proj' would write proj_K"):
+        save_rig_calibration(renamed, tmp_path / "two.yml")
+    assert not (tmp_path / "two.yml").exists()

@@ -86,22 +86,10 @@ def save_rig_calibration(rc: RigCalibration, path) -> Path:
     import cv2
 
     from .formats import OPENCV
-    from .opencv import device_coeffs, write_devices
+    from .opencv import write_devices
 
+    ref = _reference_keys(rc, path)
     first = next(iter(rc.pairs.values()))
-    # the reference pair's keys: a device named cam or proj has keys of the same names (cam_K, ...), written once
-    # when they hold the same numbers (they are the same device's), refused otherwise (a key given twice)
-    ref = {"cam_K": np.asarray(first.camera.K, float), "cam_kc": device_coeffs(first.camera),
-           "cam_size": np.array(first.camera.image_size, np.int32).reshape(1, 2),
-           "proj_K": np.asarray(first.projector.K, float), "proj_kc": device_coeffs(first.projector),
-           "proj_size": np.array(first.projector.image_size, np.int32).reshape(1, 2)}
-    for d in rc.devices:
-        for key, value in _device_keys(d).items():
-            if key in ref and not np.array_equal(ref[key], value):
-                whose = "camera" if key.startswith("cam_") else "projector"
-                raise CalibrationFileError(f"{path}: device {d.name!r} would write {key}, procam's key of the "
-                                           f"reference pair's {whose}, with other numbers; rename the device or "
-                                           "write the rig as JSON")
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
         write_devices(fs, OPENCV, first)
@@ -119,6 +107,34 @@ def save_rig_calibration(rc: RigCalibration, path) -> Path:
                     fs.write(key, value)
         fs.release()
     return path
+
+
+def _reference_keys(rc: RigCalibration, path) -> dict:
+    """The reference pair's FileStorage keys and values of a rig's YAML/XML ``path``; a device named cam or proj
+    has keys of the same names (cam_K, ...): written once when they hold the same numbers (the same device's),
+    refused otherwise (a key given twice).  :func:`save_rig_calibration` checks with it before writing, and so can
+    a command before it writes anything."""
+    from .opencv import device_coeffs
+
+    first = next(iter(rc.pairs.values()))
+    ref = {"cam_K": np.asarray(first.camera.K, float), "cam_kc": device_coeffs(first.camera),
+           "cam_size": np.array(first.camera.image_size, np.int32).reshape(1, 2),
+           "proj_K": np.asarray(first.projector.K, float), "proj_kc": device_coeffs(first.projector),
+           "proj_size": np.array(first.projector.image_size, np.int32).reshape(1, 2)}
+    for d in rc.devices:
+        for key, value in _device_keys(d).items():
+            if key in ref and not np.array_equal(ref[key], value):
+                whose = "camera" if key.startswith("cam_") else "projector"
+                raise CalibrationFileError(f"{path}: device {d.name!r} would write {key}, procam's key of the "
+                                           f"reference pair's {whose}, with other numbers; rename the device or "
+                                           "write the rig as JSON")
+    return ref
+
+
+def check_rig_yaml(rc: RigCalibration, path) -> None:
+    """Raise :class:`CalibrationFileError` when ``rc`` cannot be written as the YAML/XML ``path`` (a device name
+    whose keys are the reference pair's with other numbers); nothing is written."""
+    _reference_keys(rc, path)
 
 
 def _device_keys(d) -> dict:
