@@ -60,6 +60,10 @@ def test_a_rig_files_device_blocks_are_validated_like_a_pair_files(tmp_path, edi
     page = tmp_path / "rig.html"
     code, out, err = run_cli(["report", path, "-o", page])
     assert code == 2 and f"{path.name}: {field}" in err and "Traceback" not in out + err and not page.exists()
+    from procam.io import load_calibration
+
+    with pytest.raises(CalibrationFileError, match=f"{path}: {field.replace('>', '.')}"):
+        load_calibration(path, pair="cam/left")          # one pair of a corrupt rig file: refused too
 
 
 # ------------------------------------------------------------------------------------------------

@@ -143,6 +143,9 @@ def load_calibration(path, pair: str | None = None) -> Calibration:
     if kind == "json":
         doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)
         if isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT:
+            from .rig import rig_devices
+
+            rig_devices(path, doc)          # the whole rig checked: a file is read whole or refused
             return validate_calibration(procam.calibration_from_json(path, _rig_pair(path, doc, pair)), path)
         if pair is not None:
             raise CalibrationFileError(f"{path}: not a rig calibration, so it has no pair {pair!r}")

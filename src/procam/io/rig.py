@@ -227,19 +227,18 @@ def _relative_from(path, key: str, r) -> RelativePose:
         bad(path, f"{where}.std", f"must hold numbers ({e})", fix=_HINT)
 
 
-def load_rig_calibration(path) -> RigCalibration:
-    """The :class:`~procam.rig.result.RigCalibration` a rig calibration JSON file holds (every device, relative
-    pose and pair as written): every device block and relative pose checked by the one validator set
-    (:mod:`procam.io.validate`), the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
-    like any calibration.  :class:`CalibrationFileError` naming the file and the field otherwise."""
-    from .calibration_file import load_calibration
-
-    path = Path(path)
-    doc = load_rig_document(path)
-    if not doc["cameras"]:
+def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
+    """The cameras (the reference first), projectors and relative poses of a rig calibration document read from
+    ``path``: ``(cameras, projectors, {"a->b": RelativePose})``, every block checked by the one validator set
+    (:mod:`procam.io.validate`).  :func:`procam.io.load_calibration` checks them too when it reads one pair, so a
+    rig file is read whole or refused."""
+    if not isinstance(doc.get("cameras"), dict) or not doc["cameras"]:
         raise CalibrationFileError(f"{path}: a rig calibration without cameras; {_HINT}")
+    for key in ("projectors", "relative"):
+        if not isinstance(doc.get(key), dict):
+            bad(path, key, "must be an object", fix=_HINT)
     reference = doc.get("reference", next(iter(doc["cameras"])))
-    if reference not in doc["cameras"]:
+    if not isinstance(reference, str) or reference not in doc["cameras"]:
         bad(path, "reference", f"names no camera of the rig (cameras: {', '.join(doc['cameras'])})", fix=_HINT)
     both = set(doc["cameras"]) & set(doc["projectors"])
     if both:
@@ -248,6 +247,19 @@ def load_rig_calibration(path) -> RigCalibration:
     cams = tuple(sorted(cams, key=lambda c: c.name != reference))       # the reference first
     projs = tuple(_device_from(path, n, "projector", d, False) for n, d in doc["projectors"].items())
     rel = {key: _relative_from(path, key, r) for key, r in doc["relative"].items()}
+    return cams, projs, rel
+
+
+def load_rig_calibration(path) -> RigCalibration:
+    """The :class:`~procam.rig.result.RigCalibration` a rig calibration JSON file holds (every device, relative
+    pose and pair as written): every device block and relative pose checked by the one validator set
+    (:func:`rig_devices`), the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
+    like any calibration.  :class:`CalibrationFileError` naming the file and the field otherwise."""
+    from .calibration_file import load_calibration
+
+    path = Path(path)
+    doc = load_rig_document(path)
+    cams, projs, rel = rig_devices(path, doc)
     pairs = {key: load_calibration(path, pair=key) for key in doc["pairs"]}
     verdict = doc.get("verdict") or {}
     if not isinstance(verdict, dict):
