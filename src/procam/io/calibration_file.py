@@ -100,15 +100,17 @@ def _storage_calibration(fs, path) -> Calibration:
                                f"or {KAMINO410.cam_K}/{KAMINO410.proj_K}); {CALIBRATION_FORMATS}")
 
 
-def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
-    """The procam calibration document of one pair of a rig calibration (``procam-rig-calibration``): ``pair`` is
-    ``"camera/projector"`` or a device name that is in one pair only; None for a rig of one pair."""
+def _rig_pair(path: Path, doc: dict, pair: str | None) -> tuple[str, dict]:
+    """``(key, document)``: the procam calibration document of one pair of a rig calibration
+    (``procam-rig-calibration``): ``pair`` is ``"camera/projector"`` or a device name that is in one pair only; None
+    for a rig of one pair."""
     pairs = doc.get("pairs")
     if not isinstance(pairs, dict) or not pairs:
         raise CalibrationFileError(f"{path}: a rig calibration without pairs")
     if pair is None and len(pairs) == 1:
-        return next(iter(pairs.values()))
-    hits = [k for k in pairs if pair is not None and (k == pair or pair in k.split("/"))]
+        hits = list(pairs)
+    else:
+        hits = [k for k in pairs if pair is not None and (k == pair or pair in k.split("/"))]
     if len(hits) != 1:
         what = "names no pair" if pair is not None and not hits else "is ambiguous" if pair is not None else ""
         raise CalibrationFileError(f"{path}: a rig calibration of {len(pairs)} pairs ({', '.join(pairs)})"
@@ -117,7 +119,7 @@ def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
                                    "load_calibration(path, pair=...))")
     if not isinstance(pairs[hits[0]], dict) or pairs[hits[0]].get("format") != CALIBRATION_FORMAT:
         raise CalibrationFileError(f"{path}: pair {hits[0]!r} is not a procam calibration document")
-    return pairs[hits[0]]
+    return hits[0], pairs[hits[0]]
 
 
 def load_calibration(path, pair: str | None = None) -> Calibration:
@@ -146,7 +148,9 @@ def load_calibration(path, pair: str | None = None) -> Calibration:
             from .rig import rig_devices
 
             rig_devices(path, doc)          # the whole rig checked: a file is read whole or refused
-            return validate_calibration(procam.calibration_from_json(path, _rig_pair(path, doc, pair)), path)
+            key, pair_doc = _rig_pair(path, doc, pair)
+            where = f"{path} (pair {key})"  # the errors name the pair
+            return validate_calibration(procam.calibration_from_json(where, pair_doc), where)
         if pair is not None:
             raise CalibrationFileError(f"{path}: not a rig calibration, so it has no pair {pair!r}")
         if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:

@@ -247,6 +247,11 @@ def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
     cams = tuple(sorted(cams, key=lambda c: c.name != reference))       # the reference first
     projs = tuple(_device_from(path, n, "projector", d, False) for n, d in doc["projectors"].items())
     rel = {key: _relative_from(path, key, r) for key, r in doc["relative"].items()}
+    names = {d.name for d in cams + projs}
+    for key, r in rel.items():
+        if r.a not in names or r.b not in names:
+            bad(path, f"relative.{key}", f"names a device the rig does not have (devices: {', '.join(sorted(names))})",
+                fix=_HINT)
     return cams, projs, rel
 
 
