@@ -121,7 +121,7 @@ def test_rig_file_json_yaml_and_pairs(two_projectors, tmp_path):
 
     from procam.errors import CalibrationFileError
     from procam.io import load_calibration, save_calibration
-    from procam.rig.file import load_rig_document, save_rig_calibration
+    from procam.io.rig import load_rig_document, save_rig_calibration
 
     _, _, rc = two_projectors
     path = save_rig_calibration(rc, tmp_path / "rig.json")

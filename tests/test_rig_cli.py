@@ -44,7 +44,7 @@ def test_rendered_rig_end_to_end(tmp_path):
     the projector-to-projector translation within 0.5 % of the baseline."""
     from procam import models
     from procam import simulate as sim
-    from procam.rig.file import load_rig_document
+    from procam.io.rig import load_rig_document
 
     folders = []
     for j, a in enumerate(ANGLES):

@@ -20,7 +20,8 @@ camera called ``camera`` and one projector per sub-folder, named after it.
 Device names are identifiers (a letter, then letters, digits or ``_``): they become keys of the OpenCV
 YAML file of a rig calibration.
 
-Failure modes: a missing sub-folder, a device named twice, a pair naming an unknown device, or a manifest
+Failure modes: a missing sub-folder, two pairs that are one capture (one folder once links are resolved, or the
+same frames: :mod:`procam.capture.distinct`), a device named twice, a pair naming an unknown device, or a manifest
 that is not procam's are :class:`~procam.errors.CaptureError` with one line naming the file.
 """
 
@@ -176,4 +177,9 @@ def read_rig_pose(folder) -> RigPose:
     keys = [p.key for p in pairs]
     if len(set(keys)) != len(keys):
         raise CaptureError(f"{man}: a (camera, projector) pair is listed twice")
+    from .distinct import refuse_repeats
+
+    refuse_repeats([p.folder for p in pairs], "pair folder",
+                   "each (camera, projector) pair needs its own capture (a link or a copy of another pair's folder "
+                   "would calibrate one device against itself)")
     return RigPose(f, tuple(cams), tuple(projs), tuple(pairs))

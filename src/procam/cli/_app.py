@@ -497,16 +497,15 @@ def _capture_folder(folder: Path, inputs) -> bool:
 
 
 def distinct_poses(poses) -> None:
-    """Refuse a pose folder given twice (it would count as two poses of the board)."""
-    seen = {}
-    for p in poses:
-        try:
-            key = Path(p).resolve()
-        except OSError:
-            key = Path(p)
-        if key in seen:
-            fail(f"{p}: this pose folder is given twice (also as {seen[key]}); give each pose once")
-        seen[key] = p
+    """Refuse a pose folder given twice: the same folder once links are resolved, or the same frames (it would
+    count as two poses of the board; :func:`procam.capture.distinct.refuse_repeats`)."""
+    from ..capture.distinct import refuse_repeats
+    from ..errors import CaptureError
+
+    try:
+        refuse_repeats(poses, "pose folder", "give each pose once")
+    except CaptureError as e:
+        fail(str(e))
 
 
 def load_pose(pose_dir, projector, calib, order=None, step=None):

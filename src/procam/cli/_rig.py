@@ -16,7 +16,7 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, rep
     rig's drawing ``png``, the HTML ``report``); exit 3 when it must not be trusted."""
     from .. import capture
     from ..rig import calibrate_rig, rig_views_from_folders
-    from ..rig.file import save_rig_calibration
+    from ..io.rig import check_rig_yaml, save_rig_calibration
     from ..rig.verify import verify_rig
 
     not_rig = [str(p) for p in poses if not capture.is_rig_pose(p)]
@@ -41,6 +41,9 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, rep
     if not rc.trusted and not force:
         fail(f"{rc.verdict} rig calibration, not written: {'; '.join(rc.verdict_reasons) or rc.verdict} "
              "(--force writes it anyway, marked as such)", code=3, label="not trusted")
+    for path in (out, yaml):              # a YAML/XML the rig's device names cannot be written as: before any write
+        if path is not None and path.suffix.lower() in (".yml", ".yaml", ".xml"):
+            check_rig_yaml(rc, path)
     save_rig_calibration(rc, out)
     say(f"wrote {out}" + ("" if rc.trusted else f" (marked {rc.verdict})"))
     if yaml is not None:
@@ -96,7 +99,7 @@ def write_report(rc, path: Path, *, poses=None, agreement=None, name: str | None
 def report(calibration: Path, poses, *, out: Path, brd, projector=None, order=None, step=None, options=None) -> None:
     """``procam report`` of a rig calibration file: its page, verified on the rig pose folders ``poses`` when
     given (else on the poses its pairs keep)."""
-    from ..rig.file import load_rig_calibration
+    from ..io.rig import load_rig_calibration
 
     rc = load_rig_calibration(calibration)
     views = None

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import (FIGURE_SUFFIXES, BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
+from ._app import (FIGURE_SUFFIXES, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
                    StepOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
                    number, pose_options, preload, say, user_errors, value, warn, with_pose_options)
 
@@ -35,14 +35,12 @@ def _float(text: str, option: str) -> float:
         fail(f"{option}: {text!r} is not a number")
 
 
-def _dense_options(throw_ratio, lens_shift, projector_file, not_single: bool):
+def _dense_options(throw_ratio, lens_shift, projector_file):
     """The single-pose projector's options from ``--throw-ratio``, ``--lens-shift`` (priors) and
-    ``--projector-intrinsics`` (checked here, before any work)."""
+    ``--projector-intrinsics`` (checked here, before any work; :func:`_refuse_unused` has refused them where they do
+    not apply)."""
     from ..single_pose.dense import DenseOptions, ProjectorPrior
 
-    if (throw_ratio or lens_shift or projector_file) and not_single:
-        fail("--throw-ratio, --lens-shift and --projector-intrinsics are for a single-pose calibration (one pose "
-             "folder); a multi-pose calibration estimates the projector from its poses")
     if projector_file is not None and (throw_ratio or lens_shift):
         fail("--projector-intrinsics gives the projector's intrinsics; --throw-ratio and --lens-shift are priors for "
              "estimating them: use one or the other")
@@ -63,6 +61,55 @@ def _dense_options(throw_ratio, lens_shift, projector_file, not_single: bool):
                                                        what="a lens shift in percent") for v in parts)
         kw["shift_std_pct"] = number(tol, "--lens-shift tolerance", lo=0, lo_open=True, hi=100)
     return DenseOptions(prior=ProjectorPrior(**kw))
+
+
+#: What each option that applies to some calibrations only is, and the calibrations (:func:`_path`) it applies to.
+_APPLIES = {
+    "--camera": ("the camera's intrinsics, fixed for a single-pose calibration", {"single-pose"}),
+    "--projector-intrinsics": ("the projector's intrinsics, fixed for a single-pose calibration", {"single-pose"}),
+    "--throw-ratio": ("a datasheet prior of the single-pose projector fit", {"single-pose"}),
+    "--lens-shift": ("a datasheet prior of the single-pose projector fit", {"single-pose"}),
+    "--cod": ("how a single-pose fit finds the camera's principal point",
+              {"single-pose", "camera-only (one photo)", "rig single-pose"}),
+    "--background": ("the scene behind the board in the single-pose projector fit", {"single-pose", "rig single-pose"}),
+    "--cam-dist": ("the camera distortion model of a calibration from several poses",
+                   {"multi-pose", "camera-only (several photos)", "rig multi-pose"}),
+    "--proj-dist": ("the projector distortion model of a multi-pose calibration", {"multi-pose", "rig multi-pose"}),
+    "--no-refine": ("skips a multi-pose calibration's joint refinement", {"multi-pose", "rig multi-pose"}),
+}
+
+
+def _path(how: str, rig: bool, method: str | None, n: int) -> str:
+    """Which calibration the command runs: single-pose, multi-pose, camera-only (one photo / several photos), rig
+    single-pose or rig multi-pose."""
+    if rig:
+        return "rig single-pose" if method == "single-pose" or (method is None and n == 1) else "rig multi-pose"
+    if how == "camera-only":
+        return "camera-only (one photo)" if n == 1 else "camera-only (several photos)"
+    return how
+
+
+def _refuse_unused(path: str, given: dict, poses) -> None:
+    """Refuse (one line, exit 2) an option given to a calibration that would ignore it: what it is, what this
+    calibration is, what to do.  ``given``: option -> whether it was given; ``--cod`` also goes unused with a
+    fixed camera (``--camera``)."""
+    for opt, is_given in given.items():
+        what, applies = _APPLIES[opt]
+        unused = path not in applies or (opt == "--cod" and given.get("--camera"))
+        if not (is_given and unused):
+            continue
+        if opt == "--cod" and path in applies:
+            fail("--cod is how a single-pose fit finds the camera's principal point; with --camera the camera's "
+                 "intrinsics are given and fixed, so it would be ignored: leave one of them out")
+        hint = ""
+        if path.startswith("rig") and "single-pose" in applies and "rig single-pose" not in applies:
+            hint = (f" (to use it on one pair of the rig, calibrate that pair's folder alone, e.g. procam calibrate "
+                    f"{Path(poses[0]) / '<pair>'} ...)")
+        elif path.startswith("rig") and "rig single-pose" in applies:
+            hint = " (it applies to a rig calibrated from one rig pose)"
+        elif path.startswith("rig") and "rig multi-pose" in applies:
+            hint = " (it applies to a rig calibrated from several rig poses)"
+        fail(f"{opt} is {what}; this is a {path} calibration, which would ignore it: leave it out{hint}")
 
 
 #: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
@@ -99,13 +146,14 @@ def calibrate_cmd(
     yaml: Path = typer.Option(None, "--yaml", help="Also write OpenCV FileStorage YAML (cam_K, cam_kc, ...)."),
     png: Path = typer.Option(None, "--png", help="Residual plot."),
     report: Path = typer.Option(None, "--report", help="Also write the HTML report (one self-contained file)."),
-    cod: Cod = typer.Option(Cod.auto, "--cod", help="Single-pose principal point: auto (the centre of distortion "
-                                                    "when reliable, else the image centre as a prior), paper "
-                                                    "(always the centre of distortion) or image-center."),
-    background: BackgroundOpt = BackgroundMode.free,
-    cam_dist: DistModel = typer.Option(DistModel.auto, "--cam-dist", help="Multi-pose camera distortion model (auto: "
-                                       "the richest OpenCV model whose terms the poses determine)."),
-    proj_dist: DistModel = typer.Option(DistModel.auto, "--proj-dist", help="Multi-pose projector distortion model."),
+    cod: Cod = typer.Option(None, "--cod", show_default="auto", help="Single-pose principal point: auto (the centre "
+                            "of distortion when reliable, else the image centre as a prior), paper (always the centre "
+                            "of distortion) or image-center."),
+    background: BackgroundOpt = None,
+    cam_dist: DistModel = typer.Option(None, "--cam-dist", show_default="auto", help="Multi-pose camera distortion "
+                                       "model (auto: the richest OpenCV model whose terms the poses determine)."),
+    proj_dist: DistModel = typer.Option(None, "--proj-dist", show_default="auto", help="Multi-pose projector "
+                                        "distortion model."),
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
     force: bool = typer.Option(False, "--force", help="Write a degenerate or failed calibration anyway (marked as "
                                                       "such in the files; the exit code is still 3)."),
@@ -127,12 +175,25 @@ def calibrate_cmd(
     brd = parse_board(board, square)
     how = calibration_method.choose(len(poses), "camera-only" if camera_only else _METHODS[value(method)])
     multi = how == "multi-pose"
+    from ..capture import is_rig_pose
+
+    rig = [p for p in poses if is_rig_pose(p)]
+    if rig and camera_only:
+        fail(f"{rig[0]}: a rig pose folder (pattern captures of each camera-projector pair); --camera-only "
+             "calibrates a camera from photos of the board: leave --camera-only out, or give the photos")
+    _refuse_unused(_path(how, bool(rig), _METHODS[value(method)], len(poses)),
+                   {"--camera": camera_file is not None, "--projector-intrinsics": projector_file is not None,
+                    "--throw-ratio": bool(throw_ratio), "--lens-shift": bool(lens_shift), "--cod": cod is not None,
+                    "--background": background is not None, "--cam-dist": cam_dist is not None,
+                    "--proj-dist": proj_dist is not None, "--no-refine": no_refine}, poses)
+    cod, background = value(cod) or "auto", value(background) or "free"
+    cam_dist, proj_dist = value(cam_dist) or "auto", value(proj_dist) or "auto"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
                         background=not multi)
-    camera = _sp.CameraOptions(cod=value(cod))
-    dense_options = _dense_options(throw_ratio, lens_shift, projector_file, multi or camera_only)
+    camera = _sp.CameraOptions(cod=cod)
+    dense_options = _dense_options(throw_ratio, lens_shift, projector_file)
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
     output_path(yaml, "--yaml", (".yml", ".yaml"), inputs=poses)
@@ -141,15 +202,14 @@ def calibrate_cmd(
     outs = [p.resolve() for p in (out, yaml, png, report) if p is not None]
     if len(set(outs)) < len(outs):
         fail("-o, --yaml, --png and --report must be different files")
-    from ..capture import is_rig_pose
-
-    if not camera_only and camera_file is None and any(is_rig_pose(p) for p in poses):
+    if rig:
         from . import _rig
 
         distinct_poses(poses)
-        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, report=report, brd=brd, method=_METHODS[value(method)],
-                              options=opts, camera=camera, background=BackgroundOptions(mode=value(background)),
-                              cam_dist=value(cam_dist), proj_dist=value(proj_dist), refine=not no_refine, force=force,
+        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, report=report, brd=brd,
+                              method=_METHODS[value(method)], options=opts, camera=camera,
+                              background=BackgroundOptions(mode=background), cam_dist=cam_dist, proj_dist=proj_dist,
+                              refine=not no_refine, force=force,
                               projector=optional_size(projector), order=value(order), step=step)
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
@@ -162,8 +222,6 @@ def calibrate_cmd(
             fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
         if multi and len(poses) < 2:
             fail("--method multi needs at least two pose folders (three or more recommended)")
-        if multi and camera_file is not None:
-            fail("--camera (known camera intrinsics) is for a single-pose calibration; give one pose folder")
         distinct_poses(poses)
         from ..stream import Prefetcher
 
@@ -190,8 +248,8 @@ def calibrate_cmd(
 
     try:
         calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
-                                             background=BackgroundOptions(mode=value(background)),
-                                             cam_dist=value(cam_dist), proj_dist=value(proj_dist),
+                                             background=BackgroundOptions(mode=background),
+                                             cam_dist=cam_dist, proj_dist=proj_dist,
                                              refine=not no_refine, known_projector=known_projector,
                                              dense=dense_options)
     except DegeneratePoseError as e:  # no result at all: nothing to write, even with --force

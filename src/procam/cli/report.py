@@ -44,7 +44,7 @@ def report_cmd(
             fail("give --board COLSxROWS and --square with the pose folders (the board they show)")
         brd = parse_board(board, square)
         opts = pose_options(**pose_args)
-    from ..rig.file import is_rig_calibration
+    from ..io.rig import is_rig_calibration
 
     if is_rig_calibration(calibration):  # several projectors / cameras (procam.rig): the rig's page
         from . import _rig

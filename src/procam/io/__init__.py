@@ -10,6 +10,7 @@
     kamino410         kamino410/procam-calibration's calibration_result.xml and camera_config.json
     calibration_file  one calibration file, whatever its format: save_calibration (by suffix), load_calibration
                       and load_camera_intrinsics (by content)
+    rig               a rig's calibration file (every device, relative pose and pair), written and read back
     maps              decoded maps (procam decode -o) and remap tables as .npz
     engines           the engine exports' files: their JSON, the Blender script, distortion maps, the projector's view
     ply               point clouds as binary PLY
@@ -23,7 +24,7 @@ from __future__ import annotations
 import importlib
 
 _SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "calibration_file",
-               "maps", "engines", "ply")
+               "rig", "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {
@@ -36,6 +37,7 @@ _EXPORTS = {
     "load_calibration": "calibration_file", "load_camera_intrinsics": "calibration_file",
     "load_projector_intrinsics": "calibration_file",
     "save_calibration": "calibration_file", "complete_sizes": "calibration_file",
+    "load_rig_calibration": "rig", "save_rig_calibration": "rig", "is_rig_calibration": "rig",
     "load_decoded_maps": "maps", "save_decoded_maps": "maps", "save_maps": "maps",
     "read_ply": "ply", "write_ply": "ply",
 }

@@ -23,14 +23,13 @@ cannot be read is refused with one line that names it and the formats read.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from . import kamino410, opencv, procam
 from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV, RIG_CALIBRATION_FORMAT
-from .validate import check_size, validate_calibration
+from .validate import check_size, load_json, validate_calibration
 
 #: What :func:`load_calibration` reads, as its errors say it.
 CALIBRATION_FORMATS = ("procam reads procam calibration JSON, OpenCV FileStorage YAML/XML with procam's keys "
@@ -71,10 +70,7 @@ def _kind(path: Path) -> str | None:
 
 
 def _json(path: Path, what: str, hint: str):
-    try:
-        return json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as e:
-        raise CalibrationFileError(f"{path}: {what} ({e}); {hint}") from None
+    return load_json(path, what, hint)
 
 
 def _is_storage(doc) -> bool:
@@ -104,15 +100,17 @@ def _storage_calibration(fs, path) -> Calibration:
                                f"or {KAMINO410.cam_K}/{KAMINO410.proj_K}); {CALIBRATION_FORMATS}")
 
 
-def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
-    """The procam calibration document of one pair of a rig calibration (``procam-rig-calibration``): ``pair`` is
-    ``"camera/projector"`` or a device name that is in one pair only; None for a rig of one pair."""
+def _rig_pair(path: Path, doc: dict, pair: str | None) -> tuple[str, dict]:
+    """``(key, document)``: the procam calibration document of one pair of a rig calibration
+    (``procam-rig-calibration``): ``pair`` is ``"camera/projector"`` or a device name that is in one pair only; None
+    for a rig of one pair."""
     pairs = doc.get("pairs")
     if not isinstance(pairs, dict) or not pairs:
         raise CalibrationFileError(f"{path}: a rig calibration without pairs")
     if pair is None and len(pairs) == 1:
-        return next(iter(pairs.values()))
-    hits = [k for k in pairs if pair is not None and (k == pair or pair in k.split("/"))]
+        hits = list(pairs)
+    else:
+        hits = [k for k in pairs if pair is not None and (k == pair or pair in k.split("/"))]
     if len(hits) != 1:
         what = "names no pair" if pair is not None and not hits else "is ambiguous" if pair is not None else ""
         raise CalibrationFileError(f"{path}: a rig calibration of {len(pairs)} pairs ({', '.join(pairs)})"
@@ -121,13 +119,13 @@ def _rig_pair(path: Path, doc: dict, pair: str | None) -> dict:
                                    "load_calibration(path, pair=...))")
     if not isinstance(pairs[hits[0]], dict) or pairs[hits[0]].get("format") != CALIBRATION_FORMAT:
         raise CalibrationFileError(f"{path}: pair {hits[0]!r} is not a procam calibration document")
-    return pairs[hits[0]]
+    return hits[0], pairs[hits[0]]
 
 
 def load_calibration(path, pair: str | None = None) -> Calibration:
     """Read a calibration in any format procam writes or reads (module docstring), recognised by content.
 
-    A rig calibration (``procam-rig-calibration``, :mod:`procam.rig.file`) holds one calibration per
+    A rig calibration (``procam-rig-calibration``, :mod:`procam.io.rig`) holds one calibration per
     (camera, projector) pair: ``pair`` names it (``"camera/projector"``, or a device name in one pair only); it
     is required for a rig of several pairs and refused for any other file.
 
@@ -147,7 +145,12 @@ def load_calibration(path, pair: str | None = None) -> Calibration:
     if kind == "json":
         doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)
         if isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT:
-            return validate_calibration(procam.calibration_from_json(path, _rig_pair(path, doc, pair)), path)
+            from .rig import rig_devices
+
+            rig_devices(path, doc)          # the whole rig checked: a file is read whole or refused
+            key, pair_doc = _rig_pair(path, doc, pair)
+            where = f"{path} (pair {key})"  # the errors name the pair
+            return validate_calibration(procam.calibration_from_json(where, pair_doc), where)
         if pair is not None:
             raise CalibrationFileError(f"{path}: not a rig calibration, so it has no pair {pair!r}")
         if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:

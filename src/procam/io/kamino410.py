@@ -35,6 +35,32 @@ KAMINO410_KEYS = {
 OLD_ROTATION_KEY = "roration"
 
 
+def _off_centre(K, size) -> float:
+    """How far the principal point of ``K`` sits from the centre of a ``size`` = (w, h) image, as the larger of its
+    two offsets in fractions of the side."""
+    w, h = size
+    return max(abs(K[0, 2] - (w - 1) / 2) / w, abs(K[1, 2] - (h - 1) / 2) / h)
+
+
+def camera_size(path, shape, K) -> tuple[int, int]:
+    """The camera's (width, height) from kamino410's ``img_shape`` (``[height, width]``), checked against the
+    camera matrix ``K``: a shape written as ``[width, height]`` puts the principal point off the centre of the image
+    it describes (by 10-40 % of a side for 16:10 to 4:3 images) and at the centre of the transposed one.  Such a
+    file is refused (one line naming ``img_shape`` and both readings), never read as a camera turned a quarter
+    turn."""
+    size = check_size(path, "img_shape", np.asarray(shape).ravel()[::-1])
+    w, h = size
+    if w != h:
+        here, there = _off_centre(K, (w, h)), _off_centre(K, (h, w))
+        if here > 0.08 and there < here / 2:
+            bad(path, "img_shape", f"[{h}, {w}] reads as a {w}x{h} camera (kamino410's img_shape is [height, width]),"
+                                   f" but the principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) of {KAMINO410.cam_K} is "
+                                   f"that of a {h}x{w} camera (the centre of a {w}x{h} image is "
+                                   f"({(w - 1) / 2:.0f}, {(h - 1) / 2:.0f}))",
+                fix=f"write img_shape as [{w}, {h}] (height, width) if the camera is {h}x{w}")
+    return size
+
+
 def save_kamino410(calib: Calibration, path) -> Path:
     """Write kamino410/procam-calibration's ``calibration_result.xml`` (``cv2.FileStorage``), atomically.
 
@@ -90,7 +116,7 @@ def read_calibration(fs, path, proj_size=None) -> Calibration:
     shape = matrix(fs, path, "img_shape")
     if shape is None:
         bad(path, "img_shape", "is missing (the camera's height, width)")
-    cam_size = check_size(path, "img_shape", shape.ravel()[::-1])
+    cam_size = camera_size(path, shape, Kc)
     warnings = []
     if proj_size is not None:
         proj_size = check_size(path, "the projector size", proj_size)

@@ -110,9 +110,34 @@ def cv_message(e: BaseException) -> str:
     return f"{m.group(1)}: {m.group(2)}" if m else text
 
 
+def _top_level_keys(path) -> list[str]:
+    """The top-level keys of a FileStorage YAML or XML file in the order written ([] for JSON, which
+    :func:`procam.io.validate.load_json` checks, and for a file that does not parse: OpenCV then says why)."""
+    try:
+        text = Path(path).read_bytes().lstrip(b"\xef\xbb\xbf \t\r\n")
+    except OSError:
+        return []
+    if text.startswith((b"<?xml", b"<opencv_storage")):
+        import xml.etree.ElementTree as ET
+
+        try:
+            return [child.tag for child in ET.fromstring(text)]
+        except (ET.ParseError, ValueError, RecursionError):
+            return []
+    if text.startswith(b"{"):
+        return []
+    keys = []
+    for line in text.decode("utf-8", "replace").splitlines():
+        m = re.match(r"([^\s#%\-\[\]{}:'\"][^:]*?)\s*:(\s|$)", line)      # a key at column 0
+        if m:
+            keys.append(m.group(1))
+    return keys
+
+
 def open_storage(path, hint: str):
     """``cv2.FileStorage`` of ``path`` open for reading (OpenCV tells YAML, XML and JSON apart by content), or a
-    one-line :class:`CalibrationFileError` ending in ``hint`` (what the reader accepts)."""
+    one-line :class:`CalibrationFileError` ending in ``hint`` (what the reader accepts).  A top-level key given
+    twice is refused (OpenCV would silently read one of the two values)."""
     import cv2
 
     try:
@@ -123,6 +148,12 @@ def open_storage(path, hint: str):
         raise CalibrationFileError(f"{path}: not a readable OpenCV FileStorage file ({msg}); {hint}") from None
     if not opened:
         raise CalibrationFileError(f"{path}: not a readable OpenCV FileStorage file; {hint}")
+    seen = set()
+    for key in _top_level_keys(path):
+        if key in seen:
+            fs.release()
+            bad(path, key, "is given twice (procam cannot tell which one is meant)", fix="keep one")
+        seen.add(key)
     return fs
 
 
@@ -212,8 +243,9 @@ def read_calibration(fs, path) -> Calibration:
         info={"image_size_assumed": assumed} if assumed else {}, verdict=verdict_level(string(fs, "verdict")))
 
 
-def _camera_size(fs, path, K_key):
-    """The camera's image size as its layout stores it, or None."""
+def _camera_size(fs, path, K_key, K):
+    """The camera's image size as its layout stores it (checked against its matrix ``K`` where the layout's order
+    of width and height is easily mistaken), or None."""
     if K_key == OPENCV.cam_K:
         m = matrix(fs, path, "cam_size")
         return None if m is None else check_size(path, "cam_size", m)
@@ -223,8 +255,10 @@ def _camera_size(fs, path, K_key):
         w, h = real(fs, path, "image_width"), real(fs, path, "image_height")
         return check_size(path, "image_width/image_height", (w, h))
     if K_key == KAMINO410.cam_K:
+        from .kamino410 import camera_size
+
         m = matrix(fs, path, "img_shape")
-        return None if m is None else check_size(path, "img_shape", m.ravel()[::-1])
+        return None if m is None else camera_size(path, m, K)
     return None
 
 
@@ -234,5 +268,5 @@ def read_camera(fs, path) -> tuple[np.ndarray, Distortion, tuple[int, int] | Non
     for K_key, d_key, _ in CAMERA_LAYOUTS:
         if has(fs, K_key):
             K = check_K(path, K_key, matrix(fs, path, K_key))
-            return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key)
+            return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key, K)
     return None

@@ -26,9 +26,14 @@ The rules, and why each is what it is:
   Division model: a finite centre ``(x, y)`` and finite ``k1``, ``k2``.
 * translation ``T``: 3 finite numbers, ``0 < |T| <= MAX_BASELINE`` (camera and projector are apart).
 * an RMS error: a number of pixels, or absent (NaN).
+* a JSON file: each key once in every object (:func:`load_json`); a second value of a key is refused, never
+  read as the first or the last.
 """
 
 from __future__ import annotations
+
+import json
+from pathlib import Path
 
 import numpy as np
 
@@ -173,6 +178,35 @@ def check_rms(path, field: str, v) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         bad(path, field, f"must be a number of pixels, got {short(v)}")
     return float(v)
+
+
+class _DuplicateKey(ValueError):
+    pass
+
+
+def _unique_keys(pairs):
+    seen = {}
+    for k, v in pairs:
+        if k in seen:
+            raise _DuplicateKey(k)
+        seen[k] = v
+    return seen
+
+
+def load_json(path, what: str, hint: str, *, error: type = CalibrationFileError):
+    """The JSON document of the file ``path``, each key once in every object.  A file that cannot be read or
+    parsed is refused with ``PATH: WHAT (why); HINT``, a key given twice with ``PATH: key 'K' is given twice``
+    (raised as ``error``)."""
+    path = Path(path)
+    try:
+        return json.loads(path.read_text(), object_pairs_hook=_unique_keys)
+    except _DuplicateKey as e:
+        raise error(f"{path}: key {e.args[0]!r} is given twice (procam cannot tell which one is meant); keep "
+                    "one") from None
+    except RecursionError:
+        raise error(f"{path}: {what} (nested too deeply); {hint}") from None
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise error(f"{path}: {what} ({e}); {hint}") from None
 
 
 def validate_calibration(calib, path) -> Calibration:

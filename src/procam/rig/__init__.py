@@ -7,7 +7,7 @@ every device in the reference camera's frame (the first camera; ``x_dev = R x_re
 * :mod:`~procam.rig.calibrate` - :func:`calibrate_rig`: single-pose per pair with the shared camera (one rig
   pose), or per-pair multi-pose initialisation then a joint refinement of every device and pose
   (:mod:`~procam.rig.joint`, sparse least squares); every relative pose with its std (:mod:`~procam.rig.result`).
-* :mod:`~procam.rig.file` - the rig calibration file (JSON, OpenCV YAML); each pair also an ordinary procam
+* :mod:`procam.io.rig` - the rig calibration file (JSON, OpenCV YAML); each pair also an ordinary procam
   calibration (:func:`procam.io.load_calibration` with ``pair=``).
 * :mod:`~procam.rig.verify` - where two projectors light the same corners, their triangulated points agree
   (mm and % of depth).

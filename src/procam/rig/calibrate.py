@@ -65,11 +65,17 @@ class RigPoseViews:
 def rig_views_from_folders(folders: Sequence, board, projector=None, order=None, *, options=None, step=None,
                            progress=None) -> list[RigPoseViews]:
     """The :class:`RigPoseViews` of rig pose folders (:func:`procam.capture.read_rig_pose`; each pair's folder by
-    :func:`procam.pipeline.view_from_folder`).  Every pose must name the same cameras and projectors.
+    :func:`procam.pipeline.view_from_folder`).  Every pose must name the same cameras and projectors, and no pair
+folder may be another's capture (:func:`procam.capture.distinct.refuse_repeats`).
     ``progress(done, total, folder)`` after each pair's folder."""
     from .. import capture, pipeline
 
+    from ..capture.distinct import refuse_repeats
+
+    refuse_repeats(folders, "rig pose folder", "give each rig pose once")
     rigs = [capture.read_rig_pose(f) for f in folders]
+    refuse_repeats([p.folder for r in rigs for p in r.pairs], "pair folder",
+                   "each rig pose needs its own capture of each pair")
     first = rigs[0]
     for r in rigs[1:]:
         if (r.cameras, r.projectors) != (first.cameras, first.projectors):

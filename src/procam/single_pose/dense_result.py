@@ -61,6 +61,52 @@ def std_dict(fit: DenseFit, known_camera=None, known_projector=None) -> dict:
     return out
 
 
+#: The priors' pull on a fit (the sum of their squared normalised residuals ``((estimate - mean) / std)^2``) beyond
+#: which the data contradict them: 5 sigma of one term.
+PRIOR_PULL_ALARM = 25.0
+#: A datasheet prior *holds* its parameter when the fit's std of it is at least this fraction of the prior's: the
+#: estimate is then the prior's, not the data's.
+PRIOR_HOLDS = 0.5
+
+
+def _prior_words(name: str, mu: float, sd: float, proj_size) -> str:
+    """A prior in the datasheet's words where it has them (module :mod:`procam.datasheet`)."""
+    W, H = (float(v) for v in proj_size)
+    if name == "f_p":
+        return f"the datasheet's throw ratio {mu / W:.4g} ± {sd / W:.2g} (f_p = {mu:.5g} ± {sd:.3g} px)"
+    if name == "v0p":
+        return f"the datasheet's vertical lens shift {100 * (mu - (H - 1) / 2) / H:.3g} % ± {100 * sd / H:.2g} % " \
+               f"(v0p = {mu:.5g} ± {sd:.3g} px)"
+    if name == "u0p":
+        return f"the prior u0p = {mu:.5g} ± {sd:.3g} px (horizontal lens shift {100 * ((W - 1) / 2 - mu) / W:.3g} %)"
+    return f"the assumed {name} = {mu:.4g} ± {sd:.3g}"
+
+
+def prior_conflict(fit: DenseFit, proj_size) -> str:
+    """Why the data contradict the datasheet priors that hold the fit, or '' when they do not.
+
+    The priors' pull is the sum of their squared normalised residuals (decentrings aside); beyond
+    :data:`PRIOR_PULL_ALARM` the data contradict them.  It is the datasheet's number that is wrong (not the pose) when
+    a datasheet prior (``f_p`` of a throw ratio, ``v0p`` of a lens shift) holds its parameter (the fit's std of it at
+    least :data:`PRIOR_HOLDS` of the prior's): the estimate is then the prior's, and the other priors give way.  A
+    prior the data outweigh (a loose tolerance) moves nothing: the estimate is the data's, said by the fit's
+    conflicts only."""
+    terms = [(n, mu, sd, (float(fit.p[J.IDX[n]]) - mu) / sd) for n, mu, sd in fit.priors if n not in J.DECENTRING]
+    pull = sum(z * z for *_, z in terms)
+    held = [t for t in terms if t[0] in ("f_p", "v0p") and fit.std(t[0]) >= PRIOR_HOLDS * t[2]]
+    if pull <= PRIOR_PULL_ALARM or not held:
+        return ""
+    shown = sorted((t for t in terms if abs(t[3]) > 2 or t in held), key=lambda t: -abs(t[3]))
+    pulls = ", ".join(f"{n} {float(fit.p[J.IDX[n]]):.5g} ({z:+.1f} sigma from {mu:.5g})" for n, mu, _, z in shown)
+    want = " and ".join(f"a {'smaller' if z < 0 else 'larger'} {'throw ratio' if n == 'f_p' else 'vertical lens shift'}"
+                        for n, _, _, z in held)
+    return (f"the data contradict {' and '.join(_prior_words(n, mu, sd, proj_size) for n, mu, sd, _ in held)}, "
+            f"which holds the fit (the fit's ± is the prior's) while the data want {want}: the priors pull the "
+            f"estimate by chi-square {pull:.0f} "
+            f"(at most {PRIOR_PULL_ALARM:.0f}): {pulls}; the pose is not the cause -- check the datasheet's number "
+            "(docs/datasheet.md), widen its tolerance or leave it out")
+
+
 def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=None) -> dict:
     """The projector's rating from the dense fit's ``±`` (module constants), in the rating's words (the keys of
     :func:`procam.single_pose.rating.rate_pose`'s device entries, ``source = "fit"``)."""
@@ -89,7 +135,10 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
     what = (f"this pose determines f_p {f:.1f} to ± {sf:.1f} px ({100 * rel:.2f} %), u0p to ± {su:.1f}, v0p to ± "
             f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors; the "
             f"reported ± adds a lens decentring no pose can see)")
-    if level == "failed":
+    conflict = prior_conflict(fit, proj_size)
+    if conflict:      # the estimate is the datasheet's, bent to fit it: not a result, whatever its ±
+        level, msg = "failed", f"projector: FAILED estimate: {conflict}"
+    elif level == "failed":
         msg = (f"projector: FAILED estimate: f_p = {f:.4g} px is impossible for a {proj_size[0]}x{proj_size[1]} panel "
                f"(plausible {lo:.0f}-{hi:.0f} px) -- turn the board about the projector's vertical axis")
     elif level == "good":
