@@ -187,13 +187,18 @@ def view_from_folder(folder, board: Board, projector=None, order=None, *, option
 
 def views_from_folders(folders: Sequence, board: Board, projector=None, order=None, *,
                        options: PoseOptions = PoseOptions(), step=None,
-                       progress: Callable[[int, int, str], None] | None = None, prefetcher=None) -> list[View]:
+                       progress: Callable[[int, int, str], None] | None = None, prefetcher=None,
+                       dropped: list | None = None) -> list[View]:
     """One View per pose folder (:func:`view_from_folder`), in order; ``progress(done, total, folder)``
     after each.
 
     The next pose's images are read in background threads while this one is processed: by ``prefetcher``
     (a :class:`procam.stream.Prefetcher` of ``folders`` the caller started, and closes), else by one made here.
     Only the Views are kept.
+
+    ``dropped``: a list to leave out the poses whose board is not found (:class:`BoardNotFoundError`) instead of
+    raising: each is appended as ``(folder, message)`` (a multi-pose set goes on with the poses that show the
+    board; the caller says so). Any other error of a pose still raises.
     """
     from .stream import Prefetcher
 
@@ -201,8 +206,14 @@ def views_from_folders(folders: Sequence, board: Board, projector=None, order=No
     views = []
     with (Prefetcher(folders) if prefetcher is None else contextlib.nullcontext(prefetcher)) as pf:
         for k, folder in enumerate(folders):
-            view, _ = view_from_folder(folder, board, projector, order, options=options, step=step, reader=pf.read,
-                                       keep_maps=False)
+            try:
+                view, _ = view_from_folder(folder, board, projector, order, options=options, step=step,
+                                           reader=pf.read, keep_maps=False)
+            except BoardNotFoundError as e:
+                if dropped is None:
+                    raise
+                dropped.append((str(folder), str(e)))
+                continue
             views.append(view)
             if progress is not None:
                 progress(k + 1, len(folders), str(folder))

@@ -207,13 +207,19 @@ def evidence_reasons(check, options: EvidenceOptions = EvidenceOptions()) -> lis
 
 def with_evidence(calib, check, options: EvidenceOptions = EvidenceOptions()):
     """The calibration with its verdict made worse where its metric verification says so
-    (:func:`evidence_reasons`): the reasons join ``verdict_reasons`` and ``warnings`` and are emitted as the procam
-    warning of their level. Unchanged when the evidence finds nothing (or only what it already says)."""
+    (:func:`evidence_reasons`): :func:`with_reasons` of them."""
+    return with_reasons(calib, evidence_reasons(check, options), stacklevel=3)
+
+
+def with_reasons(calib, reasons, *, stacklevel: int = 2):
+    """The calibration with its verdict made worse by ``reasons`` (``[(level, message)]``, level ``weak``,
+    ``degenerate`` or ``failed``): the messages join ``verdict_reasons`` and ``warnings`` and are emitted as the
+    procam warning of their level. Unchanged when there are none (or only what it already says)."""
     import warnings as _warnings
 
     from .errors import DegeneratePoseWarning, FailedEstimateWarning, WeakPoseWarning
 
-    new = [(lvl, r) for lvl, r in evidence_reasons(check, options) if r not in calib.verdict_reasons]
+    new = [(lvl, r) for lvl, r in reasons if r not in calib.verdict_reasons]
     if not new:
         return calib
     rank = LEVELS.index
@@ -224,7 +230,7 @@ def with_evidence(calib, check, options: EvidenceOptions = EvidenceOptions()):
     for lvl in ("failed", "degenerate", "weak"):
         msgs = [r for level, r in new if level == lvl]
         if msgs:
-            _warnings.warn("; ".join(msgs), category[lvl], stacklevel=2)
+            _warnings.warn("; ".join(msgs), category[lvl], stacklevel=stacklevel)
     return calib.replace(verdict=word, verdict_reasons=tuple(worst) + tuple(calib.verdict_reasons) + tuple(rest),
                          warnings=tuple(calib.warnings) + tuple(r for _, r in new if r not in calib.warnings))
 

@@ -112,6 +112,21 @@ def _refuse_unused(path: str, given: dict, poses) -> None:
         fail(f"{opt} is {what}; this is a {path} calibration, which would ignore it: leave it out{hint}")
 
 
+def _left_out(dropped, n_views: int) -> list[str]:
+    """The reasons of the poses left out of a multi-pose set because their board was not found (one line each,
+    printed now; they join the verdict); a one-line error when fewer than two poses are left."""
+    reasons = []
+    for folder, why in dropped:
+        why = why.split(": ", 1)[1] if why.startswith(f"{folder}: ") else why
+        reasons.append(f"pose {folder} left out: {why}; calibrated from the other poses (--strict fails instead; "
+                       "--detector sb, or capture the pose again with the whole board in view)")
+        warn(reasons[-1])
+    if dropped and n_views < 2:
+        fail(f"{len(dropped)} of {len(dropped) + n_views} poses show no board ({', '.join(f for f, _ in dropped)}): "
+             "a multi-pose calibration needs at least two; check --board and capture again")
+    return reasons
+
+
 #: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
 #: imported in a thread while the poses are read and decoded, so the import costs no wall time.
 SOLVER_MODULES = ("scipy.special", "scipy.optimize", "procam.verify")
@@ -155,6 +170,8 @@ def calibrate_cmd(
     proj_dist: DistModel = typer.Option(None, "--proj-dist", show_default="auto", help="Multi-pose projector "
                                         "distortion model."),
     no_refine: bool = typer.Option(False, "--no-refine", help="Multi-pose: skip the joint refinement."),
+    strict: bool = typer.Option(False, "--strict", help="Multi-pose: fail when a pose's board is not found "
+                                "(default: leave that pose out, say so, and calibrate from the others)."),
     force: bool = typer.Option(False, "--force", help="Write a degenerate or failed calibration anyway (marked as "
                                                       "such in the files; the exit code is still 3)."),
     projector: ProjectorOpt = None,
@@ -211,6 +228,7 @@ def calibrate_cmd(
                               background=BackgroundOptions(mode=background), cam_dist=cam_dist, proj_dist=proj_dist,
                               refine=not no_refine, force=force,
                               projector=optional_size(projector), order=value(order), step=step)
+    left_out = []
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
             fail("a camera-only calibration has no projector, so no OpenCV procam YAML; write it as JSON (-o cam.json)")
@@ -225,11 +243,13 @@ def calibrate_cmd(
         distinct_poses(poses)
         from ..stream import Prefetcher
 
+        dropped = [] if multi and not strict else None
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext(), \
                 Prefetcher(poses) as pf:
             preload(SOLVER_MODULES)
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
-                                                step=step, prefetcher=pf)
+                                                step=step, prefetcher=pf, dropped=dropped)
+        left_out = _left_out(dropped or (), len(views))
         for v in views:
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
             for w in v.diagnostics.get("warnings", []):
@@ -254,6 +274,10 @@ def calibrate_cmd(
                                              dense=dense_options)
     except DegeneratePoseError as e:  # no result at all: nothing to write, even with --force
         fail(f"degenerate: {e}", code=3, label="not trusted")
+    if left_out:
+        from ..verdict import with_reasons
+
+        calib = with_reasons(calib, [("weak", r) for r in left_out])
     check = None
     if calib.projector is not None:  # the metric verification: in-sample, and leave-one-out with >= 4 poses
         from ..verify import verify_calibration
