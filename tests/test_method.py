@@ -30,7 +30,7 @@ def test_a_method_that_cannot_work_with_the_views_is_refused():
         method.calibrate([v, v], method="single-pose")
     with pytest.raises(CalibrationError, match="multi-pose calibration needs at least two views"):
         method.calibrate([v], method="multi-pose")
-    with pytest.raises(CalibrationError, match="known camera intrinsics are for a single-pose calibration"):
+    with pytest.raises(CalibrationError, match="known camera or projector intrinsics are for a single-pose calibration"):
         method.calibrate([v], method="camera-only", known_camera=object())
 
 
@@ -43,3 +43,32 @@ def test_one_view_is_the_single_pose_calibration():
     assert calib.camera.K.tolist() == again.camera.K.tolist()
     photo = method.calibrate([v], method="camera-only")
     assert photo.method == "camera-only" and photo.projector is None and photo.views == (v,)
+
+
+@pytest.mark.parametrize("unit", ["view", "pose folder", "rig pose", "rig pose folder"])
+def test_one_method_rule_worded_once_for_every_caller(unit):
+    """The library, the rig path and the CLI ask :func:`procam.method.check`: one rule, one wording."""
+    from procam import method
+
+    with pytest.raises(CalibrationError, match=rf"a single-pose calibration takes one {unit}, got 3; .*--method multi"):
+        method.check("single-pose", 3, unit=unit)
+    with pytest.raises(CalibrationError, match=rf"a multi-pose calibration needs at least two {unit}s"):
+        method.check("multi-pose", 1, unit=unit)
+    method.check("multi-pose", 2, unit=unit)
+    method.check("single-pose", 1, known_intrinsics=True, unit=unit)
+    with pytest.raises(CalibrationError, match="known camera or projector intrinsics are for a single-pose"):
+        method.check("multi-pose", 3, known_intrinsics=True, unit=unit)
+
+
+def test_the_rig_path_and_the_cli_use_the_one_rule(tmp_path):
+    from conftest import run_cli
+
+    from procam.rig import calibrate_rig
+
+    with pytest.raises(CalibrationError, match="a multi-pose calibration needs at least two rig poses"):
+        calibrate_rig([object()], method="multi-pose")
+    folder = tmp_path / "pose"
+    folder.mkdir()
+    code, _, err = run_cli(["calibrate", str(folder), "--method", "multi", "--board", "10x6", "--square", "24",
+                            "-o", tmp_path / "c.json"])
+    assert code == 2 and "a multi-pose calibration needs at least two pose folders" in err

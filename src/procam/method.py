@@ -15,7 +15,8 @@ procam has three methods (the result's :attr:`~procam.calibration.Calibration.me
 :func:`choose` names the method before anything is decoded (a multi-pose pose needs fewer corners than a
 single-pose one, so the decoding depends on it): the one asked for, else single-pose for one view and
 multi-pose for several. Camera-only is never guessed: views without projector points are a failed decode,
-not photos. :func:`calibrate` runs it, after checking that it can work with the views it is given.
+not photos. :func:`check` is the one rule of what each method takes (the CLI and the rig path ask it too);
+:func:`calibrate` runs the method, after checking that it can work with the views it is given.
 
 The solvers are imported only when :func:`calibrate` runs them.
 """
@@ -27,7 +28,7 @@ from typing import Sequence
 from .errors import CalibrationError
 from . import choices
 
-__all__ = ["METHODS", "choose", "calibrate"]
+__all__ = ["METHODS", "choose", "check", "calibrate"]
 
 #: The calibration methods.
 METHODS = choices.METHODS
@@ -49,18 +50,23 @@ def choose(n_views: int, method: str | None = None) -> str:
     return method
 
 
-def _check(method: str, n_views: int, known_camera: bool) -> None:
-    """Raise :class:`CalibrationError` unless ``method`` can calibrate ``n_views`` views (with a known camera)."""
-    if n_views < 1:
-        raise CalibrationError("a calibration needs at least one view")
-    if method == "single-pose" and n_views != 1:
-        raise CalibrationError(f"a single-pose calibration takes one view, got {n_views}; calibrate several with "
-                               "the multi-pose method")
-    if method == "multi-pose" and n_views < 2:
-        raise CalibrationError("a multi-pose calibration needs at least two views (three or more recommended)")
-    if known_camera and method != "single-pose":
-        raise CalibrationError(f"known camera intrinsics are for a single-pose calibration of one view, not "
-                               f"{method}")
+def check(method: str, n: int, *, known_intrinsics: bool = False, unit: str = "view") -> None:
+    """Raise :class:`CalibrationError` unless ``method`` can calibrate ``n`` inputs: the one method rule, worded
+    once for every caller (``unit``: what the inputs are -- ``"view"``, ``"pose folder"``, ``"rig pose"``).
+
+    single-pose takes exactly one; multi-pose at least two; known intrinsics (a camera's or a projector's) are for
+    a single-pose calibration only.
+    """
+    if n < 1:
+        raise CalibrationError(f"a calibration needs at least one {unit}")
+    if method == "single-pose" and n != 1:
+        raise CalibrationError(f"a single-pose calibration takes one {unit}, got {n}; calibrate several with the "
+                               "multi-pose method (--method multi)")
+    if method == "multi-pose" and n < 2:
+        raise CalibrationError(f"a multi-pose calibration needs at least two {unit}s (three or more recommended)")
+    if known_intrinsics and method != "single-pose":
+        raise CalibrationError(f"known camera or projector intrinsics are for a single-pose calibration of one "
+                               f"{unit}, not {method}")
 
 
 def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, camera=None, background=None,
@@ -95,7 +101,7 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
     """
     views = list(views)
     method = choose(len(views), method)
-    _check(method, len(views), known_camera is not None or known_projector is not None)
+    check(method, len(views), known_intrinsics=known_camera is not None or known_projector is not None)
     if method == "multi-pose":
         from . import multi_pose
 

@@ -23,10 +23,9 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, rep
     if not_rig:
         fail(f"{not_rig[0]}: not a rig pose folder, while {poses[0] if str(poses[0]) != not_rig[0] else 'another'} "
              "is; give rig pose folders only (one sub-folder per camera-projector pair) or ordinary ones only")
-    if method == "multi-pose" and len(poses) < 2:
-        fail("--method multi needs at least two rig pose folders (three or more recommended)")
-    if method == "single-pose" and len(poses) != 1:
-        fail(f"--method single takes one rig pose folder, got {len(poses)}; use --method multi")
+    from .. import method as calibration_method
+
+    calibration_method.check(calibration_method.choose(len(poses), method), len(poses), unit="rig pose folder")
     views = rig_views_from_folders(poses, brd, projector, order, options=options, step=step)
     for pv in views:
         for (c, p), v in pv.views.items():

@@ -236,10 +236,7 @@ def calibrate_cmd(
             fail("--camera gives the camera's intrinsics; --camera-only estimates them: use one of the two")
         views = [pipeline.camera_only_view(p, brd, options=opts) for p in poses]
     else:
-        if how == "single-pose" and len(poses) != 1:
-            fail(f"--method single takes one pose folder, got {len(poses)}; use --method multi")
-        if multi and len(poses) < 2:
-            fail("--method multi needs at least two pose folders (three or more recommended)")
+        calibration_method.check(how, len(poses), unit="pose folder")
         distinct_poses(poses)
         from ..stream import Prefetcher
 

@@ -118,16 +118,14 @@ def calibrate_rig(poses: Sequence[RigPoseViews], *, method: str | None = None, c
     poses = list(poses)
     if not poses:
         raise CalibrationError("a rig calibration needs at least one rig pose")
-    method = method or ("single-pose" if len(poses) == 1 else "multi-pose")
-    if method == "single-pose":
-        if len(poses) != 1:
-            raise CalibrationError(f"a single-pose rig calibration takes one rig pose, got {len(poses)}")
-        return _single(poses[0], camera, background)
-    if method != "multi-pose":
+    from .. import method as calibration_method
+
+    method = calibration_method.choose(len(poses), method)
+    if method not in ("single-pose", "multi-pose"):
         raise CalibrationError(f"a rig is calibrated single-pose or multi-pose, not {method!r}")
-    if len(poses) < 2:
-        raise CalibrationError("a multi-pose rig calibration needs at least two rig poses (three or more "
-                               "recommended)")
+    calibration_method.check(method, len(poses), unit="rig pose")
+    if method == "single-pose":
+        return _single(poses[0], camera, background)
     return _multi(poses, cam_dist, proj_dist, refine)
 
 
