@@ -35,8 +35,8 @@ import numpy as np
 from .board import Board
 from .errors import BoardNotFoundError, CalibrationError, ProcamError
 
-__all__ = ["WorldCheckOptions", "WorldCheck", "world_check", "draw", "virtual_device", "capture_device",
-           "VERDICTS"]
+__all__ = ["VERDICTS", "WorldCheck", "WorldCheckOptions", "capture_device", "draw", "virtual_device",
+           "white_square_centres", "world_check"]
 
 #: The verdict words: the calibration holds in the world, is off, or the check cannot tell.
 VERDICTS = ("holds", "off", "inconclusive")
