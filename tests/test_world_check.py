@@ -154,6 +154,39 @@ def test_no_board_or_no_projector_is_a_one_line_error():
         WorldCheckOptions(tolerance_px=0.0)
 
 
+def test_capture_device_shows_and_grabs_through_the_capture_layer():
+    """capture_device on a VirtualProjector and a streaming camera whose first frame after each change is stale
+    (the previous image): the check waits for a frame of the image shown, and the truth holds."""
+    from procam.acquire import Frame, VirtualProjector
+    from procam.world_check import capture_device
+
+    sc = small_scene()
+    r = _renderer()
+    rng = np.random.default_rng(2)
+
+    class StaleCamera:
+        streaming = True
+
+        def __init__(self, projector):
+            self.projector, self.seen, self.lin, self.grabs = projector, None, None, 0
+
+        def grab(self):
+            self.grabs += 1
+            stale = self.lin
+            if self.seen is not self.projector.current:
+                self.seen = self.projector.current
+                self.lin = r.linear_image(self.seen)
+                if stale is not None:
+                    return Frame(r.finish(stale, rng), 0.0)
+            return Frame(r.finish(self.lin, rng), 0.0)
+
+    with VirtualProjector(sc.proj_size) as proj:
+        cam = StaleCamera(proj)
+        wc = world_check(simulate.truth_calibration(sc), _board(sc), capture_device(proj, cam, settle_s=0.0))
+    assert proj.shown == 3 and cam.grabs >= 7      # white (2 grabs), spots and black (3 each: stale, fresh, fresh)
+    assert wc.verdict == "holds" and wc.rms_px <= 0.3
+
+
 @pytest.fixture
 def small_rig(monkeypatch):
     """``--virtual`` renders the small scene (the CLI's rig is the capture's demo scene, 1280x800 at 3x3)."""
