@@ -209,6 +209,8 @@ def test_cli_world_check_virtual(tmp_path, small_rig):
     doc = json.loads((tmp_path / "wc.json").read_text())
     assert doc["verdict"] == "holds" and doc["rms_px"] <= 0.3 and doc["found"] == doc["targets"] == 22
     assert (tmp_path / "wc.png").read_bytes()[:4] == b"\x89PNG"
+    code, out, err = run_cli(["world-check", good, "--virtual", "--json", tmp_path / "wc.json"])  # its own: rewritten
+    assert code == 0, err
     code, out, err = run_cli(["world-check", bad, "--virtual"])
     assert code == 3 and "off:" in err and "focal length looks too long" in err and "Traceback" not in err
 

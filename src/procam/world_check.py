@@ -124,14 +124,15 @@ class WorldCheck:
     tolerance: float = float("nan")
 
     def to_dict(self) -> dict:
-        """The numbers as JSON-ready types (no image)."""
+        """The numbers as JSON-ready types (no image), ``"format": "procam-world-check"``."""
+        from .io.formats import WORLD_CHECK_FORMAT
         def arr(a):
             return [[None if not np.isfinite(v) else round(float(v), 4) for v in row] for row in np.asarray(a)]
 
         def num(v):
             return None if v is None or not np.isfinite(v) else round(float(v), 5)
 
-        return {"verdict": self.verdict, "reasons": list(self.reasons), "diagnosis": self.diagnosis,
+        return {"format": WORLD_CHECK_FORMAT, "version": 1, "verdict": self.verdict, "reasons": list(self.reasons), "diagnosis": self.diagnosis,
                 "rms_px": num(self.rms_px), "max_px": num(self.max_px), "rms": num(self.rms), "max": num(self.max),
                 "noise_px": num(self.noise_px), "tolerance_px": num(self.tolerance_px),
                 "tolerance": num(self.tolerance), "marker_sigma_proj_px": num(self.marker_sigma),
