@@ -96,7 +96,7 @@ def test_the_truth_holds_in_the_world():
     centres, _ = white_square_centres(_board(sc))
     others = [c for c in centres[:, :2] if np.min(np.hypot(*(wc.targets - c).T)) > 1e-9]
     assert len(others) == 23
-    level = [wc.white[int(round(y)), int(round(x))] for x, y in simulate.project_points(
+    level = [wc.white[round(y), round(x)] for x, y in simulate.project_points(
         sc, np.column_stack([others, np.zeros(23)]) @ np.asarray(sc.R_board).T + sc.t_board)]
     assert wc.white[tuple(np.rint(wc.predicted[:, ::-1]).astype(int).T)].min() > 2 * max(level)
     assert wc.rms_px <= 0.3 and wc.max_px <= 0.3 and wc.rms <= 0.3 and wc.diagnosis == ""

@@ -165,7 +165,7 @@ def _sample(image: np.ndarray, pts: np.ndarray, r: int = 1) -> np.ndarray:
     out = np.full(len(pts), np.nan)
     for k, (x, y) in enumerate(pts):
         if np.isfinite(x) and np.isfinite(y) and r <= x < w - r and r <= y < h - r:
-            xi, yi = int(round(x)), int(round(y))
+            xi, yi = round(x), round(y)
             out[k] = float(image[yi - r:yi + r + 1, xi - r:xi + r + 1].mean())
     return out
 
@@ -457,7 +457,7 @@ def draw(check: WorldCheck, magnify: float = 10.0, max_width: int = 1600) -> np.
     grey = bgr(NEUTRAL)
 
     def pt(p):
-        return int(round(p[0] * scale)), int(round(p[1] * scale))
+        return round(p[0] * scale), round(p[1] * scale)
 
     for p, f, s in zip(check.predicted, check.found, check.status):
         if not np.isfinite(p).all():
