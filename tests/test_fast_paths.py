@@ -405,7 +405,7 @@ print(json.dumps({"code": code, "typer": "typer" in sys.modules, "commands": cmd
     out, rep = run("calibrate", "--help")
     assert rep["code"] in (0, None) and rep["commands"] == ["calibrate"] and "--board" in out
     out, rep = run("--help")
-    assert rep["code"] in (0, None) and rep["commands"] == sorted(COMMANDS) and all(c in out for c in COMMANDS)
+    assert rep["code"] in (0, None) and rep["commands"] == sorted(COMMANDS.values()) and all(c in out for c in COMMANDS)
 
 
 def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):

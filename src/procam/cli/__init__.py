@@ -19,6 +19,7 @@ import sys
 COMMANDS = {name: name for name in ("advise", "capture", "check", "patterns", "decode", "simulate", "correspond",
                                     "calibrate", "evaluate", "report", "reconstruct", "export", "blend",
                                     "experiment", "study", "demo")}
+COMMANDS["world-check"] = "world_check"
 
 
 def register(names=None) -> None:

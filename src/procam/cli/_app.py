@@ -332,6 +332,26 @@ MAX_FRAMES = 10_000_000
 MAX_SEED = 2**32 - 1 - 99  # a session of up to 99 poses seeds pose k with seed + k
 
 
+def parse_pose(text: str) -> tuple[float, float, float]:
+    """``--pose PSI,NU[,PHI]``: the board's angles in degrees (phi 0 when left out), checked (one-line errors)."""
+    parts = [p for p in text.replace(";", ",").split(",") if p.strip()] if text else []
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        vals = []
+    if len(vals) not in (2, 3):
+        fail(f"--pose must be PSI,NU[,PHI] in degrees (e.g. 15,12,0), got {text!r}")
+    if not all(math.isfinite(v) for v in vals):
+        fail(f"--pose angles must be finite numbers of degrees, got {text!r}")
+    if len(vals) == 2:
+        vals.append(0.0)
+    if any(abs(v) >= 80 for v in vals[:2]):
+        fail(f"--pose angles psi and nu must be within +-80 degrees, got {text!r}")
+    if abs(vals[2]) > 360:
+        fail(f"--pose angle phi must be within +-360 degrees, got {text!r}")
+    return vals[0], vals[1], vals[2]
+
+
 def camera_settings(exposure, gain, camera_size, seed) -> tuple[int, int] | None:
     """Check the camera options of ``capture``/``advise`` (one line naming the option when one is out of range);
     returns the camera size ``(width, height)`` or None."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import typer
@@ -10,30 +9,11 @@ import typer
 from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
 from ._app import (ComplementaryOpt, CountsOpt, DeviceName, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt,
-                   SimPreset, StepsOpt, WhiteBlackOpt, app, console, fail, is_tty, number, pattern_sequence, say,
-                   user_errors, value, warn)
+                   SimPreset, StepsOpt, WhiteBlackOpt, app, console, fail, is_tty, number, parse_pose,
+                   pattern_sequence, say, user_errors, value, warn)
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
-
-
-def _parse_pose(text: str) -> tuple[float, float, float]:
-    parts = [p for p in text.replace(";", ",").split(",") if p.strip()] if text else []
-    try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        vals = []
-    if len(vals) not in (2, 3):
-        fail(f"--pose must be PSI,NU[,PHI] in degrees (e.g. 15,12,0), got {text!r}")
-    if not all(math.isfinite(v) for v in vals):
-        fail(f"--pose angles must be finite numbers of degrees, got {text!r}")
-    if len(vals) == 2:
-        vals.append(0.0)
-    if any(abs(v) >= 80 for v in vals[:2]):
-        fail(f"--pose angles psi and nu must be within +-80 degrees, got {text!r}")
-    if abs(vals[2]) > 360:
-        fail(f"--pose angle phi must be within +-360 degrees, got {text!r}")
-    return vals[0], vals[1], vals[2]
 
 
 @app.command("simulate")
@@ -91,7 +71,7 @@ def simulate_cmd(
     number(noise, "--noise", lo=0, hi=255, unit=" DN (8-bit grey levels)", what="a read noise")
     number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
     number(proj_gamma, "--proj-gamma", lo=0.2, hi=5, what="a projector gamma")
-    angles = _parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
+    angles = parse_pose(pose) if pose is not None else sim.RECOMMENDED_POSE
     if rig is not None:
         from . import _rig
 

@@ -46,6 +46,8 @@ PATTERNS_FORMAT = "procam-patterns"
 CAPTURE_FORMAT = "procam-capture"
 #: ``procam evaluate -o``.
 EVALUATION_FORMAT = "procam-evaluation"
+#: ``procam world-check --json`` (:meth:`procam.world_check.WorldCheck.to_dict`).
+WORLD_CHECK_FORMAT = "procam-world-check"
 #: The simulator's ``truth.json`` of one scene, and of a rig.
 SIM_TRUTH_FORMAT = "procam-sim-truth"
 SIM_RIG_TRUTH_FORMAT = "procam-sim-rig-truth"

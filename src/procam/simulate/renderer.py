@@ -228,6 +228,44 @@ class Renderer:
             raise ValueError(f"a {axis} pattern of this projector has {n} values, got shape {values.shape}")
         return self._linear(axis, _profile(self.emitted(values), self.sigma, self.pad))
 
+    def linear_image(self, image) -> np.ndarray:
+        """Noise-free linear camera image (H, W) float32 of ANY projector image: ``image`` (projector height,
+        projector width), 0-255 levels through ``proj_gamma`` (:meth:`emitted`) or bool.  :meth:`finish` adds the
+        camera's blur and noise.
+
+        The panel image is defocused (Gaussian, ``proj_defocus`` projector px, black beyond the panel) and looked
+        up bilinearly at native resolution (the 1-D patterns' profiles are 8x finer): right for images smooth on
+        the scale of a projector pixel (blobs, the white panel up to its outermost pixel); a binary stripe pattern
+        renders best through :meth:`linear_stripes`.
+        """
+        sc = self.scene
+        Wp, Hp = sc.proj_size
+        image = np.asarray(image)
+        if image.shape != (Hp, Wp):
+            raise ValueError(f"a projector image of this scene is ({Hp}, {Wp}) (height, width), got {image.shape}")
+        U, pad = PROFILE_UPSAMPLE, self.pad // PROFILE_UPSAMPLE + 1
+        light = np.zeros((Hp + 2 * pad, Wp + 2 * pad), np.float32)
+        light[pad:pad + Hp, pad:pad + Wp] = self.emitted(image)
+        if self.sigma > 0:
+            light = cv2.GaussianBlur(light, (0, 0), sigmaX=self.sigma, sigmaY=self.sigma,
+                                     borderType=cv2.BORDER_CONSTANT)
+        W, H = sc.cam_size
+        s = self.mapx.shape[0] // H
+        out = np.empty((H, W), np.float32)
+        shift = np.float32(pad - self.pad / U + 0.5 / U - 0.5)  # profile sample index -> padded panel pixel
+        for y0 in range(0, H, self.BAND):
+            y1 = min(H, y0 + self.BAND)
+            b = slice(y0 * s, y1 * s)
+            # the surfaces' shading: the white panel's light over the panel's own (defocused) extent
+            with np.errstate(divide="ignore", invalid="ignore"):
+                coef = np.where(self.full[b] > 1e-12, self.coef_cols[b] * self.coef_rows[b] / self.full[b], 0.0)
+            x = self.mapx[b] / np.float32(U) + shift
+            y = self.mapy[b] / np.float32(U) + shift
+            hi = cv2.remap(light, x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+            hi = hi * coef.astype(np.float32) + self.amb[b]
+            cv2.resize(hi, (W, y1 - y0), dst=out[y0:y1], interpolation=cv2.INTER_AREA)
+        return out
+
     def _linear(self, what: str, prof=None) -> np.ndarray:
         """The linear image of the white or black panel, or of a column or row profile (:func:`_profile`)."""
         sc = self.scene
