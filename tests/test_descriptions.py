@@ -1,0 +1,116 @@
+"""patterns.json and rig.json as a careless or unlucky user writes them (issue 36, items 13, 14, 16): every number
+and every JSON structure bounded before use, unknown keys named with the closest known one, a rig folder without
+rig.json named as such; each a one-line error naming the file and the field, exit code 2 on the command line."""
+
+import json
+
+import numpy as np
+import pytest
+
+from procam import capture
+from procam.errors import CaptureError
+from procam.io.jsonfile import JSONError, loads
+from conftest import run_cli, write_stack
+
+GRAY_PHASE = {"family": "gray-phase", "width": 64, "height": 48, "sequence": [
+    {"kind": "gray", "axis": "col", "bits": 3}, {"kind": "phase", "axis": "col", "steps": 4, "period": 8},
+    {"kind": "gray", "axis": "row", "bits": 3}, {"kind": "phase", "axis": "row", "steps": 4, "period": 8}]}
+
+
+def _with(path, text):
+    path.mkdir(parents=True, exist_ok=True)
+    (path / "patterns.json").write_text(text if isinstance(text, str) else json.dumps(text))
+    return path
+
+
+def _block(i, **change):
+    doc = json.loads(json.dumps(GRAY_PHASE))
+    doc["sequence"][i].update(change)
+    return doc
+
+
+@pytest.mark.parametrize("text, words", [
+    # a Gray block before its phase block used that block's period unchecked (ZeroDivisionError, TypeError)
+    (_block(1, period=None) | {"sequence": [GRAY_PHASE["sequence"][0],
+                                            {"kind": "phase", "axis": "col", "steps": 4, "periods": 0},
+                                            *GRAY_PHASE["sequence"][2:]]},
+     r"patterns.json: sequence\[1\].periods must be from 1e-06 to 32, got 0"),
+    (_block(1, period=[16]), r"patterns.json: sequence\[1\].period must be a number, got \[16\]"),
+    # a 400-digit width overflowed every float conversion (OverflowError)
+    ('{"width": ' + "9" * 400 + ', "height": 48}', r"patterns.json: width is a whole number of 400 digits"),
+    ('{"family": "phase", "width": ' + "9" * 400 + ', "height": 48, "sequence": []}',
+     r"patterns.json: width is a whole number of 400 digits"),
+    ('{"width": 64, "height": 48, "step": 1e400}', r"patterns.json: step is inf, not a finite number"),
+    ({"width": 64, "height": 48, "step": 10 ** 12}, r"patterns.json: step must be from 1 to 64"),
+    # nested 100,000 levels deep (RecursionError), and 70 levels (under Python's limit, over procam's)
+    ("[" * 100000 + "]" * 100000, r"patterns.json: is nested too deep \(more than 64 levels"),
+    ('{"width": 64, "height": 48, "notes": ' + "[" * 70 + "]" * 70 + "}", r"patterns.json: is nested too deep"),
+    ("[1, 2]", r"patterns.json: not a JSON object"),
+    ({"width": 64, "height": 48, "bit_order": "reversed"}, r'patterns.json: bit_order must be "msb-first"'),
+], ids=["periods-0", "period-list", "width-400-digits-gray", "width-400-digits-phase", "step-1e400", "step-1e12",
+        "nested-100000", "nested-70", "not-an-object", "bit-order"])
+def test_every_number_and_structure_is_bounded_before_use(tmp_path, text, words):
+    folder = _with(tmp_path / "pose", text)
+    with pytest.raises(CaptureError, match=words):
+        capture.resolve_pattern_set(folder)
+
+
+@pytest.mark.parametrize("doc, words", [
+    # the typo made the file a Gray description: "unknown order 'procam'; fix it or pass --order"
+    ({**GRAY_PHASE, "famliy": "gray-phase", "order": "procam"} | {"family": None},
+     r"unknown key 'famliy' \(did you mean 'family'\?"),
+    ({k: v for k, v in GRAY_PHASE.items() if k != "family"} | {"famliy": "gray-phase", "order": "procam"},
+     r"unknown key 'famliy' \(did you mean 'family'\?"),
+    ({"width": 64, "height": 48, "setp": 2}, r"unknown key 'setp' \(did you mean 'step'\?"),
+    ({"width": 64, "height": 48, "sequence": []}, r"unknown key 'sequence' \(the keys of a Gray-code description"),
+    (_block(0, bitorder="lsb-first"), r"sequence\[0\]: unknown key 'bitorder' \(did you mean 'bit_order'\?"),
+    (GRAY_PHASE | {"fringe": {"shfit": -1}}, r"fringe: unknown key 'shfit' \(did you mean 'shift'\?"),
+], ids=["famliy", "famliy-alone", "setp", "gray-with-sequence", "bitorder", "shfit"])
+def test_an_unknown_key_is_named_with_the_closest_known_one(tmp_path, doc, words):
+    doc = {k: v for k, v in doc.items() if v is not None}
+    folder = _with(tmp_path / "pose", doc)
+    with pytest.raises(CaptureError, match=words) as e:
+        capture.resolve_pattern_set(folder)
+    assert "unknown order" not in str(e.value)  # the key is the cause named, not the order it left alone
+
+
+def test_the_loader_names_the_field_and_leaves_ordinary_documents_alone():
+    assert loads('{"a": [1, 2.5, {"b": -3}], "c": "x"}') == {"a": [1, 2.5, {"b": -3}], "c": "x"}
+    with pytest.raises(JSONError, match=r"a\[2\]\.b is a whole number of 20 digits"):
+        loads('{"a": [1, 2, {"b": -12345678901234567890}]}')
+    with pytest.raises(JSONError, match=r"x is nan, not a finite number"):
+        loads('{"x": NaN}')
+    assert np.isnan(loads('{"x": NaN}', finite=False)["x"])
+
+
+def test_cli_refuses_a_bad_description_with_exit_2_and_the_field(tmp_path):
+    folder = _with(tmp_path / "pose", ('{"family": "phase", "width": ' + "9" * 400 + ', "height": 48, "sequence": []}'))
+    write_stack(folder, np.zeros((4, 8, 8), np.uint8))
+    code, out, err = run_cli(["decode", folder, "-o", tmp_path / "maps.npz"])
+    assert code == 2, out + err
+    text = " ".join((out + err).split())
+    assert "patterns.json: width is a whole number of 400 digits" in text and "Traceback" not in text
+    assert not (tmp_path / "maps.npz").exists()
+
+
+def test_a_deep_rig_json_is_a_one_line_error(tmp_path):
+    rig = tmp_path / "rig"
+    for sub in ("left", "right"):
+        (rig / sub).mkdir(parents=True)
+        (rig / sub / "patterns.json").write_text('{"width": 64, "height": 48}')
+    (rig / "rig.json").write_text('{"format": "procam-rig-pose", "pairs": ' + "[" * 100000 + "]" * 100000 + "}")
+    with pytest.raises(CaptureError, match=r"rig.json: not a readable rig manifest: it is nested too deep"):
+        capture.read_rig_pose(rig)
+
+
+def test_a_rig_folder_without_rig_json_names_what_a_rig_needs(tmp_path):
+    rig = tmp_path / "rig"
+    for sub in ("left", "right"):
+        write_stack(rig / sub, np.zeros((3, 8, 8), np.uint8))
+    with pytest.raises(CaptureError, match=r"holds no images, but its sub-folders left, right do: a rig pose folder "
+                                           r"needs a rig.json .* or a patterns.json in every sub-folder"):
+        capture.load_capture(rig, projector=(64, 48))
+    with pytest.raises(CaptureError, match=r"needs a rig.json"):
+        capture.read_rig_pose(rig)
+    code, out, err = run_cli(["decode", rig, "--projector", "64x48", "-o", tmp_path / "maps.npz"])
+    assert code == 2 and "rig.json" in " ".join((out + err).split())
