@@ -114,3 +114,70 @@ def test_a_rig_folder_without_rig_json_names_what_a_rig_needs(tmp_path):
         capture.read_rig_pose(rig)
     code, out, err = run_cli(["decode", rig, "--projector", "64x48", "-o", tmp_path / "maps.npz"])
     assert code == 2 and "rig.json" in " ".join((out + err).split())
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# the order of a Gray block's bits (issue 36 item 8, issue 34 build item 2)
+
+GRAY_BLOCKS = {"gray-opencv": dict(order="opencv"), "gray-moreno": dict(order="moreno"),
+               "gray-phase": dict(family="gray-phase"),
+               "gray-phase-no-inverse": dict(family="gray-phase", inverse=False, complementary=False)}
+
+
+def _render_gray_blocks(tmp_path, kind, rendered, described):
+    """The small scene's capture of the sequence ``kind`` with its Gray bits in the order ``rendered``, written with
+    a patterns.json that says ``described``; returns (folder, scene)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from sim_small import small_scene
+
+    from procam import patterns, simulate
+
+    scene = small_scene()
+    ps = patterns.pattern_set(*scene.proj_size, bit_order=rendered, **GRAY_BLOCKS[kind])
+    r = simulate.Renderer(scene).with_patterns(ps)
+    rng = np.random.default_rng(5)
+    folder = tmp_path / f"{kind}-{rendered}-{described}"
+    write_stack(folder, np.stack([r.frame(k, rng) for k in range(ps.count)]))
+    meta = ps.to_dict()
+    for d in [meta, *meta.get("sequence", [])]:
+        if d is meta and "sequence" in meta or d.get("kind", "gray") != "gray":
+            continue
+        d.pop("bit_order", None)
+        if described != "msb-first":
+            d["bit_order"] = described
+    (folder / "patterns.json").write_text(json.dumps(meta))
+    return folder, scene
+
+
+@pytest.mark.parametrize("kind", list(GRAY_BLOCKS))
+@pytest.mark.parametrize("rendered", ["msb-first", "lsb-first"])
+def test_every_gray_block_decodes_in_the_order_described(tmp_path, kind, rendered):
+    from procam import decode, simulate
+
+    folder, scene = _render_gray_blocks(tmp_path, kind, rendered, rendered)
+    cap = capture.load_capture(folder)
+    assert cap.pattern_set.count == len(cap.files)
+    res = decode.decode(cap.stack, cap.pattern_set)
+    tm = simulate.true_projector_maps(scene, step=4)
+    for got, true in ((res.col[::4, ::4], tm.col), (res.row[::4, ::4], tm.row)):
+        ok = tm.lit_board & np.isfinite(got)
+        assert ok.sum() > 0.9 * tm.lit_board.sum()
+        err = np.abs(got - true)[ok]
+        assert np.median(err) < 0.6 and np.mean(err > 8) < 1e-3  # right to the pixel, no stripe out of place
+
+
+@pytest.mark.parametrize("kind", list(GRAY_BLOCKS))
+@pytest.mark.parametrize("rendered, described", [("lsb-first", "msb-first"), ("msb-first", "lsb-first")])
+def test_a_gray_block_described_in_the_wrong_bit_order_is_refused_naming_the_order(tmp_path, kind, rendered,
+                                                                                    described):
+    folder, _ = _render_gray_blocks(tmp_path, kind, rendered, described)
+    said, seen = ("most", "least") if described == "msb-first" else ("least", "most")
+    where = "patterns.json" if kind.startswith("gray-o") or kind.startswith("gray-m") else r"sequence\[0\] in patterns.json"
+    with pytest.raises(CaptureError, match=rf"the column Gray bits come {seen} significant first, the description "
+                                           rf"says {said} .* write \"bit_order\": \"{rendered}\" in {where}"):
+        capture.load_capture(folder)
+    code, out, err = run_cli(["decode", folder, "-o", tmp_path / "maps.npz"])
+    assert code == 2 and f'"bit_order": "{rendered}"' in " ".join((out + err).split())

@@ -1,7 +1,8 @@
 """A phase-family capture folder: its checks and its board image.
 
 * :func:`check_phase_capture` - the white and black frames where the description puts them (when it has them),
-  every Gray bit followed by its inverse (when it says so), and the description itself against the frames
+  every Gray bit followed by its inverse (when it says so), the Gray bits in the described order
+  (:func:`procam.capture.bit_order.check_bit_order`), and the description itself against the frames
   (:func:`procam.phase.diagnose.check_description`: the fringes' modulation, each frame's fit to its block's
   sinusoid, the frequencies' (or the Gray code's) consistency, the decoded coordinates' range); each failure is a
   one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagrees.  Returns the exposure
@@ -19,6 +20,7 @@ import numpy as np
 
 from ..errors import CaptureError
 from ..io import files as _files
+from .bit_order import check_bit_order
 from .frames import describe_frame
 from .sample import _sample, frame_levels
 
@@ -98,6 +100,7 @@ def check_phase_capture(stack: np.ndarray, ps, folder, files, sub: np.ndarray | 
     sub = _sample(stack) if sub is None else sub
     _levels_check(stack, ps, folder, files, sub)
     _pairs_check(ps, folder, files, sub)
+    check_bit_order(stack, ps, folder, files)
     check_description(stack, ps, str(folder), files)
     fs = _files.full_scale_of(stack)
     frames = ps.phase_frames()

@@ -14,6 +14,8 @@ folder or file and says what to do:
   from the pattern/inverse pairs), or hints at the projector size and step;
 * the white and black frames are where the order puts them, judged from the images;
 * every pattern is followed by its inverse (catches shuffled or missing frames);
+* the bits come in the order the description says, most significant first unless its ``bit_order`` says
+  otherwise (:func:`~procam.capture.bit_order.check_bit_order`: the finer the bit, the more stripe edges);
 * when those checks fail, saturation (an over-exposed capture) and frames of another pose (a pattern
   and its inverse that do not add up like every other pair) are named as the cause.
 """
@@ -28,6 +30,7 @@ import numpy as np
 from .. import patterns
 from ..errors import CaptureError
 from ..io import files as _files
+from .bit_order import check_bit_order
 from .frames import describe_frame, frame_role
 from .sample import _sample, frame_levels, sample_index  # noqa: F401 (sample_index, frame_levels: re-exported)
 
@@ -552,6 +555,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
         check_light(stack, folder, sub=sub)
         check_white_black(stack, ps, folder, files, sub=sub)
         check_pairs(stack, ps, folder, files, sub=sub)
+        check_bit_order(stack, ps, folder, files)
         warnings = notes + exposure_warnings(stack, ps, folder, files)
     return Capture(stack, tuple(files), ps, folder, warnings)
 

@@ -417,7 +417,7 @@ def _check_set(ps: PhaseSet) -> None:
 
 def phase_set(width: int, height: int, family: str = "phase", *, steps: int | None = None,
               period: float | None = None, periods=None, inverse: bool = True, complementary: bool = True,
-              white_black: bool = True, fringe: Fringe = Fringe()) -> PhaseSet:
+              white_black: bool = True, fringe: Fringe = Fringe(), bit_order: str = "msb-first") -> PhaseSet:
     """procam's own sequence of ``family`` for a ``width`` x ``height`` projector.
 
     Columns first, then rows; per axis the Gray block (gray-phase) and the phase blocks finest first, the
@@ -438,6 +438,7 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
         both: the complementary bit removes the stripe-edge errors of the plain hybrid).
     white_black : end with a white and a black frame.
     fringe : the conventions (default procam's).
+    bit_order : gray-phase: the order of the Gray bits, ``"msb-first"`` (default) or ``"lsb-first"``.
     """
     if family not in PHASE_FAMILIES:
         raise ValueError(f"family must be one of {', '.join(PHASE_FAMILIES)}, got {family!r}")
@@ -464,7 +465,7 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
         p = float(period if period is not None else DEFAULT_PERIODS[family][0])
         if family == "gray-phase":
             add(kind="gray", axis=axis, bits=bits_for(_periods_needed(n, p, fringe.x0)), inverse=bool(inverse),
-                complementary=bool(complementary), period=p)
+                complementary=bool(complementary), period=p, bit_order=bit_order)
             add(kind="phase", axis=axis, steps=steps, period=p)
             continue
         if periods is not None:
