@@ -181,3 +181,88 @@ def test_a_gray_block_described_in_the_wrong_bit_order_is_refused_naming_the_ord
         capture.load_capture(folder)
     code, out, err = run_cli(["decode", folder, "-o", tmp_path / "maps.npz"])
     assert code == 2 and f'"bit_order": "{rendered}"' in " ".join((out + err).split())
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# the shift's direction, checked by the direction the fringes move (issue 36 item 5)
+
+def _render_phase(tmp_path, name, description_change, **fringe):
+    """The small scene's capture of procam's phase sequence (4 steps; shift +1, sign +1, or the conventions
+    ``fringe``) with a patterns.json changed by ``description_change(meta)``; returns the folder."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from sim_small import small_scene
+
+    from procam import patterns, simulate
+
+    scene = small_scene()
+    ps = patterns.pattern_set(*scene.proj_size, family="phase", steps=4, fringe=patterns.Fringe(**fringe))
+    r = simulate.Renderer(scene).with_patterns(ps)
+    rng = np.random.default_rng(7)
+    folder = tmp_path / name
+    write_stack(folder, np.stack([r.frame(k, rng) for k in range(ps.count)]))
+    meta = ps.to_dict()
+    description_change(meta)
+    (folder / "patterns.json").write_text(json.dumps(meta))
+    return folder
+
+
+def _every_block(**change):
+    def apply(meta):
+        for b in meta["sequence"]:
+            if b["kind"] == "phase":
+                b.update(change)
+    return apply
+
+
+def test_a_shift_of_the_wrong_way_round_in_every_block_is_refused(tmp_path):
+    """Frames shifted by +2 pi k / N described with "shift": -1 in every block: every frequency agrees, and the
+    decoded projector image is turned by 180 degrees (the calibration then has the projector upside down)."""
+    folder = _render_phase(tmp_path, "shift", _every_block(shift=-1))
+    with pytest.raises(CaptureError, match=r"the projector's image decodes upside down in the camera \(turned by "
+                                           r"1[5-8]\d degrees\), which is what \"shift\": -1 of the wrong way round in "
+                                           r"every block does .* \"sign\": \+1 flipped in every block does the same\) — write \"shift\": \+1 "
+                                           r"in every block"):
+        capture.load_capture(folder)
+    folder = _render_phase(tmp_path, "sign", _every_block(sign=-1))  # the same frames as a sign flipped everywhere
+    with pytest.raises(CaptureError, match=r"decodes upside down in the camera"):
+        capture.load_capture(folder)
+    code, out, err = run_cli(["decode", folder, "-o", tmp_path / "maps.npz"])
+    assert code == 2 and "upside down" in out + err and not (tmp_path / "maps.npz").exists()
+
+
+def test_the_right_shift_passes_and_upside_down_is_said_not_guessed(tmp_path):
+    right = _render_phase(tmp_path, "right", lambda meta: None)
+    assert capture.load_capture(right).pattern_set.upside_down is False
+    # a projector that really shows its image upside down says so (here: the same turned decode, described so)
+    turned = _render_phase(tmp_path, "turned", lambda m: (_every_block(shift=-1)(m), m.update(upside_down=True)))
+    assert capture.load_capture(turned).pattern_set.upside_down is True
+    claimed = _render_phase(tmp_path, "claimed", lambda meta: meta.update(upside_down=True))
+    with pytest.raises(CaptureError, match=r'says "upside_down": true, but the projector\'s image decodes upright'):
+        capture.load_capture(claimed)
+
+
+def test_a_cosine_described_for_a_sine_names_start(tmp_path):
+    """Issue 34: the hint named shift, sign and axes, never ``start``.  Sine fringes (start -pi/2) described as
+    procam's cosines."""
+    folder = _render_phase(tmp_path, "sine", _every_block(start=0.0), start=-np.pi / 2)
+    with pytest.raises(CaptureError, match=r'with "start": -1.5708 \(a sine where a cosine was said\) in the column '
+                                           r"blocks they agree"):
+        capture.load_capture(folder)
+
+
+def test_missing_inverses_are_named(tmp_path):
+    """Issue 34: a description without the inverse frames the tool has was refused without naming inverses."""
+    folder, _ = _render_gray_blocks(tmp_path, "gray-phase", "msb-first", "msb-first")
+    meta = json.loads((folder / "patterns.json").read_text())
+    for b in meta["sequence"]:
+        if b["kind"] == "gray":
+            b["inverse"] = False
+    meta.pop("count")
+    (folder / "patterns.json").write_text(json.dumps(meta))
+    with pytest.raises(CaptureError, match=r'found 42 — 16 more, one per Gray bit: the capture seems to show each '
+                                           r'Gray bit with its inverse; say "inverse": true in sequence\[0\], '
+                                           r'sequence\[2\]'):
+        capture.load_capture(folder)

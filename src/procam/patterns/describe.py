@@ -29,7 +29,7 @@ from .phase import AXES, KINDS, PHASE_FAMILIES, Block, Fringe, PhaseSet
 
 _FRINGE_KEYS = ("sign", "origin", "pixel_center", "shift", "start", "levels", "gamma")
 _TOP_KEYS = ("format", "version", "family", "width", "height", "order", "count", "white", "black", "sequence",
-             "fringe", "files", "note", "notes", "description")
+             "fringe", "upside_down", "files", "note", "notes", "description")
 #: The keys of a Gray-family patterns.json: procam's own (:meth:`PatternSet.to_dict` and the frames' names) and
 #: ``bit_order``; only ``width``, ``height``, ``order``, ``step`` and ``bit_order`` are read.
 _GRAY_KEYS = (*(f.name for f in fields(PatternSet)), "format", "version", "family", "col_pairs", "row_pairs",
@@ -118,7 +118,7 @@ def _fringe(d: dict, base: Fringe, where: str) -> Fringe:
 def _flag(d: dict, key: str, default: bool, where: str) -> bool:
     v = d.get(key, default)
     if not isinstance(v, bool):
-        raise ValueError(f"{where}.{key} must be true or false, got {_short(v)}")
+        raise ValueError(f"{where + '.' if where else ''}{key} must be true or false, got {_short(v)}")
     return v
 
 
@@ -190,7 +190,7 @@ def from_dict(meta: dict, width: int | None = None, height: int | None = None):
     order = meta.get("order", "custom")
     if not isinstance(order, str) or len(order) > 64:
         raise ValueError(f"order must be a short text (procam's own sequences say 'procam'), got {_short(order)}")
-    ps = PhaseSet(w, h, family, tuple(blocks), order)
+    ps = PhaseSet(w, h, family, tuple(blocks), order, _flag(meta, "upside_down", False, ""))
     if "count" in meta and meta["count"] != ps.count:
         raise ValueError(f"count is {_short(meta['count'])} but the sequence's blocks have {ps.count} frames")
     return ps

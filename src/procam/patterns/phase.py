@@ -187,6 +187,9 @@ class PhaseSet:
         ``"gray-phase"`` (a Gray code orders the fringe periods).
     blocks : the :class:`Block` s in frame order.
     order : ``"procam"`` for procam's own sequences, ``"custom"`` for one described by hand.
+    upside_down : the projector shows its image upside down to the camera (a description's
+        ``"upside_down": true``; a sequence without a Gray code is checked to decode upright otherwise,
+        :mod:`procam.phase.diagnose`).
     """
 
     width: int
@@ -194,6 +197,7 @@ class PhaseSet:
     family: str
     blocks: tuple
     order: str = "procam"
+    upside_down: bool = False
 
     def __post_init__(self):
         _check_set(self)
@@ -303,9 +307,12 @@ class PhaseSet:
 
     def to_dict(self) -> dict:
         """The ``patterns.json`` of the sequence (``docs/file-formats.md``)."""
-        return {"format": PATTERNS_FORMAT, "version": 1, "family": self.family, "width": self.width,
-                "height": self.height, "order": self.order, "count": self.count, "white": self.white,
-                "black": self.black, "sequence": [b.to_dict() for b in self.blocks]}
+        d = {"format": PATTERNS_FORMAT, "version": 1, "family": self.family, "width": self.width,
+             "height": self.height, "order": self.order, "count": self.count, "white": self.white,
+             "black": self.black, "sequence": [b.to_dict() for b in self.blocks]}
+        if self.upside_down:
+            d["upside_down"] = True
+        return d
 
 
 def _num(v: float) -> str:
