@@ -62,10 +62,13 @@ def test_every_number_and_structure_is_bounded_before_use(tmp_path, text, words)
     ({k: v for k, v in GRAY_PHASE.items() if k != "family"} | {"famliy": "gray-phase", "order": "procam"},
      r"unknown key 'famliy' \(did you mean 'family'\?"),
     ({"width": 64, "height": 48, "setp": 2}, r"unknown key 'setp' \(did you mean 'step'\?"),
-    ({"width": 64, "height": 48, "sequence": []}, r"unknown key 'sequence' \(the keys of a Gray-code description"),
+    ({"width": 64, "height": 48, "sequence": []}, r"'sequence' belongs to a phase family's description, but the file "
+                                                   r"names no family .* add \"family\" \(phase, heterodyne"),
+    ({"family": "gray", "width": 64, "height": 48, "sequence": []}, r"unknown key 'sequence' \(the keys of a "
+                                                                     r"Gray-code description"),
     (_block(0, bitorder="lsb-first"), r"sequence\[0\]: unknown key 'bitorder' \(did you mean 'bit_order'\?"),
     (GRAY_PHASE | {"fringe": {"shfit": -1}}, r"fringe: unknown key 'shfit' \(did you mean 'shift'\?"),
-], ids=["famliy", "famliy-alone", "setp", "gray-with-sequence", "bitorder", "shfit"])
+], ids=["famliy", "famliy-alone", "setp", "no-family-with-sequence", "gray-with-sequence", "bitorder", "shfit"])
 def test_an_unknown_key_is_named_with_the_closest_known_one(tmp_path, doc, words):
     doc = {k: v for k, v in doc.items() if v is not None}
     folder = _with(tmp_path / "pose", doc)

@@ -118,9 +118,10 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None):
         return gray_from_dict(meta, *(projector if projector is not None else (None, None)), order, step)
     except ValueError as e:
         text = str(e)
-        fix = ("; fix it or pass --projector WIDTHxHEIGHT" if text.startswith(("width", "height", "no width",
-                                                                                "no height"))
-               else "; fix it or pass --order" if text.startswith("unknown order")
+        if text.startswith(("width", "height", "no width", "no height")):
+            raise CaptureError(f"{where}: no valid width/height: {text}; fix it or pass --projector WIDTHxHEIGHT") \
+                from None
+        fix = ("; fix it or pass --order" if text.startswith("unknown order")
                else "; fix it or pass --step" if text.startswith("step") else " — see docs/patterns.md")
         raise CaptureError(f"{where}: {text}{fix}") from None
 

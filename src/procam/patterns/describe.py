@@ -66,6 +66,11 @@ def check_keys(meta: dict) -> None:
     _unknown(meta, known, "", "a patterns.json")
     family = family_of(meta)
     if family == "gray":
+        phase_only = [k for k in meta if k not in _GRAY_KEYS]
+        if phase_only and "family" not in meta:
+            raise ValueError(f"{phase_only[0]!r} belongs to a phase family's description, but the file names no "
+                             f"family (without one it is a Gray-code file): add \"family\" ("
+                             f"{', '.join(PHASE_FAMILIES)})")
         _unknown(meta, _GRAY_KEYS, "", "a Gray-code description (no family, or family gray)")
     elif family in PHASE_FAMILIES:
         _unknown(meta, _TOP_KEYS, "", f"a {family} description")
