@@ -47,8 +47,10 @@ def _block(i, **change):
     ('{"width": 64, "height": 48, "notes": ' + "[" * 70 + "]" * 70 + "}", r"patterns.json: is nested too deep"),
     ("[1, 2]", r"patterns.json: not a JSON object"),
     ({"width": 64, "height": 48, "bit_order": "reversed"}, r'patterns.json: bit_order must be "msb-first"'),
+    (GRAY_PHASE | {"upside_down": 1}, r"patterns.json: upside_down must be true or false, got 1"),
+    (GRAY_PHASE | {"upside_down": True}, r"patterns.json: upside_down applies to a sequence without a Gray code"),
 ], ids=["periods-0", "period-list", "width-400-digits-gray", "width-400-digits-phase", "step-1e400", "step-1e12",
-        "nested-100000", "nested-70", "not-an-object", "bit-order"])
+        "nested-100000", "nested-70", "not-an-object", "bit-order", "upside-down-1", "upside-down-gray"])
 def test_every_number_and_structure_is_bounded_before_use(tmp_path, text, words):
     folder = _with(tmp_path / "pose", text)
     with pytest.raises(CaptureError, match=words):

@@ -195,7 +195,11 @@ def from_dict(meta: dict, width: int | None = None, height: int | None = None):
     order = meta.get("order", "custom")
     if not isinstance(order, str) or len(order) > 64:
         raise ValueError(f"order must be a short text (procam's own sequences say 'procam'), got {_short(order)}")
-    ps = PhaseSet(w, h, family, tuple(blocks), order, _flag(meta, "upside_down", False, ""))
+    upside_down = _flag(meta, "upside_down", False, "")
+    if upside_down and any(b.kind == "gray" for b in blocks):
+        raise ValueError("upside_down applies to a sequence without a Gray code (a Gray code is absolute: its "
+                         "projector's image decodes the way it is shown); drop it")
+    ps = PhaseSet(w, h, family, tuple(blocks), order, upside_down)
     if "count" in meta and meta["count"] != ps.count:
         raise ValueError(f"count is {_short(meta['count'])} but the sequence's blocks have {ps.count} frames")
     return ps
