@@ -9,7 +9,6 @@ import pytest
 
 from procam import capture
 from procam.errors import CaptureError
-from procam.io.jsonfile import JSONError, loads
 from conftest import run_cli, write_stack
 
 GRAY_PHASE = {"family": "gray-phase", "width": 64, "height": 48, "sequence": [
@@ -80,6 +79,8 @@ def test_an_unknown_key_is_named_with_the_closest_known_one(tmp_path, doc, words
 
 
 def test_the_loader_names_the_field_and_leaves_ordinary_documents_alone():
+    from procam.io.jsonfile import JSONError, loads
+
     assert loads('{"a": [1, 2.5, {"b": -3}], "c": "x"}') == {"a": [1, 2.5, {"b": -3}], "c": "x"}
     with pytest.raises(JSONError, match=r"a\[2\]\.b is a whole number of 20 digits"):
         loads('{"a": [1, 2, {"b": -12345678901234567890}]}')
