@@ -272,3 +272,13 @@ def test_missing_inverses_are_named(tmp_path):
                                            r'Gray bit with its inverse; say "inverse": true in sequence\[0\], '
                                            r'sequence\[2\]'):
         capture.load_capture(folder)
+
+
+def test_an_output_folder_holding_a_deep_patterns_json_is_refused_not_crashed(tmp_path):
+    """The output folder's check read a patterns.json there (an older procam's mark) unbounded: RecursionError."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "patterns.json").write_text("[" * 100000 + "]" * 100000)
+    code, _, err = run_cli(["patterns", "-p", "64x48", "-o", out])
+    assert code == 2 and "procam did not write (patterns.json)" in " ".join(err.split())
+    assert (out / "patterns.json").read_text() == "[" * 100000 + "]" * 100000
