@@ -103,14 +103,13 @@ def check_bit_order(stack: np.ndarray, ps, folder, files) -> None:
         ok = np.isfinite(dens)
         if ok.sum() < 3 or _spearman(dens[ok]) >= REVERSED_BELOW:
             continue
-        kept = [f for f, k in zip(frames, ok) if k]
-        first, last = kept[0][0], kept[-1][0]
+        kept = sorted((f[0], d) for f, d, k in zip(frames, dens, ok) if k)  # (frame, density) in frame order
+        (first, d_first), (last, d_last) = kept[0], kept[-1]
         said, seen = (("most", "least") if order == "msb-first" else ("least", "most"))
         fix = "lsb-first" if order == "msb-first" else "msb-first"
         raise CaptureError(
             f"{folder}: the {name} Gray bits come {seen} significant first, the description says {said} "
-            f"(bit_order {order}): read in its order their stripes get "
-            f"{'coarser' if order == 'msb-first' else 'finer'} — stripe edges at {dens[ok][0]:.1%} of neighbouring "
-            f"pixels in frame #{first} ({Path(files[first]).name}), {dens[ok][-1]:.1%} in #{last} "
-            f"({Path(files[last]).name}) — write \"bit_order\": \"{fix}\" in {where} (docs/patterns.md), or "
-            "check that the file names sort in capture order")
+            f"(bit_order {order}): from frame to frame their stripes get {'coarser' if d_first > d_last else 'finer'} "
+            f"— stripe edges at {d_first:.1%} of neighbouring pixels in frame #{first} ({Path(files[first]).name}), "
+            f"{d_last:.1%} in #{last} ({Path(files[last]).name}) — write \"bit_order\": \"{fix}\" in {where} "
+            "(docs/patterns.md), or check that the file names sort in capture order")
