@@ -282,3 +282,29 @@ def test_an_output_folder_holding_a_deep_patterns_json_is_refused_not_crashed(tm
     code, _, err = run_cli(["patterns", "-p", "64x48", "-o", out])
     assert code == 2 and "procam did not write (patterns.json)" in " ".join(err.split())
     assert (out / "patterns.json").read_text() == "[" * 100000 + "]" * 100000
+
+
+def test_a_ceiling_mounted_projector_decodes_upside_down_rightly(tmp_path):
+    """The ``ceiling`` rig's projector is rolled 180 degrees: procam's own phase capture of it passes as written;
+    the same frames described by hand are refused until the description says ``"upside_down": true``."""
+    from procam import patterns, simulate
+
+    sc = simulate.preset("ceiling")
+    K = np.array(sc.K_cam, float)
+    K[:2] *= 0.5
+    K[0, 2], K[1, 2] = (sc.K_cam[0][2] + 0.5) * 0.5 - 0.5, (sc.K_cam[1][2] + 0.5) * 0.5 - 0.5
+    sc = sc.replace(cam_size=(640, 400), K_cam=K, supersample=1)
+    ps = patterns.pattern_set(*sc.proj_size, family="phase", steps=4)
+    r = simulate.Renderer(sc).with_patterns(ps)
+    rng = np.random.default_rng(11)
+    stack = np.stack([r.frame(k, rng) for k in range(ps.count)])
+    for name, change in (("own", {}), ("by-hand", {"order": "custom"}),
+                         ("by-hand-turned", {"order": "custom", "upside_down": True})):
+        folder = tmp_path / name
+        write_stack(folder, stack)
+        (folder / "patterns.json").write_text(json.dumps(ps.to_dict() | change))
+        if name == "by-hand":
+            with pytest.raises(CaptureError, match="decodes upside down in the camera"):
+                capture.load_capture(folder)
+        else:
+            assert capture.load_capture(folder).pattern_set.count == ps.count

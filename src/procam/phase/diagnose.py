@@ -16,10 +16,10 @@ one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagr
   the axes exchanged, and names the change that makes them agree;
 * **the decoded coordinate range**: over :data:`MAX_DISAGREEMENT` of the well-lit pixels decode off the panel
   (a period or a projector size that is not the capture's);
-* **the direction the fringes move** (a sequence without a Gray code): a ``shift`` (or a ``sign``) of the wrong
-  way round in every block agrees with itself at every frequency and turns the decoded projector image by 180
-  degrees; a decoded image upside down in the camera (turned by more than about 135 degrees) is refused unless the
-  description says ``"upside_down": true`` (and an upright one then is).
+* **the direction the fringes move** (a sequence without a Gray code, described by hand): a ``shift`` (or a
+  ``sign``) of the wrong way round in every block agrees with itself at every frequency and turns the decoded
+  projector image by 180 degrees; a decoded image upside down in the camera (turned by more than about 135
+  degrees) is refused unless the description says ``"upside_down": true`` (and an upright one then is).
 
 A capture that passes can still be decoded wrongly in ways no frame shows (a consistent but shifted origin moves
 every coordinate by the same amount; it shows in the calibration, not here; one axis's sign or shift of the wrong
@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import decoded as _d
 from ..errors import CaptureError, ProcamWarning
-from ..patterns.phase import PhaseSet
+from ..patterns.phase import Fringe, PhaseSet
 from . import response as _resp
 
 MIN_RELATIVE_MODULATION = 0.15
@@ -197,12 +197,16 @@ def _rotation_cos(res, idx, lit, W: int) -> float | None:
 
 
 def _check_upright(res, idx, lit, ps: PhaseSet, W: int, name: str) -> None:
-    """Raise when a sequence without a Gray code decodes to a projector image turned upside down in the camera
-    (or upright when the description says ``"upside_down": true``).  A shift (or a sign) of the wrong way round in
+    """Raise when a sequence without a Gray code, described by hand, decodes to a projector image turned upside
+    down in the camera (or upright when the description says ``"upside_down": true``).  procam's own sequences
+    (order ``procam``, its conventions unchanged) are what it projected and are not judged: a ceiling-mounted
+    projector decodes upside down, rightly.  A shift (or a sign) of the wrong way round in
     every block turns the decoded image by 180 degrees and nothing else: every frequency still agrees and the
     calibration comes out with the projector upside down.  A Gray code is absolute and needs no such check."""
     if any(b.kind == "gray" for b in ps.blocks):
         return
+    if ps.order == "procam" and not ps.upside_down and all(b.fringe == Fringe() for b in ps.blocks):
+        return  # procam's own sequence with its own conventions: what it projected is known, however it is mounted
     c = _rotation_cos(res, idx, lit, W)
     if c is None or (c >= TURNED_COS if not ps.upside_down else c <= -TURNED_COS):
         return
