@@ -1,7 +1,8 @@
 """A phase-family capture folder: its checks and its board image.
 
 * :func:`check_phase_capture` - the white and black frames where the description puts them (when it has them),
-  every Gray bit followed by its inverse (when it says so), and the description itself against the frames
+  every Gray bit followed by its inverse (when it says so), the Gray bits in the described order
+  (:func:`procam.capture.bit_order.check_bit_order`), and the description itself against the frames
   (:func:`procam.phase.diagnose.check_description`: the fringes' modulation, each frame's fit to its block's
   sinusoid, the frequencies' (or the Gray code's) consistency, the decoded coordinates' range); each failure is a
   one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagrees.  Returns the exposure
@@ -19,6 +20,7 @@ import numpy as np
 
 from ..errors import CaptureError
 from ..io import files as _files
+from .bit_order import check_bit_order
 from .frames import describe_frame
 from .sample import _sample, frame_levels
 
@@ -41,6 +43,8 @@ def count_error(folder, files, ps, missing) -> str:
     if missing and len(files) + len(missing) == ps.count:
         why = (f" — {', '.join(missing[:4])}{' ...' if len(missing) > 4 else ''}, listed in the folder's manifest or "
                f"patterns.json, {'is' if len(missing) == 1 else 'are'} missing: re-capture the pose, or restore the file")
+    elif _inverse_hint(ps, len(files)):
+        why = _inverse_hint(ps, len(files))
     elif len(files) == ps.count - 2 and ps.white is not None and ps.black is not None:
         why = (" — two short: are the white and black frames missing? If the capture has none, drop them from the "
                "description's sequence")
@@ -48,6 +52,23 @@ def count_error(folder, files, ps, missing) -> str:
         why = " — check the description's sequence (docs/patterns.md) and that no frame is missing or extra"
     return (f"{folder}: expected {ps.count} images for the sequence its patterns.json describes ({ps.describe()}), "
             f"found {len(files)}" + why)
+
+
+def _inverse_hint(ps, found: int) -> str:
+    """The hint for a count that the Gray blocks' inverses explain: frames with inverses described without them,
+    or the other way round; '' otherwise."""
+    gray = [(i, b) for i, b in enumerate(ps.blocks) if b.kind == "gray"]
+    bits = sum(b.bits + int(b.complementary) for _, b in gray)
+    if not gray or bits == 0:
+        return ""
+    where = ", ".join(f"sequence[{i}]" for i, _ in gray)
+    if all(not b.inverse for _, b in gray) and found == ps.count + bits:
+        return (f" — {bits} more, one per Gray bit: the capture seems to show each Gray bit with its inverse; say "
+                f"\"inverse\": true in {where} (docs/patterns.md)")
+    if all(b.inverse for _, b in gray) and found == ps.count - bits:
+        return (f" — {bits} fewer, one per Gray bit: the capture seems to have no inverse Gray frames; say "
+                f"\"inverse\": false in {where} (docs/patterns.md)")
+    return ""
 
 
 def _levels_check(stack, ps, folder, files, sub) -> None:
@@ -98,6 +119,7 @@ def check_phase_capture(stack: np.ndarray, ps, folder, files, sub: np.ndarray | 
     sub = _sample(stack) if sub is None else sub
     _levels_check(stack, ps, folder, files, sub)
     _pairs_check(ps, folder, files, sub)
+    check_bit_order(stack, ps, folder, files)
     check_description(stack, ps, str(folder), files)
     fs = _files.full_scale_of(stack)
     frames = ps.phase_frames()

@@ -14,6 +14,8 @@ folder or file and says what to do:
   from the pattern/inverse pairs), or hints at the projector size and step;
 * the white and black frames are where the order puts them, judged from the images;
 * every pattern is followed by its inverse (catches shuffled or missing frames);
+* the bits come in the order the description says, most significant first unless its ``bit_order`` says
+  otherwise (:func:`~procam.capture.bit_order.check_bit_order`: the finer the bit, the more stripe edges);
 * when those checks fail, saturation (an over-exposed capture) and frames of another pose (a pattern
   and its inverse that do not add up like every other pair) are named as the cause.
 """
@@ -28,6 +30,7 @@ import numpy as np
 from .. import patterns
 from ..errors import CaptureError
 from ..io import files as _files
+from .bit_order import check_bit_order
 from .frames import describe_frame, frame_role
 from .sample import _sample, frame_levels, sample_index  # noqa: F401 (sample_index, frame_levels: re-exported)
 
@@ -65,17 +68,37 @@ class Capture:
         return None if self.pattern_set.black is None else self.stack[self.pattern_set.black]
 
 
+def read_patterns_json(folder) -> dict | None:
+    """The folder's ``patterns.json`` (bounded: :func:`procam.io.jsonfile.load_json`), or None without one.
+    Raises :class:`CaptureError` naming the file for one that cannot be read or is no JSON object."""
+    from ..io.jsonfile import JSONError, load_json
+
+    path = Path(folder) / "patterns.json"
+    if not path.is_file():
+        return None
+    try:
+        meta = load_json(path)
+    except OSError as e:
+        raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    except JSONError as e:
+        raise CaptureError(f"{path}: {e}; fix it (docs/patterns.md)") from None
+    if not isinstance(meta, dict):
+        raise CaptureError(f"{path}: not a JSON object; a description is an object with width, height and, for a "
+                           "phase family, family and sequence (docs/patterns.md)")
+    return meta
+
+
 def resolve_pattern_set(folder, projector=None, order=None, step=None):
     """The sequence of ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
     patterns.json, else the defaults (opencv order, step 1).  A patterns.json of a phase family
     (:func:`procam.patterns.from_dict`) gives a :class:`~procam.patterns.PhaseSet` (``projector`` overrides its
-    size; ``order`` and ``step`` are the Gray family's)."""
-    meta = _files.read_sidecar(folder, "patterns.json")
-    if meta is not None and not isinstance(meta, dict):
-        meta = {}
+    size; ``order`` and ``step`` are the Gray family's).  A Gray-family patterns.json's ``bit_order`` is kept."""
+    from ..patterns.describe import gray_from_dict
+
+    meta = read_patterns_json(folder)
+    where = Path(folder) / "patterns.json"
     family = patterns.family_of(meta)
     if family != "gray":
-        where = Path(folder) / "patterns.json"
         if order is not None or step is not None:
             raise CaptureError(f"{where} describes a {family} sequence: --order and --step apply to Gray codes only; "
                                "drop them")
@@ -83,28 +106,24 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None):
             return patterns.from_dict(meta, *(projector if projector is not None else (None, None)))
         except ValueError as e:
             raise CaptureError(f"{where}: {e} — see docs/patterns.md for how to describe a sequence") from None
-    if projector is None:
-        if meta is None:
+    if meta is None:
+        if projector is None:
             raise CaptureError(f"{folder}: the projector size is unknown; pass --projector WIDTHxHEIGHT "
                                "(no patterns.json in the folder)")
         try:
-            projector = (int(meta["width"]), int(meta["height"]))
-        except (KeyError, TypeError, ValueError):
-            raise CaptureError(f"{Path(folder) / 'patterns.json'}: no valid width/height; fix it or pass "
-                               "--projector WIDTHxHEIGHT") from None
-    if order is None:
-        order = meta.get("order", "opencv") if meta else "opencv"
-        if order not in patterns.ORDERS:
-            raise CaptureError(f"{Path(folder) / 'patterns.json'}: unknown order {order!r}; fix it or pass --order")
-    if step is None:
-        try:
-            step = int(meta.get("step", 1)) if meta else 1
-        except (TypeError, ValueError):
-            raise CaptureError(f"{Path(folder) / 'patterns.json'}: invalid step; fix it or pass --step") from None
+            return patterns.pattern_set(projector[0], projector[1], order or "opencv", 1 if step is None else step)
+        except ValueError as e:
+            raise CaptureError(f"{folder}: {e}") from None
     try:
-        return patterns.pattern_set(projector[0], projector[1], order, step)
+        return gray_from_dict(meta, *(projector if projector is not None else (None, None)), order, step)
     except ValueError as e:
-        raise CaptureError(f"{folder}: {e}") from None
+        text = str(e)
+        if text.startswith(("width", "height", "no width", "no height")):
+            raise CaptureError(f"{where}: no valid width/height: {text}; fix it or pass --projector WIDTHxHEIGHT") \
+                from None
+        fix = ("; fix it or pass --order" if text.startswith("unknown order")
+               else "; fix it or pass --step" if text.startswith("step") else " — see docs/patterns.md")
+        raise CaptureError(f"{where}: {text}{fix}") from None
 
 
 def _count_hint(found: int, ps: patterns.PatternSet) -> str:
@@ -424,7 +443,10 @@ def _listed(folder) -> list[str] | None:
         frames = [n for n, r in man["files"].items() if r in ("frame", "captured")]
         if frames:
             return frames
-    meta = _files.read_sidecar_quiet(folder, "patterns.json")
+    try:
+        meta = read_patterns_json(folder)
+    except CaptureError:
+        meta = None
     if isinstance(meta, dict) and isinstance(meta.get("files"), list) and meta["files"]:
         names = [str(f) for f in meta["files"]]
         return names if all(Path(n).name == n for n in names) else None
@@ -490,7 +512,12 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     reader : ``reader(files) -> stack``, default :func:`procam.io.files.read_images` (e.g.
         :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
+    from .rig import rig_without_manifest
+
     folder = Path(folder)
+    why = rig_without_manifest(folder)
+    if why is not None:
+        raise CaptureError(why)
     images = _files.list_images(folder)
     ps = resolve_pattern_set(folder, projector, order, step)
     files, notes = sequence_files(folder, images)
@@ -529,6 +556,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
         check_light(stack, folder, sub=sub)
         check_white_black(stack, ps, folder, files, sub=sub)
         check_pairs(stack, ps, folder, files, sub=sub)
+        check_bit_order(stack, ps, folder, files)
         warnings = notes + exposure_warnings(stack, ps, folder, files)
     return Capture(stack, tuple(files), ps, folder, warnings)
 

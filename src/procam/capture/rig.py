@@ -27,7 +27,6 @@ that is not procam's are :class:`~procam.errors.CaptureError` with one line nami
 
 from __future__ import annotations
 
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -132,6 +131,29 @@ def is_rig_pose(folder) -> bool:
     return any(_pose_like(d) for d in f.iterdir())
 
 
+def rig_without_manifest(folder) -> str | None:
+    """Why ``folder`` cannot be read, when it looks like a rig pose folder that is not one: no images of its own,
+    no ``rig.json``, and sub-folders that hold images but no ``patterns.json`` (so nothing says they are pose
+    folders); the message names what a rig pose folder needs.  None for anything else."""
+    f = Path(folder)
+    if not f.is_dir() or (f / RIG_MANIFEST).exists() or (f / "patterns.json").exists():
+        return None
+    try:
+        entries = list(f.iterdir())
+    except OSError:
+        return None
+    if any(p.suffix.lower() in _IMAGES for p in entries if not p.name.startswith(".")):
+        return None
+    subs = sorted(d.name for d in entries if not d.name.startswith(".") and d.is_dir()
+                  and any(p.suffix.lower() in _IMAGES for p in d.iterdir()))
+    if not subs:
+        return None
+    listing = ", ".join(subs[:4]) + (", ..." if len(subs) > 4 else "")
+    return (f"{f}: holds no images, but its sub-folders {listing} do: a rig pose folder needs a {RIG_MANIFEST} naming "
+            "its cameras, projectors and the pair each sub-folder holds (docs/rigs.md), or a patterns.json in every "
+            "sub-folder (each is then read as one projector); for a single pose, give the sub-folder itself")
+
+
 def read_rig_pose(folder) -> RigPose:
     """The :class:`RigPose` of a rig pose folder (module docstring), checked: every pair's sub-folder exists,
     the names are device names, each used once as a camera or a projector.  Raises
@@ -140,7 +162,8 @@ def read_rig_pose(folder) -> RigPose:
     man = f / RIG_MANIFEST
     if not man.is_file():
         if not is_rig_pose(f):
-            raise CaptureError(f"{f}: not a rig pose folder (no {RIG_MANIFEST}, no sub-folders with patterns.json)")
+            raise CaptureError(rig_without_manifest(f) or f"{f}: not a rig pose folder (no {RIG_MANIFEST}, no "
+                               "sub-folders with patterns.json)")
         subs = sorted(d.name for d in f.iterdir() if _pose_like(d))
         try:
             doc = rig_manifest(["camera"], subs)
@@ -148,10 +171,14 @@ def read_rig_pose(folder) -> RigPose:
             raise CaptureError(f"{f}: {e} (sub-folders are read as projectors; add {RIG_MANIFEST} to name them)") \
                 from None
     else:
+        from ..io.jsonfile import JSONError, load_json
+
         try:
-            doc = json.loads(man.read_text())
-        except (OSError, UnicodeDecodeError, ValueError) as e:
-            raise CaptureError(f"{man}: not a readable rig manifest ({e})") from None
+            doc = load_json(man)
+        except OSError as e:
+            raise CaptureError(f"{man}: cannot be read ({e.strerror or e}); check its permissions") from None
+        except JSONError as e:
+            raise CaptureError(f"{man}: not a readable rig manifest: it {e}") from None
         if not isinstance(doc, dict) or doc.get("format") != RIG_POSE_FORMAT:
             raise CaptureError(f"{man}: not a procam rig manifest (missing format: {RIG_POSE_FORMAT})")
     try:

@@ -17,8 +17,9 @@ from pathlib import Path
 
 from ..errors import OutputError
 from . import formats
-from .files import (IMAGE_EXTS, fmt_bytes, natural_key, plain_name, read_manifest, read_sidecar_quiet, record_files,
-                    remove_stale_temps, unlist_files, write_manifest)
+from .files import (IMAGE_EXTS, fmt_bytes, natural_key, plain_name, read_manifest, record_files, remove_stale_temps,
+                    unlist_files, write_manifest)
+from .jsonfile import JSONError, load_json
 
 
 def _visible(folder: Path) -> list[str]:
@@ -29,7 +30,10 @@ def _visible(folder: Path) -> list[str]:
 def _legacy_files(folder: Path) -> set[str]:
     """Files an older procam (before manifests) wrote: a sequence folder's ``patterns.json`` lists its
     frames; ``truth.json`` is the simulator's.  A camera capture (``capture.json``) is not counted."""
-    meta = read_sidecar_quiet(folder, "patterns.json")
+    try:
+        meta = load_json(folder / "patterns.json")
+    except (OSError, JSONError):  # none, or not one procam wrote: nothing in the folder counts as procam's
+        return set()
     if not (isinstance(meta, dict) and meta.get("format") == formats.GRAYCODE_FORMAT
             and isinstance(meta.get("files"), list)):
         return set()

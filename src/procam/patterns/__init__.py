@@ -41,14 +41,16 @@ def pattern_set(width: int, height: int, order: str = "opencv", step: int = 1, *
                 **phase) -> PatternSet | PhaseSet:
     """Describe procam's sequence for a ``width`` x ``height`` projector.
 
-    ``family="gray"`` (default): the Gray-code sequence in ``order`` with ``step`` px per code
-    (:func:`procam.patterns.gray.pattern_set`).  Any other family: :func:`phase_set` with the keywords
-    ``phase`` (``steps``, ``period``, ``periods``, ``inverse``, ``complementary``, ``white_black``, ``fringe``).
+    ``family="gray"`` (default): the Gray-code sequence in ``order`` with ``step`` px per code, its bits in
+    ``bit_order`` (keyword, default ``"msb-first"``; :func:`procam.patterns.gray.pattern_set`).  Any other family:
+    :func:`phase_set` with the keywords ``phase`` (``steps``, ``period``, ``periods``, ``inverse``,
+    ``complementary``, ``white_black``, ``fringe``, ``bit_order``).
     """
     if family == "gray":
+        bit_order = phase.pop("bit_order", "msb-first")
         if phase:
             raise ValueError(f"the Gray family takes no {', '.join(sorted(phase))}")
-        return _gray.pattern_set(width, height, order, step)
+        return _gray.pattern_set(width, height, order, step, bit_order)
     if family not in FAMILIES:
         raise ValueError(f"family must be one of {', '.join(FAMILIES)}, got {family!r}")
     if step != 1:

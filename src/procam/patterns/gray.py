@@ -15,6 +15,10 @@ Two orders are supported (see ``docs``/README):
 Bit counts are per axis: ``n_x = ceil(log2 W)`` and ``n_y = ceil(log2 H)``, so a
 sequence has ``2 (n_x + n_y) + 2`` images (46 for 1920x1080, 42 for 1024x768).
 
+``bit_order`` (default ``"msb-first"``) is the order of each axis's bits: most significant first (OpenCV's,
+Moreno-Taubin's, procam's), or ``"lsb-first"`` (least significant first, as some tools show them); the pairs
+(pattern, inverse) stay together either way.
+
 ``step`` (default 1) codes blocks of ``step x step`` projector pixels with one code, as
 kamino410/procam-calibration's ``graycode_step`` does against moire: the codes are those of a
 ``ceil(W/step) x ceil(H/step)`` projector, each pattern pixel drawn ``step`` times in each direction
@@ -33,6 +37,8 @@ from ..io.formats import GRAYCODE_FORMAT
 
 
 ORDERS = PATTERN_ORDERS
+#: The orders of a Gray code's bits in the frames (the ``bit_order`` of a description, ``docs/patterns.md``).
+BIT_ORDERS = ("msb-first", "lsb-first")
 
 
 def gray_encode(x: np.ndarray) -> np.ndarray:
@@ -70,9 +76,11 @@ class PatternSet:
     col_offset, row_offset : code offsets (the code of column x is ``gray(x + col_offset)``).
     white, black : indices of the all-white and all-black frames.
     col_start, row_start : index of the first column / row pattern; bit ``b`` (MSB = col_bits-1)
-        of the column code is image ``col_start + 2 (col_bits - 1 - b)`` and its inverse follows.
+        of the column code is image ``col_start + 2 (col_bits - 1 - b)`` (``col_start + 2 b`` when
+        ``bit_order`` is ``"lsb-first"``) and its inverse follows.
     count : total number of images.
     step : projector pixels per code along each axis (1 = every pixel has its own code).
+    bit_order : ``"msb-first"`` (default) or ``"lsb-first"``: the order of each axis's bits in the frames.
     """
 
     width: int
@@ -88,6 +96,7 @@ class PatternSet:
     row_start: int
     count: int
     step: int = 1
+    bit_order: str = "msb-first"
 
     @property
     def code_width(self) -> int:
@@ -100,18 +109,22 @@ class PatternSet:
         return (self.height - 1) // self.step + 1
 
     def pair_indices(self, axis: str) -> np.ndarray:
-        """(n_bits, 2) indices of (pattern, inverse) pairs for ``axis`` in {'col', 'row'}, MSB first."""
+        """(n_bits, 2) indices of (pattern, inverse) pairs for ``axis`` in {'col', 'row'}, MSB first (whatever
+        the order of the frames, :attr:`bit_order`)."""
         if axis == "col":
             start, n = self.col_start, self.col_bits
         elif axis == "row":
             start, n = self.row_start, self.row_bits
         else:
             raise ValueError(f"axis must be 'col' or 'row', got {axis!r}")
-        first = start + 2 * np.arange(n)
+        j = np.arange(n)
+        first = start + 2 * (j if self.bit_order == "msb-first" else n - 1 - j)
         return np.stack([first, first + 1], axis=1)
 
     def to_dict(self) -> dict:
         d = asdict(self)
+        if self.bit_order == "msb-first":
+            del d["bit_order"]  # the default: procam's own files stay as they were
         d["format"] = GRAYCODE_FORMAT
         d["version"] = 1
         d["col_pairs"] = self.pair_indices("col").tolist()
@@ -121,9 +134,13 @@ class PatternSet:
         return d
 
 
-def pattern_set(width: int, height: int, order: str = "opencv", step: int = 1) -> PatternSet:
-    """Describe the sequence for a ``width`` x ``height`` projector in ``order`` (``step`` px per code)."""
+def pattern_set(width: int, height: int, order: str = "opencv", step: int = 1,
+                bit_order: str = "msb-first") -> PatternSet:
+    """Describe the sequence for a ``width`` x ``height`` projector in ``order`` (``step`` px per code), each
+    axis's bits in ``bit_order`` (:data:`BIT_ORDERS`)."""
     width, height, step = int(width), int(height), int(step)
+    if bit_order not in BIT_ORDERS:
+        raise ValueError(f"bit_order must be one of {', '.join(BIT_ORDERS)}, got {bit_order!r}")
     if width < 2 or height < 2:
         raise ValueError(f"projector size must be at least 2x2, got {width}x{height}")
     if order not in ORDERS:
@@ -137,10 +154,10 @@ def pattern_set(width: int, height: int, order: str = "opencv", step: int = 1) -
     npat = 2 * (nx + ny)
     if order == "opencv":
         return PatternSet(width, height, order, nx, ny, 0, 0, white=npat, black=npat + 1,
-                          col_start=0, row_start=2 * nx, count=npat + 2, step=step)
+                          col_start=0, row_start=2 * nx, count=npat + 2, step=step, bit_order=bit_order)
     ox, oy = (2**nx - cw) // 2, (2**ny - ch) // 2
     return PatternSet(width, height, order, nx, ny, ox, oy, white=0, black=1,
-                      col_start=2, row_start=2 + 2 * nx, count=npat + 2, step=step)
+                      col_start=2, row_start=2 + 2 * nx, count=npat + 2, step=step, bit_order=bit_order)
 
 
 def bit_planes(n: int, bits: int, offset: int) -> np.ndarray:
@@ -172,12 +189,12 @@ def frames(ps: PatternSet, white: int = 255, black: int = 0, dtype=np.uint8):
 
 
 def generate(width: int, height: int, order: str = "opencv", white: int = 255,
-             black: int = 0, dtype=np.uint8, step: int = 1) -> np.ndarray:
+             black: int = 0, dtype=np.uint8, step: int = 1, bit_order: str = "msb-first") -> np.ndarray:
     """The full sequence as an array ``(count, height, width)`` of ``dtype``.
 
     Nothing is written to disk; see :func:`save`.
     """
-    ps = pattern_set(width, height, order, step)
+    ps = pattern_set(width, height, order, step, bit_order)
     out = np.empty((ps.count, ps.height, ps.width), dtype=dtype)
     out[ps.white] = white
     out[ps.black] = black

@@ -19,7 +19,7 @@ Conventions (:class:`Fringe`; the figure in ``docs/patterns.md``)
     ``(0, 255)``, ``gamma = 1`` (not pre-corrected).
 Gray blocks
     Frame ``b`` (most significant first) is white (255) where bit ``bits - 1 - b`` of ``gray(m)`` is 1, black (0)
-    elsewhere, with ``m = floor((x - x0) / P)`` the fringe period of the axis's phase block (``x0`` and ``P``
+    elsewhere (bit ``b`` when the block's ``bit_order`` is ``"lsb-first"``), with ``m = floor((x - x0) / P)`` the fringe period of the axis's phase block (``x0`` and ``P``
     are that block's); the complementary bit is the least significant bit of ``gray(floor(2 (x - x0) / P))``,
     whose stripes change in the middle of the fringe periods.
 """
@@ -33,7 +33,7 @@ import numpy as np
 
 from ..choices import PATTERN_FAMILIES
 from ..io.formats import PATTERNS_FORMAT
-from .gray import bits_for, gray_encode
+from .gray import BIT_ORDERS, bits_for, gray_encode
 
 #: Block kinds of a sequence.
 KINDS = ("phase", "gray", "white", "black")
@@ -120,6 +120,8 @@ class Block:
     inverse : gray: every bit is followed by its inverse.
     complementary : gray: one more bit (stripes half a period wide, changing mid-period) after the others.
     fringe : phase: the conventions (:class:`Fringe`); gray: those of the phase block it orders.
+    bit_order : gray: ``"msb-first"`` (default) or ``"lsb-first"``, the order of the ordinary bits in the frames
+        (the complementary bit comes last either way).
     """
 
     kind: str
@@ -131,6 +133,7 @@ class Block:
     inverse: bool = True
     complementary: bool = False
     fringe: Fringe = field(default_factory=Fringe)
+    bit_order: str = "msb-first"
 
     @property
     def count(self) -> int:
@@ -157,7 +160,7 @@ class Block:
         b, inv = divmod(j, per)
         if b == self.bits:
             return -1, bool(inv), True
-        return self.bits - 1 - b, bool(inv), False
+        return (self.bits - 1 - b if self.bit_order == "msb-first" else b), bool(inv), False
 
     def to_dict(self) -> dict:
         d = {"kind": self.kind}
@@ -167,6 +170,8 @@ class Block:
             d.update(steps=self.steps, period=self.period, **self.fringe.to_dict())
         elif self.kind == "gray":
             d.update(bits=self.bits, inverse=self.inverse, complementary=self.complementary, period=self.period)
+            if self.bit_order != "msb-first":
+                d["bit_order"] = self.bit_order
         return d
 
 
@@ -182,6 +187,9 @@ class PhaseSet:
         ``"gray-phase"`` (a Gray code orders the fringe periods).
     blocks : the :class:`Block` s in frame order.
     order : ``"procam"`` for procam's own sequences, ``"custom"`` for one described by hand.
+    upside_down : the projector shows its image upside down to the camera (a description's
+        ``"upside_down": true``; a sequence without a Gray code is checked to decode upright otherwise,
+        :mod:`procam.phase.diagnose`).
     """
 
     width: int
@@ -189,6 +197,7 @@ class PhaseSet:
     family: str
     blocks: tuple
     order: str = "procam"
+    upside_down: bool = False
 
     def __post_init__(self):
         _check_set(self)
@@ -298,9 +307,12 @@ class PhaseSet:
 
     def to_dict(self) -> dict:
         """The ``patterns.json`` of the sequence (``docs/file-formats.md``)."""
-        return {"format": PATTERNS_FORMAT, "version": 1, "family": self.family, "width": self.width,
-                "height": self.height, "order": self.order, "count": self.count, "white": self.white,
-                "black": self.black, "sequence": [b.to_dict() for b in self.blocks]}
+        d = {"format": PATTERNS_FORMAT, "version": 1, "family": self.family, "width": self.width,
+             "height": self.height, "order": self.order, "count": self.count, "white": self.white,
+             "black": self.black, "sequence": [b.to_dict() for b in self.blocks]}
+        if self.upside_down:
+            d["upside_down"] = True
+        return d
 
 
 def _num(v: float) -> str:
@@ -360,6 +372,8 @@ def _check_set(ps: PhaseSet) -> None:
             if b.bits < 1 or 2 ** b.bits < need:
                 raise ValueError(f"{where}: {b.bits} Gray bits order {2 ** b.bits} periods of {_num(b.period)} px, "
                                  f"fewer than the {need} the panel's {n} pixels need")
+            if b.bit_order not in BIT_ORDERS:
+                raise ValueError(f"{where}: bit_order must be one of {', '.join(BIT_ORDERS)}, got {b.bit_order!r}")
             if b.complementary and abs(b.period / 2 - round(b.period / 2)) > 1e-9:
                 raise ValueError(f"{where}: a complementary Gray bit needs an even whole period, got "
                                  f"{_num(b.period)} px")
@@ -410,7 +424,7 @@ def _check_set(ps: PhaseSet) -> None:
 
 def phase_set(width: int, height: int, family: str = "phase", *, steps: int | None = None,
               period: float | None = None, periods=None, inverse: bool = True, complementary: bool = True,
-              white_black: bool = True, fringe: Fringe = Fringe()) -> PhaseSet:
+              white_black: bool = True, fringe: Fringe = Fringe(), bit_order: str = "msb-first") -> PhaseSet:
     """procam's own sequence of ``family`` for a ``width`` x ``height`` projector.
 
     Columns first, then rows; per axis the Gray block (gray-phase) and the phase blocks finest first, the
@@ -431,6 +445,7 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
         both: the complementary bit removes the stripe-edge errors of the plain hybrid).
     white_black : end with a white and a black frame.
     fringe : the conventions (default procam's).
+    bit_order : gray-phase: the order of the Gray bits, ``"msb-first"`` (default) or ``"lsb-first"``.
     """
     if family not in PHASE_FAMILIES:
         raise ValueError(f"family must be one of {', '.join(PHASE_FAMILIES)}, got {family!r}")
@@ -457,7 +472,7 @@ def phase_set(width: int, height: int, family: str = "phase", *, steps: int | No
         p = float(period if period is not None else DEFAULT_PERIODS[family][0])
         if family == "gray-phase":
             add(kind="gray", axis=axis, bits=bits_for(_periods_needed(n, p, fringe.x0)), inverse=bool(inverse),
-                complementary=bool(complementary), period=p)
+                complementary=bool(complementary), period=p, bit_order=bit_order)
             add(kind="phase", axis=axis, steps=steps, period=p)
             continue
         if periods is not None:

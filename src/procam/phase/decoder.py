@@ -477,6 +477,8 @@ def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
     if g.complementary:
         comp, comp_c = bits[-1], certain[-1]
         bits, contrast, certain = bits[:-1], contrast[:-1], certain[:-1]
+    if g.bit_order == "lsb-first":  # the orders below take the bits most significant first
+        bits, contrast, certain = bits[::-1], contrast[::-1], certain[::-1]
     m = _unwrap.gray_orders(bits, contrast, certain, u, reason, comp, comp_c, margin=4.0 * sd, su=su)
     x = m.astype(np.float32)
     x += u

@@ -12,12 +12,18 @@ one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagr
 * **the cue's consistency**: the frequencies (or the Gray code and the fringes) give different fringe periods at
   over :data:`MAX_DISAGREEMENT` of the well-lit pixels -- a wrong period, phase sign, shift direction or frame
   order.  procam then tries the description with the shift direction and the phase sign of that axis's blocks
-  flipped, and with the axes exchanged, and names the change that makes them agree;
+  flipped, with their ``start`` turned by a quarter or a half period (a sine described as a cosine), and with
+  the axes exchanged, and names the change that makes them agree;
 * **the decoded coordinate range**: over :data:`MAX_DISAGREEMENT` of the well-lit pixels decode off the panel
-  (a period or a projector size that is not the capture's).
+  (a period or a projector size that is not the capture's);
+* **the direction the fringes move** (a sequence without a Gray code, described by hand): a ``shift`` (or a
+  ``sign``) of the wrong way round in every block agrees with itself at every frequency and turns the decoded
+  projector image by 180 degrees; a decoded image upside down in the camera (turned by more than about 135
+  degrees) is refused unless the description says ``"upside_down": true`` (and an upright one then is).
 
 A capture that passes can still be decoded wrongly in ways no frame shows (a consistent but shifted origin moves
-every coordinate by the same amount; it shows in the calibration, not here).
+every coordinate by the same amount; it shows in the calibration, not here; one axis's sign or shift of the wrong
+way round mirrors the decoded image, which the calibration's orientation check names).
 """
 
 from __future__ import annotations
@@ -29,7 +35,7 @@ import numpy as np
 
 from .. import decoded as _d
 from ..errors import CaptureError, ProcamWarning
-from ..patterns.phase import PhaseSet
+from ..patterns.phase import Fringe, PhaseSet
 from . import response as _resp
 
 MIN_RELATIVE_MODULATION = 0.15
@@ -75,18 +81,34 @@ def _variants(ps: PhaseSet, axis: str):
                 f = replace(f, **{k: -getattr(f, k) for k in how})
                 b = replace(b, fringe=f)
             blocks.append(b)
-        return PhaseSet(ps.width, ps.height, ps.family, tuple(blocks), ps.order)
+        return replace(ps, blocks=tuple(blocks))
+
+    def turn(by):
+        blocks = tuple(replace(b, fringe=replace(b.fringe, start=_wrap(b.fringe.start + by)))
+                       if b.axis == axis and b.kind in ("phase", "gray") else b for b in ps.blocks)
+        return replace(ps, blocks=blocks)
 
     name = "column" if axis == "col" else "row"
     yield f'"shift": -1 (the phase steps the other way) in the {name} blocks', flip(shift=True)
+    starts = {b.fringe.start for b in ps.blocks if b.axis == axis and b.kind == "phase"}
+    if len(starts) == 1:
+        start = starts.pop()
+        for by, what in ((-np.pi / 2, "a sine where a cosine was said"), (np.pi / 2, "a sine of the other sign"),
+                         (np.pi, "the fringes' crests and troughs exchanged")):
+            yield (f'"start": {_wrap(start + by):.4f} ({what}) in the {name} blocks', turn(by))
     yield f'"sign": -1 (the phase falls along the {name}s) in the {name} blocks', flip(sign=True)
     yield f'"shift" and "sign" both flipped in the {name} blocks', flip(shift=True, sign=True)
     swapped = tuple(replace(b, axis={"col": "row", "row": "col"}.get(b.axis)) for b in ps.blocks)
     try:
-        yield "the columns and rows exchanged (each block's axis)", PhaseSet(ps.width, ps.height, ps.family, swapped,
-                                                                             ps.order)
+        yield "the columns and rows exchanged (each block's axis)", replace(ps, blocks=swapped)
     except ValueError:
         return
+
+
+def _wrap(t: float) -> float:
+    """``t`` (radians) wrapped to (-pi, pi]."""
+    t = float(np.mod(t + np.pi, 2.0 * np.pi) - np.pi)
+    return np.pi if t == -np.pi else t
 
 
 def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, options=None) -> None:
@@ -148,6 +170,64 @@ def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, op
             hint = f"; with {best[1]} they agree at {1 - best[0]:.0%} of them"
         raise CaptureError(f"{name}: the description does not match the frames: along the {label}s {how}{hint} — fix "
                            "patterns.json (docs/patterns.md: the conventions and the frame order)")
+    _check_upright(res, idx, lit, ps, W, name)
+
+
+#: The decoded projector image counts as turned when the cosine of its rotation in the camera image is below this
+#: (turned by more than about 135 degrees), as upright when above its negative.
+TURNED_COS = -0.7
+
+
+def _rotation_cos(res, idx, lit, W: int) -> float | None:
+    """Cosine of the angle the decoded projector image is turned by in the camera image (1: upright, -1: upside
+    down), from the least-squares affine map of the camera pixel to the projector coordinates at the well-decoded
+    sample pixels; None when they are too few or the map reverses orientation (a mirror: the calibration's
+    orientation check names it)."""
+    ok = lit & (res.reason_col[0] == _d.OK) & (res.reason_row[0] == _d.OK)
+    if ok.sum() < 200:
+        return None
+    v, u = np.divmod(idx[ok].astype(np.float64), W)
+    A = np.stack([u - u.mean(), v - v.mean(), np.ones_like(u)], axis=1)
+    (a, b, _), *_ = np.linalg.lstsq(A, res.col[0][ok].astype(np.float64), rcond=None)
+    (d, e, _), *_ = np.linalg.lstsq(A, res.row[0][ok].astype(np.float64), rcond=None)
+    n1, n2 = np.hypot(a, b), np.hypot(d, e)
+    if n1 == 0 or n2 == 0 or a * e - b * d <= 0:
+        return None
+    return float((a / n1 + e / n2) / 2.0)
+
+
+def _check_upright(res, idx, lit, ps: PhaseSet, W: int, name: str) -> None:
+    """Raise when a sequence without a Gray code, described by hand, decodes to a projector image turned upside
+    down in the camera (or upright when the description says ``"upside_down": true``).  procam's own sequences
+    (order ``procam``, its conventions unchanged) are what it projected and are not judged: a ceiling-mounted
+    projector decodes upside down, rightly.  A shift (or a sign) of the wrong way round in
+    every block turns the decoded image by 180 degrees and nothing else: every frequency still agrees and the
+    calibration comes out with the projector upside down.  A Gray code is absolute and needs no such check."""
+    if any(b.kind == "gray" for b in ps.blocks):
+        return
+    if ps.order == "procam" and not ps.upside_down and all(b.fringe == Fringe() for b in ps.blocks):
+        return  # procam's own sequence with its own conventions: what it projected is known, however it is mounted
+    c = _rotation_cos(res, idx, lit, W)
+    if c is None or (c >= TURNED_COS if not ps.upside_down else c <= -TURNED_COS):
+        return
+    blocks = [b for b in ps.blocks if b.kind == "phase"]
+    shifts = {b.fringe.shift for b in blocks}
+    signs = {b.fringe.sign for b in blocks}
+    one = shifts.pop() if len(shifts) == 1 else None
+    said = f'"shift": {one:+d}' if one is not None else "the blocks' shifts"
+    fix = f'"shift": {-one:+d}' if one is not None else "each block's shift the other way round"
+    sign = f'"sign": {signs.pop():+d}' if len(signs) == 1 else "the blocks' signs"
+    angle = float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    if ps.upside_down:
+        raise CaptureError(
+            f"{name}: the description says \"upside_down\": true, but the projector's image decodes upright in the "
+            f"camera (turned by {angle:.0f} degrees): drop \"upside_down\" from patterns.json (docs/patterns.md)")
+    raise CaptureError(
+        f"{name}: the description does not match the frames: the projector's image decodes upside down in the camera "
+        f"(turned by {angle:.0f} degrees), which is what {said} of the wrong way round in every block does (the fringes "
+        f"move the other way between frames than it says; {sign} flipped in every block does the same) — write {fix} "
+        "in every block of patterns.json (docs/patterns.md); if the projector really shows its image upside down to "
+        "the camera, say \"upside_down\": true")
 
 
 def _frame_fit(values, psi, b, gamma, blur, ps, name, files) -> None:

@@ -1,0 +1,115 @@
+"""Are a Gray code's bits in the order the description says?  Judged from the frames themselves.
+
+Bit ``b`` (0 = least significant) of a Gray code changes every ``2 ** (b + 1)`` codes, so across the panel the
+least significant bit has the most stripe edges and every more significant one about half as many.  In the camera
+image this shows as the share of neighbouring pixels whose bit differs (the **edge density**), whatever the
+camera's view of the panel.  Read in the order the description gives (most significant first by default), the
+densities must grow; when they fall, the bits come least significant first (or the other way round), which no
+other check sees: a pattern still has its inverse beside it, and the XOR of all bits (the only cross-check a
+Gray-phase capture has between its Gray code and its fringes) does not depend on their order.
+
+:func:`check_bit_order` raises a one-line :class:`~procam.errors.CaptureError` naming the axis, the frames, the
+densities and the ``bit_order`` to write.  Every Gray block is judged: the Gray family's two axes
+(:class:`~procam.patterns.PatternSet`) and each Gray block of a hybrid (:class:`~procam.patterns.PhaseSet`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .. import patterns
+from ..errors import CaptureError
+
+#: Rank correlation (Spearman) of the edge densities with the bits' described significance below which the
+#: order is judged reversed (a right order gives about +1, a reversed one about -1).
+REVERSED_BELOW = -0.6
+#: Fewest neighbouring pixel pairs, both sure of their bit, for a bit's edge density to count.
+MIN_PAIRS = 200
+
+
+def _bits_in_described_order(ps, axis: str) -> tuple[list[tuple[int, int | None]], str, str] | None:
+    """``([(frame, inverse frame or None), ...] most significant first as described, bit_order, where)`` of the
+    Gray bits of ``axis``, or None when the axis has no Gray code."""
+    if not patterns.is_phase(ps):
+        pairs = [(int(a), int(i)) for a, i in ps.pair_indices(axis)]
+        return pairs, ps.bit_order, "patterns.json"
+    g = ps.gray_block(axis)
+    if g is None:
+        return None
+    per = 2 if g.inverse else 1
+    by_bit = {}
+    for j in range(0, g.count, per):
+        bit, _, comp = g.gray_frame(j)
+        if not comp:
+            by_bit[bit] = (g.first + j, g.first + j + 1 if g.inverse else None)
+    index = ps.blocks.index(g)
+    return [by_bit[b] for b in range(g.bits - 1, -1, -1)], g.bit_order, f"sequence[{index}] in patterns.json"
+
+
+def _edge_densities(stack: np.ndarray, frames, stride: int) -> np.ndarray:
+    """(n,) share of neighbouring pixels (across and down, every ``stride``-th pixel) whose bit differs, among
+    those sure of it; NaN where fewer than :data:`MIN_PAIRS` are."""
+    imgs = [(stack[a, ::stride, ::stride].astype(np.float32),
+             None if i is None else stack[i, ::stride, ::stride].astype(np.float32)) for a, i in frames]
+    if imgs[0][1] is None:
+        p = np.stack([a for a, _ in imgs])
+        lo, hi = p.min(axis=0), p.max(axis=0)
+        span = hi - lo
+        thr = (lo + hi) / 2.0
+        sure_lit = span > 0.25 * float(np.percentile(span, 99))
+    out = np.full(len(imgs), np.nan)
+    for k, (a, i) in enumerate(imgs):
+        if i is None:
+            bit, sure = a > thr, sure_lit & (np.abs(a - thr) > 0.25 * span)
+        else:
+            c = np.abs(a - i)
+            bit, sure = a > i, c > 0.25 * float(np.percentile(c, 99))
+        n, d = 0, 0
+        for ax in (0, 1):
+            s0 = [slice(None), slice(None)]
+            s1 = [slice(None), slice(None)]
+            s0[ax], s1[ax] = slice(None, -1), slice(1, None)
+            both = sure[tuple(s0)] & sure[tuple(s1)]
+            n += int(both.sum())
+            d += int(np.sum(both & (bit[tuple(s0)] != bit[tuple(s1)])))
+        if n >= MIN_PAIRS:
+            out[k] = d / n
+    return out
+
+
+def _spearman(x: np.ndarray) -> float:
+    """Rank correlation of ``x`` with its index (ties ranked by order)."""
+    n = len(x)
+    rx = np.argsort(np.argsort(x, kind="stable"), kind="stable").astype(float)
+    ri = np.arange(n, dtype=float)
+    rx -= rx.mean()
+    ri -= ri.mean()
+    return float(np.sum(rx * ri) / np.sqrt(np.sum(rx * rx) * np.sum(ri * ri)))
+
+
+def check_bit_order(stack: np.ndarray, ps, folder, files) -> None:
+    """Raise :class:`CaptureError` when an axis's Gray bits come in the other order than the description's
+    ``bit_order`` (module docstring).  ``stack`` is the (K, H, W) capture, ``files`` its frames' paths."""
+    H, W = stack.shape[1:3]
+    stride = max(1, min(H, W) // 400)
+    for axis, name in (("col", "column"), ("row", "row")):
+        found = _bits_in_described_order(ps, axis)
+        if found is None or len(found[0]) < 3:
+            continue
+        frames, order, where = found
+        dens = _edge_densities(stack, frames, stride)
+        ok = np.isfinite(dens)
+        if ok.sum() < 3 or _spearman(dens[ok]) >= REVERSED_BELOW:
+            continue
+        kept = sorted((f[0], d) for f, d, k in zip(frames, dens, ok) if k)  # (frame, density) in frame order
+        (first, d_first), (last, d_last) = kept[0], kept[-1]
+        said, seen = (("most", "least") if order == "msb-first" else ("least", "most"))
+        fix = "lsb-first" if order == "msb-first" else "msb-first"
+        raise CaptureError(
+            f"{folder}: the {name} Gray bits come {seen} significant first, the description says {said} "
+            f"(bit_order {order}): from frame to frame their stripes get {'coarser' if d_first > d_last else 'finer'} "
+            f"— stripe edges at {d_first:.1%} of neighbouring pixels in frame #{first} ({Path(files[first]).name}), "
+            f"{d_last:.1%} in #{last} ({Path(files[last]).name}) — write \"bit_order\": \"{fix}\" in {where} "
+            "(docs/patterns.md), or check that the file names sort in capture order")

@@ -1,0 +1,78 @@
+"""Reading a JSON file a user may have written: every structure and number bounded before anything uses it.
+
+:func:`load_json` parses like :func:`json.loads` but refuses, with a ValueError whose text says what is wrong and
+where (the caller prefixes the file's name):
+
+* a document nested more than :data:`MAX_DEPTH` levels deep (a hand-edited or hostile file must not exhaust the
+  interpreter's recursion, nor any code that walks the document);
+* a whole number of more than :data:`MAX_INT_DIGITS` digits (no field procam reads needs one; a 400-digit
+  ``width`` would overflow every float conversion after it);
+* a number that is not finite (``NaN``, ``Infinity``, ``1e400``) unless ``finite=False``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+#: Deepest nesting of arrays and objects a procam JSON file may have (procam's own go 5 levels deep).
+MAX_DEPTH = 64
+#: Most digits of a whole number (procam's sizes, counts and indices have at most 6).
+MAX_INT_DIGITS = 15
+
+
+class JSONError(ValueError):
+    """A JSON text procam does not read; the message says what is wrong, without the file's name."""
+
+
+def _path(parts) -> str:
+    """``sequence[1].period``-style name of a place in a document."""
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "the document"
+
+
+def _check(doc, finite: bool) -> None:
+    """Raise :class:`JSONError` for nesting deeper than :data:`MAX_DEPTH`, a whole number of more than
+    :data:`MAX_INT_DIGITS` digits or (``finite``) a number that is not finite, naming the field; walked without
+    recursion."""
+    big = 10 ** MAX_INT_DIGITS
+    todo = [(doc, ())]
+    while todo:
+        node, where = todo.pop()
+        if len(where) >= MAX_DEPTH:
+            raise JSONError(f"is nested too deep (more than {MAX_DEPTH} levels of arrays and objects)")
+        if isinstance(node, dict):
+            todo.extend((v, (*where, str(k))) for k, v in node.items())
+        elif isinstance(node, list):
+            todo.extend((v, (*where, i)) for i, v in enumerate(node))
+        elif isinstance(node, int) and not isinstance(node, bool) and abs(node) >= big:
+            raise JSONError(f"{_path(where)} is a whole number of {len(str(abs(node)))} digits; no field takes "
+                            f"more than {MAX_INT_DIGITS}")
+        elif finite and isinstance(node, float) and not math.isfinite(node):
+            raise JSONError(f"{_path(where)} is {node}, not a finite number")
+
+
+def loads(text: str, finite: bool = True):
+    """The document of the JSON ``text``, bounded (module docstring).  Raises :class:`JSONError` (a ValueError)."""
+    try:
+        doc = json.loads(text)
+    except RecursionError:
+        raise JSONError(f"is nested too deep (more than {MAX_DEPTH} levels of arrays and objects)") from None
+    except ValueError as e:  # also a number beyond Python's own limit of digits
+        raise JSONError(f"is not valid JSON ({e})") from None
+    _check(doc, finite)
+    return doc
+
+
+def load_json(path, finite: bool = True):
+    """The bounded document of the JSON file ``path`` (:func:`loads`).  Raises :class:`JSONError` for a text
+    procam does not read, OSError when the file cannot be read."""
+    data = Path(path).read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise JSONError(f"is not UTF-8 text ({e.reason} at byte {e.start})") from None
+    return loads(text, finite)
