@@ -7,7 +7,12 @@ where (the caller prefixes the file's name):
   interpreter's recursion, nor any code that walks the document);
 * a whole number of more than :data:`MAX_INT_DIGITS` digits (no field procam reads needs one; a 400-digit
   ``width`` would overflow every float conversion after it);
-* a number that is not finite (``NaN``, ``Infinity``, ``1e400``) unless ``finite=False``.
+* a number that is not finite (``NaN``, ``Infinity``, ``1e400``) unless ``finite=False``;
+* a key given twice in one object (JSON allows it and a parser keeps one of the two: procam cannot tell which
+  one the writer meant, so it keeps neither).
+
+It is the one JSON reader of procam's files: descriptions (``patterns.json``), rig folders (``rig.json``),
+manifests, calibrations (:func:`procam.io.validate.load_json` adds the file's name and what to do).
 """
 
 from __future__ import annotations
@@ -55,10 +60,22 @@ def _check(doc, finite: bool) -> None:
             raise JSONError(f"{_path(where)} is {node}, not a finite number")
 
 
+def _unique_keys(pairs):
+    """``object_pairs_hook`` of :func:`loads`: an object's keys, each once."""
+    out = {}
+    for k, v in pairs:
+        if k in out:
+            raise JSONError(f"key {k!r} is given twice (procam cannot tell which one is meant); keep one")
+        out[k] = v
+    return out
+
+
 def loads(text: str, finite: bool = True):
     """The document of the JSON ``text``, bounded (module docstring).  Raises :class:`JSONError` (a ValueError)."""
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, object_pairs_hook=_unique_keys)
+    except JSONError:
+        raise
     except RecursionError:
         raise JSONError(f"is nested too deep (more than {MAX_DEPTH} levels of arrays and objects)") from None
     except ValueError as e:  # also a number beyond Python's own limit of digits

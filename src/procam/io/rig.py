@@ -152,8 +152,10 @@ def is_rig_calibration(path) -> bool:
     path = Path(path)
     if not path.is_file() or path.suffix.lower() in (".yml", ".yaml", ".xml"):
         return False
+    from .jsonfile import load_json as _bounded
+
     try:
-        doc = json.loads(path.read_text())
+        doc = _bounded(path, finite=False)
     except (OSError, UnicodeDecodeError, ValueError):
         return False
     return isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT

@@ -32,7 +32,6 @@ The rules, and why each is what it is:
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -180,31 +179,21 @@ def check_rms(path, field: str, v) -> float:
     return float(v)
 
 
-class _DuplicateKey(ValueError):
-    pass
-
-
-def _unique_keys(pairs):
-    seen = {}
-    for k, v in pairs:
-        if k in seen:
-            raise _DuplicateKey(k)
-        seen[k] = v
-    return seen
-
-
 def load_json(path, what: str, hint: str, *, error: type = CalibrationFileError):
-    """The JSON document of the file ``path``, each key once in every object.  A file that cannot be read or
-    parsed is refused with ``PATH: WHAT (why); HINT``, a key given twice with ``PATH: key 'K' is given twice``
-    (raised as ``error``)."""
+    """The JSON document of the file ``path`` through the one bounded reader (:func:`procam.io.jsonfile.load_json`:
+    nesting, digits, finite numbers, each key once in every object).  A file that cannot be read or parsed is
+    refused with ``PATH: WHAT (why); HINT``, a key given twice with ``PATH: key 'K' is given twice`` (raised as
+    ``error``)."""
+    from .jsonfile import JSONError
+    from .jsonfile import load_json as _bounded
+
     path = Path(path)
     try:
-        return json.loads(path.read_text(), object_pairs_hook=_unique_keys)
-    except _DuplicateKey as e:
-        raise error(f"{path}: key {e.args[0]!r} is given twice (procam cannot tell which one is meant); keep "
-                    "one") from None
-    except RecursionError:
-        raise error(f"{path}: {what} (nested too deeply); {hint}") from None
+        return _bounded(path, finite=False)
+    except JSONError as e:
+        if "is given twice" in str(e):
+            raise error(f"{path}: {e}") from None
+        raise error(f"{path}: {what} ({e}); {hint}") from None
     except (OSError, UnicodeDecodeError, ValueError) as e:
         raise error(f"{path}: {what} ({e}); {hint}") from None
 
