@@ -490,7 +490,8 @@ def assumed_size(calib, key: str) -> str:
 
 def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     """Check an output file before any work is done (one-line errors): a known suffix; a folder that can be
-    created and written; not a file that is an input of the command (``inputs``: files and pose folders),
+    created and written; not an input of the command nor a file an input folder needs, symbolic links resolved
+    (``inputs``: files and pose or rig folders; :func:`procam.io.folders.input_clash`),
     not a file procam did not write in a capture folder, not an image added to a capture folder that
     has no manifest (it would be read as a frame of the sequence)."""
     if path is None:
@@ -515,6 +516,9 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         fail(f"{option} {path}: cannot {where} ({why}); choose another place")
     if path.is_symlink() and not path.exists():
         fail(f"{option} {path}: is a broken or looping symbolic link; give another name")
+    clash = folders.input_clash(path, inputs)
+    if clash is not None:
+        fail(f"{option} {path}: {clash}; give another name (procam never writes over its inputs)")
     if path.exists():
         if not path.is_file():
             fail(f"{option} {path}: exists and is not a regular file; give another name")
@@ -523,13 +527,6 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         if not _files.procam_wrote(path):
             fail(f"{option} {path}: the file exists and procam did not write it; give another name, or move it "
                  "away first (procam never overwrites a file it did not write)")
-        for p in inputs:
-            try:
-                same = Path(p).exists() and path.samefile(p)
-            except OSError:
-                same = False
-            if same:
-                fail(f"{option} {path}: is also an input of this command; give another name")
     folder = path.parent
     if _capture_folder(folder, inputs):
         own = folders.replaceable(folder)

@@ -26,7 +26,7 @@ from ..calibration import Calibration, Device, Distortion
 from ..distortion import opencv_from_division
 from ..errors import CalibrationFileError
 from .files import atomic_path
-from .formats import KAMINO410, OPENCV, FileStorageLayout
+from .formats import FILESTORAGE_FORMATS, FILESTORAGE_KEY, KAMINO410, OPENCV, FileStorageLayout
 from .procam import VERDICT_MEANING, verdict_level
 from .validate import bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs
 
@@ -83,6 +83,7 @@ def save_opencv_yaml(calib, path) -> Path:
     path = Path(path)
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
+        fs.write(FILESTORAGE_KEY, FILESTORAGE_FORMATS[OPENCV.name])  # procam's mark (io.formats)
         write_devices(fs, OPENCV, calib)
         fs.write("cam_error", float(calib.cam_rms))
         fs.write("proj_error", float(calib.proj_rms))
