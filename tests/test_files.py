@@ -48,7 +48,7 @@ def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
     try:
         import plyfile  # noqa: F401
 
-        written.append(io.write_ply(tmp_path / "p.ply", np.zeros((2, 3)), comments=["procam reconstruct"]))
+        written.append(io.write_ply(tmp_path / "p.ply", np.zeros((2, 3)), comments=[formats.PLY_COMMENT]))
     except ImportError:
         pass
     from matplotlib.figure import Figure

@@ -540,13 +540,17 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     return path
 
 
-def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
+def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False, inputs=()) -> Path:
     """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
     ``force`` any folder, where nothing procam did not write is overwritten or deleted
     (:func:`procam.io.folders.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
-    the writer, so an interrupted run leaves none)."""
+    the writer, so an interrupted run leaves none).  Never an input folder of the command, nor a capture folder
+    inside one (``inputs``: :func:`procam.io.folders.folder_clash`)."""
     from ..io import folders
 
+    clash = folders.folder_clash(path, inputs)
+    if clash is not None:
+        fail(f"{option} {path}: {clash}; give another folder (procam never writes into its inputs)")
     try:
         return folders.prepare_output_dir(path, writer, force=force, option=option, create=create)
     except OutputError as e:

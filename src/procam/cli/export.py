@@ -54,7 +54,7 @@ def _check_outputs(fmt, out, calibration, inputs, force, rectify=False):
     if fmt == "maps":
         if out.exists() and not out.is_dir():
             fail(f"-o {out}: --format maps writes several files; give a folder")
-        output_dir(out, "-o", "export", force)
+        output_dir(out, "-o", "export", force, inputs=inputs)
         for name in MAPS_FILES + (RECTIFY_FILES if rectify else ()):
             output_path(out / name, "-o", (".npz",), inputs=inputs)
         return

@@ -117,7 +117,9 @@ def procam_wrote(path) -> bool:
     if suffix == ".npz":
         return _npz_format(path) in formats.NPZ_FORMATS
     if suffix == ".ply":
-        return f"\ncomment {formats.PLY_COMMENT}".encode() in head[:4096]
+        end = head.find(b"\nend_header")
+        return head.startswith(b"ply") and end > 0 and re.search(
+            rb"\ncomment " + re.escape(formats.PLY_COMMENT.encode()) + rb"\r?\n", head[:end + 1]) is not None
     if suffix == ".png":
         return head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix == ".pdf":  # the document information (its Creator) comes last

@@ -207,3 +207,27 @@ def input_clash(path: Path, inputs) -> str | None:
             what = {"frame": "a frame", "captured": "a captured frame"}.get(role, target.name)
             return f"is {what} of {p}, an input of this command"
     return None
+
+
+def folder_clash(folder: Path, inputs) -> str | None:
+    """Which of the command's ``inputs`` writing into the output ``folder`` would change (words for a message), after
+    resolving symbolic links, or None: ``folder`` is an input folder, or a capture folder inside one (a rig pose's
+    pair folder), whose readers would take the files written there for its own."""
+    try:
+        target = Path(folder).resolve()
+    except (OSError, RuntimeError):
+        return None
+    for p in inputs:
+        try:
+            src = Path(p).resolve()
+        except (OSError, RuntimeError):
+            continue
+        if target == src:
+            return "is also an input of this command" if Path(p) == Path(folder) else \
+                f"is {p}, an input of this command (symbolic links followed)"
+        man = read_manifest(target)
+        holds_frames = (man is not None and any(r in ("frame", "captured") for r in man["files"].values())) or any(
+            (target / n).is_file() for n in ("patterns.json", "capture.json", "rig.json"))
+        if src in target.parents and holds_frames:
+            return f"is a capture folder of {p}, an input of this command"
+    return None

@@ -12,7 +12,7 @@ JSON                a top-level ``"format"`` that starts with :data:`JSON_PREFIX
 FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) whose key :data:`FILESTORAGE_KEY` names a format of
                     :data:`FILESTORAGE_FORMATS` (procam's layout :data:`OPENCV`, kamino410's :data:`KAMINO410`)
 ``.npz``            a member :data:`NPZ_KEY` naming a format of :data:`NPZ_FORMATS` (decoded maps, a remap table)
-PLY                 a header comment that starts with :data:`PLY_COMMENT`
+PLY                 a header comment line :data:`PLY_COMMENT` (the key and a format, as in FileStorage)
 PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
 Python script       a first line :data:`SCRIPT_MARK` and the SHA-256 of the rest of the file (:func:`script_mark`)
 JPEG                a comment (``COM``) segment :data:`SOFTWARE` (a figure written as ``.jpg``)
@@ -100,8 +100,8 @@ NPZ_FORMATS = (DECODED_MAPS_FORMAT, REMAP_FORMAT)
 
 # ------------------------------------------------------------------------------------------------
 # PLY, PNG and HTML
-#: The first word of the first header comment of a PLY procam writes (``procam reconstruct``).
-PLY_COMMENT = "procam"
+#: The first header comment of a PLY procam writes (``procam reconstruct``), a whole line.
+PLY_COMMENT = "procam_format procam-point-cloud"
 #: The ``<head>`` element of every HTML page procam writes (the report), by which it knows the page is its own.
 HTML_GENERATOR = f'<meta name="generator" content="{SOFTWARE}">'
 
