@@ -9,8 +9,6 @@ test runs every writing command onto every kind of file a user owns and onto its
 
 from __future__ import annotations
 
-import json
-import os
 from pathlib import Path
 
 import cv2
@@ -51,10 +49,10 @@ def user_file(path: Path, kind: str) -> Path:
     elif kind == "html":
         path.write_text("<html><head><title>procam notes</title></head><body>procam</body></html>")
     elif kind == "png":
-        ok, buf = cv2.imencode(".png", np.full((8, 8), 7, np.uint8))
+        _, buf = cv2.imencode(".png", np.full((8, 8), 7, np.uint8))
         path.write_bytes(buf.tobytes())
     elif kind == "jpg":
-        ok, buf = cv2.imencode(".jpg", np.full((8, 8, 3), 7, np.uint8))
+        _, buf = cv2.imencode(".jpg", np.full((8, 8, 3), 7, np.uint8))
         path.write_bytes(buf.tobytes())
     elif kind == "ply":
         path.write_text("ply\nformat ascii 1.0\ncomment procam-like scan of mine\nend_header\n")
@@ -71,11 +69,12 @@ KIND = {".npz": "npz", ".yml": "yml", ".yaml": "yml", ".xml": "xml", ".py": "py"
 def world(tmp_path_factory):
     """One small rendered pose, its true calibration (JSON and YAML) and a tiny rig pose folder written by the
     simulator's rig writer (two pairs, 64x48 projectors, frames made without rendering)."""
+    from sim_small import small_scene
+
     from procam import simulate as sim
     from procam.capture import pair_folder_name
     from procam.simulate import truth_calibration
     from procam.simulate.rig_capture import write_rig_capture
-    from sim_small import small_scene
 
     root = tmp_path_factory.mktemp("world")
     pose = root / "pose"

@@ -28,8 +28,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..capture import RIG_MANIFEST, check_out_dir, pair_folder_name, rig_manifest
-from ..capture.rig import check_device_name, write_rig_file
+from ..capture import RIG_MANIFEST, check_out_dir, pair_folder_name, rig_manifest, write_rig_file
+from ..capture.rig import check_device_name
 from .orchestrate import Hooks, Rig, capture_session
 from .session import CaptureOptions, CaptureResult
 

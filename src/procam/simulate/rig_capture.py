@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from ..capture.rig import RIG_MANIFEST, pair_folder_name, prepare_rig_dir, rig_manifest, write_rig_file
+from ..capture import RIG_MANIFEST, pair_folder_name, prepare_rig_dir, rig_manifest, write_rig_file
 from ..io.files import to_jsonable
 from .renderer import render, write_capture
 from .rig import Rig
