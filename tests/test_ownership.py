@@ -234,6 +234,9 @@ def folder_cases(w, d: Path) -> list:
         (["patterns", "-p", "64x48", "-o", d], {d / "patterns.json": "json"}),
         (["simulate", d, "--seed", "1"], {d / "truth.json": "json"}),
         (["simulate", d, "--seed", "1"], {d / "17.png": "png"}),
+        (["simulate", d, "--rig", "two_projectors"], {d / "rig.json": "json"}),
+        (["simulate", d, "--rig", "two_projectors"], {d / "truth.json": "json"}),
+        (["simulate", d, "--rig", "two_projectors"], {d / "left" / "00.png": "png"}),
         (["blend", rig1, "-o", d], {d / f"alpha_{p0}.png": "png"}),
         (["blend", rig1, "-o", d], {d / "blend.npz": "npz"}),
         (["study", "projector", "-o", d, "--grid", "0,15", "--trials", "2", "--slice-grid", "15", "--model-error",
@@ -296,6 +299,10 @@ def test_every_writing_command_leaves_every_byte_of_the_users_files_and_its_inpu
             refused(fix + list(force), "procam did not write")
             assert snapshot(d) == before, fix + list(force)
             n += 1
+    cap = user_file(tmp_path / "capture" / "00.png", "png").parent  # a capture never goes into a non-empty folder
+    before = snapshot(cap)
+    refused(["capture", cap, "--virtual", "--projector", "64x48"], "not empty")
+    assert snapshot(cap) == before
     d = tmp_path / "inputs"
     d.mkdir()
     for args in input_cases(world, d):

@@ -110,10 +110,9 @@ def write_rig_file(out_dir, name: str, text: str) -> Path:
     """Write one of a rig pose folder's own files (``rig.json``, ``truth.json``) into ``out_dir``, listed in its
     manifest as a ``sidecar``: a file its readers need, so no command's output ever replaces it (an ``output`` is
     what a later command may write over)."""
-    from ..io.files import record_files, write_text
+    from ..io.files import write_text
 
-    record_files(out_dir, {name: "sidecar"})
-    return write_text(Path(out_dir) / name, text)
+    return write_text(Path(out_dir) / name, text, role="sidecar")
 
 
 def prepare_rig_dir(out_dir, writer: str, *, force: bool = False, option: str | None = None):

@@ -363,7 +363,7 @@ def _named(e: OSError, path: Path) -> OSError:
 
 
 @contextmanager
-def atomic_path(path, record: bool = True):
+def atomic_path(path, record: bool = True, role: str = "output"):
     """Yield a temporary path next to ``path``; on success rename it to ``path``.  An existing ``path`` procam did not
     write (:func:`procam_wrote`) is never replaced: :class:`~procam.errors.OutputError` before anything is written,
     whatever a command checked before (its ``--force`` included).
@@ -372,7 +372,8 @@ def atomic_path(path, record: bool = True):
     (disk full, read-only, permission denied) names ``path``, not the temporary file.  Temporary files
     of dead processes in the folder are removed first (:func:`remove_stale_temps`).  With ``record``,
     a folder that has a manifest gets ``path`` listed in it (role ``output`` unless it is listed already)
-    before the file is written, so a kill never leaves a file of procam's that its manifest does not list.
+    before the file is written, so a kill never leaves a file of procam's that its manifest does not list; ``role``
+    ``sidecar`` (a file the folder's readers need) also replaces an ``output`` listing.
     """
     path = Path(path)
     if path.name != MANIFEST and path.exists() and not procam_wrote(path):  # the last line of defence
@@ -385,8 +386,9 @@ def atomic_path(path, record: bool = True):
     remove_stale_temps(path.parent)
     if record:
         man = read_manifest(path.parent)
-        if man is not None and path.name not in man["files"]:
-            record_files(path.parent, {path.name: "output"})
+        listed = man["files"].get(path.name) if man is not None else None
+        if man is not None and (listed is None or (listed == "output" and role != "output")):
+            record_files(path.parent, {path.name: role})
     tmp = temp_path(path)
     try:
         yield tmp
@@ -401,9 +403,9 @@ def atomic_path(path, record: bool = True):
             pass
 
 
-def write_text(path, text: str, record: bool = True) -> Path:
-    """Write ``text`` to ``path`` atomically (``record``: see :func:`atomic_path`)."""
-    with atomic_path(path, record) as tmp:
+def write_text(path, text: str, record: bool = True, role: str = "output") -> Path:
+    """Write ``text`` to ``path`` atomically (``record``, ``role``: see :func:`atomic_path`)."""
+    with atomic_path(path, record, role) as tmp:
         Path(tmp).write_text(text)
     return Path(path)
 
