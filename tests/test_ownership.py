@@ -310,3 +310,15 @@ def test_every_writing_command_leaves_every_byte_of_the_users_files_and_its_inpu
         n += 1
     assert snapshot(world["root"]) == inputs
     assert n > 60 and not [p for p in tmp_path.rglob(".*tmp*")]
+
+
+def test_a_rig_calibration_writes_over_its_own_yaml_and_json(monkeypatch, tmp_path):
+    """The rig's FileStorage file carries procam's mark too (its writer takes it with the device keys)."""
+    from rig_sim import fake_rig_folders
+
+    _, folders = fake_rig_folders(monkeypatch, tmp_path)
+    for _ in range(2):
+        rc, out, err = run_cli(["calibrate", *folders, *BOARD, "-o", tmp_path / "rig.json", "--yaml",
+                                tmp_path / "rig.yml"])
+        assert rc == 0, (out, err)
+    assert _files.procam_wrote(tmp_path / "rig.yml") and _files.procam_wrote(tmp_path / "rig.json")

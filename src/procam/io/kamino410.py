@@ -16,7 +16,7 @@ import numpy as np
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from .files import atomic_path
-from .formats import FILESTORAGE_FORMATS, FILESTORAGE_KEY, KAMINO410
+from .formats import KAMINO410
 from .opencv import cv_message, distortion, has, matrix, open_storage, real, write_devices
 from .validate import bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs, validate_calibration
 
@@ -58,7 +58,6 @@ def save_kamino410(calib: Calibration, path) -> Path:
     Wp, Hp = (int(v) for v in calib.projector.image_size)
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
-        fs.write(FILESTORAGE_KEY, FILESTORAGE_FORMATS[KAMINO410.name])  # procam's mark (io.formats)
         fs.write("img_shape", np.array([[H], [W]], float))
         fs.write("rms", float(calib.stereo_rms))
         write_devices(fs, KAMINO410, calib)

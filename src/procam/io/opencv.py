@@ -57,8 +57,10 @@ def device_coeffs(dev: Device) -> np.ndarray:
 
 
 def write_devices(fs, keys: FileStorageLayout, calib) -> None:
-    """Write a layout's six keys into the open ``fs``: both devices' ``K`` and OpenCV distortion
-    (:func:`device_coeffs`), ``R`` and ``T`` (3x1)."""
+    """Write procam's mark (:data:`~procam.io.formats.FILESTORAGE_KEY` naming the layout's format) and a layout's six
+    keys into the open ``fs``: both devices' ``K`` and OpenCV distortion (:func:`device_coeffs`), ``R`` and ``T``
+    (3x1)."""
+    fs.write(FILESTORAGE_KEY, FILESTORAGE_FORMATS[keys.name])
     fs.write(keys.cam_K, np.asarray(calib.camera.K, float))
     fs.write(keys.cam_dist, device_coeffs(calib.camera))
     fs.write(keys.proj_K, np.asarray(calib.projector.K, float))
@@ -83,7 +85,6 @@ def save_opencv_yaml(calib, path) -> Path:
     path = Path(path)
     with atomic_path(path) as tmp:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
-        fs.write(FILESTORAGE_KEY, FILESTORAGE_FORMATS[OPENCV.name])  # procam's mark (io.formats)
         write_devices(fs, OPENCV, calib)
         fs.write("cam_error", float(calib.cam_rms))
         fs.write("proj_error", float(calib.proj_rms))
