@@ -202,7 +202,7 @@ def test_outputs_into_a_pose_folder(poses, tmp_path):
     assert rc == 0, err
     rc, out, err = run_cli(["decode", own])
     assert rc == 0 and "46 images" in out and "warning" not in out, (out, err)
-    bad(["correspond", own, *BOARD, "-o", own / "patterns.json"], "would overwrite a file of the capture")
+    bad(["correspond", own, *BOARD, "-o", own / "patterns.json"], "is patterns.json of", "an input of this command")
 
 
 def test_single_file_outputs_never_overwrite_the_users_files(tmp_path, calib_file, poses):

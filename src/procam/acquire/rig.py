@@ -28,7 +28,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..capture import RIG_MANIFEST, check_out_dir, pair_folder_name, rig_manifest
+from ..capture import RIG_MANIFEST, check_out_dir, pair_folder_name, rig_manifest, write_rig_file
 from ..capture.rig import check_device_name
 from .orchestrate import Devices, Hooks, capture_session
 from .session import CaptureOptions, CaptureResult
@@ -130,7 +130,7 @@ def capture_rig_pose(out_dir, projectors, rig: Devices, options: CaptureOptions,
     -------
     list of :class:`~procam.acquire.session.CaptureResult`, one per projector.
     """
-    from ..io.files import to_jsonable, write_text
+    from ..io.files import to_jsonable
 
     projectors = tuple(projectors)
     names = [check_device_name(p.name, "projector name") for p in projectors]
@@ -154,6 +154,6 @@ def capture_rig_pose(out_dir, projectors, rig: Devices, options: CaptureOptions,
             one = dataclasses.replace(one, scene=scene, proj_size=tuple(scene.proj_size))
         results += capture_session(sub, 1, one, options, board=board, hooks=hooks)
     if rig.virtual:
-        write_text(out_dir / "truth.json", json.dumps(to_jsonable(simulated.truth()), indent=1))
-    write_text(out_dir / RIG_MANIFEST, json.dumps(manifest, indent=1))
+        write_rig_file(out_dir, "truth.json", json.dumps(to_jsonable(simulated.truth()), indent=1))
+    write_rig_file(out_dir, RIG_MANIFEST, json.dumps(manifest, indent=1))
     return results

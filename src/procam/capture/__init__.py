@@ -12,6 +12,6 @@ from .read import (Capture, check_light, check_memory, check_pairs, check_white_
                    exposure_warnings, foreign_frames, frame_levels, load_capture, resolve_pattern_set, sample_index,
                    saturated_fraction, sequence_files)
 from .rig import (RIG_MANIFEST, RigPair, RigPose, is_rig_pose, pair_folder_name, prepare_rig_dir,  # noqa: F401
-                  read_rig_pose, rig_manifest)
+                  read_rig_pose, rig_manifest, write_rig_file)
 from .write import (SequenceWriter, check_out_dir, check_sequence_dir, remove_stale, sequence_names,  # noqa: F401
                     write_sequence)

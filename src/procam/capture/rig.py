@@ -35,7 +35,7 @@ from ..errors import CaptureError
 from ..io.formats import RIG_POSE_FORMAT
 
 __all__ = ["RIG_MANIFEST", "RigPair", "RigPose", "is_rig_pose", "read_rig_pose", "rig_manifest", "pair_folder_name",
-           "check_device_name", "prepare_rig_dir"]
+           "check_device_name", "prepare_rig_dir", "write_rig_file"]
 
 #: The manifest of a rig pose folder.
 RIG_MANIFEST = "rig.json"
@@ -104,6 +104,15 @@ def rig_manifest(cameras, projectors, pairs=None) -> dict:
     return {"format": RIG_POSE_FORMAT, "version": 1, "reference": cameras[0], "cameras": cameras,
             "projectors": projectors, "pairs": {k: list(v) for k, v in pairs.items()},
             "layout": "one sub-folder per (camera, projector) pair, each an ordinary pose folder"}
+
+
+def write_rig_file(out_dir, name: str, text: str) -> Path:
+    """Write one of a rig pose folder's own files (``rig.json``, ``truth.json``) into ``out_dir``, listed in its
+    manifest as a ``sidecar``: a file its readers need, so no command's output ever replaces it (an ``output`` is
+    what a later command may write over)."""
+    from ..io.files import write_text
+
+    return write_text(Path(out_dir) / name, text, role="sidecar")
 
 
 def prepare_rig_dir(out_dir, writer: str, *, force: bool = False, option: str | None = None):

@@ -552,7 +552,8 @@ def assumed_size(calib, key: str) -> str:
 
 def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     """Check an output file before any work is done (one-line errors): a known suffix; a folder that can be
-    created and written; not a file that is an input of the command (``inputs``: files and pose folders),
+    created and written; not an input of the command nor a file an input folder needs, symbolic links resolved
+    (``inputs``: files and pose or rig folders; :func:`procam.io.folders.input_clash`),
     not a file procam did not write in a capture folder, not an image added to a capture folder that
     has no manifest (it would be read as a frame of the sequence)."""
     if path is None:
@@ -577,6 +578,9 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         fail(f"{option} {path}: cannot {where} ({why}); choose another place")
     if path.is_symlink() and not path.exists():
         fail(f"{option} {path}: is a broken or looping symbolic link; give another name")
+    clash = folders.input_clash(path, inputs)
+    if clash is not None:
+        fail(f"{option} {path}: {clash}; give another name (procam never writes over its inputs)")
     if path.exists():
         if not path.is_file():
             fail(f"{option} {path}: exists and is not a regular file; give another name")
@@ -585,13 +589,6 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         if not _files.procam_wrote(path):
             fail(f"{option} {path}: the file exists and procam did not write it; give another name, or move it "
                  "away first (procam never overwrites a file it did not write)")
-        for p in inputs:
-            try:
-                same = Path(p).exists() and path.samefile(p)
-            except OSError:
-                same = False
-            if same:
-                fail(f"{option} {path}: is also an input of this command; give another name")
     folder = path.parent
     if _capture_folder(folder, inputs):
         own = folders.replaceable(folder)
@@ -605,13 +602,17 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     return path
 
 
-def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False) -> Path:
+def output_dir(path, option: str, writer: str, force: bool = False, create: bool = False, inputs=()) -> Path:
     """Check an output folder before any work is done: new, empty, or ``writer``'s own earlier output; with
     ``force`` any folder, where nothing procam did not write is overwritten or deleted
     (:func:`procam.io.folders.prepare_output_dir`).  A new folder is created only with ``create`` (otherwise by
-    the writer, so an interrupted run leaves none)."""
+    the writer, so an interrupted run leaves none).  Never an input folder of the command, nor a capture folder
+    inside one (``inputs``: :func:`procam.io.folders.folder_clash`)."""
     from ..io import folders
 
+    clash = folders.folder_clash(path, inputs)
+    if clash is not None:
+        fail(f"{option} {path}: {clash}; give another folder (procam never writes into its inputs)")
     try:
         return folders.prepare_output_dir(path, writer, force=force, option=option, create=create)
     except OutputError as e:

@@ -153,6 +153,24 @@ def capture(out_dir: Path, projectors, rig, options, *, board, hooks) -> None:
         f"({', '.join(p.name for p in projectors)}); procam calibrate reads it")
 
 
+def _check_rig_dir(out_dir: Path, rig, order: str, force: bool) -> None:
+    """Before rendering: the rig folder, its own files and each pair's folder take the simulator's output, and none
+    of them holds a file procam did not write under a name it writes (raises :class:`~procam.errors.OutputError`)."""
+    from .. import capture, patterns
+    from ..io.folders import prepare_output_dir
+    from ._app import output_path
+
+    prepare_output_dir(out_dir, "simulate", force=force, option="OUT_DIR", create=False)
+    for name in (capture.RIG_MANIFEST, "truth.json"):
+        output_path(out_dir / name, "OUT_DIR", (".json",))
+    devices = {d.name: d for d in rig.projectors}
+    nc, npj = len(rig.cameras), len(rig.projectors)
+    for c, p in rig.pairs():
+        ps = patterns.pattern_set(*devices[p].size, order)
+        capture.check_sequence_dir(out_dir / capture.pair_folder_name(c, p, nc, npj), ps, writer="simulate",
+                                   force=force, extra=("truth.json",), option="OUT_DIR")
+
+
 def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed: int, order: str, force: bool) -> None:
     """Render the preset rig ``rig_name`` at board ``angles`` (reference camera frame) and write it as a rig pose
     folder (:func:`procam.simulate.write_rig_capture`)."""
@@ -163,6 +181,7 @@ def simulate(out_dir: Path, rig_name: str, angles, distance, changes: dict, seed
     if rig.fit_margin() < 0:
         warn(f"part of the board is outside some device's image (by {-rig.fit_margin():.0f} px); some corners may "
              "be missing - try a larger --distance or smaller angles")
+    _check_rig_dir(out_dir, rig, order, force)
     rendered = sim.render_rig(rig, order=order, seed=seed, changes=changes)
     folders = sim.write_rig_capture(out_dir, rig, rendered, order=order, force=force)
     names = ", ".join(f"{f.name} ({c}, {p})" for f, (c, p, _, _) in zip(folders, rendered.values()))

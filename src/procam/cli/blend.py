@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, app, fail, number, output_dir, say, user_errors
+from ._app import ForceOpt, app, fail, number, output_dir, output_path, say, user_errors
 
 
 @app.command("blend")
@@ -35,7 +35,9 @@ def blend_cmd(
     pairs = [p for p in rig.pairs if p.camera == cam]
     if len(pairs) < 2:
         fail(f"{pose}: camera {cam} sees {len(pairs)} projector(s); blending needs two or more")
-    output_dir(out, "-o", "blend", force)
+    output_dir(out, "-o", "blend", force, inputs=(pose,))
+    for name in [f"{k}_{p.projector}.png" for p in pairs for k in ("alpha", "overlap")] + ["blend.npz"]:
+        output_path(out / name, "-o", (Path(name).suffix,), inputs=(pose,))  # each file, before any work
     maps, sizes = {}, {}
     for p in pairs:
         cap = capture.load_capture(p.folder)

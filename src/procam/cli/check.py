@@ -33,7 +33,7 @@ def check_cmd(
 
     brd = parse_board(board, square)
     opts = pose_options(**pose_args)
-    output_path(png, "--png", (".png", ".jpg", ".jpeg"))  # the overlay is a picture, not a plot
+    output_path(png, "--png", (".png", ".jpg", ".jpeg"), inputs=(pose_dir,))  # the overlay is a picture, not a plot
     check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step,
                        background=value(background))
     _show.print_pose_check(check, png)

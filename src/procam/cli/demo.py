@@ -9,7 +9,10 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, SimPreset, app, console, fail, number, output_dir, say, user_errors, value
+from ._app import ForceOpt, SimPreset, app, console, fail, number, output_dir, output_path, say, user_errors, value
+
+#: The files the demo writes beside its capture folder (name, suffix).
+DEMO_FILES = (("calib.json", ".json"), ("calib.yml", ".yml"), ("decode.png", ".png"), ("corners.png", ".png"))
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
@@ -50,6 +53,16 @@ def demo_cmd(
         fail(f"--preset must be one of {', '.join(simulate.PRESETS)}, got {preset!r}")
     number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
     output_dir(out_dir, "OUT_DIR", "demo", force)
+    for name, suffix in DEMO_FILES:  # each of its files, and its capture folder, before any work
+        output_path(out_dir / name, "OUT_DIR", (suffix,))
+    from .. import capture
+    from ..errors import OutputError
+
+    try:
+        capture.check_sequence_dir(out_dir / "capture", patterns.pattern_set(*simulate.preset(preset).proj_size),
+                                   writer="simulate", force=force, extra=("truth.json",), option="OUT_DIR")
+    except OutputError as e:
+        fail(str(e))
     # 2x2 supersamples instead of the preset's 3x3: half the rendering time, the same errors against the truth
     # (seeds 0-2, 'ideal': corner RMS camera 0.0092-0.0097 px vs 0.0090-0.0096, projector 0.024-0.026 vs
     # 0.023-0.025; the parameters' errors differ by less than from seed to seed)
@@ -82,10 +95,11 @@ def demo_cmd(
                   f"({time.perf_counter() - t0:.1f} s)")
     calib = single_pose.calibrate(view)
     _show.print_calibration(calib)
-    io.save_calibration(calib, out_dir / "calib.json")
-    io.save_opencv_yaml(calib, out_dir / "calib.yml")
-    save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), out_dir / "decode.png")
-    save_figure(correspond_figure(view, stack[ps.white], title="demo: correspondences"), out_dir / "corners.png")
+    cal_json, cal_yml, dec_png, cor_png = (out_dir / n for n, _ in DEMO_FILES)
+    io.save_calibration(calib, cal_json)
+    io.save_opencv_yaml(calib, cal_yml)
+    save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), dec_png)
+    save_figure(correspond_figure(view, stack[ps.white], title="demo: correspondences"), cor_png)
 
     t = Table(title=f"single-pose estimate vs truth ('{preset}' preset, pose {simulate.RECOMMENDED_POSE} deg)")
     for col in ("parameter", "true", "estimated", "error", "± std"):

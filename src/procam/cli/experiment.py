@@ -108,7 +108,7 @@ def experiment_cmd(
     if n_sets > MAX_SETS:
         fail(f"{len(poses)} poses with --min-set {min_set} make {n_sets} pose sets to calibrate (at most {MAX_SETS}); "
              "raise --min-set or give fewer poses")
-    output_dir(out, "-o", "experiment", force)
+    output_dir(out, "-o", "experiment", force, inputs=poses)
     cam_dist, proj_dist = value(cam_dist), value(proj_dist)
     for name, d in (("--cam-dist", cam_dist), ("--proj-dist", proj_dist)):
         if d not in DIST_CHOICES:

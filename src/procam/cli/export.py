@@ -43,12 +43,20 @@ def _clip(fmt: str, near, far, unit: str):
     return near * metres_per_unit(unit), far * metres_per_unit(unit)
 
 
-def _check_outputs(fmt, out, calibration, inputs, force):
-    """Every output file checked before any work (the neighbours an export writes beside ``out`` too)."""
+#: The files of ``--format maps`` in its folder, and those ``--rectify`` adds.
+MAPS_FILES = ("camera_undistort.npz", "projector_predistort.npz")
+RECTIFY_FILES = ("camera_rectify.npz", "projector_rectify.npz")
+
+
+def _check_outputs(fmt, out, calibration, inputs, force, rectify=False):
+    """Every output file checked before any work (the neighbours an export writes beside ``out`` too, each file of
+    a maps folder: ``--force`` lets the export write beside other files, never over one procam did not write)."""
     if fmt == "maps":
         if out.exists() and not out.is_dir():
             fail(f"-o {out}: --format maps writes several files; give a folder")
-        output_dir(out, "-o", "export", force)
+        output_dir(out, "-o", "export", force, inputs=inputs)
+        for name in MAPS_FILES + (RECTIFY_FILES if rectify else ()):
+            output_path(out / name, "-o", (".npz",), inputs=inputs)
         return
     output_path(out, "-o", SUFFIXES[fmt], inputs=inputs)
     if fmt == "blender":
@@ -143,7 +151,7 @@ def export_cmd(
 
     fmt, world, unit = value(fmt), value(world), value(unit)
     inputs = tuple(p for p in (calibration, pose, maps_file) if p is not None)
-    _check_outputs(fmt, out, calibration, inputs, force)
+    _check_outputs(fmt, out, calibration, inputs, force, rectify)
     for opt, given, fmts in (("--pose", pose, ("projector-view",)), ("--maps", maps_file, ("projector-view",)),
                              ("--rectify", rectify, ("maps",)), ("--y-down", y_down, ("opengl",)),
                              ("--zero-to-one", zero_to_one, ("opengl",)), ("--near", near, ENGINES),
@@ -200,10 +208,9 @@ def _maps(calib, out, force, rectify, scale):
     written = []
     cam, proj = calib.camera, calib.projector
     mx, my = _ex.undistort_maps(cam)
-    written.append(io.save_maps(out / "camera_undistort.npz", mx, my, K=cam.K, new_K=cam.K,
-                                size=np.array(cam.image_size)))
+    written.append(io.save_maps(out / MAPS_FILES[0], mx, my, K=cam.K, new_K=cam.K, size=np.array(cam.image_size)))
     mx, my = _ex.predistort_maps(proj)
-    written.append(io.save_maps(out / "projector_predistort.npz", mx, my, K=proj.K, K_ideal=proj.K,
+    written.append(io.save_maps(out / MAPS_FILES[1], mx, my, K=proj.K, K_ideal=proj.K,
                                 size=np.array(proj.image_size)))
     if rectify:
         from ..export.rectify import turn_words
@@ -212,7 +219,7 @@ def _maps(calib, out, force, rectify, scale):
         for name, dev, k in (("camera", cam, "1"), ("projector", proj, "2")):
             mx, my = _ex.undistort_maps(dev, new_K=rect["P" + k][:, :3], R=rect["R" + k], size=rect["size" + k])
             turn = rect["rows_along_deg"][name]
-            written.append(io.save_maps(out / f"{name}_rectify.npz", mx, my, R=rect["R" + k], P=rect["P" + k],
+            written.append(io.save_maps(out / RECTIFY_FILES[int(k) - 1], mx, my, R=rect["R" + k], P=rect["P" + k],
                                         Q=rect["Q"], size=np.array(rect["size" + k]), rows_along_deg=np.array(turn)))
             say(f"{name}: rectified image {rect['size' + k][0]}x{rect['size' + k][1]}, {turn_words(turn)} "
                 f"(its rows run at {turn:+.1f} deg in the {name}'s image)")

@@ -83,8 +83,8 @@ def reconstruct_cmd(
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
              "check the decode picture (procam decode --png)")
     io.write_ply(out, cloud.points, cloud.colours,
-                 comments=[f"{PLY_COMMENT} reconstruct", f"calibration {Path(calibration).name}", f"pose {Path(pose_dir).name}",
-                           "frame: camera (x right, y down, z forward), units of the calibration's T"])
+                 comments=[PLY_COMMENT, "procam reconstruct", f"calibration {Path(calibration).name}",
+                           f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"])
     t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))
     t.add_column("quantity")
     t.add_column("value", justify="right")

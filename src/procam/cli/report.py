@@ -37,7 +37,7 @@ def report_cmd(
     from .. import io, pipeline
     from . import _show
 
-    output_path(out, "-o", REPORT_SUFFIXES)
+    output_path(out, "-o", REPORT_SUFFIXES, inputs=(calibration, *(poses or ())))
     views = decodes = None
     if poses:
         if board is None or square is None:

@@ -10,7 +10,8 @@ import typer
 
 from ..style import fmt_number
 from ..errors import ProcamError
-from ._app import DeviceName, ForceOpt, app, console, err_console, fail, number, output_dir, plain, say, user_errors, value
+from ._app import (DeviceName, ForceOpt, app, console, err_console, fail, number, output_dir, output_path, plain, say,
+                   user_errors, value)
 
 #: Most cell-trials (cells x (trials + 1)) a study may run: about a day of one core at ~1 ms per trial.
 MAX_WORK = 10**8
@@ -71,6 +72,9 @@ def study(
         fail(f"the study would run {n_cells} cells x {cfg.trials + 1} calibrations (more than {MAX_WORK:.0e}, days "
              "of computing); use a coarser --grid or fewer --trials")
     output_dir(output, "-o", "study", force)
+    stem = f"study_{device}_{model_error}"
+    for p in sorted(output.glob(f"{stem}*")) if output.is_dir() else ():  # its files, before any work
+        output_path(p, "-o", (p.suffix.lower(),))
 
     client = None
     backend = None
@@ -100,7 +104,6 @@ def study(
             client.close()
 
     output_dir(output, "-o", "study", force, create=True)
-    stem = f"study_{device}_{model_error}"
     csv_path = result.to_csv(output / f"{stem}.csv")
     # no wall times in the files: the same study writes the same bytes
     timing = ("seconds", "cells_per_second")

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import to_jsonable, write_image, write_text
+from .formats import script_mark
 from .maps import save_maps
 
 #: The distortion map each device gets beside an engine export: what it does, in the file name.
@@ -36,10 +37,11 @@ def blender_script_path(path) -> Path:
 
 def save_blender(doc: dict, path, script: str) -> list[Path]:
     """Write the Blender export ``doc`` as ``path`` (JSON) and ``script`` (the text of
-    :mod:`procam.export.blender_cameras`, which creates its cameras) beside it (:func:`blender_script_path`);
-    returns both paths."""
+    :mod:`procam.export.blender_cameras`, which creates its cameras) beside it (:func:`blender_script_path`), under
+    procam's mark (a first line with the digest of the rest: :func:`procam.io.formats.script_mark`); returns both
+    paths."""
     script_path = blender_script_path(path)
-    write_text(script_path, script)
+    write_text(script_path, script_mark(script) + script)
     return [save_document(doc, path), script_path]
 
 

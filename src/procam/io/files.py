@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CaptureError
+from ..errors import CaptureError, OutputError
 from . import formats
 from .image_marks import PNG_SIGNATURE, jpeg_comment, jpeg_with_comment, png_texts, png_with_text
 
@@ -88,10 +88,11 @@ def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
     Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
-    :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a calibration FileStorage file
-    (``cam_K``/``cam_int`` ...), procam's ``.npz`` maps, a PLY with procam's header comment, a PNG/JPEG/PDF/SVG
+    :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a FileStorage file or ``.npz`` whose
+    ``procam_format`` names one of procam's formats, a PLY with procam's header comment, a PNG/JPEG/PDF/SVG
     marked ``procam`` (every figure and image procam writes is), an HTML page whose head names procam its
-    generator (the report), a script whose first line is procam's mark, or an empty file.
+    generator (the report), a script whose first line is procam's mark with the digest of the rest, or an empty
+    file.
     """
     path = Path(path)
     man = read_manifest(path.parent)
@@ -112,19 +113,13 @@ def procam_wrote(path) -> bool:
             return False
         return isinstance(doc, dict) and str(doc.get("format", "")).startswith(formats.JSON_PREFIX)
     if suffix in (".yml", ".yaml", ".xml"):
-        return (head.startswith(b"%YAML") or b"<opencv_storage>" in head) and any(
-            k.encode() in head for k in formats.FILESTORAGE_MARKS)
+        return _storage_format(head) in formats.FILESTORAGE_FORMATS.values()
     if suffix == ".npz":
-        import zipfile
-
-        try:
-            with zipfile.ZipFile(path) as z:
-                names = set(z.namelist())
-        except (OSError, zipfile.BadZipFile):
-            return False
-        return any({f"{k}.npy" for k in mark} <= names for mark in (formats.DECODED_MAPS_MARK, formats.REMAP_MARK))
+        return _npz_format(path) in formats.NPZ_FORMATS
     if suffix == ".ply":
-        return f"\ncomment {formats.PLY_COMMENT}".encode() in head[:4096]
+        end = head.find(b"\nend_header")
+        return head.startswith(b"ply") and end > 0 and re.search(
+            rb"\ncomment " + re.escape(formats.PLY_COMMENT.encode()) + rb"\r?\n", head[:end + 1]) is not None
     if suffix == ".png":
         return head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.SOFTWARE
     if suffix == ".pdf":  # the document information (its Creator) comes last
@@ -144,8 +139,40 @@ def procam_wrote(path) -> bool:
         end = low.find(b"</head>")
         return end > 0 and formats.HTML_GENERATOR.encode() in low[:end]
     if suffix == ".py":
-        return head.startswith(formats.SCRIPT_MARK.encode())
+        if not head.startswith(formats.SCRIPT_MARK.encode()):
+            return False
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            return False
+        first, _, body = text.partition("\n")
+        return first + "\n" == formats.script_mark(body)
     return False
+
+
+def _storage_format(head: bytes) -> str | None:
+    """The format an OpenCV FileStorage file (YAML or XML, its first bytes ``head``) names under procam's key
+    :data:`~procam.io.formats.FILESTORAGE_KEY`, or None."""
+    key = re.escape(formats.FILESTORAGE_KEY.encode())
+    if head.startswith(b"%YAML"):
+        m = re.search(rb"(?m)^" + key + rb':[ \t]*"?([\w.-]+)"?[ \t]*\r?$', head)
+    elif b"<opencv_storage>" in head:
+        m = re.search(rb"<" + key + rb'>[ \t]*"?([\w.-]+)"?[ \t]*</' + key + rb">", head)
+    else:
+        return None
+    return m.group(1).decode("ascii") if m else None
+
+
+def _npz_format(path) -> str | None:
+    """The format an ``.npz`` names in its member :data:`~procam.io.formats.NPZ_KEY` (a string array), or None."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z, z.open(f"{formats.NPZ_KEY}.npy") as f:
+            value = np.lib.format.read_array(f, allow_pickle=False)
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        return None
+    return str(value) if value.dtype.kind == "U" and value.ndim == 0 else None
 
 
 def check_image_bytes(path, data: bytes) -> None:
@@ -336,16 +363,22 @@ def _named(e: OSError, path: Path) -> OSError:
 
 
 @contextmanager
-def atomic_path(path, record: bool = True):
-    """Yield a temporary path next to ``path``; on success rename it to ``path``.
+def atomic_path(path, record: bool = True, role: str = "output"):
+    """Yield a temporary path next to ``path``; on success rename it to ``path``.  An existing ``path`` procam did not
+    write (:func:`procam_wrote`) is never replaced: :class:`~procam.errors.OutputError` before anything is written,
+    whatever a command checked before (its ``--force`` included).
 
     On error the temporary file is removed, so no half-written output is left behind; an OS error
     (disk full, read-only, permission denied) names ``path``, not the temporary file.  Temporary files
     of dead processes in the folder are removed first (:func:`remove_stale_temps`).  With ``record``,
     a folder that has a manifest gets ``path`` listed in it (role ``output`` unless it is listed already)
-    before the file is written, so a kill never leaves a file of procam's that its manifest does not list.
+    before the file is written, so a kill never leaves a file of procam's that its manifest does not list; ``role``
+    ``sidecar`` (a file the folder's readers need) also replaces an ``output`` listing.
     """
     path = Path(path)
+    if path.name != MANIFEST and path.exists() and not procam_wrote(path):  # the last line of defence
+        raise OutputError(f"{path}: the file exists and procam did not write it; give another name, or move it away "
+                          "first (procam never overwrites a file it did not write)")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -353,8 +386,9 @@ def atomic_path(path, record: bool = True):
     remove_stale_temps(path.parent)
     if record:
         man = read_manifest(path.parent)
-        if man is not None and path.name not in man["files"]:
-            record_files(path.parent, {path.name: "output"})
+        listed = man["files"].get(path.name) if man is not None else None
+        if man is not None and (listed is None or (listed == "output" and role != "output")):
+            record_files(path.parent, {path.name: role})
     tmp = temp_path(path)
     try:
         yield tmp
@@ -369,9 +403,9 @@ def atomic_path(path, record: bool = True):
             pass
 
 
-def write_text(path, text: str, record: bool = True) -> Path:
-    """Write ``text`` to ``path`` atomically (``record``: see :func:`atomic_path`)."""
-    with atomic_path(path, record) as tmp:
+def write_text(path, text: str, record: bool = True, role: str = "output") -> Path:
+    """Write ``text`` to ``path`` atomically (``record``, ``role``: see :func:`atomic_path`)."""
+    with atomic_path(path, record, role) as tmp:
         Path(tmp).write_text(text)
     return Path(path)
 
@@ -381,12 +415,18 @@ def write_text(path, text: str, record: bool = True) -> Path:
 NPZ_LEVEL = 1
 
 
-def write_npz(path, compress: bool = True, **arrays) -> Path:
+def write_npz(path, fmt: str | None = None, compress: bool = True, **arrays) -> Path:
     """Write ``arrays`` as a NumPy ``.npz`` atomically, byte for byte the same for the same arrays (the zip
-    entries carry a fixed date, unlike ``np.savez``'s; deflated at :data:`NPZ_LEVEL` when ``compress``)."""
+    entries carry a fixed date, unlike ``np.savez``'s; deflated at :data:`NPZ_LEVEL` when ``compress``).  With
+    ``fmt`` (one of :data:`~procam.io.formats.NPZ_FORMATS`) the file carries procam's mark, the member
+    :data:`~procam.io.formats.NPZ_KEY` holding ``fmt``; without, only its folder's manifest says it is procam's."""
     import io
     import zipfile
 
+    if fmt is not None:
+        if fmt not in formats.NPZ_FORMATS:
+            raise ValueError(f"fmt must be one of {formats.NPZ_FORMATS}, got {fmt!r}")
+        arrays = {**arrays, formats.NPZ_KEY: np.array(fmt)}
     path = Path(path)
     mode = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
     with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", mode, allowZip64=True) as zf:

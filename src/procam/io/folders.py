@@ -17,8 +17,7 @@ from pathlib import Path
 
 from ..errors import OutputError
 from . import formats
-from .files import (IMAGE_EXTS, fmt_bytes, natural_key, plain_name, read_manifest, record_files, remove_stale_temps,
-                    unlist_files, write_manifest)
+from .files import (IMAGE_EXTS, MANIFEST, fmt_bytes, natural_key, plain_name, read_manifest, record_files, remove_stale_temps, unlist_files, write_manifest)
 from .jsonfile import JSONError, load_json
 
 
@@ -179,3 +178,59 @@ def check_writable_dir(folder, label: str | None = None, need_bytes: int = 1 << 
     why = why_not_writable(folder, need_bytes)
     if why is not None:
         raise OutputError(f"{label or folder}: cannot write into {folder} ({why}); choose another place")
+
+
+#: The files of a capture or rig folder its readers need besides its frames (and the manifest naming them).
+INPUT_FILES = ("rig.json", "truth.json", "patterns.json", "capture.json", MANIFEST)
+
+
+def input_clash(path: Path, inputs) -> str | None:
+    """Which of the command's ``inputs`` (files and pose or rig folders) writing ``path`` would change (words for a
+    message: ``'is rig.json of rig1, an input of this command'``), after
+    resolving symbolic links (of the file and of its folders), or None: an input file itself, or inside an input
+    folder (at any depth) one of :data:`INPUT_FILES` or a file its folder's manifest lists as a frame, camera
+    frame or side file -- whether it exists yet or not."""
+    try:
+        target = Path(path).resolve()
+    except (OSError, RuntimeError):
+        return None
+    for p in inputs:
+        try:
+            src = Path(p).resolve()
+        except (OSError, RuntimeError):
+            continue
+        if target == src:
+            return ("is also an input of this command" if Path(p) == Path(path) else
+                    f"is {p}, an input of this command (symbolic links followed)")
+        if not (src.is_dir() and src in target.parents):
+            continue
+        man = read_manifest(target.parent)
+        role = man["files"].get(target.name) if man is not None else None
+        if target.name in INPUT_FILES or role in ("frame", "captured", "sidecar"):
+            what = {"frame": "a frame", "captured": "a captured frame"}.get(role, target.name)
+            return f"is {what} of {p}, an input of this command"
+    return None
+
+
+def folder_clash(folder: Path, inputs) -> str | None:
+    """Which of the command's ``inputs`` writing into the output ``folder`` would change (words for a message), after
+    resolving symbolic links, or None: ``folder`` is an input folder, or a capture folder inside one (a rig pose's
+    pair folder), whose readers would take the files written there for its own."""
+    try:
+        target = Path(folder).resolve()
+    except (OSError, RuntimeError):
+        return None
+    for p in inputs:
+        try:
+            src = Path(p).resolve()
+        except (OSError, RuntimeError):
+            continue
+        if target == src:
+            return "is also an input of this command" if Path(p) == Path(folder) else \
+                f"is {p}, an input of this command (symbolic links followed)"
+        man = read_manifest(target)
+        holds_frames = (man is not None and any(r in ("frame", "captured") for r in man["files"].values())) or any(
+            (target / n).is_file() for n in ("patterns.json", "capture.json", "rig.json"))
+        if src in target.parents and holds_frames:
+            return f"is a capture folder of {p}, an input of this command"
+    return None

@@ -9,16 +9,21 @@ nothing heavy (``procam.io.files`` imports it, and must stay cheap).
 file                mark
 ==================  ===========================================================================================
 JSON                a top-level ``"format"`` that starts with :data:`JSON_PREFIX` (``procam-calibration``, ...)
-FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) holding a device-matrix key of procam's layout
-                    (:data:`OPENCV`) or kamino410's (:data:`KAMINO410`): :data:`FILESTORAGE_MARKS`
-``.npz``            the members :data:`DECODED_MAPS_MARK` (decoded maps) or :data:`REMAP_MARK` (a remap table)
-PLY                 a header comment that starts with :data:`PLY_COMMENT`
+FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) whose key :data:`FILESTORAGE_KEY` names a format of
+                    :data:`FILESTORAGE_FORMATS` (procam's layout :data:`OPENCV`, kamino410's :data:`KAMINO410`)
+``.npz``            a member :data:`NPZ_KEY` naming a format of :data:`NPZ_FORMATS` (decoded maps, a remap table)
+PLY                 a header comment line :data:`PLY_COMMENT` (the key and a format, as in FileStorage)
 PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
-Python script       a first line that starts with :data:`SCRIPT_MARK` (the Blender script of an export)
+Python script       a first line :data:`SCRIPT_MARK` and the SHA-256 of the rest of the file (:func:`script_mark`)
 JPEG                a comment (``COM``) segment :data:`SOFTWARE` (a figure written as ``.jpg``)
 PDF, SVG, PS, EPS   :data:`SOFTWARE` as the figure's Creator
 HTML                ``<meta name="generator" content="procam">`` (:data:`HTML_GENERATOR`) in the page's head
 ==================  ===========================================================================================
+
+A mark is something a user's own file does not carry by accident: a key or member named after procam holding one of
+procam's format names (never the mere presence of keys other tools write too, such as ``cam_K`` or ``map_x``), or,
+for a script, a digest of its own text (a copy the user edited is theirs).  A file an older procam wrote without
+these marks counts as the user's: it is refused, never overwritten.
 """
 
 from __future__ import annotations
@@ -76,8 +81,9 @@ OPENCV = FileStorageLayout("procam / Moreno-Taubin", "cam_K", "cam_kc", "proj_K"
 #: kamino410/procam-calibration's ``calibration_result.xml`` (``procam export --format kamino410``).
 KAMINO410 = FileStorageLayout("kamino410/procam-calibration", "cam_int", "cam_dist", "proj_int", "proj_dist",
                               "rotation", "translation")
-#: A FileStorage file holding one of these keys is a calibration procam wrote (or may overwrite).
-FILESTORAGE_MARKS = (OPENCV.cam_K, OPENCV.proj_K, KAMINO410.cam_K, KAMINO410.proj_K)
+#: The FileStorage key of procam's mark, and the formats it names (procam's YAML/XML, kamino410's XML).
+FILESTORAGE_KEY = "procam_format"
+FILESTORAGE_FORMATS = {OPENCV.name: CALIBRATION_FORMAT, KAMINO410.name: "procam-kamino410"}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -85,19 +91,30 @@ FILESTORAGE_MARKS = (OPENCV.cam_K, OPENCV.proj_K, KAMINO410.cam_K, KAMINO410.pro
 #: Members of the decoded-maps file (``procam decode -o maps.npz``), in the order they are written.
 DECODED_MAPS_KEYS = ("col", "row", "valid_col", "valid_row", "reason_col", "reason_row", "confidence",
                      "dropped_col", "dropped_row", "projector_size", "order")
-DECODED_MAPS_MARK = ("col", "valid_col")
 #: The two tables of a remap file (``procam export --format maps``); further members are its metadata.
 REMAP_MARK = ("map_x", "map_y")
+#: The member of procam's mark in an ``.npz`` (a 0-d string array, no pickle) and the formats it names.
+NPZ_KEY = "procam_format"
+DECODED_MAPS_FORMAT = "procam-decoded-maps"
+REMAP_FORMAT = "procam-remap"
+NPZ_FORMATS = (DECODED_MAPS_FORMAT, REMAP_FORMAT)
 
 
 # ------------------------------------------------------------------------------------------------
 # PLY, PNG and HTML
-#: The first word of the first header comment of a PLY procam writes (``procam reconstruct``).
-PLY_COMMENT = "procam"
+#: The first header comment of a PLY procam writes (``procam reconstruct``), a whole line.
+PLY_COMMENT = "procam_format procam-point-cloud"
 #: The ``<head>`` element of every HTML page procam writes (the report), by which it knows the page is its own.
 HTML_GENERATOR = f'<meta name="generator" content="{SOFTWARE}">'
 
 #: The PNG ``tEXt`` key procam's signature stands under (value :data:`SOFTWARE`).
 PNG_TEXT_KEY = "Software"
-#: The first line of a script procam writes (``procam export --format blender``) starts with this.
-SCRIPT_MARK = "# procam"
+#: The first line of a script procam writes (``procam export --format blender``): this, then the SHA-256 of the rest.
+SCRIPT_MARK = "# procam-script sha256:"
+
+
+def script_mark(body: str) -> str:
+    """The first line (with its newline) of a script procam writes whose text after that line is ``body``."""
+    import hashlib
+
+    return f"{SCRIPT_MARK}{hashlib.sha256(body.encode('utf-8')).hexdigest()}\n"

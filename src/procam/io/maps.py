@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import CaptureError
 from .files import write_npz
-from .formats import DECODED_MAPS_KEYS, REMAP_MARK
+from .formats import DECODED_MAPS_FORMAT, DECODED_MAPS_KEYS, REMAP_FORMAT, REMAP_MARK
 from .validate import bad, check_size
 
 _FIX = "re-run 'procam decode -o'"
@@ -34,7 +34,7 @@ def save_decoded_maps(path, result) -> Path:
               "reason_col": result.reason_col, "reason_row": result.reason_row, "confidence": result.confidence,
               "dropped_col": result.dropped_col, "dropped_row": result.dropped_row,
               "projector_size": np.array([ps.width, ps.height]), "order": np.array(ps.order)}
-    return write_npz(path, **{k: arrays[k] for k in DECODED_MAPS_KEYS})
+    return write_npz(path, DECODED_MAPS_FORMAT, **{k: arrays[k] for k in DECODED_MAPS_KEYS})
 
 
 def load_decoded_maps(path) -> dict:
@@ -73,5 +73,5 @@ def save_maps(path, map_x, map_y, **meta) -> Path:
     """Write remap tables as ``.npz`` (``map_x``, ``map_y`` float32 plus ``meta`` arrays), atomically (the same
     tables give the same bytes)."""
     x, y = REMAP_MARK
-    return write_npz(path, **{x: np.asarray(map_x, np.float32), y: np.asarray(map_y, np.float32)},
+    return write_npz(path, REMAP_FORMAT, **{x: np.asarray(map_x, np.float32), y: np.asarray(map_y, np.float32)},
                      **{k: np.asarray(v) for k, v in meta.items()})

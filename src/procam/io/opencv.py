@@ -26,7 +26,7 @@ from ..calibration import Calibration, Device, Distortion
 from ..distortion import opencv_from_division
 from ..errors import CalibrationFileError
 from .files import atomic_path
-from .formats import KAMINO410, OPENCV, FileStorageLayout
+from .formats import FILESTORAGE_FORMATS, FILESTORAGE_KEY, KAMINO410, OPENCV, FileStorageLayout
 from .procam import VERDICT_MEANING, verdict_level
 from .validate import bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs
 
@@ -57,8 +57,10 @@ def device_coeffs(dev: Device) -> np.ndarray:
 
 
 def write_devices(fs, keys: FileStorageLayout, calib) -> None:
-    """Write a layout's six keys into the open ``fs``: both devices' ``K`` and OpenCV distortion
-    (:func:`device_coeffs`), ``R`` and ``T`` (3x1)."""
+    """Write procam's mark (:data:`~procam.io.formats.FILESTORAGE_KEY` naming the layout's format) and a layout's six
+    keys into the open ``fs``: both devices' ``K`` and OpenCV distortion (:func:`device_coeffs`), ``R`` and ``T``
+    (3x1)."""
+    fs.write(FILESTORAGE_KEY, FILESTORAGE_FORMATS[keys.name])
     fs.write(keys.cam_K, np.asarray(calib.camera.K, float))
     fs.write(keys.cam_dist, device_coeffs(calib.camera))
     fs.write(keys.proj_K, np.asarray(calib.projector.K, float))

@@ -2,9 +2,9 @@
 'procam[ply]'``; imported only when a cloud is written or read).
 
 Vertices carry ``x, y, z`` (float32), optionally ``red, green, blue`` (uchar) and further properties; the header's
-comment lines say what the numbers are.  A cloud procam writes starts its comments with a line that begins with
-:data:`procam.io.formats.PLY_COMMENT` (``procam reconstruct ...``), by which :func:`procam.io.files.procam_wrote`
-knows it.  Files are written atomically (:func:`procam.io.files.atomic_path`).  The table is in
+comment lines say what the numbers are.  A cloud procam writes has the comment line
+:data:`procam.io.formats.PLY_COMMENT` (``procam_format procam-point-cloud``), by which
+:func:`procam.io.files.procam_wrote` knows it.  Files are written atomically (:func:`procam.io.files.atomic_path`).  The table is in
 ``docs/exports.md``.
 """
 

@@ -327,7 +327,7 @@ def _phase_of(blk, bl, pb, scratch, mean: bool = False):
 
     C, S, M = _wrapped.block_sums([blk[k] for k in bl.frames], pb["sums"], scratch, mean)
     u = cv2.phase(C, S)  # atan2(-sum I sin d, sum I cos d) in [0, 2 pi]
-    B = cv2.magnitude(C, S)
+    B = _wrapped.magnitude(C, S)
     B *= np.float32(2.0 / bl.steps)
     A = M.copy() if mean else None
     slope = None

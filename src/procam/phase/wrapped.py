@@ -73,6 +73,34 @@ class SumPlan:
             self.c, self.s = sum_plan(c), sum_plan(-s)
 
 
+#: Byte alignment of the float32 sums a block's magnitude is taken of, and of the magnitude itself.  OpenCV's
+#: ``magnitude`` (its IPP kernel) rounds the last bit of some pixels differently depending on where its inputs and
+#: output start in memory, so buffers at whatever address the allocator happened to return made a phase decode's
+#: modulation and confidence differ by one float32 ulp at a few thousand pixels from run to run; at fixed
+#: alignments the same frames give the same bits.
+ALIGN = 64
+
+
+def aligned(n: int, size: int) -> np.ndarray:
+    """Uninitialised ``(n, size)`` float32 whose rows each start at an :data:`ALIGN`-byte boundary (a view into a
+    padded buffer)."""
+    per = ALIGN // 4
+    stride = -(-size // per) * per
+    raw = np.empty(n * stride + per, np.float32)
+    skip = (-raw.ctypes.data % ALIGN) // 4
+    return raw[skip:skip + n * stride].reshape(n, stride)[:, :size]
+
+
+def magnitude(C: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """``sqrt(C**2 + S**2)`` float32 (h, W) of the sums ``C``, ``S`` (:func:`block_sums`), by OpenCV, into a new
+    aligned array: the same inputs give the same bits in every run (:data:`ALIGN`)."""
+    import cv2
+
+    out = aligned(1, C.size)[0].reshape(C.shape)
+    cv2.magnitude(C, S, out)
+    return out
+
+
 class Scratch:
     """Buffers the band pass reuses for one block's sums: the frames widened to a signed integer type (int16 for
     8-bit frames, which holds sums of up to 128 of them; int32 otherwise), an integer accumulator and three float32
@@ -82,7 +110,7 @@ class Scratch:
         self.wide = np.int16 if np.dtype(dtype) == np.uint8 and steps <= 128 else np.int32
         self.ints = np.empty((steps, rows * width), self.wide)
         self.acc = np.empty(rows * width, self.wide)
-        self.sums = np.empty((3, rows * width), np.float32)
+        self.sums = aligned(3, rows * width)
         self.tmp = np.empty(rows * width, np.float32)
 
 

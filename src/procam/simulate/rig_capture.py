@@ -13,8 +13,8 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from ..capture import RIG_MANIFEST, pair_folder_name, prepare_rig_dir, rig_manifest
-from ..io.files import to_jsonable, write_text
+from ..capture import RIG_MANIFEST, pair_folder_name, prepare_rig_dir, rig_manifest, write_rig_file
+from ..io.files import to_jsonable
 from .renderer import render, write_capture
 from .rig import Rig
 
@@ -53,6 +53,6 @@ def write_rig_capture(out_dir, rig: Rig, rendered: dict, order: str = "opencv", 
         folders.append(out / sub)
     man = rig_manifest([d.name for d in rig.cameras], [d.name for d in rig.projectors],
                        {sub: [c, p] for sub, (c, p, _, _) in rendered.items()})
-    write_text(out / "truth.json", json.dumps(to_jsonable(rig.truth()), indent=1))
-    write_text(out / RIG_MANIFEST, json.dumps(man, indent=1))  # last: a folder without it is not a finished rig pose
+    write_rig_file(out, "truth.json", json.dumps(to_jsonable(rig.truth()), indent=1))
+    write_rig_file(out, RIG_MANIFEST, json.dumps(man, indent=1))  # last: a folder without it is not a finished rig pose
     return folders
