@@ -80,4 +80,19 @@ def test_importing_the_file_plumbing_imports_no_format_code():
     code = ("import sys, procam.io.files; print(sorted(m for m in sys.modules if m.startswith('procam')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert eval(out) == ["procam", "procam.errors", "procam.io", "procam.io.files", "procam.io.formats",
-                         "procam.io.image_marks"]
+                         "procam.io.image_marks", "procam.io.jsonfile"]
+
+
+def test_a_hostile_manifest_or_json_output_is_read_as_not_procams_not_crashed(tmp_path):
+    """Every JSON procam reads goes through the one bounded reader: a manifest nested 100,000 levels deep, or one
+    with a key given twice, counts as no manifest, and such an output file as not procam's (never overwritten)."""
+    from procam.io import files
+
+    deep = "[" * 100_000 + "]" * 100_000
+    (tmp_path / files.MANIFEST).write_text(deep)
+    assert files.read_manifest(tmp_path) is None
+    (tmp_path / files.MANIFEST).write_text('{"format": "procam-manifest", "files": {}, "files": {"a.png": "output"}}')
+    assert files.read_manifest(tmp_path) is None
+    out = tmp_path / "calib.json"
+    out.write_text('{"format": "procam-calibration", "x": ' + deep + "}")
+    assert not files.procam_wrote(out)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import CaptureError, OutputError
 from . import formats
+from . import jsonfile as _jsonfile
 from .image_marks import PNG_SIGNATURE, jpeg_comment, jpeg_with_comment, png_texts, png_with_text
 
 IMAGE_EXTS = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm", ".webp", ".jp2"}
@@ -108,7 +109,7 @@ def procam_wrote(path) -> bool:
     suffix = path.suffix.lower()
     if suffix == ".json":
         try:
-            doc = json.loads(path.read_text())
+            doc = _jsonfile.load_json(path, finite=False)
         except (OSError, ValueError, UnicodeDecodeError):
             return False
         return isinstance(doc, dict) and str(doc.get("format", "")).startswith(formats.JSON_PREFIX)
@@ -300,7 +301,7 @@ def read_sidecar(folder, name: str = "patterns.json") -> dict | None:
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text())
+        return _jsonfile.load_json(path, finite=False)
     except (OSError, ValueError) as e:
         raise CaptureError(f"{path}: not valid JSON ({e}); fix or delete it") from None
 
@@ -308,7 +309,7 @@ def read_sidecar(folder, name: str = "patterns.json") -> dict | None:
 def read_sidecar_quiet(folder, name: str):
     """:func:`read_sidecar` that returns None for an unreadable file instead of raising."""
     try:
-        return json.loads((Path(folder) / name).read_text())
+        return _jsonfile.load_json(Path(folder) / name, finite=False)
     except (OSError, ValueError, UnicodeDecodeError):
         return None
 
@@ -552,7 +553,7 @@ def read_manifest(folder) -> dict | None:
     has none (or an unreadable one: then the folder counts as not procam's)."""
     path = Path(folder) / MANIFEST
     try:
-        doc = json.loads(path.read_text())
+        doc = _jsonfile.load_json(path, finite=False)
     except (OSError, ValueError, UnicodeDecodeError):
         return None
     if not (isinstance(doc, dict) and doc.get("format") == formats.MANIFEST_FORMAT
