@@ -131,7 +131,7 @@ def test_user_mistakes_give_one_line_errors(ideal_capture, tmp_path, shared_data
         (["calibrate", "--camera-only", img, "--board", "9x6", "--square", "25", "-o", tmp_path / "c.yml"],
          "camera-only"),
         (["calibrate", "--camera-only", tmp_path, "--board", "9x6", "--square", "25", "-o", tmp_path / "c.json"],
-         "is a folder"),
+         "no images found"),  # a folder is a pose folder to --camera-only: this one holds none
         (["calibrate", "--camera-only", tmp_path / "nope.jpg", "--board", "9x6", "--square", "25", "-o",
           tmp_path / "c.json"], "no such file"),
         (["correspond", folder, *base, "-o", tmp_path / "c.txt"], "must end in .json"),

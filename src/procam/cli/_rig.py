@@ -9,22 +9,20 @@ from pathlib import Path
 from ._app import console, fail, plain, say, warn
 
 
-def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, report: Path | None = None, method: str | None, options, camera,
-              background, cam_dist: str, proj_dist: str, refine: bool, force: bool, projector=None, order=None,
-              step=None) -> None:
-    """Calibrate the rig of rig pose folders ``poses``, print it, verify it, write ``out`` (and ``yaml``, the
-    rig's drawing ``png``, the HTML ``report``); exit 3 when it must not be trusted."""
+def calibrate(poses, *, brd, method: str | None, options, camera, background, cam_dist: str, proj_dist: str,
+              refine: bool, projector=None, order=None, step=None):
+    """Calibrate the rig of rig pose folders ``poses``, print it and verify it: ``(RigCalibration, agreement)``
+    for the calibrate command's one finish (:func:`procam.cli.calibrate.finish`: write, draw, report, exit 3 when
+    it must not be trusted)."""
     from .. import capture
+    from .. import method as calibration_method
     from ..rig import calibrate_rig, rig_views_from_folders
-    from ..io.rig import check_rig_yaml, save_rig_calibration
     from ..rig.verify import verify_rig
 
     not_rig = [str(p) for p in poses if not capture.is_rig_pose(p)]
     if not_rig:
         fail(f"{not_rig[0]}: not a rig pose folder, while {poses[0] if str(poses[0]) != not_rig[0] else 'another'} "
              "is; give rig pose folders only (one sub-folder per camera-projector pair) or ordinary ones only")
-    from .. import method as calibration_method
-
     calibration_method.check(calibration_method.choose(len(poses), method), len(poses), unit="rig pose folder")
     views = rig_views_from_folders(poses, brd, projector, order, options=options, step=step)
     for pv in views:
@@ -37,28 +35,7 @@ def calibrate(poses, *, out: Path, yaml: Path | None, png: Path | None, brd, rep
     print_rig(rc)
     agreement = verify_rig(rc, views)
     print_agreement(agreement)
-    if not rc.trusted and not force:
-        fail(f"{rc.verdict} rig calibration, not written: {'; '.join(rc.verdict_reasons) or rc.verdict} "
-             "(--force writes it anyway, marked as such)", code=3, label="not trusted")
-    for path in (out, yaml):              # a YAML/XML the rig's device names cannot be written as: before any write
-        if path is not None and path.suffix.lower() in (".yml", ".yaml", ".xml"):
-            check_rig_yaml(rc, path)
-    save_rig_calibration(rc, out)
-    say(f"wrote {out}" + ("" if rc.trusted else f" (marked {rc.verdict})"))
-    if yaml is not None:
-        save_rig_calibration(rc, yaml)
-        say(f"wrote {yaml}")
-    if png is not None:
-        from ..plots import save_figure
-        from ..rig.draw import rig_figure
-
-        save_figure(rig_figure(rc, agreement, title=out.name), png)
-        say(f"wrote {png}")
-    if report is not None:
-        write_report(rc, report, agreement=agreement, name=out.name)
-    if not rc.trusted:
-        fail(f"{rc.verdict} rig calibration (written because of --force): "
-             f"{'; '.join(rc.verdict_reasons) or rc.verdict}", code=3, label="not trusted")
+    return rc, agreement
 
 
 def print_rig(rc) -> None:

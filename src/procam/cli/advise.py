@@ -7,7 +7,6 @@ Importing this module registers the command on :data:`procam.cli._app.app`.  The
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Optional
 
 import typer

@@ -182,7 +182,7 @@ def calibrate_cmd(
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     import contextlib
 
-    from .. import io, pipeline
+    from .. import pipeline
     from .. import method as calibration_method
     from .. import multi_pose as _mp
     from .. import single_pose as _sp
@@ -223,11 +223,11 @@ def calibrate_cmd(
         from . import _rig
 
         distinct_poses(poses)
-        return _rig.calibrate(poses, out=out, yaml=yaml, png=png, report=report, brd=brd,
-                              method=_METHODS[value(method)], options=opts, camera=camera,
-                              background=BackgroundOptions(mode=background), cam_dist=cam_dist, proj_dist=proj_dist,
-                              refine=not no_refine, force=force,
-                              projector=optional_size(projector), order=value(order), step=step)
+        rc, agreement = _rig.calibrate(poses, brd=brd, method=_METHODS[value(method)], options=opts, camera=camera,
+                                       background=BackgroundOptions(mode=background), cam_dist=cam_dist,
+                                       proj_dist=proj_dist, refine=not no_refine,
+                                       projector=optional_size(projector), order=value(order), step=step)
+        return finish(rc, out=out, yaml=yaml, png=png, report=report, force=force, agreement=agreement)
     left_out = []
     if camera_only:
         if yaml is not None or out.suffix.lower() in (".yml", ".yaml"):
@@ -286,28 +286,66 @@ def calibrate_cmd(
         _show.print_verification(check)
         if check.leave_one_out is not None and check.leave_one_out.refits:
             _show.print_spread(calib, check.leave_one_out.refits)
-    trusted = calib.trusted
-    if not trusted and not force:
-        fail(f"{calib.verdict} calibration, not written: {'; '.join(calib.verdict_reasons) or calib.verdict} "
+    finish(calib, out=out, yaml=yaml, png=png, report=report, force=force, check=check)
+
+
+def finish(result, *, out: Path, yaml: Path | None, png: Path | None, report: Path | None, force: bool, check=None,
+           agreement=None) -> None:
+    """The one end of every calibration the command makes, a pair's (:class:`~procam.calibration.Calibration`)
+    or a rig's (:class:`~procam.rig.result.RigCalibration`): refuse to write one that must not be trusted unless
+    ``force``; write ``out`` (JSON or YAML) and ``yaml``, the figure ``png`` (the pair's residuals, the rig's
+    drawing) and the HTML ``report``; exit 3 after writing an untrusted one.  ``check``: the pair's metric
+    verification; ``agreement``: the rig's."""
+    from .. import io
+
+    rig = agreement is not None or not hasattr(result, "camera")
+    what = "rig calibration" if rig else "calibration"
+    if not result.trusted and not force:
+        fail(f"{result.verdict} {what}, not written: {'; '.join(result.verdict_reasons) or result.verdict} "
              "(--force writes it anyway, marked as such)", code=3, label="not trusted")
-    io.save_calibration(calib, out)
-    say(f"wrote {out}" + ("" if trusted else f" (marked {calib.verdict})"))
+    if rig:
+        from ..io.rig import check_rig_yaml, save_rig_calibration
+
+        for path in (out, yaml):  # a YAML/XML the rig's device names cannot be written as: before any write
+            if path is not None and path.suffix.lower() in (".yml", ".yaml", ".xml"):
+                check_rig_yaml(result, path)
+        save, save_yaml = save_rig_calibration, save_rig_calibration
+    else:
+        save, save_yaml = io.save_calibration, io.save_opencv_yaml
+    save(result, out)
+    say(f"wrote {out}" + ("" if result.trusted else f" (marked {result.verdict})"))
     if yaml is not None:
-        io.save_opencv_yaml(calib, yaml)
+        save_yaml(result, yaml)
         say(f"wrote {yaml}")
     if png is not None:
         from ..plots import save_figure
-        from ..plots.residuals import residual_figure
-        from ..residuals import calibration_residuals
-        from ..verdict import calibration_verdict
 
-        fig = residual_figure(calibration_residuals(calib), calib.camera.image_size,
-                              calib.projector.image_size if calib.projector is not None else None,
-                              title=f"{out.name}: {calib.method}", verdict=calibration_verdict(calib).line())
-        save_figure(fig, png)
+        save_figure(_figure(result, rig, agreement, out.name), png)
         say(f"wrote {png}")
     if report is not None:
-        _show.write_calibration_report(calib, report, check=check, name=out.name)
-    if not trusted:
-        fail(f"{calib.verdict} calibration (written because of --force): "
-             f"{'; '.join(calib.verdict_reasons) or calib.verdict}", code=3, label="not trusted")
+        if rig:
+            from ._rig import write_report
+
+            write_report(result, report, agreement=agreement, name=out.name)
+        else:
+            from . import _show
+
+            _show.write_calibration_report(result, report, check=check, name=out.name)
+    if not result.trusted:
+        fail(f"{result.verdict} {what} (written because of --force): "
+             f"{'; '.join(result.verdict_reasons) or result.verdict}", code=3, label="not trusted")
+
+
+def _figure(result, rig: bool, agreement, name: str):
+    """The figure of ``--png``: a rig's drawing, a pair's residuals."""
+    if rig:
+        from ..rig.draw import rig_figure
+
+        return rig_figure(result, agreement, title=name)
+    from ..plots.residuals import residual_figure
+    from ..residuals import calibration_residuals
+    from ..verdict import calibration_verdict
+
+    return residual_figure(calibration_residuals(result), result.camera.image_size,
+                           result.projector.image_size if result.projector is not None else None,
+                           title=f"{name}: {result.method}", verdict=calibration_verdict(result).line())
