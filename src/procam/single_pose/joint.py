@@ -40,6 +40,7 @@ import numpy as np
 
 from .. import _dual as D
 from .. import models
+from ..models import brown, brown_inverse, distort_division_xy, undistort_division_xy
 from ..parameters import CAMERA_VECTOR
 
 #: The projector's part of the joint parameter vector.
@@ -64,64 +65,6 @@ S = models.KAPPA_SCALE
 
 # ------------------------------------------------------------------------------------------------
 # the model's pieces (plain arrays or Duals)
-
-def _undistort_division(x, y, cx, cy, k1, k2):
-    dx, dy = x - cx, y - cy
-    r2 = dx * dx + dy * dy
-    s = 1.0 / (1.0 + k1 * r2 + k2 * r2 * r2)
-    return cx + dx * s, cy + dy * s
-
-
-def _distort_division(x, y, cx, cy, k1, k2, iterations: int = 8):
-    """Undistorted -> distorted pixels of the division model (Newton on the radial scale; converged values then
-    one step carry the derivatives)."""
-    dx, dy = x - cx, y - cy
-    q = dx * dx + dy * dy
-    qv, k1v, k2v = D.value(q), D.value(k1), D.value(k2)
-    s = np.ones_like(qv)
-    with np.errstate(all="ignore"):
-        for _ in range(iterations):
-            g = s - 1.0 - k1v * s * s * qv - k2v * s ** 4 * qv * qv
-            s = s - g / (1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv)
-    if isinstance(q, D.Dual) or isinstance(k1, D.Dual) or isinstance(k2, D.Dual):
-        g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
-        dg = 1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv
-        s = s - g / dg
-    return cx + dx * s, cy + dy * s
-
-
-def brown(x, y, k1, k2, p1, p2, k3):
-    """OpenCV's distortion of normalised coordinates: ``(x_d, y_d)``."""
-    r2 = x * x + y * y
-    rad = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
-    xy = x * y
-    return x * rad + 2.0 * p1 * xy + p2 * (r2 + 2.0 * x * x), y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * xy
-
-
-def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
-    """Undistorted normalised coordinates of distorted ones: fixed-point iteration on the values, then one Newton
-    step that carries the derivatives (the implicit function's, exactly)."""
-    V = D.value
-    kv = [V(k) for k in (k1, k2, p1, p2, k3)]
-    xdv, ydv = V(xd), V(yd)
-    x, y = xdv, ydv
-    with np.errstate(all="ignore"):
-        for _ in range(iterations):
-            bx, by = brown(x, y, *kv)
-            x, y = x - (bx - xdv), y - (by - ydv)
-    if not any(isinstance(a, D.Dual) for a in (xd, yd, k1, k2, p1, p2, k3)):
-        return x, y
-    r2 = x * x + y * y
-    rad = 1 + kv[0] * r2 + kv[1] * r2 ** 2 + kv[4] * r2 ** 3
-    dr = kv[0] + 2 * kv[1] * r2 + 3 * kv[4] * r2 ** 2
-    a = rad + 2 * x * x * dr + 2 * kv[2] * y + 6 * kv[3] * x
-    b = 2 * x * y * dr + 2 * kv[2] * x + 2 * kv[3] * y
-    d = rad + 2 * y * y * dr + 6 * kv[2] * y + 2 * kv[3] * x
-    det = a * d - b * b
-    bx, by = brown(x, y, k1, k2, p1, p2, k3)
-    ex, ey = bx - xd, by - yd
-    return x - (d * ex - b * ey) / det, y - (a * ey - b * ex) / det
-
 
 def _transpose(R):
     return [[R[j][i] for j in range(3)] for i in range(3)]
@@ -223,7 +166,7 @@ class JointModel:
         if self.data.camera_fixed is not None:
             ux, uy = und_fixed[:, 0], und_fixed[:, 1]
         else:
-            ux, uy = _undistort_division(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
+            ux, uy = undistort_division_xy(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
         return (ux - u0) / f, (uy - v0) / (a * f)
 
     def _projector(self, p):
@@ -250,7 +193,7 @@ class JointModel:
         if d.camera_fixed is not None:
             cam_res = [d._cam_und[:, 0] - xu, d._cam_und[:, 1] - yu]
         else:
-            xd, yd = _distort_division(xu, yu, cx, cy, k1, k2)
+            xd, yd = distort_division_xy(xu, yu, cx, cy, k1, k2)
             cam_res = [d.cam[:, 0] - xd, d.cam[:, 1] - yd]
         fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
         Rp = D.rotation([p[21], p[22], p[23]])
