@@ -29,7 +29,9 @@ projector whose intrinsics are given is held fixed (its pixels undistorted once 
 
 Every residual is divided by its noise (camera corners, board and background samples each have a scale the fit
 measures), so the cost is a chi-square and the Jacobian's covariance is in the data's units. Derivatives are exact
-(forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters.
+(forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters. The lens models are
+:mod:`procam.models`' (the division model, OpenCV's), the covariance and its degeneracy rule
+:func:`procam.uncertainty.covariance`'s.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ import numpy as np
 
 from .. import _dual as D
 from .. import models
+from .. import uncertainty as unc
 from ..models import brown, brown_inverse, distort_division_xy, undistort_division_xy
 from ..parameters import CAMERA_VECTOR
 
@@ -64,7 +67,7 @@ S = models.KAPPA_SCALE
 
 
 # ------------------------------------------------------------------------------------------------
-# the model's pieces (plain arrays or Duals)
+# the model's pieces (plain arrays or Duals; the lens models are procam.models')
 
 def _transpose(R):
     return [[R[j][i] for j in range(3)] for i in range(3)]
@@ -297,7 +300,7 @@ def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
     r, J = evaluate(res.x)
     cov = np.zeros((len(NAMES), len(NAMES)))
     idx = np.flatnonzero(mask)
-    cov[np.ix_(idx, idx)] = _inverse(J)
+    cov[np.ix_(idx, idx)] = unc.covariance(J, 1.0)  # residuals in sigmas
     return JointFit(p=p, free=tuple(n for n in NAMES if n in free), cov=cov, cost=float(r @ r),
                     n_residuals=len(r), jac=J, residuals=r, nfev=int(res.nfev))
 
@@ -312,19 +315,5 @@ def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.nd
     v, Jm = np.where(np.isfinite(r.v), r.v, 1e6), np.where(np.isfinite(r.d), r.d, 0.0)
     cov = np.zeros((len(NAMES), len(NAMES)))
     idx = np.flatnonzero(mask)
-    cov[np.ix_(idx, idx)] = _inverse(Jm)
+    cov[np.ix_(idx, idx)] = unc.covariance(Jm, 1.0)
     return v, Jm, cov
-
-
-def _inverse(J) -> np.ndarray:
-    """``(J^T J)^-1`` with columns normalised (conditioning); infinite where the normal matrix is singular."""
-    s = np.linalg.norm(J, axis=0)
-    s = np.where(s > 0, s, 1.0)
-    A = (J / s).T @ (J / s)
-    try:
-        w, V = np.linalg.eigh(A)
-    except np.linalg.LinAlgError:
-        return np.full(A.shape, np.inf)
-    if w.min() <= w.max() * 1e-14:
-        return np.full(A.shape, np.inf)
-    return (V / w) @ V.T / np.outer(s, s)
