@@ -21,6 +21,42 @@ def test_distort_undistort_round_trip():
     assert np.allclose(models.distort_division(c[None], c, -2e-7), c[None])
 
 
+def test_lens_models_one_implementation_for_arrays_complex_steps_and_duals():
+    """The division model on coordinates gives the (N, 2) functions' values exactly, NaN where no root exists, and
+    its Dual derivatives equal the complex-step ones; OpenCV's model (brown) is cv2's own, and inverts."""
+    import cv2
+
+    from procam import _dual as D
+
+    rng = np.random.default_rng(3)
+    c = np.array([652.0, 481.0])
+    p = c + rng.uniform(-900, 900, size=(300, 2))
+    k1, k2 = 4e-7, 2e-13  # strong pincushion: the far corners have no distorted point
+    d = models.distort_division(p, c, k1, k2)
+    bad = np.isnan(d).any(1)
+    assert 0 < bad.sum() < len(p) and np.isnan(d[bad]).all()
+    x = D.Dual(np.array([k1, k2]), np.eye(2))   # d/dk1, d/dk2
+    xd, yd = models.distort_division_xy(p[:, 0], p[:, 1], c[0], c[1], x[0], x[1])
+    np.testing.assert_array_equal(np.isnan(xd.v), bad)
+    np.testing.assert_allclose(xd.v[~bad], d[~bad, 0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(yd.v[~bad], d[~bad, 1], rtol=0, atol=1e-9)
+    for j, (h1, h2) in enumerate([(1e-30, 0.0), (0.0, 1e-37)]):
+        dc = models.distort_division(p[~bad], c, k1 + 1j * h1, k2 + 1j * h2).imag / (h1 + h2)
+        np.testing.assert_allclose(xd.d[~bad, j], dc[:, 0], rtol=1e-9, atol=1e-12 * np.abs(dc).max())
+        np.testing.assert_allclose(yd.d[~bad, j], dc[:, 1], rtol=1e-9, atol=1e-12 * np.abs(dc).max())
+    ux, uy = models.undistort_division_xy(xd, yd, c[0], c[1], x[0], x[1])  # the round trip's derivative is zero
+    np.testing.assert_allclose(ux.v[~bad], p[~bad, 0], atol=1e-8)
+    assert np.abs(ux.d[~bad]).max() < 1e-6 * np.abs(xd.d[~bad]).max()
+
+    coeffs = np.array([-0.12, 0.05, 0.001, -0.0007, -0.01])
+    xn = rng.uniform(-0.6, 0.6, size=(200, 2))
+    ref, _ = cv2.projectPoints(np.column_stack([xn, np.ones(len(xn))]), np.zeros(3), np.zeros(3), np.eye(3), coeffs)
+    bx, by = models.brown(xn[:, 0], xn[:, 1], *coeffs)
+    np.testing.assert_allclose(np.column_stack([bx, by]), ref.reshape(-1, 2), rtol=0, atol=1e-12)
+    ix, iy = models.brown_inverse(bx, by, *coeffs)
+    np.testing.assert_allclose(np.column_stack([ix, iy]), xn, rtol=0, atol=1e-10)
+
+
 def test_euler_matrix_round_trip():
     rng = np.random.default_rng(1)
     for _ in range(50):

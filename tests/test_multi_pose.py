@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from procam import models, multi_pose, simulate
-from procam.multi_pose import refine
+from procam.multi_pose import bundle
 from conftest import expect_warning
 
 from procam.errors import CalibrationError, FailedEstimateWarning
@@ -122,20 +122,25 @@ def test_refinement_jacobian_matches_finite_differences(rig):
     objs = [v.obj_pts for v in views]
     cams = [v.cam_pts for v in views]
     projs = [v.proj_pts for v in views]
-    lay = refine._Layout((0, 1, 2, 3, 4), (0, 1), 5, 5, 3)
+    lay = bundle.Layout(["k1k2p1p2k3", "k1k2"], 3)
     rv = [models.matrix_to_rvec(sc.R_board) + 0.01 for sc in scenes[:3]]
     tv = [sc.t_board + 1.0 for sc in scenes[:3]]
-    x0 = lay.pack(base.K_cam, np.array(CAM_DIST) + 0.01, base.K_proj, [0.02, -0.01, 0, 0, 0],
-                  models.matrix_to_rvec(base.R) + 0.01, base.T, rv, tv)
-    args = (lay, objs, cams, projs, np.zeros(5), np.zeros(5))
-    _, J = refine._stereo_model(x0, *args, True)
+    devices = [bundle.JointDevice("camera", base.K_cam, np.array(CAM_DIST) + 0.01, "k1k2p1p2k3", np.eye(3), np.zeros(3)),
+               bundle.JointDevice("projector", base.K_proj, [0.02, -0.01, 0, 0, 0], "k1k2",
+                                  models.rvec_to_matrix(models.matrix_to_rvec(base.R) + 0.01), base.T)]
+    x0 = lay.pack(devices, rv, tv)
+    obs = [bundle.Observation(i, j, objs[j], (cams, projs)[i][j]) for j in range(3) for i in (0, 1)]
+    args = (lay, obs, [np.zeros(5), np.zeros(5)], (1.0, 0.5))
+    _, J = bundle.model(x0, *args, True, sparse=False)
     Jn = np.empty_like(J)
     for i in range(len(x0)):
         h = 1e-6 * max(1.0, abs(x0[i]))
         xp, xm = x0.copy(), x0.copy()
         xp[i] += h
         xm[i] -= h
-        Jn[:, i] = (refine._stereo_model(xp, *args, False) - refine._stereo_model(xm, *args, False)) / (2 * h)
+        Jn[:, i] = (bundle.model(xp, *args, False) - bundle.model(xm, *args, False)) / (2 * h)
+    _, Js = bundle.model(x0, *args, True, sparse=True)
+    np.testing.assert_array_equal(Js.toarray(), J)  # the rig's sparse Jacobian is the pair's dense one
     assert np.abs(J - Jn).max() < 1e-6 * np.abs(Jn).max()
 
 

@@ -56,3 +56,48 @@ def test_propagate_linear_and_infinite():
     out = unc.propagate(cov, lambda p: np.array([p[0] + p[1], 2 * p[0]]), np.zeros(2))
     np.testing.assert_allclose(out, [[13.0, 8.0], [8.0, 16.0]], rtol=1e-8)
     assert np.all(np.isinf(unc.propagate(np.full((2, 2), np.inf), lambda p: p, np.zeros(2))))
+
+
+def _conditioned(cond, m=40, seed=2):
+    """(m, 3) Jacobian with unit columns, condition about ``cond``, and its exact (J^T J)^-1."""
+    rng = np.random.default_rng(seed)
+    U, _ = np.linalg.qr(rng.standard_normal((m, 3)))
+    V, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    s = np.array([1.0, 0.3, cond])
+    A = (U * s) @ V.T
+    d = np.linalg.norm(A, axis=0)
+    return A / d, ((V / s ** 2) @ V.T) * np.outer(d, d)
+
+
+def test_one_degeneracy_rule_on_the_condition_of_the_jacobian():
+    """Finite, to its digits, above RCOND = 1e-9 (here between it and the single-pose joint fit's old eigenvalue
+    limit of 1e-14, a condition of 1e-7, where inverting J^T J keeps only ~2 digits); infinite below."""
+    J, exact = _conditioned(3e-8)
+    assert 1e-9 < unc.condition(J) < 1e-7
+    np.testing.assert_allclose(unc.covariance(J, 1.0), exact, rtol=1e-6)
+    for c in (1e-11, 1e-13):
+        J, _ = _conditioned(c)
+        assert unc.condition(J) < unc.RCOND
+        assert np.all(np.isinf(unc.covariance(J, 1.0)))
+
+
+def test_the_single_pose_joint_fit_covariance_is_the_one_rule():
+    from procam import models, simulate
+    from procam.single_pose import joint
+
+    scene = simulate.preset("paper")
+    obj, cam, _ = simulate.correspondences(scene, 0.1, 0.2, seed=3)
+    empty = np.zeros((0, 2))
+    model = joint.JointModel(joint.JointData(obj, cam, empty, empty, empty, empty), joint.Scales(0.1, 1.0, 1.0))
+    p = np.zeros(len(joint.NAMES))
+    K = scene.K_cam
+    p[:12] = [K[0, 0], K[1, 1] / K[0, 0], K[0, 2], K[1, 2], 0.0, 0.0, *models.matrix_to_rvec(scene.R_board),
+              *scene.t_board]
+    p[12] = p[13] = 1.0  # the projector is not in these residuals
+    free = ("f_c", "alpha_c") + joint.POSE_C  # what one view of a plane determines, its centre given
+    _, Jm, cov = joint.linearise(model, p, free)
+    idx = [joint.IDX[n] for n in free]
+    np.testing.assert_array_equal(cov[np.ix_(idx, idx)], unc.covariance(Jm, 1.0))
+    assert np.all(np.isfinite(cov[np.ix_(idx, idx)]))
+    _, Jm, cov = joint.linearise(model, p, free + ("u0p",))   # u0p: no residual sees it -> infinite
+    assert np.all(np.isinf(cov[np.ix_(idx, idx)]))

@@ -141,9 +141,6 @@ def _single_pose_like(alpha=0.9989, alpha_std=0.0009, model="u0p"):
 
 
 def test_a_prior_is_said_as_a_prior_and_a_given_value_as_given():
-    from procam.single_pose.background import BackgroundOptions
-
-    assert summary.ALPHA_PRIOR_STD == BackgroundOptions().alpha_prior_std  # the prior the tables name is the fit's
     words = summary.projector_assumptions(_single_pose_like())
     assert words[1].startswith("alpha_p = fy_p / f_p = 0.9989 ± 0.0009 rests on a PRIOR of 1 ± 0.003")
     assert not any("alpha_p = 1 (fy_p = f_p) is ASSUMED" in w for w in words)

@@ -94,7 +94,7 @@ def _perturb(R, w):
     return models.rvec_to_matrix(w) @ R
 
 
-def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", prior_precision=None):
+def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=unc.RCOND, jacobian="complex", prior_precision=None):
     """Generic CRLB: covariance lower bound of the parameters of ``model`` at ``p0``.
 
     Parameters
@@ -129,7 +129,7 @@ def fisher_bound(model, p0, sigma, *, rel_step=1e-6, cond_limit=1e-9, jacobian="
 
 
 def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full", *,
-                 radius_scale=1000.0, rel_step=1e-6, cond_limit=1e-9, jacobian="complex", pp_prior_std=None,
+                 radius_scale=1000.0, rel_step=1e-6, cond_limit=unc.RCOND, jacobian="complex", pp_prior_std=None,
                  pp_prior_when="always"):
     """CRLB of a single-pose camera calibration with the division model.
 
@@ -264,7 +264,7 @@ def camera_bound(K, dist_center, k1, k2, R, t, obj_pts, sigma=0.1, model="full",
     return _pack(cov * np.outer(raw_scale, raw_scale), names, cond, model, keys, prior_used=True)
 
 
-def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=1e-9, jacobian="complex"):
+def projector_bound(K, R, t, obj_pts, sigma=0.2, *, rel_step=1e-6, cond_limit=unc.RCOND, jacobian="complex"):
     """CRLB of the single-pose projector calibration (unknowns ``f_p, v0p`` and the pose).
 
     ``u0p`` and ``alpha_p`` are held at the values in ``K``:

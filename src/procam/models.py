@@ -2,7 +2,8 @@
 
 Every solver, the Cramer-Rao bounds and the evaluation use these functions, so the bound is computed
 on the model the solver fits (the simulator keeps its own independent copy on purpose: it is the
-oracle). The projection and distortion functions accept complex arrays (complex-step derivatives).
+oracle). The projection and distortion functions accept complex arrays (complex-step derivatives), and the lens
+models on coordinates (``*_xy``, :func:`brown`) forward-mode Duals too.
 
 Conventions (``docs/conventions.md``)
 ------------------------------------
@@ -17,6 +18,10 @@ Conventions (``docs/conventions.md``)
 
   Barrel distortion has ``k1 < 0``.  Its inverse (:func:`distort_division`) is solved
   per point by Newton's method.
+* The lens models (the division model and OpenCV's ``k1, k2, p1, p2, k3`` model, :func:`brown`) are
+  written once here on coordinates, generic over the derivative type (plain, complex and
+  :mod:`procam._dual` arrays): every solver's lens model is one of them (OpenCV's own functions where
+  no derivative is carried).
 * Angles: the plain intrinsic XYZ Euler angles ``(psi, nu, phi)`` of a rotation,
   ``R = Rx(psi) @ Ry(nu) @ Rz(phi)`` (scipy ``Rotation.from_euler('XYZ', ...)``), are
   :func:`euler_to_matrix` / :func:`matrix_to_euler` (radians) and :func:`euler_deg` (degrees); the angles
@@ -147,18 +152,13 @@ def project(K: np.ndarray, R: np.ndarray, t: np.ndarray, X: np.ndarray) -> np.nd
 def undistort_division(pts: np.ndarray, center, k1: float, k2: float = 0.0) -> np.ndarray:
     """Division model, distorted -> undistorted pixels. ``pts`` (N, 2) -> (N, 2)."""
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-    d = pts - np.asarray(center, float).reshape(1, 2)
-    r2 = np.sum(d * d, axis=1, keepdims=True)
-    return np.asarray(center, float).reshape(1, 2) + d / (1.0 + k1 * r2 + k2 * r2 * r2)
+    c = np.asarray(center, float).reshape(2)
+    return np.column_stack(undistort_division_xy(pts[:, 0], pts[:, 1], c[0], c[1], k1, k2))
 
 
 def distort_division(pts: np.ndarray, center, k1, k2=0.0, iterations: int = 50) -> np.ndarray:
-    """Inverse of :func:`undistort_division`: undistorted -> distorted pixels, (N, 2) (complex-safe).
-
-    With ``r_d = s r_u`` the scale ``s`` solves ``s = 1 + k1 s^2 q + k2 s^4 q^2``, ``q = r_u^2``
-    (the division model at the distorted radius), by Newton's method from ``s = 1`` -- the same
-    iterates as Newton on ``r_d`` from ``r_d = r_u``, without a square root (so no branch at the
-    centre). Points where no root exists (strong pincushion far out) are NaN.
+    """Inverse of :func:`undistort_division`: undistorted -> distorted pixels, (N, 2) (complex-safe;
+    :func:`distort_division_xy`).
 
     >>> p = np.array([[900.0, 700.0]])
     >>> q = distort_division(p, (640.0, 400.0), -1e-7)
@@ -166,26 +166,101 @@ def distort_division(pts: np.ndarray, center, k1, k2=0.0, iterations: int = 50) 
     True
     """
     pts = np.asarray(pts).reshape(-1, 2)
-    c = np.asarray(center).reshape(1, 2)
-    d = pts - c
-    q = d[:, 0] ** 2 + d[:, 1] ** 2
-    s = np.ones_like(q)
-    complex_step = np.iscomplexobj(q) or np.iscomplexobj(k1) or np.iscomplexobj(k2) or np.iscomplexobj(c)
+    c = np.asarray(center).reshape(2)
+    return np.column_stack(distort_division_xy(pts[:, 0], pts[:, 1], c[0], c[1], k1, k2, iterations))
+
+
+# The lens models on coordinates, generic over the derivative type: plain or complex arrays (complex-step
+# derivatives) and procam._dual Duals (forward mode) alike.  Every solver's lens is one of these two.
+def undistort_division_xy(x, y, cx, cy, k1, k2):
+    """Division model (module docstring), distorted -> undistorted pixels ``(x_u, y_u)`` of distorted ``x, y``
+    (arrays of one shape, px) about the centre ``(cx, cy)`` with ``k1`` [px^-2], ``k2`` [px^-4]."""
+    from . import _dual as D
+
+    dx, dy = x - cx, y - cy
+    r2 = dx * dx + dy * dy
+    den = 1.0 + k1 * r2 + k2 * r2 * r2
+    if isinstance(den, D.Dual):  # one reciprocal's derivatives instead of two quotients'
+        s = 1.0 / den
+        return cx + dx * s, cy + dy * s
+    return cx + dx / den, cy + dy / den
+
+
+def distort_division_xy(x, y, cx, cy, k1, k2, iterations: int = 50):
+    """Inverse of :func:`undistort_division_xy`: undistorted -> distorted pixels ``(x_d, y_d)``.
+
+    With ``r_d = s r_u`` the scale ``s`` solves ``s = 1 + k1 s^2 q + k2 s^4 q^2``, ``q = r_u^2`` (the division
+    model at the distorted radius), by Newton's method from ``s = 1`` -- the same iterates as Newton on ``r_d``
+    from ``r_d = r_u``, without a square root (so no branch at the centre) -- until no step exceeds 1e-15 or
+    ``iterations`` steps.  Complex input iterates in complex arithmetic (every step, so the complex step is
+    carried); Duals iterate on their values, then one Newton step carries the derivatives (the implicit
+    function's, exactly).  Points where no root exists (strong pincushion far out) are NaN.
+    """
+    from . import _dual as D
+
+    dx, dy = x - cx, y - cy
+    q = dx * dx + dy * dy
+    dual = any(isinstance(a, D.Dual) for a in (q, k1, k2))
+    qv, k1v, k2v = D.value(q), D.value(k1), D.value(k2)
+    s = np.ones_like(qv)
+    complex_step = np.iscomplexobj(qv) or np.iscomplexobj(k1v) or np.iscomplexobj(k2v)
     with np.errstate(all="ignore"):
         for _ in range(iterations):
-            g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
-            dg = 1.0 - 2.0 * k1 * s * q - 4.0 * k2 * s ** 3 * q * q
+            g = s - 1.0 - k1v * s * s * qv - k2v * s ** 4 * qv * qv
+            dg = 1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv
             step = g / dg
             s = s - step
             if not complex_step and np.all(np.abs(step[np.isfinite(step)]) < 1e-15):
                 break
-        g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
-        ok = np.isfinite(s) & (np.abs(g) * np.sqrt(np.abs(q)) < 1e-6) & (np.real(s) >= 0)
-    out = c + d * s[:, None]
-    if not np.all(ok):
-        out = out.astype(np.result_type(out, float))
-        out[~ok] = np.nan
-    return out
+        g = s - 1.0 - k1v * s * s * qv - k2v * s ** 4 * qv * qv
+        ok = np.isfinite(s) & (np.abs(g) * np.sqrt(np.abs(qv)) < 1e-6) & (np.real(s) >= 0)
+        if dual:
+            dg = 1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv
+            s = s - (s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q) / dg
+    xd, yd = cx + dx * s, cy + dy * s
+    if np.all(ok):
+        return xd, yd
+    if dual:
+        return D.where(ok, xd, np.nan), D.where(ok, yd, np.nan)
+    xd, yd = np.array(xd, dtype=np.result_type(xd, float)), np.array(yd, dtype=np.result_type(yd, float))
+    xd[~ok], yd[~ok] = np.nan, np.nan
+    return xd, yd
+
+
+def brown(x, y, k1, k2, p1, p2, k3):
+    """OpenCV's distortion (``cv2.projectPoints``' model, terms ``k1, k2, p1, p2, k3``) of normalised coordinates
+    ``x, y``: ``(x_d, y_d)``."""
+    r2 = x * x + y * y
+    rad = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
+    xy = x * y
+    return x * rad + 2.0 * p1 * xy + p2 * (r2 + 2.0 * x * x), y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * xy
+
+
+def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
+    """Undistorted normalised coordinates of distorted ones (inverse of :func:`brown`): fixed-point iteration on
+    the values, then, for Duals, one Newton step that carries the derivatives (the implicit function's, exactly)."""
+    from . import _dual as D
+
+    V = D.value
+    kv = [V(k) for k in (k1, k2, p1, p2, k3)]
+    xdv, ydv = V(xd), V(yd)
+    x, y = xdv, ydv
+    with np.errstate(all="ignore"):
+        for _ in range(iterations):
+            bx, by = brown(x, y, *kv)
+            x, y = x - (bx - xdv), y - (by - ydv)
+    if not any(isinstance(a, D.Dual) for a in (xd, yd, k1, k2, p1, p2, k3)):
+        return x, y
+    r2 = x * x + y * y
+    rad = 1 + kv[0] * r2 + kv[1] * r2 ** 2 + kv[4] * r2 ** 3
+    dr = kv[0] + 2 * kv[1] * r2 + 3 * kv[4] * r2 ** 2
+    a = rad + 2 * x * x * dr + 2 * kv[2] * y + 6 * kv[3] * x
+    b = 2 * x * y * dr + 2 * kv[2] * x + 2 * kv[3] * y
+    d = rad + 2 * y * y * dr + 6 * kv[2] * y + 2 * kv[3] * x
+    det = a * d - b * b
+    bx, by = brown(x, y, k1, k2, p1, p2, k3)
+    ex, ey = bx - xd, by - yd
+    return x - (d * ex - b * ey) / det, y - (a * ey - b * ex) / det
 
 
 def camera_predict(p, obj) -> np.ndarray:

@@ -41,3 +41,7 @@ CAMERA_VECTOR = ("f_c", "alpha_c", "u0c", "v0c", "k1", "k2", "rx", "ry", "rz", "
 #: The single-pose projector parameter vector (:func:`procam.models.projector_predict`; ``u0p`` and
 #: ``alpha_p = 1`` fixed).
 PROJECTOR_VECTOR = ("f_p", "v0p", "rx", "ry", "rz", "tx", "ty", "tz")
+
+#: The std of the prior ``alpha_p = 1 +- std`` that every single-pose projector fit puts on square projector pixels
+#: while it does not estimate ``alpha_p`` (the dense fit's and the background's default, and what the tables name).
+ALPHA_PRIOR_STD = 0.003

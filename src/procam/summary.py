@@ -21,6 +21,7 @@ import numpy as np
 
 from . import datasheet as _datasheet
 from . import models
+from .parameters import ALPHA_PRIOR_STD
 
 #: What every ``±`` in these rows means.
 PLUS_MINUS = "± is 1σ from the fit, assuming the model and i.i.d. corner noise"
@@ -68,10 +69,6 @@ def projector_freed(calib) -> frozenset:
     return frozenset() if model in (None, "single-pose", "assumed") else frozenset(str(model).split("+"))
 
 
-#: The default std of the prior ``alpha_p = 1 +- std`` of a single-pose projector fit with the background
-#: (``procam.single_pose.background.BackgroundOptions.alpha_prior_std``; a test holds the two equal). Here as a
-#: number, not an import: the file writers read this module and sit below the solvers.
-ALPHA_PRIOR_STD = 0.003
 
 
 def _alpha_prior_std(calib) -> float:

@@ -7,9 +7,18 @@ the ground truth with the true sigma this is the Cramer-Rao bound (:mod:`procam.
 estimate it is the usual "parameter +- std" of a calibration: 1 sigma **under the model**, assuming
 the model is right and the corner noise i.i.d.
 
-Degenerate problems: the Jacobian's columns are normalised to unit norm and, if the condition
-number ``s_min / s_max`` is below ``rcond`` (default 1e-9), the covariance is reported as infinite
-(``inv``, never ``pinv``: a pseudo-inverse silently reports tiny errors for degenerate poses).
+The one degeneracy rule (every solver's covariance, plain or forward-mode Jacobian, the bounds of
+:mod:`procam.crlb`): the Jacobian of the residuals in noise sigmas, prior rows included, has its columns
+normalised to unit norm; if its condition ``s_min / s_max`` (singular values, :func:`condition`) is at or
+below :data:`RCOND` = 1e-9 the covariance is infinite (``inv``, never ``pinv``: a pseudo-inverse silently
+reports tiny errors for degenerate poses).  The covariance is computed from that SVD, never by inverting
+the normal matrix ``J^T J``, whose eigenvalue ratio is the square of the condition (1e-18 at the limit) and
+which loses twice the digits: a solver that works on ``J^T J`` must use ``RCOND ** 2`` on its eigenvalues.
+(The single-pose joint fit inverted ``J^T J`` with an eigenvalue limit of 1e-14, i.e. a condition of 1e-7,
+before it called :func:`covariance`: its fits in ``benchmarks/real_projector.py`` have conditions of 4e-7 or more,
+or are exactly singular, so the one limit changes none of them; the limit stays at 1e-9 because the single-pose
+projector's fit, with central differences, reaches conditions from 1e-9 to 1e-8 at near-degenerate poses in
+the tests, which a limit of 1e-7 would turn infinite.)
 """
 
 from __future__ import annotations
@@ -18,7 +27,8 @@ from typing import Callable
 
 import numpy as np
 
-#: Default condition threshold of the column-normalised Jacobian below which Cov is infinite.
+#: The degeneracy rule's limit (module docstring): ``s_min / s_max`` of the column-normalised Jacobian at or below
+#: which a covariance is infinite.
 RCOND = 1e-9
 
 #: Imaginary step of complex-step derivatives (exact to rounding for analytic functions).
@@ -122,7 +132,10 @@ def covariance(J, sigma: float, *, prior_precision=None, rcond: float = RCOND) -
     d = np.linalg.norm(Ja, axis=0)
     if np.any(d == 0):
         return np.full((n, n), np.inf)
-    _, s, Vt = np.linalg.svd(Ja / d, full_matrices=False)
+    try:
+        _, s, Vt = np.linalg.svd(Ja / d, full_matrices=False)
+    except np.linalg.LinAlgError:  # the SVD did not converge: nothing to report but that
+        return np.full((n, n), np.inf)
     if len(s) < n or s[-1] <= rcond * s[0]:
         return np.full((n, n), np.inf)
     cov_n = (Vt.T / s ** 2) @ Vt

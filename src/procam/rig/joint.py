@@ -7,7 +7,7 @@ reference-camera pose.  Observations: each device at each pose sees the board's 
 detected corners, a projector its decoded coordinates at them).  A device's residual block depends on its own
 intrinsics, its pose and one board pose only, so the Jacobian is sparse (scipy ``least_squares`` with a
 ``scipy.sparse`` Jacobian and the ``lsmr`` trust-region solver); its blocks are analytic
-(``cv2.projectPoints`` and ``cv2.composeRT``, as in :mod:`procam.multi_pose.refine`).
+(:mod:`procam.multi_pose.bundle`, the bundle adjuster of every multi-pose solver; a pair is a rig of two).
 
 Weights: each device's residuals are divided by that device's noise sigma (px), estimated from its own
 residuals after a first solve (each device has its own Gaussian noise: projector coordinates decoded at the
@@ -28,34 +28,10 @@ import numpy as np
 
 from .. import models
 from .. import uncertainty as unc
-from ..multi_pose.device import _check_dist
+from ..multi_pose import bundle
+from ..multi_pose.bundle import JointDevice, Observation
 
 __all__ = ["JointDevice", "Observation", "JointResult", "refine_rig"]
-
-
-@dataclass(frozen=True)
-class JointDevice:
-    """A device of the joint problem: ``name``, ``K`` (3, 3) and ``dist`` (OpenCV vector) to start from,
-    ``model`` (an OpenCV distortion model name of :data:`procam.multi_pose.DIST_MODELS`), ``R, T`` reference ->
-    device to start from (ignored for the reference, index 0)."""
-
-    name: str
-    K: np.ndarray
-    dist: np.ndarray
-    model: str
-    R: np.ndarray
-    T: np.ndarray
-
-
-@dataclass(frozen=True)
-class Observation:
-    """Device ``device`` (index) at pose ``pose`` (index) sees board points ``obj`` (N, 3) at pixels ``pts``
-    (N, 2), all finite."""
-
-    device: int
-    pose: int
-    obj: np.ndarray
-    pts: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -92,87 +68,6 @@ class JointResult:
 _F_SCALE = 3.0
 
 
-class _Layout:
-    def __init__(self, devices, n_poses):
-        self.free, self.ncoef, self.intr = [], [], []
-        off = 0
-        for d in devices:
-            _, nc, free = _check_dist(d.model)
-            self.free.append(tuple(free))
-            self.ncoef.append(nc)
-            self.intr.append(list(range(off, off + 4 + len(free))))
-            off += 4 + len(free)
-        self.pose = [None]
-        for _ in devices[1:]:
-            self.pose.append(list(range(off, off + 6)))
-            off += 6
-        self.board = []
-        for _ in range(n_poses):
-            self.board.append(list(range(off, off + 6)))
-            off += 6
-        self.size = off
-
-    def pack(self, devices, board_r, board_t):
-        x = np.zeros(self.size)
-        for i, d in enumerate(devices):
-            K = np.asarray(d.K, float)
-            dist = np.zeros(self.ncoef[i])
-            dd = np.asarray(d.dist, float).ravel()[:self.ncoef[i]]
-            dist[:len(dd)] = dd
-            x[self.intr[i]] = [K[0, 0], K[1, 1], K[0, 2], K[1, 2], *dist[list(self.free[i])]]
-            if i:
-                x[self.pose[i]] = [*models.matrix_to_rvec(d.R), *np.asarray(d.T, float).ravel()]
-        for j, (r, t) in enumerate(zip(board_r, board_t)):
-            x[self.board[j]] = [*np.ravel(r), *np.ravel(t)]
-        return x
-
-    def intrinsics(self, x, i, dist0):
-        v = x[self.intr[i]]
-        K = np.array([[v[0], 0.0, v[2]], [0.0, v[1], v[3]], [0.0, 0.0, 1.0]])
-        d = np.array(dist0[i], float).copy()
-        d[list(self.free[i])] = v[4:]
-        return K, d
-
-
-def _model(x, lay: _Layout, obs, dist0, weights, want_jac: bool):
-    """Weighted residuals (predicted - observed) / sigma and their sparse Jacobian."""
-    import cv2
-    from scipy import sparse
-
-    res, rows, cols, vals = [], [], [], []
-    row = 0
-    for o in obs:
-        K, d = lay.intrinsics(x, o.device, dist0)
-        rb, tb = x[lay.board[o.pose][:3]], x[lay.board[o.pose][3:]]
-        obj = o.obj.reshape(-1, 1, 3)
-        if lay.pose[o.device] is None:
-            pp, J = cv2.projectPoints(obj, rb, tb, K, d)
-            blocks = [(lay.board[o.pose], J[:, 0:6])]
-        else:
-            rd, td = x[lay.pose[o.device][:3]], x[lay.pose[o.device][3:]]
-            r3, t3, dr3dr1, dr3dt1, dr3dr2, dr3dt2, dt3dr1, dt3dt1, dt3dr2, dt3dt2 = cv2.composeRT(rb, tb, rd, td)
-            pp, J = cv2.projectPoints(obj, r3, t3, K, d)
-            Jr, Jt = J[:, 0:3], J[:, 3:6]
-            blocks = [(lay.board[o.pose], np.hstack([Jr @ dr3dr1 + Jt @ dt3dr1, Jr @ dr3dt1 + Jt @ dt3dt1])),
-                      (lay.pose[o.device], np.hstack([Jr @ dr3dr2 + Jt @ dt3dr2, Jr @ dr3dt2 + Jt @ dt3dt2]))]
-        w = 1.0 / weights[o.device]
-        res.append(w * (pp.reshape(-1) - o.pts.reshape(-1)))
-        n2 = 2 * len(o.obj)
-        if want_jac:
-            blocks.append((lay.intr[o.device], np.hstack([J[:, 6:10], J[:, [10 + k for k in lay.free[o.device]]]])))
-            for idx, B in blocks:
-                rr, cc = np.meshgrid(np.arange(row, row + n2), idx, indexing="ij")
-                rows.append(rr.ravel())
-                cols.append(cc.ravel())
-                vals.append(w * B.ravel())
-        row += n2
-    r = np.concatenate(res)
-    if not want_jac:
-        return r
-    J = sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(row, lay.size))
-    return r, J
-
-
 def refine_rig(devices, observations, board_r, board_t, *, sigma=None, max_nfev: int = 100,
                tol: float = 1e-8) -> JointResult:
     """Jointly refine a rig (module docstring).
@@ -189,41 +84,26 @@ def refine_rig(devices, observations, board_r, board_t, *, sigma=None, max_nfev:
     -------
     :class:`JointResult`
     """
-    from scipy.optimize import least_squares
-
     devices = list(devices)
     obs = [Observation(o.device, o.pose, np.asarray(o.obj, float).reshape(-1, 3), np.asarray(o.pts, float).reshape(-1, 2))
            for o in observations]
-    lay = _Layout(devices, len(board_r))
+    lay = bundle.Layout([d.model for d in devices], len(board_r))
     dist0 = []
     for i, d in enumerate(devices):
-        v = np.zeros(lay.ncoef[i])
-        dd = np.asarray(d.dist, float).ravel()[:lay.ncoef[i]]
-        v[:len(dd)] = dd
-        v[[k for k in range(lay.ncoef[i]) if k not in lay.free[i]]] = 0.0
+        v = bundle.start_dist(d.dist, lay.ncoef[i])
+        v[[k for k in range(lay.ncoef[i]) if k not in lay.free[i]]] = 0.0  # the held terms are zero
         dist0.append(v)
     x = lay.pack(devices, board_r, board_t)
     weights = np.ones(len(devices)) if sigma is None else np.maximum(np.asarray(sigma, float), 1e-3)
+    unit = np.ones(len(devices))
     sol = None
     for _ in range(2):  # solve, re-estimate each device's sigma from its residuals, solve again
-        cache: dict = {}
-
-        def fun(x, w=weights, cache=cache):
-            r, J = _model(x, lay, obs, dist0, w, True)
-            cache["x"], cache["J"] = x.copy(), J
-            return r
-
-        def jac(x, w=weights, cache=cache):
-            if "x" in cache and np.array_equal(cache["x"], x):
-                return cache["J"]
-            return _model(x, lay, obs, dist0, w, True)[1]
-
-        sol = least_squares(fun, x, jac=jac, method="trf", loss="soft_l1", f_scale=_F_SCALE, x_scale="jac",
-                            tr_solver="lsmr", ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev)
+        sol = bundle.solve(x, lay, obs, dist0, 1.0 / weights, sparse=True, loss="soft_l1", f_scale=_F_SCALE, tol=tol,
+                           max_nfev=max_nfev)
         x, polished = _polish(sol.x, lay, obs, dist0, weights)
-        raw = _model(x, lay, obs, dist0, np.ones(len(devices)), False)
+        raw = bundle.model(x, lay, obs, dist0, unit, False)
         weights = _sigmas(raw, obs, lay, len(devices))
-    r, J = _model(x, lay, obs, dist0, weights, True)
+    r, J = bundle.model(x, lay, obs, dist0, 1.0 / weights, True)
     cov = unc.covariance(J.toarray(), unc.sigma_from_residuals(r, len(x)) if len(r) > len(x) else float("nan"))
     Ks, ds, Rs, Ts = [], [], [], []
     for i in range(len(devices)):
@@ -237,7 +117,7 @@ def refine_rig(devices, observations, board_r, board_t, *, sigma=None, max_nfev:
             Rs.append(models.rvec_to_matrix(x[lay.pose[i][:3]]))
             Ts.append(x[lay.pose[i][3:]].copy())
     residuals, row = [], 0
-    raw = _model(x, lay, obs, dist0, np.ones(len(devices)), False)
+    raw = bundle.model(x, lay, obs, dist0, unit, False)
     for o in obs:
         n2 = 2 * len(o.obj)
         residuals.append(-raw[row:row + n2].reshape(-1, 2))
@@ -248,7 +128,7 @@ def refine_rig(devices, observations, board_r, board_t, *, sigma=None, max_nfev:
                        nfev=int(sol.nfev), cost=float(sol.cost))
 
 
-def _polish(x, lay: _Layout, obs, dist0, weights, iterations: int = 25, tol: float = 1e-4):
+def _polish(x, lay: bundle.Layout, obs, dist0, weights, iterations: int = 25, tol: float = 1e-4):
     """Gauss-Newton steps of the robust problem (iteratively reweighted: the soft_l1 weight of each residual) with
     the exact sparse normal equations: ``lsmr``'s inexact trust-region steps approach the minimum, these land on
     it (linearly: the weights move with the residuals).  Converged when no parameter moves by more than ``tol``
@@ -258,7 +138,7 @@ def _polish(x, lay: _Layout, obs, dist0, weights, iterations: int = 25, tol: flo
     from scipy.sparse.linalg import spsolve
 
     for _ in range(iterations):
-        r, J = _model(x, lay, obs, dist0, weights, True)
+        r, J = bundle.model(x, lay, obs, dist0, 1.0 / weights, True)
         w = (1.0 + (r / _F_SCALE) ** 2) ** -0.25
         Jw = diags(w) @ J
         A = (Jw.T @ Jw).tocsc()
@@ -274,7 +154,7 @@ def _polish(x, lay: _Layout, obs, dist0, weights, iterations: int = 25, tol: flo
     return x, False
 
 
-def _sigmas(raw, obs, lay: _Layout, n_dev: int) -> np.ndarray:
+def _sigmas(raw, obs, lay: bundle.Layout, n_dev: int) -> np.ndarray:
     """Per device noise sigma (px) of the unweighted residuals: sqrt(sum r^2 / (m - n)) with the device's
     intrinsics and pose counted against its own residuals (the board poses are shared, not counted)."""
     ss, m = np.zeros(n_dev), np.zeros(n_dev)

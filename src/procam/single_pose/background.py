@@ -64,6 +64,7 @@ from .. import models
 from ..calibration import Calibration
 from ..correspond import background_points
 from ..errors import CalibrationError, ModelErrorWarning
+from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from ._joint import _N_CAM, _PROJ, BackgroundFit, _epipolar, _Joint, _single_pose_parts
 from .. import choices
@@ -118,7 +119,7 @@ class BackgroundOptions:
     max_std_fraction: float = 0.05
     noise_floor_px: float = 0.05
     max_points: int = 4000
-    alpha_prior_std: float = 0.003
+    alpha_prior_std: float = ALPHA_PRIOR_STD
 
     def __post_init__(self):
         if self.mode not in MODES:

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .. import models
+from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
 
@@ -101,7 +102,7 @@ class DenseOptions:
     """
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
-    alpha_prior_std: float = 0.003
+    alpha_prior_std: float = ALPHA_PRIOR_STD
     decentring_prior_px: float = 5.0
     u0_prior_pct: float = 3.0
     prior: ProjectorPrior | None = None

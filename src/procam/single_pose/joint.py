@@ -29,7 +29,9 @@ projector whose intrinsics are given is held fixed (its pixels undistorted once 
 
 Every residual is divided by its noise (camera corners, board and background samples each have a scale the fit
 measures), so the cost is a chi-square and the Jacobian's covariance is in the data's units. Derivatives are exact
-(forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters.
+(forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters. The lens models are
+:mod:`procam.models`' (the division model, OpenCV's), the covariance and its degeneracy rule
+:func:`procam.uncertainty.covariance`'s.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ import numpy as np
 
 from .. import _dual as D
 from .. import models
+from .. import uncertainty as unc
+from ..models import brown, brown_inverse, distort_division_xy, undistort_division_xy
 from ..parameters import CAMERA_VECTOR
 
 #: The projector's part of the joint parameter vector.
@@ -63,65 +67,7 @@ S = models.KAPPA_SCALE
 
 
 # ------------------------------------------------------------------------------------------------
-# the model's pieces (plain arrays or Duals)
-
-def _undistort_division(x, y, cx, cy, k1, k2):
-    dx, dy = x - cx, y - cy
-    r2 = dx * dx + dy * dy
-    s = 1.0 / (1.0 + k1 * r2 + k2 * r2 * r2)
-    return cx + dx * s, cy + dy * s
-
-
-def _distort_division(x, y, cx, cy, k1, k2, iterations: int = 8):
-    """Undistorted -> distorted pixels of the division model (Newton on the radial scale; converged values then
-    one step carry the derivatives)."""
-    dx, dy = x - cx, y - cy
-    q = dx * dx + dy * dy
-    qv, k1v, k2v = D.value(q), D.value(k1), D.value(k2)
-    s = np.ones_like(qv)
-    with np.errstate(all="ignore"):
-        for _ in range(iterations):
-            g = s - 1.0 - k1v * s * s * qv - k2v * s ** 4 * qv * qv
-            s = s - g / (1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv)
-    if isinstance(q, D.Dual) or isinstance(k1, D.Dual) or isinstance(k2, D.Dual):
-        g = s - 1.0 - k1 * s * s * q - k2 * s ** 4 * q * q
-        dg = 1.0 - 2.0 * k1v * s * qv - 4.0 * k2v * s ** 3 * qv * qv
-        s = s - g / dg
-    return cx + dx * s, cy + dy * s
-
-
-def brown(x, y, k1, k2, p1, p2, k3):
-    """OpenCV's distortion of normalised coordinates: ``(x_d, y_d)``."""
-    r2 = x * x + y * y
-    rad = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
-    xy = x * y
-    return x * rad + 2.0 * p1 * xy + p2 * (r2 + 2.0 * x * x), y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * xy
-
-
-def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
-    """Undistorted normalised coordinates of distorted ones: fixed-point iteration on the values, then one Newton
-    step that carries the derivatives (the implicit function's, exactly)."""
-    V = D.value
-    kv = [V(k) for k in (k1, k2, p1, p2, k3)]
-    xdv, ydv = V(xd), V(yd)
-    x, y = xdv, ydv
-    with np.errstate(all="ignore"):
-        for _ in range(iterations):
-            bx, by = brown(x, y, *kv)
-            x, y = x - (bx - xdv), y - (by - ydv)
-    if not any(isinstance(a, D.Dual) for a in (xd, yd, k1, k2, p1, p2, k3)):
-        return x, y
-    r2 = x * x + y * y
-    rad = 1 + kv[0] * r2 + kv[1] * r2 ** 2 + kv[4] * r2 ** 3
-    dr = kv[0] + 2 * kv[1] * r2 + 3 * kv[4] * r2 ** 2
-    a = rad + 2 * x * x * dr + 2 * kv[2] * y + 6 * kv[3] * x
-    b = 2 * x * y * dr + 2 * kv[2] * x + 2 * kv[3] * y
-    d = rad + 2 * y * y * dr + 6 * kv[2] * y + 2 * kv[3] * x
-    det = a * d - b * b
-    bx, by = brown(x, y, k1, k2, p1, p2, k3)
-    ex, ey = bx - xd, by - yd
-    return x - (d * ex - b * ey) / det, y - (a * ey - b * ex) / det
-
+# the model's pieces (plain arrays or Duals; the lens models are procam.models')
 
 def _transpose(R):
     return [[R[j][i] for j in range(3)] for i in range(3)]
@@ -223,7 +169,7 @@ class JointModel:
         if self.data.camera_fixed is not None:
             ux, uy = und_fixed[:, 0], und_fixed[:, 1]
         else:
-            ux, uy = _undistort_division(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
+            ux, uy = undistort_division_xy(pix[:, 0], pix[:, 1], cx, cy, k1, k2)
         return (ux - u0) / f, (uy - v0) / (a * f)
 
     def _projector(self, p):
@@ -250,7 +196,7 @@ class JointModel:
         if d.camera_fixed is not None:
             cam_res = [d._cam_und[:, 0] - xu, d._cam_und[:, 1] - yu]
         else:
-            xd, yd = _distort_division(xu, yu, cx, cy, k1, k2)
+            xd, yd = distort_division_xy(xu, yu, cx, cy, k1, k2)
             cam_res = [d.cam[:, 0] - xd, d.cam[:, 1] - yd]
         fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
         Rp = D.rotation([p[21], p[22], p[23]])
@@ -354,7 +300,7 @@ def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
     r, J = evaluate(res.x)
     cov = np.zeros((len(NAMES), len(NAMES)))
     idx = np.flatnonzero(mask)
-    cov[np.ix_(idx, idx)] = _inverse(J)
+    cov[np.ix_(idx, idx)] = unc.covariance(J, 1.0)  # residuals in sigmas
     return JointFit(p=p, free=tuple(n for n in NAMES if n in free), cov=cov, cost=float(r @ r),
                     n_residuals=len(r), jac=J, residuals=r, nfev=int(res.nfev))
 
@@ -369,19 +315,5 @@ def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.nd
     v, Jm = np.where(np.isfinite(r.v), r.v, 1e6), np.where(np.isfinite(r.d), r.d, 0.0)
     cov = np.zeros((len(NAMES), len(NAMES)))
     idx = np.flatnonzero(mask)
-    cov[np.ix_(idx, idx)] = _inverse(Jm)
+    cov[np.ix_(idx, idx)] = unc.covariance(Jm, 1.0)
     return v, Jm, cov
-
-
-def _inverse(J) -> np.ndarray:
-    """``(J^T J)^-1`` with columns normalised (conditioning); infinite where the normal matrix is singular."""
-    s = np.linalg.norm(J, axis=0)
-    s = np.where(s > 0, s, 1.0)
-    A = (J / s).T @ (J / s)
-    try:
-        w, V = np.linalg.eigh(A)
-    except np.linalg.LinAlgError:
-        return np.full(A.shape, np.inf)
-    if w.min() <= w.max() * 1e-14:
-        return np.full(A.shape, np.inf)
-    return (V / w) @ V.T / np.outer(s, s)
