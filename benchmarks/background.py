@@ -61,7 +61,7 @@ OFF = bg.BackgroundOptions(mode="off")
 
 def capture(preset, k, pose, cache: Path, refine: str = "fit"):
     """(scene, view) of one rendered pose (the render cached as .npz); ``refine``: the camera corners'
-    refinement (:data:`procam.corners.REFINERS`; ``subpix`` is the paper's cornerSubPix)."""
+    refinement (:data:`procam.board.corners.REFINERS`; ``subpix`` is the paper's cornerSubPix)."""
     scene = simulate.with_board_pose(simulate.preset(preset), pose)
     fn = cache / f"{preset}_{'_'.join(str(a) for a in pose)}_seed{100 + k}.npz"
     if fn.exists():

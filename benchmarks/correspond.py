@@ -36,7 +36,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
-from procam import board, corners, correspond, decode, patterns, pipeline, simulate  # noqa: E402
+from procam import board, correspond, decode, patterns, pipeline, simulate  # noqa: E402
+from procam.board import corners  # noqa: E402
 from procam.board import Board  # noqa: E402
 
 BOARD = (10, 6)

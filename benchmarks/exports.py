@@ -162,7 +162,7 @@ def datasheet_table(seeds):
 
 
 def projector_view_table():
-    from procam.corners import detect_corners
+    from procam.board.corners import detect_corners
     from procam.export.projector_view import projector_view
     from sim_small import small_capture
 

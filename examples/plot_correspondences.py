@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from procam import board, corners, correspond, decode, patterns, simulate
+from procam import board, correspond, decode, patterns, simulate
+from procam.board import corners
 from procam.plots import save_figure
 from procam.plots.correspond import correspond_figure
 from procam.view import View

@@ -14,7 +14,7 @@ from procam.acquire.cameras import VirtualLiveCamera
 from procam.acquire.live import advise
 from procam.advisor import (Advisor, AdvisorOptions, apply_move, guessed_camera, move_between)
 from procam.board import Board
-from procam.corners import LIVE, detect_corners
+from procam.board.corners import LIVE, detect_corners
 from procam.errors import ProcamError
 
 BOARD = Board(10, 6, 24.0)

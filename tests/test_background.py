@@ -135,7 +135,7 @@ def test_background_points_are_off_the_board_and_decode_the_wall():
     ps = patterns.pattern_set(*scene.proj_size, "opencv")
     board = Board(scene.board_cols, scene.board_rows, scene.square)
     view, _ = pipeline.view_from_stack(stack, ps, board)
-    # the view carries window samples (procam.samples), of the wall and of the board
+    # the view carries window samples (procam.correspond.samples), of the wall and of the board
     assert view.background is not None and len(view.background) > 200 and view.background.window > 1
     assert view.board_samples is not None and len(view.board_samples) > 200
     assert view.subset(view.valid).background is view.background

@@ -743,7 +743,8 @@ def test_every_distortion_model(model, poses, tmp_path):
 
 @pytest.mark.parametrize("opt", ["--decode", "--detector", "--estimator"])
 def test_every_pose_option_choice(opt, poses, tmp_path):
-    from procam import corners, correspond, decode
+    from procam.board import corners
+    from procam import correspond, decode
 
     allowed = {"--decode": decode.METHODS, "--detector": corners.DETECTORS, "--estimator": correspond.ESTIMATORS}[opt]
     rc, _, err = run_cli(["correspond", poses[0], *BOARD, "-o", tmp_path / "ref.json"])

@@ -1,4 +1,4 @@
-"""Corner detection and refinement (procam.corners) against simulator truth and real photographs."""
+"""Corner detection and refinement (procam.board.corners) against simulator truth and real photographs."""
 
 import dataclasses
 import time
@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from conftest import rms
 
-from procam import board, corners, correspond, decode, patterns, pipeline, simulate
+from procam import board, correspond, decode, patterns, pipeline, simulate
+from procam.board import corners
 from procam.errors import BoardNotFoundError
 
 PS = patterns.pattern_set(1920, 1080)

@@ -6,7 +6,8 @@ import pytest
 from conftest import rms, run_cli
 
 from procam.board import Board
-from procam import board, corners, correspond, decode, patterns, pipeline
+from procam import board, correspond, decode, patterns, pipeline
+from procam.board import corners
 from procam.errors import BoardNotFoundError, CorrespondenceError
 
 PS = patterns.pattern_set(1920, 1080)

@@ -173,7 +173,7 @@ def test_a_phase_decode_gives_the_same_bits_wherever_its_buffers_lie():
     from test_phase import panel
 
     from procam import patterns
-    from procam.phase import PhaseOptions, decode_phase
+    from procam.decode.phase import PhaseOptions, decode_phase
 
     ps = patterns.pattern_set(320, 200, family="phase", steps=8, period=16)
     stack = panel(ps, noise=2.0, seed=4)

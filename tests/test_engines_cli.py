@@ -146,7 +146,7 @@ def test_projector_view_of_a_rendered_pose(files, tmp_path):
     """The camera's white frame seen from the projector: the board's corners detected in it lie at their true
     projector pixels (0.5 px RMS), the mask covers the board and leaves out what the camera does not see; the
     same from the decoded maps file."""
-    from procam.corners import detect_corners
+    from procam.board.corners import detect_corners
 
     root, pose, calib, paths = files
     scene, stack, truth, maps = small_capture()

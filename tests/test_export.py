@@ -9,7 +9,7 @@ from scipy.ndimage import map_coordinates
 
 from procam import io, models, simulate
 from procam.calibration import Device, Distortion
-from procam.corners import detect_corners
+from procam.board.corners import detect_corners
 from procam.errors import CalibrationError, CalibrationFileError
 from procam.simulate import truth_calibration
 from procam import export as ex

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from procam import correspond, decode, patterns, plausibility
+from procam import correspond, decode, patterns
+from procam.decode import plausibility
 
 
 # --------------------------------------------------------------------------------------------

@@ -6,10 +6,10 @@ import pytest
 from scipy.ndimage import gaussian_filter1d
 
 from procam import decode, patterns
-from procam.decoded import LOW_MODULATION, OK, ORDER_DISAGREE, SATURATED, SHADOW
+from procam.decode.decoded import LOW_MODULATION, OK, ORDER_DISAGREE, SATURATED, SHADOW
 from procam.errors import ProcamWarning
-from procam.phase import PhaseOptions, decode_phase, response, unwrap
-from procam.phase.wrapped import Scratch, SumPlan, block_sums
+from procam.decode.phase import PhaseOptions, decode_phase, response, unwrap
+from procam.decode.phase.wrapped import Scratch, SumPlan, block_sums
 from conftest import expect_warning
 
 W, H = 256, 160

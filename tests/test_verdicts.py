@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from conftest import expect_warning, fake_pose_folders, run_cli
 
-from procam import multi_pose, plausibility, simulate
+from procam import multi_pose, simulate
+from procam.verdict import gates
 from procam.board import Board
 from procam.errors import DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning, ProcamWarning
 from procam.multi_pose.poseset import check_pose_set
@@ -179,7 +180,7 @@ def test_gates_pass_a_true_calibration_and_fail_each_impossible_one():
                    .R_board.tolist(), "t_cam": simulate.with_board_pose(simulate.preset("paper"), a, distance=650.0)
                    .t_board.tolist()} for v, a in zip(calib.views, SOUND[:2]))
     calib = calib.replace(poses=poses)
-    assert plausibility.gate_failures(calib) == []
+    assert gates.gate_failures(calib) == []
     K = np.array(calib.projector.K)
     cases = {
         "negative focal": calib.replace(projector=calib.projector.__class__(K * [[-1, 1, 1], [1, 1, 1], [1, 1, 1]],
@@ -192,10 +193,10 @@ def test_gates_pass_a_true_calibration_and_fail_each_impossible_one():
     words = {"negative focal": "not positive", "det R = -1": "det R = -1.000", "projector behind the boards":
              "the board is behind the projector", "absurd baseline": "no real rig", "stereo RMS": "stereo RMS 37 px"}
     for what, bad in cases.items():
-        msgs = plausibility.gate_failures(bad)
+        msgs = gates.gate_failures(bad)
         assert any(words[what] in m for m in msgs), (what, msgs)
         with expect_warning(FailedEstimateWarning):
-            assert plausibility.apply_gates(bad).verdict == "failed"
+            assert gates.apply_gates(bad).verdict == "failed"
 
 
 # --------------------------------------------------------------------------------------------------

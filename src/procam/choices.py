@@ -10,11 +10,11 @@ PATTERN_ORDERS = ("opencv", "moreno")
 #: Pattern families (:mod:`procam.patterns`): Gray codes with inverses; N-step phase shifting unwrapped by a
 #: unit-frequency cue, by three-frequency heterodyne, or by a Gray code.
 PATTERN_FAMILIES = ("gray", "phase", "heterodyne", "gray-phase")
-#: What the phase decoder does about the projector's response (:mod:`procam.phase`).
+#: What the phase decoder does about the projector's response (:mod:`procam.decode.phase`).
 GAMMA_MODES = ("auto", "none")
 #: Bit classifiers of the decoder (:mod:`procam.decode`).
 DECODE_METHODS = ("robust", "simple")
-#: Chessboard detectors and corner refinements (:mod:`procam.corners`).
+#: Chessboard detectors and corner refinements (:mod:`procam.board.corners`).
 DETECTORS = ("auto", "classic", "sb")
 REFINERS = ("fit", "subpix", "none")
 #: Local-homography estimators (:mod:`procam.correspond`).

@@ -17,14 +17,14 @@ import numpy as np
 
 from .io import files as _files
 from . import capture as _capture
-from . import corners as _corners
+from .board import corners as _corners
 from . import correspond as _corr
 from . import decode as _decode
-from . import plausibility as _plausible
+from .decode import plausibility as _plausible
 from .board import Board
 from .errors import BoardNotFoundError, CorrespondenceError, ProcamError
 from .patterns import PatternSet
-from .samples import WINDOW, dense_samples
+from .correspond.samples import WINDOW, dense_samples
 from .view import View
 
 
@@ -35,13 +35,13 @@ class PoseOptions:
     Attributes
     ----------
     decode : :class:`procam.decode.DecodeOptions` (classifier and thresholds).
-    detector : chessboard detector, one of :data:`procam.corners.DETECTORS`.
+    detector : chessboard detector, one of :data:`procam.board.corners.DETECTORS`.
     refine_window : half-window of the corner refinement in camera pixels (0 = none; None = the method's
-        default, :data:`procam.corners.REFINE_WINDOW`).
-    refine : corner refinement, one of :data:`procam.corners.REFINERS`.
+        default, :data:`procam.board.corners.REFINE_WINDOW`).
+    refine : corner refinement, one of :data:`procam.board.corners.REFINERS`.
     corners : :class:`procam.correspond.CornerOptions` (local homographies).
     min_corners : a pose with fewer corners that have projector coordinates is an error.
-    background : keep the dense decoded samples (:func:`procam.samples.dense_samples`) on the board in
+    background : keep the dense decoded samples (:func:`procam.correspond.samples.dense_samples`) on the board in
         ``view.board_samples`` and off it in ``view.background``: the single-pose projector's dense constraints
         and its background (:mod:`procam.single_pose`).
     window : the samples' window side, camera pixels (odd).
@@ -49,7 +49,7 @@ class PoseOptions:
 
     decode: _decode.DecodeOptions = field(default_factory=_decode.DecodeOptions)
     detector: str = "auto"
-    refine_window: int | None = None  # None: procam.corners.REFINE_WINDOW of the method
+    refine_window: int | None = None  # None: procam.board.corners.REFINE_WINDOW of the method
     refine: str = "fit"
     corners: _corr.CornerOptions = field(default_factory=_corr.CornerOptions)
     min_corners: int = 10
@@ -134,7 +134,7 @@ def view_from_stack(stack: np.ndarray, pattern_set: PatternSet, board: Board, *,
     -------
     (View, DecodeResult or None).  Raises :class:`BoardNotFoundError`, :class:`CorrespondenceError`, or
     :class:`~procam.errors.CaptureError` when the decoded capture is not a plausible picture of the projector
-    (:mod:`procam.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
+    (:mod:`procam.decode.plausibility`: wrong projector size, a pattern swapped with its inverse, a mirror).
     """
     board = as_board(board)
     d = options.decode

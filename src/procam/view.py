@@ -1,5 +1,5 @@
 """The correspondences of one pose: board, camera and projector points, and, optionally, the dense decoded
-samples on the board and on the scene behind it (:mod:`procam.samples`)."""
+samples on the board and on the scene behind it (:mod:`procam.correspond.samples`)."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ class Samples:
     proj_pts : (M, 2) float64 projector pixels (x, y) (column and row).
     sigma : (M,) float64 noise of each sample's projector coordinate (px, per axis; a relative weight), or None
         (equal weights: raw decoded pixels).
-    window : side (camera px) of the window each sample averages (:mod:`procam.samples`); 1 for raw pixels.
+    window : side (camera px) of the window each sample averages (:mod:`procam.correspond.samples`); 1 for raw pixels.
     """
 
     cam_pts: np.ndarray
@@ -84,7 +84,7 @@ class View:
         Per-corner diagnostics (arrays of length N) and free-form notes.
     board : :class:`procam.board.Board` the points were made for, or None when unknown.
     background : :class:`Samples` or None -- decoded samples off the board, the scene behind it (filled by
-        :mod:`procam.pipeline` from the decoded maps, :func:`procam.samples.dense_samples`; None when unknown,
+        :mod:`procam.pipeline` from the decoded maps, :func:`procam.correspond.samples.dense_samples`; None when unknown,
         e.g. a view read from a file).
     board_samples : :class:`Samples` or None -- decoded samples on the board (the same; the single-pose
         projector's dense constraints).

@@ -2,7 +2,7 @@
 
 With a calibration and the board in view, :func:`world_check`
 
-1. grabs the board under the projector's white light and finds its corners (:func:`procam.corners.find_corners`);
+1. grabs the board under the projector's white light and finds its corners (:func:`procam.board.corners.find_corners`);
 2. takes the board's pose by PnP with the calibrated camera (its lens undistorted first,
    :func:`procam.residuals.pnp`);
 3. puts one target on the board at the centre of every white square of the inner grid (see below), and maps it
@@ -312,7 +312,7 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     """
     import cv2
 
-    from . import corners as _corners
+    from .board import corners as _corners
     from .residuals import pnp
 
     if calib.projector is None or calib.R is None or calib.T is None:
@@ -424,7 +424,7 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
 
 def _gray(frame) -> np.ndarray:
     """A camera frame as (H, W) grey, its own dtype."""
-    from .corners import _gray as gray
+    from .board.corners import _gray as gray
 
     frame = np.asarray(frame)
     if frame.ndim not in (2, 3):
@@ -446,7 +446,7 @@ def draw(check: WorldCheck, magnify: float = 10.0, max_width: int = 1600) -> np.
     Returns (H', W', 3) uint8 BGR (at most ``max_width`` wide)."""
     import cv2
 
-    from .corners import to_gray8
+    from .board.corners import to_gray8
     from .style import NEUTRAL, VERDICT_COLOURS, bgr
 
     img = cv2.cvtColor((to_gray8(check.white) * 0.6).astype(np.uint8), cv2.COLOR_GRAY2BGR)

@@ -302,7 +302,7 @@ def _preflight(run: _Run, white_img, black_img, ps):
                                 f"({w1.shape[1]}x{w1.shape[0]}, {b.shape[1]}x{b.shape[0]})")
         corners = None
         if o.board is not None:
-            from ..corners import detect_corners
+            from ..board.corners import detect_corners
 
             corners = detect_corners(w1, tuple(o.board))
             if corners is None:

@@ -2,11 +2,11 @@
 
 Per camera frame (:meth:`Advisor.update`):
 
-1. the board: :func:`procam.corners.detect_corners` with its live setting (:data:`procam.corners.LIVE`,
+1. the board: :func:`procam.board.corners.detect_corners` with its live setting (:data:`procam.board.corners.LIVE`,
    :attr:`AdvisorOptions.detect_options`): OpenCV's chessboard detector on a downscaled copy of the frame
    (``AdvisorOptions.detect_width``, ``CALIB_CB_FAST_CHECK`` so a frame without the board costs little),
    the corners refined with ``cornerSubPix`` in the full-resolution frame, in procam's canonical order
-   (:func:`procam.corners.canonical_order`);
+   (:func:`procam.board.corners.canonical_order`);
 2. the board's pose in the camera by PnP (``SOLVEPNP_IPPE`` on the undistorted corners) with the camera's
    intrinsics: from a calibration (an earlier capture or a calibration file) when there is one, else a
    guess (``f`` = the image diagonal, the principal point at the image centre, no distortion) -- the advice

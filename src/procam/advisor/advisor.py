@@ -13,7 +13,7 @@ import numpy as np
 from .. import crlb, models
 from ..board import Board
 from ..calibration import Calibration, Device, Distortion
-from ..corners import detect_corners
+from ..board.corners import detect_corners
 from ..errors import ProcamError
 from .moves import ProjectorSide, axis_rotation, move_between, polygon_area, pose_pnp, projector_pose
 from .options import Action, Advice, AdvisorOptions, DeviceState
@@ -328,7 +328,7 @@ class Advisor:
 
     def _find_board(self, img: np.ndarray) -> np.ndarray | None:
         """The board's (N, 2) full-resolution corners in canonical order, or None: the one detector
-        (:func:`procam.corners.detect_corners`) with the live setting (:attr:`AdvisorOptions.detect_options`)."""
+        (:func:`procam.board.corners.detect_corners`) with the live setting (:attr:`AdvisorOptions.detect_options`)."""
         return detect_corners(img, self.board.pattern_size, self.options.detect_options)
 
     def _common(self, frame: int, t: float, phase: str) -> dict:

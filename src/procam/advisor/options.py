@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..corners import LIVE, DetectOptions
+from ..board.corners import LIVE, DetectOptions
 from ..errors import ProcamError
 from ..single_pose.rating import RatingOptions
 
@@ -111,7 +111,7 @@ class AdvisorOptions:
 
     @property
     def detect_options(self) -> DetectOptions:
-        """The detector's settings per frame: :data:`procam.corners.LIVE` with ``detect_width`` and
+        """The detector's settings per frame: :data:`procam.board.corners.LIVE` with ``detect_width`` and
         ``refine_window``."""
         return replace(LIVE, max_width=self.detect_width, refine_window=self.refine_window)
 

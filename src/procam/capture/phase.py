@@ -3,7 +3,7 @@
 * :func:`check_phase_capture` - the white and black frames where the description puts them (when it has them),
   every Gray bit followed by its inverse (when it says so), the Gray bits in the described order
   (:func:`procam.capture.bit_order.check_bit_order`), and the description itself against the frames
-  (:func:`procam.phase.diagnose.check_description`: the fringes' modulation, each frame's fit to its block's
+  (:func:`procam.decode.phase.diagnose.check_description`: the fringes' modulation, each frame's fit to its block's
   sinusoid, the frequencies' (or the Gray code's) consistency, the decoded coordinates' range); each failure is a
   one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagrees.  Returns the exposure
   warnings (clipped fringes).
@@ -114,7 +114,7 @@ def _pairs_check(ps, folder, files, sub) -> None:
 def check_phase_capture(stack: np.ndarray, ps, folder, files, sub: np.ndarray | None = None) -> tuple:
     """Raise :class:`CaptureError` when the frames are not the sequence ``ps`` describes (see the module
     docstring); returns warnings about the exposure."""
-    from ..phase.diagnose import check_description
+    from ..decode.phase.diagnose import check_description
 
     sub = _sample(stack) if sub is None else sub
     _levels_check(stack, ps, folder, files, sub)

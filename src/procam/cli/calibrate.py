@@ -292,7 +292,7 @@ def calibrate_cmd(
 def finish(result, *, out: Path, yaml: Path | None, png: Path | None, report: Path | None, force: bool, check=None,
            agreement=None) -> None:
     """The one end of every calibration the command makes, a pair's (:class:`~procam.calibration.Calibration`)
-    or a rig's (:class:`~procam.rig.result.RigCalibration`): refuse to write one that must not be trusted unless
+    or a rig's (:class:`~procam.calibration.RigCalibration`): refuse to write one that must not be trusted unless
     ``force``; write ``out`` (JSON or YAML) and ``yaml``, the figure ``png`` (the pair's residuals, the rig's
     drawing) and the HTML ``report``; exit 3 after writing an untrusted one.  ``check``: the pair's metric
     verification; ``agreement``: the rig's."""

@@ -12,41 +12,10 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (
-    CameraSizeOpt,
-    ComplementaryOpt,
-    CountsOpt,
-    ExposureOpt,
-    Family,
-    FamilyOpt,
-    GainOpt,
-    InverseOpt,
-    LiveAutoOpt,
-    LiveCalibrationOpt,
-    LiveJsonOpt,
-    LiveMaxFramesOpt,
-    LiveTargetOpt,
-    Order,
-    PeriodOpt,
-    SeedOpt,
-    StepsOpt,
-    app,
-    camera_settings,
-    console,
-    err_console,
-    fail,
-    is_tty,
-    live_limits,
-    number,
-    parse_board,
-    parse_size,
-    pattern_sequence,
-    phase_keywords,
-    plain,
-    text_on_stderr,
-    user_errors,
-    value,
-)
+from ._app import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
+                   LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
+                   SeedOpt, StepsOpt, app, camera_settings, console, err_console, fail, is_tty, live_limits, number,
+                   parse_board, parse_size, pattern_sequence, phase_keywords, plain, text_on_stderr, user_errors, value)
 
 
 def _list_devices(camera: str | None) -> None:

@@ -66,7 +66,7 @@ def decode_cmd(
             if not text.startswith("decoded"):
                 say(f"  {axis}: {n} px {text}")
     if res.subpixel:
-        from ..phase import summary_lines
+        from ..decode.phase import summary_lines
 
         for line in summary_lines(res):
             say(line)

@@ -74,7 +74,7 @@ def reconstruct_cmd(
              f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
              + (assumed_size(calib, "proj_size") or "; check --projector"))
     maps = decode.decode(cap.stack, ps)
-    from .. import plausibility  # the capture's own faults first: they, not the calibration, explain a bad cloud
+    from ..decode import plausibility  # the capture's own faults first: they, not the calibration, explain a bad cloud
 
     for w in plausibility.check_decoded(maps, str(pose_dir), cap.files):
         warn(w)

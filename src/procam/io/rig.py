@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import models
 from ..errors import CalibrationFileError
-from ..rig.result import RelativePose, RigCalibration, RigDevice
+from ..calibration import RelativePose, RigCalibration, RigDevice
 from .formats import RIG_CALIBRATION_FORMAT
 from .validate import (bad, check_distortion, check_K, check_rotation, check_size, check_translation,
                        load_json, numbers, short)
@@ -50,7 +50,7 @@ def _device_dict(d) -> dict:
 
 
 def rig_to_dict(rc: RigCalibration, base=None) -> dict:
-    """The JSON document of a :class:`~procam.rig.result.RigCalibration` (module docstring); pose names relative
+    """The JSON document of a :class:`~procam.calibration.RigCalibration` (module docstring); pose names relative
     to ``base`` (the file's folder) when given."""
     from .files import portable_names, to_jsonable
     from .procam import calibration_to_dict
@@ -258,7 +258,7 @@ def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
 
 
 def load_rig_calibration(path) -> RigCalibration:
-    """The :class:`~procam.rig.result.RigCalibration` a rig calibration JSON file holds (every device, relative
+    """The :class:`~procam.calibration.RigCalibration` a rig calibration JSON file holds (every device, relative
     pose and pair as written): every device block and relative pose checked by the one validator set
     (:func:`rig_devices`), the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
     like any calibration.  :class:`CalibrationFileError` naming the file and the field otherwise."""

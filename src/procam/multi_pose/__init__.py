@@ -128,7 +128,7 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
     ``info["proj_dist_model"]``, the steps taken in ``info["auto_dist"]``. Other options: :func:`calibrate_models`.
 
     The verdict (worst first): ``failed`` when the result is impossible for a real rig
-    (:func:`procam.plausibility.gate_failures`); ``degenerate`` when the pose set cannot determine the
+    (:func:`procam.verdict.gates.gate_failures`); ``degenerate`` when the pose set cannot determine the
     intrinsics, judged before the fit (:func:`procam.multi_pose.poseset.check_pose_set`, in
     ``info["pose_set"]``), or when a parameter moves far more than its ``±`` as each pose is left out
     (``leave_one_out``, with 4 or more poses: :mod:`procam.multi_pose.evidence`, in ``info["leave_one_out"]``;
@@ -140,7 +140,7 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
     with the reason).
     """
     from . import evidence, poseset
-    from .. import plausibility
+    from ..verdict import gates
 
     given = list(views)
     views, labellings = _canonical(given)  # no step may depend on how each board's corners were numbered
@@ -177,7 +177,7 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
             level = max(level, lvl, key=LEVELS.index)
     calib = calib.replace(info=info, verdict=level, verdict_reasons=tuple(reasons),
                           warnings=tuple(calib.warnings) + tuple(r for r in reasons if r not in calib.warnings))
-    calib = plausibility.apply_gates(_given(calib, given, labellings), stacklevel=2)
+    calib = gates.apply_gates(_given(calib, given, labellings), stacklevel=2)
     if calib.verdict in ("weak", "degenerate"):
         category = WeakPoseWarning if calib.verdict == "weak" else DegeneratePoseWarning
         _warnings.warn("; ".join(calib.verdict_reasons), category, stacklevel=2)
@@ -185,8 +185,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
 
 
 def _canonical(views):
-    """Each view in the canonical labelling of its board (:func:`procam.labelling.canonical_view`)."""
-    from ..labelling import canonical_view
+    """Each view in the canonical labelling of its board (:func:`procam.board.labelling.canonical_view`)."""
+    from ..board.labelling import canonical_view
 
     out = [canonical_view(v) for v in views]
     return [v for v, _ in out], [lab for _, lab in out]
@@ -391,14 +391,14 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
 def _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init, fix_aspect_ratio, iterations,
                         stereo_iterations, min_corners) -> str:
     """What to do when the joint refinement diverges: ``--no-refine`` only when its result passes the plausibility
-    gates (:func:`procam.plausibility.gate_failures`) -- advice never points at a failed result."""
-    from .. import plausibility
+    gates (:func:`procam.verdict.gates.gate_failures`) -- advice never points at a failed result."""
+    from ..verdict import gates
 
     try:
         frozen = calibrate_models(views, cam_size=cam_size, proj_size=proj_size, cam_dist=cam_dist,
                                   proj_dist=proj_dist, refine=False, init=init, fix_aspect_ratio=fix_aspect_ratio,
                                   iterations=iterations, stereo_iterations=stereo_iterations, min_corners=min_corners)
-        failures = plausibility.gate_failures(frozen)
+        failures = gates.gate_failures(frozen)
     except CalibrationError as e:
         failures = [str(e)]
     if not failures:

@@ -189,7 +189,7 @@ class PhaseSet:
     order : ``"procam"`` for procam's own sequences, ``"custom"`` for one described by hand.
     upside_down : the projector shows its image upside down to the camera (a description's
         ``"upside_down": true``; a sequence without a Gray code is checked to decode upright otherwise,
-        :mod:`procam.phase.diagnose`).
+        :mod:`procam.decode.phase.diagnose`).
     """
 
     width: int

@@ -6,7 +6,7 @@ every device in the reference camera's frame (the first camera; ``x_dev = R x_re
 
 * :mod:`~procam.rig.calibrate` - :func:`calibrate_rig`: single-pose per pair with the shared camera (one rig
   pose), or per-pair multi-pose initialisation then a joint refinement of every device and pose
-  (:mod:`~procam.rig.joint`, sparse least squares); every relative pose with its std (:mod:`~procam.rig.result`).
+  (:mod:`~procam.rig.joint`, sparse least squares); every relative pose with its std (:class:`~procam.calibration.RigCalibration`).
 * :mod:`procam.io.rig` - the rig calibration file (JSON, OpenCV YAML); each pair also an ordinary procam
   calibration (:func:`procam.io.load_calibration` with ``pair=``).
 * :mod:`~procam.rig.verify` - where two projectors light the same corners, their triangulated points agree
@@ -18,6 +18,6 @@ every device in the reference camera's frame (the first camera; ``x_dev = R x_re
 from __future__ import annotations
 
 from .calibrate import RigPoseViews, calibrate_rig, rig_views_from_folders  # noqa: F401
-from .result import RelativePose, RigCalibration, RigDevice  # noqa: F401
+from ..calibration import RelativePose, RigCalibration, RigDevice  # noqa: F401
 
 __all__ = ["RigPoseViews", "calibrate_rig", "rig_views_from_folders", "RigCalibration", "RigDevice", "RelativePose"]

@@ -32,7 +32,7 @@ from .. import uncertainty as unc
 from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError
 from ..stats import rms
-from .result import RigCalibration, RigDevice, relative_poses
+from ..calibration import RigCalibration, RigDevice, relative_poses
 
 __all__ = ["RigPoseViews", "calibrate_rig", "rig_views_from_folders", "SINGLE_UNCERTAINTY", "MULTI_UNCERTAINTY"]
 
@@ -113,7 +113,7 @@ def calibrate_rig(poses: Sequence[RigPoseViews], *, method: str | None = None, c
 
     Returns
     -------
-    :class:`~procam.rig.result.RigCalibration`
+    :class:`~procam.calibration.RigCalibration`
     """
     poses = list(poses)
     if not poses:

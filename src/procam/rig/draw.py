@@ -14,7 +14,7 @@ __all__ = ["rig_figure"]
 
 
 def rig_figure(rc, agreement=(), *, title: str = "", depth: float | None = None):
-    """A matplotlib figure of ``rc`` (:class:`~procam.rig.result.RigCalibration`): top view with each device's
+    """A matplotlib figure of ``rc`` (:class:`~procam.calibration.RigCalibration`): top view with each device's
     horizontal field of view drawn to ``depth`` (default: 1.2 x the board poses' mean depth, else 1000 board
     units), coloured by its verdict; a text panel with the agreement figures."""
     from matplotlib.figure import Figure

@@ -61,7 +61,7 @@ def verify_rig(rc, poses, *, min_corners: int = 6) -> list[PairAgreement]:
 
     Parameters
     ----------
-    rc : :class:`~procam.rig.result.RigCalibration`.
+    rc : :class:`~procam.calibration.RigCalibration`.
     poses : the :class:`~procam.rig.calibrate.RigPoseViews` (the calibration's or others).
     min_corners : fewest common corners for a figure.
 

@@ -37,8 +37,8 @@ from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationError, DegeneratePoseError, ModelErrorWarning
 from ..residuals import pnp, stereo_pose
 from ..stats import rms, robust_sigma
-from ..plausibility import apply_gates
-from ..labelling import canonical_points, canonical_view, given_labelling
+from ..verdict.gates import apply_gates
+from ..board.labelling import canonical_points, canonical_view, given_labelling
 from ._robust import RobustOptions, check_corners, clean, fit_robust, rejection_report
 from .camera import COD_MODES, REFINE_MODES, CameraOptions, CameraSolution, calibrate_camera
 from .misfit import misfit

@@ -206,7 +206,7 @@ def apply(cal, fit: DenseFit, view, *, known_camera=None, known_projector=None):
     warnings += [f"pose {view.name!r}: {c}" for c in fit.conflicts]
     info = dict(cal.info)
     info.update(dense=fit, projector_model=fit.model, notes=tuple(fit.notes),
-                board_poses={"camera": (Rc, tc), "projector": (Rp, tp)})  # for procam.labelling.given_labelling
+                board_poses={"camera": (Rc, tc), "projector": (Rp, tp)})  # for procam.board.labelling.given_labelling
     method = cal.method if known_projector is None else cal.method + ", projector given"
     return cal.replace(camera=camera, projector=projector, R=R, T=T, std=std, cam_rms=cam_rms, proj_rms=proj_rms,
                        stereo_rms=stereo, poses=(pose0, *cal.poses[1:]), warnings=tuple(warnings), info=info,

@@ -5,7 +5,7 @@ panel's last row), often a little sideways, through a lens that distorts. One po
 pinhole projector's ``u0p``/``alpha_p`` from its focal length (the board's homography has 8 degrees of freedom),
 but the decoded patterns carry much more than 60 corners:
 
-* the **board samples** (:mod:`procam.samples`): camera pixels on the board whose projector coordinates are
+* the **board samples** (:mod:`procam.correspond.samples`): camera pixels on the board whose projector coordinates are
   known to a fraction of a pixel, thousands per pose. Through the camera (its distortion, intrinsics and board
   pose) each is a point of the board's plane, which the projector images through its distortion: for a
   lens-shifted projector the distortion centre is the lens axis, far from the panel centre, and the radial field

@@ -31,7 +31,7 @@ import numpy as np
 from .. import crlb, distortion, models
 from ..errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning,
                       WeakPoseWarning)
-from ..plausibility import FOCAL_RANGE, focal_failure
+from ..verdict.gates import FOCAL_RANGE, focal_failure
 from ..verdict import LEVELS
 from ._principal_axis import homography, zhang_camera, zhang_projector
 
@@ -48,7 +48,7 @@ class RatingOptions:
     weak_angle_deg : an angle below this makes the pose weak (poorly conditioned).
     degenerate_rel_std, weak_rel_std : relative std of f above which the pose is degenerate / weak.
     plausible_f_range : focal lengths outside this range x the image diagonal (diagonal fields of view of
-        ~136 deg down to ~11 deg) are impossible for a real device (:data:`procam.plausibility.FOCAL_RANGE`).
+        ~136 deg down to ~11 deg) are impossible for a real device (:data:`procam.verdict.gates.FOCAL_RANGE`).
     camera_noise_px, projector_noise_px : the least corner noise (px) the stable prediction assumes.
     data_alarm : corners that scatter about the fitted model more than this many times that noise are bad data
         (a wrong decode or detection), not a bad pose: the rating says so instead of asking for another pose.

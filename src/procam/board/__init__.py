@@ -7,7 +7,7 @@ points away from the devices, so a fronto-parallel board has ``R = I``.
 
 :func:`board_region` is the one board-region mask: the camera pixels inside the detected corners' outer
 boundary (their convex hull, filled at 1/16 px), which every check, plot and fit that needs "the pixels on
-the board" uses.  Finding the corners is :mod:`procam.corners`.
+the board" uses.  Finding the corners is :mod:`procam.board.corners`.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ProcamError
+from ..errors import ProcamError
 
 #: Inner corners per side that a board may have (OpenCV's detectors need at least 3; 500 is far beyond
 #: any printed calibration board and keeps every array small).

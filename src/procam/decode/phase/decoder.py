@@ -1,15 +1,15 @@
 """Decoding a phase-family capture: per camera pixel a sub-pixel projector column and row, their noise, validity
-and reasons (:func:`decode_phase`, returning the :class:`~procam.decoded.DecodeResult` every stage downstream
+and reasons (:func:`decode_phase`, returning the :class:`~procam.decode.decoded.DecodeResult` every stage downstream
 reads).
 
 Two passes.  On a fixed sample of pixels (:data:`SAMPLE`) the projector's response and the camera's noise are
-measured (:func:`procam.phase.response.fit_response`).  Then, band by band of camera rows, every phase block's
-wrapped phase (:mod:`procam.phase.wrapped`), its correction for the projector's gamma (a lookup table, one index
-per pixel: :meth:`procam.phase.response.PhaseLUT.apply`), the fringe fractions and their noise (the camera's noise
-at the pixel's level once per axis), the masks and the unwrapping (:mod:`procam.phase.unwrap`), in place where the
+measured (:func:`procam.decode.phase.response.fit_response`).  Then, band by band of camera rows, every phase block's
+wrapped phase (:mod:`procam.decode.phase.wrapped`), its correction for the projector's gamma (a lookup table, one index
+per pixel: :meth:`procam.decode.phase.response.PhaseLUT.apply`), the fringe fractions and their noise (the camera's noise
+at the pixel's level once per axis), the masks and the unwrapping (:mod:`procam.decode.phase.unwrap`), in place where the
 arrays allow.
 
-Masks (reason codes of :data:`procam.decoded.REASONS`)
+Masks (reason codes of :data:`procam.decode.decoded.REASONS`)
     SHADOW: the coarsest fringes' peak-to-peak ``2 B`` (and ``white - black`` when the sequence has them) below
     ``shadow_threshold``.  SATURATED: a phase frame of the axis at full scale (a clipped sinusoid has a wrong
     phase).  LOW_CONTRAST: a Gray bit that is not sure (``|pattern - inverse|`` below ``contrast_threshold``, or
@@ -37,14 +37,14 @@ from functools import lru_cache
 import numpy as np
 
 from .. import decoded as _d
-from ..errors import ProcamWarning
-from ..io import files as _files
-from ..patterns.phase import PhaseSet
+from ...errors import ProcamWarning
+from ...io import files as _files
+from ...patterns.phase import PhaseSet
 from . import response as _resp
 from . import unwrap as _unwrap
 from . import wrapped as _wrapped
 
-#: Pixels of the sample the response and the noise are measured on (and :mod:`procam.phase.diagnose` judges).
+#: Pixels of the sample the response and the noise are measured on (and :mod:`procam.decode.phase.diagnose` judges).
 SAMPLE = 20000
 #: A gamma that leaves a larger coordinate error (projector pixels) is corrected (``"auto"``) or warned about.
 GAMMA_WARN_PX = 0.05
@@ -61,7 +61,7 @@ class PhaseOptions:
     camera_noise : the camera's noise sigma in DN; None measures it from the frames.
     shadow_threshold : minimum peak-to-peak of the coarsest fringes (and white - black), DN.
     contrast_threshold : minimum ``|pattern - inverse|`` of a Gray bit, DN.
-    tolerance, max_sigma : the unwrapping's (:mod:`procam.phase.unwrap`), cycles of the finer period.
+    tolerance, max_sigma : the unwrapping's (:mod:`procam.decode.phase.unwrap`), cycles of the finer period.
     """
 
     gamma: str | float = "auto"
@@ -113,7 +113,7 @@ class PhaseInfo:
     blur : effective blur of the fringes' harmonics, projector pixels.
     noise : ``(a, b)``, the camera's noise variance ``a + b * level`` (DN^2 at the input scale).
     blocks : :class:`BlockStats` per phase block.
-    sample_reasons : ``{axis: (n,) uint8}`` the reasons on the sample pixels (for :mod:`procam.phase.diagnose`).
+    sample_reasons : ``{axis: (n,) uint8}`` the reasons on the sample pixels (for :mod:`procam.decode.phase.diagnose`).
     warnings : what the result should be read with.
     """
 
@@ -249,7 +249,7 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
 
     Returns
     -------
-    :class:`~procam.decoded.DecodeResult` with sub-pixel ``col``/``row`` and ``sigma_col``/``sigma_row``,
+    :class:`~procam.decode.decoded.DecodeResult` with sub-pixel ``col``/``row`` and ``sigma_col``/``sigma_row``,
     ``modulation_col``/``row`` and ``phase`` (:class:`PhaseInfo`).  Warns (:class:`~procam.errors.ProcamWarning`)
     with what ``phase.warnings`` holds.
     """
@@ -270,7 +270,7 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     for y0 in range(0, H, band):
         sl = slice(y0, min(H, y0 + band))
         _band(stack[:, sl, :], sl, out, hists, scratch=scratch, **ctx)
-    # the sample's own decode, for the description checks (procam.phase.diagnose)
+    # the sample's own decode, for the description checks (procam.decode.phase.diagnose)
     sample = {"index": idx}
     view = np.ascontiguousarray(sub.astype(stack.dtype)[:, None, :])
     sout = {k: np.empty((1, len(idx)), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
@@ -306,7 +306,7 @@ def _block_stats(ps: PhaseSet, lit, nsteps: dict) -> tuple:
 
 
 def _plan(ps: PhaseSet, luts: dict, noise) -> dict:
-    """What every band reuses: per phase block how to form its sums (:class:`procam.phase.wrapped.SumPlan`),
+    """What every band reuses: per phase block how to form its sums (:class:`procam.decode.phase.wrapped.SumPlan`),
     the constant of its noise, its lookup table; per axis its blocks coarsest first."""
     blocks = {}
     for b in ps.blocks:
@@ -442,7 +442,7 @@ def _count(hist: np.ndarray, x: np.ndarray, where: np.ndarray) -> None:
 
 def _gray_phase(blk, ps, axis, level, finest, span, reason, opts, scale, noise):
     """The gray-phase coordinate of one axis: Gray bits, their orders, the fringe fraction (see
-    :func:`procam.phase.unwrap.gray_orders`)."""
+    :func:`procam.decode.phase.unwrap.gray_orders`)."""
     u, su, period, x0 = level
     A, B = finest
     g = ps.gray_block(axis)

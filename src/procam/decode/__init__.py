@@ -43,11 +43,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import decoded as _decoded
-from .io import files as _files
-from .patterns import PatternSet
-from .choices import DECODE_METHODS
+from ..io import files as _files
+from ..patterns import PatternSet
+from ..choices import DECODE_METHODS
 
-#: Reason codes and the decoded maps' type live in :mod:`procam.decoded` (shared with the phase decoder).
+#: Reason codes and the decoded maps' type live in :mod:`procam.decode.decoded` (shared with the phase decoder).
 REASONS, DecodeResult = _decoded.REASONS, _decoded.DecodeResult
 OK, SHADOW, LOW_CONTRAST, AMBIGUOUS, OUT_OF_RANGE = range(5)
 
@@ -97,7 +97,7 @@ class DecodeOptions:
         self.phase_options()  # validates gamma and camera_noise
 
     def phase_options(self):
-        """The :class:`procam.phase.PhaseOptions` of these options (for the phase families)."""
+        """The :class:`procam.decode.phase.PhaseOptions` of these options (for the phase families)."""
         from .phase import PhaseOptions
 
         return PhaseOptions(gamma=self.gamma, camera_noise=self.camera_noise, shadow_threshold=self.shadow_threshold,
@@ -107,7 +107,7 @@ class DecodeOptions:
 def decode_with(stack: np.ndarray, pattern_set, options: DecodeOptions = DecodeOptions(), *,
                 extras: bool = True) -> DecodeResult:
     """Decode ``stack`` with the user's ``options``, whatever the family: :func:`decode` for a Gray code,
-    :func:`procam.phase.decode_phase` for the phase families."""
+    :func:`procam.decode.phase.decode_phase` for the phase families."""
     if isinstance(pattern_set, PatternSet):
         return decode(stack, pattern_set, options.method, shadow_threshold=options.shadow_threshold,
                       contrast_threshold=options.contrast_threshold, extras=extras)
@@ -121,7 +121,7 @@ def decode(stack: np.ndarray, pattern_set: PatternSet, method: str = "robust", *
            direct_threshold: float = 5.0, black_fraction: float = 0.0,
            full_scale: float | None = None, max_dropped_bits: int = 3, band: int = 64,
            threads: int | None = None, extras: bool = True) -> DecodeResult:
-    """Decode a Gray-code image stack (a phase family's goes to :func:`procam.phase.decode_phase`, with
+    """Decode a Gray-code image stack (a phase family's goes to :func:`procam.decode.phase.decode_phase`, with
     ``shadow_threshold`` and ``contrast_threshold``; see :func:`decode_with` for its other options).
 
     Parameters

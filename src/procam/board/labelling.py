@@ -5,7 +5,7 @@ same pose of it must give the same calibration and the same verdict. Sums, start
 (the least-median homography that screens outliers samples points by their index) all see the corners in the
 order they come, so the solvers work in one canonical labelling of each board and report in the given one:
 
-* :func:`canonical_labelling` -- the labelling that does not depend on the numbering: :func:`procam.corners.
+* :func:`canonical_labelling` -- the labelling that does not depend on the numbering: :func:`procam.board.corners.
   canonical_order`'s rule (the grid's axes right-handed in the image with y down, corner 0 nearest the image's
   top-left corner) over all 8 labellings of the grid (rows and columns may swap), from an affine fit of the
   image points (NaN rows allowed); the board points rebuilt from the grid's integer indices, so that every
@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import models
+from .. import models
 
 __all__ = ["canonical_labelling", "Labelling", "canonical_view", "canonical_points", "given_labelling"]
 
@@ -42,7 +42,7 @@ def canonical_labelling(obj_pts, img_pts):
 
     A board given as ``9x7`` or ``7x9``, with its origin in any corner, is the same physical board; a solver fed
     with its canonical labelling gives the same result, bit for bit, whichever the user chose. The rule is
-    :func:`procam.corners.canonical_order`'s, over all 8 labellings (rows and columns may swap): the grid's axes as the image
+    :func:`procam.board.corners.canonical_order`'s, over all 8 labellings (rows and columns may swap): the grid's axes as the image
     sees them (an affine fit of the finite image points) right-handed with y down, and of those, corner 0 nearest
     the image's top-left corner.
 
@@ -221,7 +221,7 @@ def given_labelling(calib, view, lab: Labelling | None):
         if k in info:
             info[k] = _given_solution(info[k], lab)
     info["labelling"] = {"order": lab.order.tolist(), "G": lab.G.tolist(),
-                         "note": "solved in the canonical labelling of the board (procam.labelling.canonical_labelling)"}
+                         "note": "solved in the canonical labelling of the board (procam.board.labelling.canonical_labelling)"}
     return calib.replace(views=calib.views if view is None else (view,), poses=tuple(poses), info=info,
                          warnings=tuple(lab.given_text(w) for w in calib.warnings),
                          verdict_reasons=tuple(lab.given_text(r) for r in calib.verdict_reasons))

@@ -1,6 +1,6 @@
 """The decoded maps of one pose (:class:`DecodeResult`) and the reason codes of a pixel that did not decode
 (:data:`REASONS`), shared by the Gray-code decoder (:mod:`procam.decode`) and the phase decoder
-(:mod:`procam.phase`).
+(:mod:`procam.decode.phase`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from .patterns import PatternSet
+    from ..patterns import PatternSet
 
 
 #: Reason codes of :attr:`DecodeResult.reason_col` / ``reason_row``.
@@ -59,11 +59,11 @@ class DecodeResult:
     sigma_col, sigma_row : float32 or None
         Phase families: the predicted standard deviation of ``col`` / ``row`` (projector pixels) from the
         fringes' modulation and the camera's noise, ``sigma_I sqrt(2 / N) / B * P / (2 pi)`` of the finest fringes
-        (:mod:`procam.phase`); NaN where invalid.  None for a Gray code (:meth:`coordinate_sigma` has its
+        (:mod:`procam.decode.phase`); NaN where invalid.  None for a Gray code (:meth:`coordinate_sigma` has its
         quantisation instead).
     modulation_col, modulation_row : float32 or None
         Phase families: the finest fringes' modulation ``B`` (half their peak-to-peak, DN at the input scale).
-    phase : :class:`procam.phase.PhaseInfo` or None
+    phase : :class:`procam.decode.phase.PhaseInfo` or None
         Phase families: what the decoder measured and assumed (projector gamma, camera noise, per-block
         statistics, warnings).
     """
@@ -102,7 +102,7 @@ class DecodeResult:
     def noise(self) -> np.ndarray | None:
         """(H, W) float32 per-pixel noise of the projector coordinate, px (the RMS of the column's and the row's
         noise estimates, NaN where either is undecoded) for a phase family; None for a Gray code, whose
-        quantisation is no independent per-pixel noise (:func:`procam.samples.window_means` then measures it)."""
+        quantisation is no independent per-pixel noise (:func:`procam.correspond.samples.window_means` then measures it)."""
         if self.sigma_col is None or self.sigma_row is None:
             return None
         return np.sqrt(np.float32(0.5) * (self.sigma_col ** 2 + self.sigma_row ** 2)).astype(np.float32)

@@ -9,7 +9,7 @@ Model
     of a period-``P`` fringe is attenuated by ``exp(-2 pi^2 s^2 h^2 / P^2)``, ``s`` the combined projector and
     camera blur in projector pixels (:func:`waveform`).
 Phase error and its correction
-    The N-step estimate (:mod:`procam.phase.wrapped`) of such a waveform is the true phase plus an error of period
+    The N-step estimate (:mod:`procam.decode.phase.wrapped`) of such a waveform is the true phase plus an error of period
     ``2 pi / N`` in the phase (a harmonic ``h`` leaks into it when ``h = m N +- 1``): N times the fringe frequency.
     It is a known function of the phase for a given waveform and shift set, so :func:`phase_lut` tabulates the
     inverse, estimate -> phase, and the decoder looks it up per pixel.  (Where the waveform is so distorted that the
@@ -33,7 +33,7 @@ Measurement (:func:`fit_response`)
 Failure modes
     Pixels on the edges of the board's squares mix two albedos (their blocks disagree on ``beta``): the cost is
     trimmed and the noise fitted to medians.  Frames that are not what the description says make every ``gamma``
-    fit badly (:mod:`procam.phase.diagnose` names them).
+    fit badly (:mod:`procam.decode.phase.diagnose` names them).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Does a phase-family description match its frames?  :func:`check_description` judges the frames against what
-the description says they are, on the decoder's sample of pixels (:data:`procam.phase.SAMPLE`), and raises a
+the description says they are, on the decoder's sample of pixels (:data:`procam.decode.phase.SAMPLE`), and raises a
 one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagrees:
 
 * **modulation**: a phase block whose fringes are almost invisible (median modulation under
@@ -34,8 +34,8 @@ from dataclasses import replace
 import numpy as np
 
 from .. import decoded as _d
-from ..errors import CaptureError, ProcamWarning
-from ..patterns.phase import Fringe, PhaseSet
+from ...errors import CaptureError, ProcamWarning
+from ...patterns.phase import Fringe, PhaseSet
 from . import response as _resp
 
 MIN_RELATIVE_MODULATION = 0.15

@@ -1,4 +1,4 @@
-"""The model of a chessboard corner that :func:`procam.corners.fit_corners` fits, and its fit.
+"""The model of a chessboard corner that :func:`procam.board.corners.fit_corners` fits, and its fit.
 
 An X-junction -- the corner where two board edges cross -- blurred and unevenly lit::
 
@@ -8,7 +8,7 @@ with nine parameters per corner ``(px, py, t1, t2, s, a, b, gx, gy)`` (``n1, n2`
 angles ``t1, t2``).  :func:`window_samples` cuts the weighted pixels around every corner,
 :func:`level_and_contrast` gives the starting ``a, b`` in closed form, :func:`levenberg_marquardt` fits all
 corners at once (batched normal equations, one model + Jacobian evaluation per iteration).  Pure numpy
-(scipy's ``erf``); see :func:`procam.corners.fit_corners` for how the result is judged.
+(scipy's ``erf``); see :func:`procam.board.corners.fit_corners` for how the result is judged.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def window_samples(f, centre, radius):
 
 
 def model(P, X, Y, jac):
-    """:func:`procam.corners.fit_corners`' model at the samples (N, n) and, with ``jac``, its Jacobian (N, n, 9)."""
+    """:func:`procam.board.corners.fit_corners`' model at the samples (N, n) and, with ``jac``, its Jacobian (N, n, 9)."""
     from scipy.special import erf
 
     px, py, a1, a2, s, a, b, gx, gy = (P[:, k:k + 1] for k in range(9))

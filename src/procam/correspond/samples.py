@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .board import board_region
-from .view import Samples
+from ..board import board_region
+from ..view import Samples
 
 #: Default window side (camera pixels) of a sample.
 WINDOW = 11

@@ -217,7 +217,7 @@ def with_reasons(calib, reasons, *, stacklevel: int = 2):
     procam warning of their level. Unchanged when there are none (or only what it already says)."""
     import warnings as _warnings
 
-    from .errors import DegeneratePoseWarning, FailedEstimateWarning, WeakPoseWarning
+    from ..errors import DegeneratePoseWarning, FailedEstimateWarning, WeakPoseWarning
 
     new = [(lvl, r) for lvl, r in reasons if r not in calib.verdict_reasons]
     if not new:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._xjunction import level_and_contrast, levenberg_marquardt, window_samples
-from . import choices
+from .. import choices
 
 DETECTORS = choices.DETECTORS
 REFINERS = choices.REFINERS

@@ -12,12 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._threads import single_threaded_blas
-from .stats import rms
-from .board import board_region
-from .decode import DecodeResult
-from .view import CORNER_REASONS
-from . import choices
+from .._threads import single_threaded_blas
+from ..stats import rms
+from ..board import board_region
+from ..decode import DecodeResult
+from ..view import CORNER_REASONS
+from .. import choices
 
 ESTIMATORS = choices.ESTIMATORS
 
