@@ -192,7 +192,7 @@ def test_no_command_has_two_options_with_one_name():
 
 def test_commands_that_read_poses_share_the_capture_options():
     """calibrate, check, correspond, evaluate, experiment and report take the same capture-processing options
-    with the same defaults (one definition: ``cli._app.POSE_OPTIONS``)."""
+    with the same defaults (one definition: ``cli._options.POSE_OPTIONS``)."""
     import typer.main
 
     from procam.cli import app

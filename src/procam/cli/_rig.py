@@ -135,7 +135,7 @@ def _check_rig_dir(out_dir: Path, rig, order: str, force: bool) -> None:
     of them holds a file procam did not write under a name it writes (raises :class:`~procam.errors.OutputError`)."""
     from .. import capture, patterns
     from ..io.folders import prepare_output_dir
-    from ._app import output_path
+    from ._paths import output_path
 
     prepare_output_dir(out_dir, "simulate", force=force, option="OUT_DIR", create=False)
     for name in (capture.RIG_MANIFEST, "truth.json"):

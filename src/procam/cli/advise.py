@@ -11,9 +11,9 @@ from typing import Optional
 
 import typer
 
-from ._app import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt,
-                   LiveMaxFramesOpt, LiveTargetOpt, SeedOpt, app, camera_settings, fail, live_limits, parse_board, say,
-                   text_on_stderr, user_errors)
+from ._app import app, fail, say, text_on_stderr, user_errors
+from ._options import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt,
+                       LiveMaxFramesOpt, LiveTargetOpt, SeedOpt, camera_settings, live_limits, parse_board)
 from ._live import live_advice
 
 

@@ -6,7 +6,9 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, app, fail, number, output_dir, output_path, say, user_errors
+from ._app import app, fail, say, user_errors
+from ._options import ForceOpt, number
+from ._paths import output_dir, output_path
 
 
 @app.command("blend")

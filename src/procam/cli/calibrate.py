@@ -8,9 +8,10 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import (FIGURE_SUFFIXES, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt,
-                   StepOpt, app, choice, console, distinct_poses, fail, optional_size, output_path, parse_board,
-                   number, pose_options, preload, say, user_errors, value, warn, with_pose_options)
+from ._app import app, console, fail, preload, say, user_errors, warn
+from ._options import (BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, choice, number,
+                       optional_size, parse_board, pose_options, value, with_pose_options)
+from ._paths import FIGURE_SUFFIXES, distinct_poses, output_path
 
 Cod = choice("Cod", choices.COD_MODES)
 DistModel = choice("DistModel", choices.DIST_CHOICES)

@@ -12,10 +12,11 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
-                   LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
-                   SeedOpt, StepsOpt, app, camera_settings, console, err_console, fail, is_tty, live_limits, number,
-                   parse_board, parse_size, pattern_sequence, phase_keywords, plain, text_on_stderr, user_errors, value)
+from ._app import app, console, err_console, fail, is_tty, plain, text_on_stderr, user_errors
+from ._options import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
+                       LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
+                       SeedOpt, StepsOpt, camera_settings, live_limits, number, parse_board, parse_size,
+                       pattern_sequence, phase_keywords, value)
 
 
 def _list_devices(camera: str | None) -> None:

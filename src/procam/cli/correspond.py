@@ -6,8 +6,10 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, optional_size,
-                   output_path, parse_board, pose_options, say, user_errors, value, warn, with_pose_options)
+from ._app import app, say, user_errors, warn
+from ._options import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size, parse_board, pose_options,
+                       value, with_pose_options)
+from ._paths import FIGURE_SUFFIXES, output_path
 
 
 @app.command("correspond")

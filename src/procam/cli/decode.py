@@ -6,8 +6,10 @@ from pathlib import Path
 
 import typer
 
-from ._app import (FIGURE_SUFFIXES, ContrastOpt, DecodeMethod, DecodeOpt, OrderOpt, ProjectorOpt, ShadowOpt, StepOpt,
-                   app, fail, number, optional_size, output_path, pose_options, say, user_errors, value, warn)
+from ._app import app, fail, say, user_errors, warn
+from ._options import (ContrastOpt, DecodeMethod, DecodeOpt, OrderOpt, ProjectorOpt, ShadowOpt, StepOpt, number,
+                       optional_size, pose_options, value)
+from ._paths import FIGURE_SUFFIXES, output_path
 
 
 @app.command("decode")

@@ -9,7 +9,9 @@ from pathlib import Path
 
 import typer
 
-from ._app import ForceOpt, SimPreset, app, console, fail, number, output_dir, output_path, say, user_errors, value
+from ._app import app, console, fail, say, user_errors
+from ._options import ForceOpt, SimPreset, number, value
+from ._paths import output_dir, output_path
 
 #: The files the demo writes beside its capture folder (name, suffix).
 DEMO_FILES = (("calib.json", ".json"), ("calib.yml", ".yml"), ("decode.png", ".png"), ("corners.png", ".png"))

@@ -7,9 +7,10 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, assumed_size, console, distinct_poses,
-                   fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value, warn,
-                   with_pose_options)
+from ._app import app, console, fail, plain, say, user_errors, warn
+from ._options import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size, parse_board, pose_options,
+                       value, with_pose_options)
+from ._paths import assumed_size, distinct_poses, output_path
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
     from rich.table import Table

@@ -8,9 +8,10 @@ from typing import TYPE_CHECKING
 import typer
 
 from ..style import fmt_number
-from ._app import (BoardOpt, DistModel, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, console, distinct_poses,
-                   err_console, fail, is_tty, optional_size, output_dir, parse_board, plain, pose_options, say,
-                   user_errors, value, with_pose_options)
+from ._app import app, console, err_console, fail, is_tty, plain, say, user_errors
+from ._options import (BoardOpt, DistModel, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size,
+                       parse_board, pose_options, value, with_pose_options)
+from ._paths import distinct_poses, output_dir
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
     from rich.table import Table
@@ -115,7 +116,7 @@ def experiment_cmd(
             fail(f"{name} must be one of {', '.join(DIST_CHOICES)}, got {d!r}")
     size = optional_size(projector)
     if html_report is not None:
-        from ._app import output_path
+        from ._paths import output_path
 
         output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
     bar = (Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

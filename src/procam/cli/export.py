@@ -10,8 +10,9 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import (ForceOpt, OrderOpt, ProjectorOpt, StepOpt, app, choice, fail, load_pose, number, optional_size,
-                   output_dir, output_path, say, user_errors, value, warn)
+from ._app import app, fail, say, user_errors, warn
+from ._options import ForceOpt, OrderOpt, ProjectorOpt, StepOpt, choice, number, optional_size, value
+from ._paths import load_pose, output_dir, output_path
 
 Format = choice("Format", choices.EXPORT_FORMATS)
 World = choice("World", choices.WORLDS)

@@ -7,8 +7,9 @@ from pathlib import Path
 import typer
 
 from ..errors import OutputError
-from ._app import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt, StepsOpt,
-                   WhiteBlackOpt, app, fail, parse_size, pattern_sequence, say, user_errors, value)
+from ._app import app, fail, say, user_errors
+from ._options import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt,
+                       StepsOpt, WhiteBlackOpt, parse_size, pattern_sequence, value)
 
 #: The largest projector ``procam patterns`` writes a sequence for (pixels): 16K x 8K.
 MAX_PIXELS = 16384 * 8640

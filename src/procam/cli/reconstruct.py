@@ -9,8 +9,9 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, assumed_size, choice, console, fail, load_pose, output_path,
-                   parse_size, plain, say, user_errors, value, warn)
+from ._app import app, console, fail, plain, say, user_errors, warn
+from ._options import OrderOpt, ProjectorOpt, StepOpt, choice, parse_size, value
+from ._paths import assumed_size, load_pose, output_path
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 

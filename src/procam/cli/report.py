@@ -7,8 +7,10 @@ from typing import Optional
 
 import typer
 
-from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_board,
-                   pose_options, say, user_errors, value, warn, with_pose_options)
+from ._app import app, console, fail, say, user_errors, warn
+from ._options import (OrderOpt, ProjectorOpt, StepOpt, optional_size, parse_board, pose_options, value,
+                       with_pose_options)
+from ._paths import output_path
 
 REPORT_SUFFIXES = (".html", ".htm")
 

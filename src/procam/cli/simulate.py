@@ -8,9 +8,9 @@ import typer
 
 from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
-from ._app import (ComplementaryOpt, CountsOpt, DeviceName, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt,
-                   SimPreset, StepsOpt, WhiteBlackOpt, app, console, fail, is_tty, number, parse_pose,
-                   pattern_sequence, say, user_errors, value, warn)
+from ._app import app, console, fail, is_tty, say, user_errors, warn
+from ._options import (ComplementaryOpt, CountsOpt, DeviceName, Family, FamilyOpt, ForceOpt, InverseOpt, Order,
+                       PeriodOpt, SimPreset, StepsOpt, WhiteBlackOpt, number, parse_pose, pattern_sequence, value)
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1

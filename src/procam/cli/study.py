@@ -10,8 +10,9 @@ import typer
 
 from ..style import fmt_number
 from ..errors import ProcamError
-from ._app import (DeviceName, ForceOpt, app, console, err_console, fail, number, output_dir, output_path, plain, say,
-                   user_errors, value)
+from ._app import app, console, err_console, fail, plain, say, user_errors
+from ._options import DeviceName, ForceOpt, number, value
+from ._paths import output_dir, output_path
 
 #: Most cell-trials (cells x (trials + 1)) a study may run: about a day of one core at ~1 ms per trial.
 MAX_WORK = 10**8

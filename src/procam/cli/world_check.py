@@ -12,8 +12,10 @@ from typing import Optional
 
 import typer
 
-from ._app import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, SeedOpt, SimPreset, SquareOpt, app, camera_settings,
-                   fail, number, output_path, parse_board, parse_pose, say, user_errors, value)
+from ._app import app, fail, say, user_errors
+from ._options import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, SeedOpt, SimPreset, SquareOpt, camera_settings,
+                       number, parse_board, parse_pose, value)
+from ._paths import output_path
 
 
 @app.command("world-check")

@@ -1,0 +1,328 @@
+"""The options commands share, defined once with one help text and one set of bounds each, and their parsers.
+
+Groups: the board and the capture-reading options (``--board``, ``--square``, ``--projector``, the decoder's,
+the detector's and the correspondence's: :func:`with_pose_options`), the pattern sequence of the commands that
+write one (``--family`` ...), the camera settings and live advice of the commands that open a camera
+(``--exposure``, ``--gain``, ``--seed`` ...). Every number a user types is checked by :func:`number` (finite,
+in range, one line naming the option) before any work. Choice lists come from :mod:`procam.choices`.
+"""
+
+from __future__ import annotations
+
+import enum
+import functools
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from .. import choices
+from ..errors import ProcamError
+from ._app import fail
+
+
+def choice(name: str, values) -> type[enum.Enum]:
+    """A str Enum of ``values`` for a typer option: ``--help`` lists them and typer rejects anything else."""
+    return enum.Enum(name, {v: v for v in values}, type=str)
+
+
+def value(x):
+    """The plain value of a choice option (None stays None)."""
+    return getattr(x, "value", x)
+
+
+Order = choice("Order", choices.PATTERN_ORDERS)
+DecodeMethod = choice("DecodeMethod", choices.DECODE_METHODS)
+Detector = choice("Detector", choices.DETECTORS)
+Refiner = choice("Refiner", choices.REFINERS)
+Estimator = choice("Estimator", choices.ESTIMATORS)
+DistModel = choice("DistModel", choices.DIST_CHOICES)
+SimPreset = choice("SimPreset", choices.SIM_PRESETS)
+DeviceName = choice("DeviceName", choices.DEVICES)
+BackgroundMode = choice("BackgroundMode", choices.BACKGROUND_MODES)
+
+_SIZE = re.compile(r"^\s*(\d+)\s*[xX×,]\s*(\d+)\s*$")
+
+
+def parse_size(text: str, what: str = "size", *, lo: int = 2, hi: int = 32768) -> tuple[int, int]:
+    """Parse ``"1920x1080"`` into ``(1920, 1080)``; a clear error for anything else or a size outside
+    ``lo`` .. ``hi`` pixels per side."""
+    m = _SIZE.match(text or "")
+    if not m:
+        fail(f"{what} must look like WIDTHxHEIGHT (e.g. 1920x1080), got {text!r}")
+    w, h = int(m.group(1)), int(m.group(2))
+    if not (lo <= w <= hi and lo <= h <= hi):
+        fail(f"{what} {text}: each side must be from {lo} to {hi}")
+    return w, h
+
+
+def optional_size(text: str | None, what: str = "--projector") -> tuple[int, int] | None:
+    """:func:`parse_size` for an optional option (None stays None)."""
+    return parse_size(text, what) if text else None
+
+
+def parse_board(text: str, square: float):
+    """``--board COLSxROWS`` and ``--square`` -> a :class:`procam.board.Board` (one-line errors)."""
+    from .. import board as _board
+
+    lo, hi = _board.CORNERS_PER_SIDE
+    m = _SIZE.match(text or "")
+    if not m:
+        fail(f"--board must look like COLSxROWS of inner corners (e.g. 10x6), got {text!r}")
+    cols, rows = int(m.group(1)), int(m.group(2))
+    if not (lo <= cols <= hi and lo <= rows <= hi):
+        fail(f"--board {text}: each side must be from {lo} to {hi} inner corners (a board of 11x7 squares has "
+             "10x6 inner corners)")
+    if not (math.isfinite(square) and square > 0):
+        fail(f"--square must be a positive length (the board's square size, e.g. 24 for mm), got {square}")
+    try:
+        return _board.Board(cols, rows, square)
+    except ProcamError as e:
+        fail(f"--square: {e}")
+
+
+def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
+                 refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
+                 min_corners: int = 10, background: bool = True):
+    """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
+    from .. import correspond as _corr
+    from .. import decode as _decode
+    from .. import pipeline
+
+    for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
+        if not (math.isfinite(v) and 0 <= v <= 255):
+            fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
+    if refine_window is not None and not 0 <= refine_window <= 100:
+        fail(f"--refine-window must be from 0 to 100 px, got {refine_window}")
+    if not 6 <= window <= 1000:
+        fail(f"--window must be from 6 to 1000 camera px, got {window}")
+    dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
+    corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "trimmed")
+    return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
+                                refine=value(refine) or "fit", corners=corners, min_corners=min_corners,
+                                background=background)
+
+
+# Options shared by the commands that read capture folders (one definition, one help text each).
+BoardOpt = Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6.")]
+SquareOpt = Annotated[float, typer.Option("--square", help="Square size; the length unit of every output (e.g. mm).")]
+ProjectorOpt = Annotated[Optional[str], typer.Option(
+    "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: the folder's patterns.json).")]
+OrderOpt = Annotated[Optional[Order], typer.Option(
+    "--order", help="Sequence order (default: the folder's patterns.json, else opencv).")]
+StepOpt = Annotated[Optional[int], typer.Option(
+    "--step", min=1, max=64,
+    help="Projector pixels per Gray code (kamino410's graycode_step; default: patterns.json's, else 1).")]
+DecodeOpt = Annotated[DecodeMethod, typer.Option("--decode", help="Bit classifier.")]
+ShadowOpt = Annotated[float, typer.Option(
+    "--shadow-threshold", help="Minimum white - black for a lit pixel, 8-bit grey levels (scaled for 16-bit).")]
+ContrastOpt = Annotated[float, typer.Option(
+    "--contrast-threshold", help="Minimum |pattern - inverse| for a certain bit, 8-bit grey levels.")]
+DetectorOpt = Annotated[Detector, typer.Option("--detector", help="Chessboard corner detector.")]
+RefineOpt = Annotated[Optional[int], typer.Option(
+    "--refine-window", help="Half-window of the corner refinement, camera px (default: 15 for fit, 11 for subpix).")]
+RefinerOpt = Annotated[Refiner, typer.Option(
+    "--corner-refine", help="Corner refinement: fit (a blurred X-corner model with uneven lighting; default), subpix "
+                     "(OpenCV cornerSubPix, the paper's) or none.")]
+WindowOpt = Annotated[int, typer.Option("--window", help="Local-homography window side, camera px.")]
+EstimatorOpt = Annotated[Estimator, typer.Option("--estimator", help="Local-homography fit.")]
+BackgroundOpt = Annotated[BackgroundMode, typer.Option(
+    "--background", help="Single-pose: the decoded scene behind the board. off: the board alone calibrates the "
+    "projector; free (default), auto, check: the background is the second plane of the projector's dense fit (with a "
+    "view without dense samples: free lifts the paper's u0p = W/2 where the background determines it, auto only when "
+    "it refutes it, check only says so).")]
+
+# The camera settings and live advice of the commands that open a camera (capture, advise): one definition, one
+# set of bounds each (checked by :func:`camera_settings` and :func:`live_limits` before any device is opened).
+ExposureOpt = Annotated[Optional[float], typer.Option(
+    "--exposure", help="Manual camera exposure in ms (default: leave the camera's setting; switch its auto exposure "
+    "off yourself then).")]
+GainOpt = Annotated[Optional[float], typer.Option("--gain", help="Camera gain in the camera's unit (GenICam: dB).")]
+CameraSizeOpt = Annotated[Optional[str], typer.Option(
+    "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV).")]
+SeedOpt = Annotated[int, typer.Option("--seed", help="The simulator's noise seed (--virtual, --camera virtual): "
+                                      "the same seed gives the same frames.")]
+LiveJsonOpt = Annotated[bool, typer.Option(
+    "--json", help="Live advice: one JSON line per frame on stdout instead of the preview window.")]
+LiveAutoOpt = Annotated[bool, typer.Option(
+    "--auto", help="Live advice: go on by itself as soon as the pose is good and the board still.")]
+LiveCalibrationOpt = Annotated[Optional[Path], typer.Option(
+    "--calibration", help="Live advice: a calibration of this camera (procam JSON or OpenCV YAML): its "
+    "intrinsics, and with R, T the projector side.")]
+LiveTargetOpt = Annotated[float, typer.Option(
+    "--target", help="Live advice: a pose is good when the predicted std of f_c and f_p are at most this % of f.")]
+LiveMaxFramesOpt = Annotated[Optional[int], typer.Option(
+    "--max-frames", help="Live advice: go on after N frames at the latest (scripts).")]
+#: Bounds of the options above (exposure in ms, gain in the camera's unit, frames, seed).
+EXPOSURE_MS = (0.0, 60_000.0)
+GAIN = (0.0, 1000.0)
+MAX_FRAMES = 10_000_000
+MAX_SEED = 2**32 - 1 - 99  # a session of up to 99 poses seeds pose k with seed + k
+
+
+def parse_pose(text: str) -> tuple[float, float, float]:
+    """``--pose PSI,NU[,PHI]``: the board's angles in degrees (phi 0 when left out), checked (one-line errors)."""
+    parts = [p for p in text.replace(";", ",").split(",") if p.strip()] if text else []
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        vals = []
+    if len(vals) not in (2, 3):
+        fail(f"--pose must be PSI,NU[,PHI] in degrees (e.g. 15,12,0), got {text!r}")
+    if not all(math.isfinite(v) for v in vals):
+        fail(f"--pose angles must be finite numbers of degrees, got {text!r}")
+    if len(vals) == 2:
+        vals.append(0.0)
+    if any(abs(v) >= 80 for v in vals[:2]):
+        fail(f"--pose angles psi and nu must be within +-80 degrees, got {text!r}")
+    if abs(vals[2]) > 360:
+        fail(f"--pose angle phi must be within +-360 degrees, got {text!r}")
+    return vals[0], vals[1], vals[2]
+
+
+def camera_settings(exposure, gain, camera_size, seed) -> tuple[int, int] | None:
+    """Check the camera options of ``capture``/``advise`` (one line naming the option when one is out of range);
+    returns the camera size ``(width, height)`` or None."""
+    number(exposure, "--exposure", lo=EXPOSURE_MS[0], hi=EXPOSURE_MS[1], lo_open=True, unit=" ms",
+           what="a finite number")
+    number(gain, "--gain", lo=GAIN[0], hi=GAIN[1], what="a finite number")
+    number(seed, "--seed", lo=0, hi=MAX_SEED, what="a seed")
+    return parse_size(camera_size, "--camera-size") if camera_size else None
+
+
+def live_limits(max_frames) -> None:
+    """Check ``--max-frames`` (the other live-advice numbers: :func:`procam.acquire.live.advisor_options`)."""
+    number(max_frames, "--max-frames", lo=1, hi=MAX_FRAMES, what="a frame count")
+
+
+# The pattern sequence of the commands that write one (patterns, simulate): docs/patterns.md
+Family = choice("Family", choices.PATTERN_FAMILIES)
+FamilyOpt = Annotated[Family, typer.Option(
+    "--family", help="Pattern family: gray (Gray codes), phase (N-step fringes + a unit-frequency cue), "
+                     "heterodyne (three frequencies) or gray-phase (Gray code + fringes); docs/patterns.md.")]
+StepsOpt = Annotated[Optional[int], typer.Option(
+    "--steps", help="Phase families: phase shifts per block, N >= 3 (default 8 for phase and heterodyne, 4 for "
+                "gray-phase).")]
+PeriodOpt = Annotated[Optional[list[float]], typer.Option(
+    "--period", help="phase, gray-phase: fringe period in projector px (default: phase 16 and 128 under the "
+                     "cue, gray-phase 16); phase: repeat it for more levels below the cue.")]
+CountsOpt = Annotated[Optional[str], typer.Option(
+    "--counts", help="heterodyne: the three counts of periods across the panel, e.g. 70,64,59 (the default).")]
+InverseOpt = Annotated[bool, typer.Option("--inverse/--no-inverse", help="gray-phase: every Gray bit followed by its "
+                                          "inverse.")]
+ComplementaryOpt = Annotated[bool, typer.Option(
+    "--complementary/--no-complementary", help="gray-phase: a complementary Gray bit (removes stripe-edge errors).")]
+WhiteBlackOpt = Annotated[bool, typer.Option("--white-black/--no-white-black",
+                                             help="Phase families: end with a white and a black frame.")]
+
+
+def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None, period=None, counts=None,
+                     inverse: bool = True, complementary: bool = True, white_black: bool = True):
+    """The sequence (:func:`procam.patterns.pattern_set`) of the pattern options, validated (one-line errors)."""
+    from .. import patterns
+
+    family = value(family)
+    if family == "gray":
+        given = [o for o, v in (("--steps", steps), ("--period", period), ("--counts", counts)) if v]
+        if given:
+            fail(f"{', '.join(given)} appl{'y' if len(given) > 1 else 'ies'} to the phase families; add --family "
+                 "phase, heterodyne or gray-phase")
+        try:
+            return patterns.pattern_set(*size, value(order), step)
+        except ValueError as e:
+            fail(f"--step {step}: {e}; use a smaller --step")
+    if step != 1:
+        fail("--step applies to the Gray family only")
+    kw = phase_keywords(family, steps=steps, period=period, counts=counts, inverse=inverse,
+                        complementary=complementary, white_black=white_black)
+    try:
+        return patterns.pattern_set(*size, family=family, **kw)
+    except ValueError as e:
+        fail(f"the {family} sequence for a {size[0]}x{size[1]} projector: {e}")
+
+
+def phase_keywords(family, *, steps=None, period=None, counts=None, inverse: bool = True, complementary: bool = True,
+                   white_black: bool = True) -> dict:
+    """The keywords of :func:`procam.patterns.phase_set` for a phase ``family`` from the pattern options, each
+    validated (one-line errors)."""
+    family = value(family)
+    kw = {"inverse": inverse, "complementary": complementary, "white_black": white_black}
+    if steps is not None:
+        kw["steps"] = int(number(steps, "--steps", lo=3, hi=64, what="a number of phase shifts"))
+    for p in period or ():
+        number(p, "--period", lo=2, hi=1e6, unit=" projector px", what="a fringe period")
+    if period and family == "heterodyne":
+        fail("--period: the heterodyne's periods are given as --counts (periods across the panel)")
+    if counts is not None and family != "heterodyne":
+        fail("--counts applies to --family heterodyne")
+    if family == "heterodyne" and counts is not None:
+        try:
+            kw["periods"] = tuple(float(v) for v in counts.replace(";", ",").split(","))
+        except ValueError:
+            fail(f"--counts must be three numbers like 70,64,59, got {counts!r}")
+        if len(kw["periods"]) != 3 or not all(math.isfinite(v) and v > 1 for v in kw["periods"]):
+            fail(f"--counts must be three numbers above 1 like 70,64,59, got {counts!r}")
+    elif period:
+        if family == "gray-phase" and len(period) > 1:
+            fail("--period: gray-phase has one fringe period")
+        kw["period" if len(period) == 1 else "periods"] = period[0] if len(period) == 1 else tuple(period)
+    return kw
+
+#: The capture-processing options of :func:`pose_options`: (parameter name, annotation, default).
+POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", ShadowOpt, 10.0),
+                ("contrast", ContrastOpt, 3.0), ("detector", DetectorOpt, Detector.auto),
+                ("refine_window", RefineOpt, None), ("refine", RefinerOpt, Refiner.fit), ("window", WindowOpt, 60),
+                ("estimator", EstimatorOpt, Estimator.trimmed))
+
+
+def with_pose_options(fn):
+    """Give a command that reads pose folders the shared capture-processing options (:data:`POSE_OPTIONS`:
+    ``--decode``, ``--shadow-threshold``, ..., ``--estimator``): one definition, the same defaults everywhere.
+
+    The command declares ``**pose_args`` and receives them there, ready for
+    ``pose_options(**pose_args, min_corners=...)``.
+    """
+    import inspect
+
+    sig = inspect.signature(fn, eval_str=True)  # typer reads a given __signature__ as it is
+    params = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    params += [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=annotation)
+               for name, annotation, default in POSE_OPTIONS]
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        return fn(*args, **kwargs)
+
+    wrapper.__signature__ = sig.replace(parameters=params)
+    return wrapper
+
+
+def number(value, option: str, *, lo: float | None = None, hi: float | None = None, lo_open: bool = False,
+           unit: str = "", what: str = "a number"):
+    """``value`` of ``option`` if it is finite and within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), else a
+    one-line error that says the range.  None (an option not given) stays None."""
+    if value is None:
+        return None
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and lo is not None:
+        ok = value > lo if lo_open else value >= lo
+    if ok and hi is not None:
+        ok = value <= hi
+    if not ok:
+        def g(x):
+            return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"
+
+        rng = []
+        if lo is not None:
+            rng.append(f"{'>' if lo_open else '>='} {g(lo)}")
+        if hi is not None:
+            rng.append(f"<= {g(hi)}")
+        fail(f"{option} must be {what}{' ' + ' and '.join(rng) if rng else ''}{unit}, got {value}")
+    return value
+
+
+ForceOpt = Annotated[bool, typer.Option(
+    "--force", help="Write into a folder that holds other files (procam still never overwrites or deletes a file "
+                    "it did not write).")]
