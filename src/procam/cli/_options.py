@@ -218,11 +218,24 @@ WhiteBlackOpt = Annotated[bool, typer.Option("--white-black/--no-white-black",
                                              help="Phase families: end with a white and a black frame.")]
 
 
+GrayOrderOpt = Annotated[Order, typer.Option("--order", help="Gray family: sequence order.")]
+GrayStepOpt = Annotated[int, typer.Option(
+    "--step", help="Gray family: projector pixels per code, 1-64 (>1 against moire, as kamino410's graycode_step).")]
+#: The pattern options of the commands that write or show a sequence: (parameter, option, default).
+PATTERN_OPTIONS = (("order", GrayOrderOpt, Order.opencv), ("step", GrayStepOpt, 1), ("family", FamilyOpt, Family.gray),
+                   ("steps", StepsOpt, None), ("period", PeriodOpt, None), ("counts", CountsOpt, None),
+                   ("inverse", InverseOpt, True), ("complementary", ComplementaryOpt, True),
+                   ("white_black", WhiteBlackOpt, True))
+#: Most projector pixels per Gray code (``--step``).
+MAX_STEP = 64
+
+
 def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None, period=None, counts=None,
                      inverse: bool = True, complementary: bool = True, white_black: bool = True):
     """The sequence (:func:`procam.patterns.pattern_set`) of the pattern options, validated (one-line errors)."""
     from .. import patterns
 
+    number(step, "--step", lo=1, hi=MAX_STEP, what="a whole number of projector pixels")
     family = value(family)
     if family == "gray":
         given = [o for o, v in (("--steps", steps), ("--period", period), ("--counts", counts)) if v]
@@ -277,19 +290,15 @@ POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", Sh
                 ("estimator", EstimatorOpt, Estimator.trimmed))
 
 
-def with_pose_options(fn):
-    """Give a command that reads pose folders the shared capture-processing options (:data:`POSE_OPTIONS`:
-    ``--decode``, ``--shadow-threshold``, ..., ``--estimator``): one definition, the same defaults everywhere.
-
-    The command declares ``**pose_args`` and receives them there, ready for
-    ``pose_options(**pose_args, min_corners=...)``.
-    """
+def _with_group(fn, group):
+    """``fn`` with the keyword-only options of ``group`` (``(name, annotation, default)``) added to its signature;
+    it receives them in its ``**kwargs``."""
     import inspect
 
     sig = inspect.signature(fn, eval_str=True)  # typer reads a given __signature__ as it is
     params = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
     params += [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=annotation)
-               for name, annotation, default in POSE_OPTIONS]
+               for name, annotation, default in group]
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -297,6 +306,28 @@ def with_pose_options(fn):
 
     wrapper.__signature__ = sig.replace(parameters=params)
     return wrapper
+
+
+def with_pose_options(fn):
+    """Give a command that reads pose folders the shared capture-processing options (:data:`POSE_OPTIONS`:
+    ``--decode``, ``--shadow-threshold``, ..., ``--estimator``): one definition, the same defaults everywhere.
+
+    The command declares ``**pose_args`` and receives them there, ready for
+    ``pose_options(**pose_args, min_corners=...)``.
+    """
+    return _with_group(fn, POSE_OPTIONS)
+
+
+def with_pattern_options(*, leave_out: tuple = ()):
+    """Give a command that writes or shows a pattern sequence (patterns, simulate, capture) the pattern options
+    (:data:`PATTERN_OPTIONS`: ``--order``, ``--step``, ``--family`` ... ``--white-black``) but those it leaves out:
+    one definition, one help text, one set of bounds (checked by :func:`pattern_sequence`).
+
+    The command declares ``**pattern_args`` and receives them there, ready for ``pattern_sequence(size,
+    **pattern_args)``.
+    """
+    group = tuple(o for o in PATTERN_OPTIONS if o[0] not in leave_out)
+    return lambda fn: _with_group(fn, group)
 
 
 def number(value, option: str, *, lo: float | None = None, hi: float | None = None, lo_open: bool = False,

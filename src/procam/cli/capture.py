@@ -13,10 +13,26 @@ import typer
 
 from ..errors import ProcamError
 from ._app import app, console, err_console, fail, is_tty, plain, text_on_stderr, user_errors
-from ._options import (CameraSizeOpt, ComplementaryOpt, CountsOpt, ExposureOpt, Family, FamilyOpt, GainOpt, InverseOpt,
-                       LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt, LiveMaxFramesOpt, LiveTargetOpt, Order, PeriodOpt,
-                       SeedOpt, StepsOpt, camera_settings, live_limits, number, parse_board, parse_size,
-                       pattern_sequence, phase_keywords, value)
+from ._options import (
+    CameraSizeOpt,
+    ExposureOpt,
+    GainOpt,
+    LiveAutoOpt,
+    LiveCalibrationOpt,
+    LiveJsonOpt,
+    LiveMaxFramesOpt,
+    LiveTargetOpt,
+    SeedOpt,
+    camera_settings,
+    live_limits,
+    number,
+    parse_board,
+    parse_size,
+    pattern_sequence,
+    phase_keywords,
+    value,
+    with_pattern_options,
+)
 
 
 def _list_devices(camera: str | None) -> None:
@@ -51,6 +67,7 @@ def _list_devices(camera: str | None) -> None:
 
 @app.command("capture")
 @user_errors
+@with_pattern_options(leave_out=("white_black",))
 def capture_cmd(
     out_dir: Optional[Path] = typer.Argument(None, help="The pose folder to create (with --poses N: the folder that "
                                              "gets pose01 ... poseN). Must not exist, or be empty."),
@@ -73,15 +90,6 @@ def capture_cmd(
                                            "default 1: lengths in squares."),
     board: Optional[str] = typer.Option(None, "--board", help="Inner corners COLSxROWS: the pre-flight finds the board "
                                         "and judges the exposure on it (default: on the projector's light)."),
-    order: Order = typer.Option(Order.opencv, "--order", help="Gray family: sequence order."),
-    step: int = typer.Option(1, "--step", help="Gray family: projector pixels per Gray code (kamino410's "
-                             "graycode_step)."),
-    family: FamilyOpt = Family.gray,
-    steps: StepsOpt = None,
-    period: PeriodOpt = None,
-    counts: CountsOpt = None,
-    inverse: InverseOpt = True,
-    complementary: ComplementaryOpt = True,
     timeout: float = typer.Option(60.0, "--timeout", help="folder camera: seconds to wait for each new file."),
     keep_failed: bool = typer.Option(False, "--keep-failed", help="Keep the frames of a failed capture in a hidden "
                                      "partial folder."),
@@ -100,6 +108,7 @@ def capture_cmd(
     rig_spec: Optional[str] = typer.Option(None, "--rig", help="A rig pose: projectors NAME=DISPLAY,... shown in "
                                            "turn, the board still; OUT_DIR gets one sub-folder per projector and "
                                            "rig.json (docs/rigs.md). --virtual: two names."),
+    **pattern_args,
 ):
     """Show the pattern sequence full screen on the projector (Gray codes, or a phase family with --family,
     docs/patterns.md), grab and check one camera frame per pattern, and write a pose folder that decode/calibrate
@@ -127,9 +136,7 @@ def capture_cmd(
     number(timeout, "--timeout", lo=0, hi=3600, lo_open=True, unit=" s", what="a finite number")
     cam_size = camera_settings(exposure, gain, camera_size, seed)
     live_limits(max_frames)
-    order = value(order)
-    if not 1 <= step <= 64:
-        fail(f"--step must be between 1 and 64, got {step}")
+    order, step, family = value(pattern_args["order"]), pattern_args["step"], pattern_args["family"]
     board_size = parse_size(board, "--board") if board else None
     brd = parse_board(board, 1.0 if square is None else square) if board else None
     # --rig (issue 27): checked here, captured by procam.acquire.rig (cli/_rig.py)
@@ -143,11 +150,10 @@ def capture_cmd(
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
     # the sequence, checked at the projector's size (or a 1920x1080 one until the display is known)
-    pattern_sequence(size or (1920, 1080), family=family, order=order, step=step, steps=steps, period=period,
-                     counts=counts, inverse=inverse, complementary=complementary)
+    pattern_sequence(size or (1920, 1080), **pattern_args)
     family = value(family)
-    phase = {} if family == "gray" else phase_keywords(family, steps=steps, period=period, counts=counts,
-                                                       inverse=inverse, complementary=complementary)
+    phase = {} if family == "gray" else phase_keywords(**{k: v for k, v in pattern_args.items()
+                                                          if k not in ("order", "step")})
     phase.pop("white_black", None)  # a captured sequence always ends with white and black
     options = CaptureOptions(order=order, step=step, family=family, phase=phase, retries=retries, board=board_size,
                              keep_failed=keep_failed, settle_s=(settle_ms if settle_ms is not None else (0.0 if virtual else 250.0)) / 1000.0)

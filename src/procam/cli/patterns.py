@@ -8,8 +8,7 @@ import typer
 
 from ..errors import OutputError
 from ._app import app, fail, say, user_errors
-from ._options import (ComplementaryOpt, CountsOpt, Family, FamilyOpt, ForceOpt, InverseOpt, Order, PeriodOpt,
-                       StepsOpt, WhiteBlackOpt, parse_size, pattern_sequence, value)
+from ._options import ForceOpt, parse_size, pattern_sequence, value, with_pattern_options
 
 #: The largest projector ``procam patterns`` writes a sequence for (pixels): 16K x 8K.
 MAX_PIXELS = 16384 * 8640
@@ -17,22 +16,13 @@ MAX_PIXELS = 16384 * 8640
 
 @app.command("patterns")
 @user_errors
+@with_pattern_options()
 def patterns_cmd(
     projector: str = typer.Option(..., "--projector", "-p", help="Projector size WIDTHxHEIGHT, e.g. 1920x1080."),
     out: Path = typer.Option(..., "-o", "--out", help="Output folder (created if missing; must be new, empty or "
                                                      "an earlier 'procam patterns' output)."),
-    order: Order = typer.Option(Order.opencv, "--order", help="Gray family: sequence order."),
-    step: int = typer.Option(1, "--step", min=1, max=64,
-                             help="Gray family: projector pixels per code (>1 against moire, as kamino410's "
-                                  "graycode_step)."),
-    family: FamilyOpt = Family.gray,
-    steps: StepsOpt = None,
-    period: PeriodOpt = None,
-    counts: CountsOpt = None,
-    inverse: InverseOpt = True,
-    complementary: ComplementaryOpt = True,
-    white_black: WhiteBlackOpt = True,
     force: ForceOpt = False,
+    **pattern_args,
 ):
     """Write a pattern sequence for a projector as zero-padded PNGs plus patterns.json (Gray codes by default; a
     phase family with --family, docs/patterns.md)."""
@@ -43,9 +33,8 @@ def patterns_cmd(
     if w * h > MAX_PIXELS:
         fail(f"--projector {projector}: {w * h / 1e6:.0f} Mpx is larger than any projector (16384x8640); give the "
              "projector's native resolution")
-    order = value(order)
-    ps = pattern_sequence((w, h), family=family, order=order, step=step, steps=steps, period=period, counts=counts,
-                          inverse=inverse, complementary=complementary, white_black=white_black)
+    order = value(pattern_args["order"])
+    ps = pattern_sequence((w, h), **pattern_args)
     try:
         capture.check_sequence_dir(out, ps, "pattern_", writer="patterns", force=force, option="-o")
     except OutputError as e:

@@ -6,11 +6,10 @@ from pathlib import Path
 
 import typer
 
-from ..errors import OutputError
 from ..choices import PATTERN_ORDERS as ORDERS
+from ..errors import OutputError
 from ._app import app, console, fail, is_tty, say, user_errors, warn
-from ._options import (ComplementaryOpt, CountsOpt, DeviceName, Family, FamilyOpt, ForceOpt, InverseOpt, Order,
-                       PeriodOpt, SimPreset, StepsOpt, WhiteBlackOpt, number, parse_pose, pattern_sequence, value)
+from ._options import DeviceName, ForceOpt, SimPreset, number, parse_pose, pattern_sequence, value, with_pattern_options
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
 MAX_SEED = 2**32 - 1
@@ -18,6 +17,7 @@ MAX_SEED = 2**32 - 1
 
 @app.command("simulate")
 @user_errors
+@with_pattern_options(leave_out=("step",))
 def simulate_cmd(
     out_dir: Path = typer.Argument(..., help="Output folder for the images, truth.json and patterns.json."),
     preset: SimPreset = typer.Option(SimPreset.paper, "--preset", help="Rig: paper (the paper's simulated procam), ideal "
@@ -34,14 +34,6 @@ def simulate_cmd(
                                 "without any noise (no shot noise either)."),
     bits: int = typer.Option(8, "--bits", help="Output bit depth: 8 or 16."),
     seed: int = typer.Option(0, "--seed", help="Noise seed (same seed -> identical images)."),
-    order: Order = typer.Option(Order.opencv, "--order", help="Gray family: sequence order."),
-    family: FamilyOpt = Family.gray,
-    steps: StepsOpt = None,
-    period: PeriodOpt = None,
-    counts: CountsOpt = None,
-    inverse: InverseOpt = True,
-    complementary: ComplementaryOpt = True,
-    white_black: WhiteBlackOpt = True,
     proj_gamma: float = typer.Option(None, "--proj-gamma", help="The projector's gamma: a pattern value v emits "
                                      "(v/255)^gamma of white (default 1, linear; fringes are distorted by it)."),
     rig: str = typer.Option(None, "--rig", help="Render a rig instead (two_projectors: one camera, two projectors "
@@ -49,12 +41,13 @@ def simulate_cmd(
                             "folder: one pose folder per camera-projector pair, rig.json and the rig's truth.json "
                             "(Gray codes; --pose in the reference camera's frame; --preset and --frame do not apply)."),
     force: ForceOpt = False,
+    **pattern_args,
 ):
     """Render a synthetic capture of a chessboard (Gray codes, or a phase family with --family), with its ground
     truth (truth.json)."""
     from .. import simulate as sim
 
-    preset, frame, order = value(preset), value(frame), value(order)
+    preset, frame, order, family = value(preset), value(frame), value(pattern_args["order"]), pattern_args["family"]
     if rig is not None and rig not in sim.RIG_PRESETS:
         fail(f"--rig must be one of {', '.join(sim.RIG_PRESETS)}, got {rig!r}")
     if rig is not None and frame != "camera":
@@ -87,8 +80,7 @@ def simulate_cmd(
     from .. import capture
 
     scene = sim.preset(preset)
-    ps = pattern_sequence(scene.proj_size, family=family, order=order, steps=steps, period=period, counts=counts,
-                          inverse=inverse, complementary=complementary, white_black=white_black)
+    ps = pattern_sequence(scene.proj_size, **pattern_args)
     try:
         capture.check_sequence_dir(out_dir, ps, writer="simulate", force=force, extra=("truth.json",),
                                    option="OUT_DIR")
