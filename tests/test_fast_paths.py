@@ -445,3 +445,34 @@ def test_prefetcher_reads_each_frame_once_beside_procams_own_outputs(tmp_path, m
     assert "overlay.png" not in reads and all(c.stack.shape[0] == n for c in caps)
     assert sorted(reads) == sorted(2 * [p.name for p in caps[0].files])  # each frame once
     assert cv2.imread(str(folders[0] / "overlay.png")) is not None
+
+
+def test_a_phase_captures_response_is_fitted_once_for_the_check_and_the_decode(tmp_path, monkeypatch):
+    """The description check decodes the capture's sample and the decode fits the same sample again: the projector's
+    response is fitted once per capture, and the decode is the one a fresh fit gives, to the bit."""
+    from sim_small import small_scene
+
+    from procam import capture, decode, patterns, simulate
+    from procam.decode.phase import decoder, response
+
+    scene = small_scene()
+    ps = patterns.pattern_set(*scene.proj_size, family="phase")
+    stack, truth = simulate.render(scene, ps, seed=4)
+    simulate.write_capture(tmp_path / "pose", stack, truth, ps)
+    calls = []
+    real = response.fit_response
+
+    def counting(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(response, "fit_response", counting)
+    decoder._PASS1.clear()
+    cap = capture.load_capture(tmp_path / "pose")  # the description check decodes the sample
+    res = decode.decode(cap.stack, cap.pattern_set)
+    assert len(calls) == 1
+    decoder._PASS1.clear()
+    fresh = decode.decode(cap.stack, cap.pattern_set)
+    assert len(calls) == 2
+    for k in ("col", "row", "valid_col", "valid_row", "confidence"):
+        np.testing.assert_array_equal(getattr(res, k), getattr(fresh, k))

@@ -30,6 +30,7 @@ Gamma
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -171,7 +172,33 @@ def _lut_px(lut, period: float) -> float:
     return 0.0 if lut is None else lut.max_error * period / (2.0 * np.pi)
 
 
+#: The last few pass-1 results by their inputs: the description check (:mod:`procam.decode.phase.diagnose`)
+#: decodes the capture's sample, then the decode fits the same sample again; the response is fitted once.
+_PASS1: dict = {}
+_PASS1_LOCK = threading.Lock()
+
+
 def _response(sub, ps: PhaseSet, opts: PhaseOptions, fs: float, scale: float):
+    """:func:`_fit_pass1` of the sample, fitted once per sample, sequence and options (the same inputs give the
+    same bytes: a cached result is the one the fit would give again)."""
+    import hashlib
+    import json
+
+    key = (hashlib.blake2b(np.ascontiguousarray(sub).tobytes(), digest_size=20).digest(), sub.shape, sub.dtype.str,
+           json.dumps(ps.to_dict(), sort_keys=True, default=str), repr(opts), float(fs), float(scale))
+    with _PASS1_LOCK:
+        hit = _PASS1.get(key)
+    if hit is None:
+        hit = _fit_pass1(sub, ps, opts, fs, scale)
+        with _PASS1_LOCK:
+            while len(_PASS1) >= 4:
+                _PASS1.pop(next(iter(_PASS1)))
+            _PASS1[key] = hit
+    resp, measured, used, err_px, noise, luts, notes, lit, stats = hit
+    return resp, measured, used, err_px, noise, dict(luts), list(notes), lit.copy(), list(stats)
+
+
+def _fit_pass1(sub, ps: PhaseSet, opts: PhaseOptions, fs: float, scale: float):
     """Pass 1 on the sample ``sub`` (K, n): the response, the gamma to correct for, the lookup tables, warnings."""
     blocks = [b for b in ps.blocks if b.kind == "phase"]
     stats = [_resp.nstep(sub[list(b.frames)], b.shifts()) for b in blocks]
