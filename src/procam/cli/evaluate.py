@@ -78,6 +78,7 @@ def evaluate_cmd(
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
         views = pipeline.views_from_folders(poses, brd, size, value(order), options=opts, step=step)
+    calib = io.complete_sizes(calib, views[0].cam_size, views[0].proj_size)  # sizes the file did not store
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "

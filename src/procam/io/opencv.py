@@ -303,15 +303,16 @@ def _key(fs, path, layout: ResultLayout, keys: tuple[str, ...]) -> str | None:
 
 def _pair_size(path, key: str, v, order: str, K) -> tuple[int, int]:
     """A size stored as one pair: ``[width, height]``, or (order ``"either"``) the order the principal point of
-    ``K`` tells: the reading that puts it near the image centre, the other far off; refused when it cannot tell."""
+    ``K`` tells: the reading that puts it at most half as far from the image centre as the other does (in fractions
+    of the side, :func:`procam.io.validate.off_centre`); refused when neither does."""
     a = np.asarray(v, float).ravel()
     w, h = check_size(path, key, a)
     if order == "wh" or w == h:
         return w, h
     here, there = off_centre(K, (w, h)), off_centre(K, (h, w))
-    if here < 0.08 and here <= there / 2:
+    if here <= there / 2:
         return w, h
-    if there < 0.08 and there <= here / 2:
+    if there <= here / 2:
         return h, w
     bad(path, key, f"[{w}, {h}] may be [width, height] (OpenCV) or [height, width] (MATLAB's ImageSize), and the "
                    f"principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) does not tell which",
