@@ -178,6 +178,22 @@ def test_calibrate_uses_the_camera_of_a_cammat_file(pose, tmp_path):
     assert c.camera.distortion.model == "opencv" and c.camera.distortion.coeffs == (-0.02, 0.0, 0.0, 0.0, 0.0)
 
 
+def test_calibrate_uses_the_projector_of_a_cammat_file(pose, tmp_path):
+    """--projector-intrinsics with the tool's file (no sizes stored: the pose's projector size is taken): the
+    projector held at the file's K, R, T from the pose within 1 board unit of the truth."""
+    folder, truth = pose
+    k = true_keys(truth)
+    proj = write(tmp_path / "Result.yml", {"CamMat": k["Kc"], "ProMat": k["Kp"], "R": k["R"],
+                                           "T": k["T"].reshape(3, 1)})
+    out = tmp_path / "calib.json"
+    code, _, err = run_cli(["calibrate", folder, "--board", "10x6", "--square", "24", "-o", out,
+                            "--projector-intrinsics", proj])
+    assert code == 0, err
+    c = io.load_calibration(out)
+    assert np.array_equal(c.projector.K, k["Kp"]) and c.projector.image_size == tuple(truth["projector"]["size"])
+    assert np.abs(c.T - k["T"]).max() < 1.0
+
+
 def test_evaluate_report_export_read_the_layouts(pose, tmp_path):
     """evaluate (SLStudio XML, no sizes stored: the pose's are taken), report (CamMat YAML) and export (OpenCV
     stereo YAML) read other tools' files.  The true calibration in SLStudio's keys evaluates to the render's
