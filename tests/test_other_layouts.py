@@ -245,3 +245,23 @@ def test_a_bad_file_exits_2_naming_it(pose, tmp_path):
         text = out + err
         assert str(bad) in text and "Traceback" not in text
         assert not (tmp_path / "c.json").exists() and not (tmp_path / "gl.json").exists()
+
+
+def test_the_docs_examples_are_read(tmp_path):
+    """Every example of docs/file-formats.md's section on other tools' files is read, as the layout it shows."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "file-formats.md").read_text()
+    section = text[text.index("### Other tools' result files"):]
+    section = section[:section.index("\n## ")]
+    blocks = re.findall(r"```(yaml|xml)\n(.*?)```", section, re.S)
+    methods = []
+    for i, (kind, body) in enumerate(blocks):
+        path = tmp_path / f"example{i}.{'yml' if kind == 'yaml' else 'xml'}"
+        path.write_text(body)
+        c = io.load_calibration(path)
+        assert np.allclose(c.camera.K, KC) and np.allclose(c.projector.K, KP) and np.array_equal(c.T, T)
+        assert np.allclose(c.R, R, atol=1e-4) and np.allclose(c.camera.distortion.coeffs, DC)
+        methods.append(c.method)
+    assert methods == ["cammat-promat", "slstudio", "opencv-stereo"]
