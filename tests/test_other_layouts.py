@@ -223,8 +223,8 @@ def test_evaluate_report_export_read_the_layouts(pose, tmp_path):
                                          "R": k["R"], "T": k["T"].reshape(3, 1),
                                          "image_size": np.array([list(truth["camera"]["size"])], np.int32)})
     gl = tmp_path / "gl.json"
-    code, _, err = run_cli(["export", st, "--format", "opengl", "-o", gl, "--near", "100", "--far", "5000", "--projector",
-                            "x".join(map(str, truth["projector"]["size"]))])
+    code, _, err = run_cli(["export", st, "--format", "opengl", "-o", gl, "--near", "100", "--far", "5000",
+                            "--projector", "x".join(map(str, truth["projector"]["size"]))])
     assert code == 0, err
     doc = json.loads(gl.read_text())
     assert doc["camera"]["image_size"] == list(truth["camera"]["size"]) and np.array_equal(doc["camera"]["K"], k["Kc"])

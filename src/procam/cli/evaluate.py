@@ -48,7 +48,8 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
 def evaluate_cmd(
     board: BoardOpt,
     square: SquareOpt,
-    calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) to evaluate."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, OpenCV YAML/XML, another "
+                                                 "tool's result file: docs/file-formats.md) to evaluate."),
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences) to evaluate on."),
     out: Path = typer.Option(None, "-o", "--out", help="Write the metrics as JSON here."),
     projector: ProjectorOpt = None,

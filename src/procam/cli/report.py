@@ -17,8 +17,8 @@ REPORT_SUFFIXES = (".html", ".htm")
 @user_errors
 @with_pose_options
 def report_cmd(
-    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, a rig's JSON, or OpenCV YAML with "
-                                                          "pose folders)."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, a rig's JSON, or OpenCV YAML/XML, "
+                                                          "another tool's too, with pose folders)."),
     poses: Optional[list[Path]] = typer.Argument(None, help="Pose folders to show and verify (default: the poses "
                                                             "stored in the calibration JSON)."),
     out: Path = typer.Option(..., "-o", "--out", help="The report (.html): one self-contained file."),

@@ -20,10 +20,11 @@ one camera's intrinsics from those and from OpenCV's calibration sample (``camer
 Recognition: a file that starts with ``%YAML``, ``<?xml`` or ``<opencv_storage>`` is a FileStorage file; one that
 starts with ``{`` is JSON (procam's, kamino410's camera file, or a FileStorage JSON holding one of the layouts'
 keys); for anything else the suffix decides (``.json`` JSON; ``.yml``, ``.yaml``, ``.xml`` FileStorage), so the
-error says what is wrong with that kind of file.  In a FileStorage file procam's keys are looked for first, then
-kamino410's, then the table's; a file holding the device matrices of two layouts is refused
-as ambiguous, one holding none names the keys it has and the layouts read.  Every field is checked by the one validator set (:mod:`procam.io.validate`), and a file that
-cannot be read is refused with one line that names it and the formats read.
+error says what is wrong with that kind of file.  In a FileStorage file the layout is the one whose device
+matrices the file holds (procam's, kamino410's or a row of the table); a file holding those of two layouts is
+refused as ambiguous, one holding none names the keys it has and the layouts read.  Every field is checked by the
+one validator set (:mod:`procam.io.validate`), and a file that cannot be read is refused with one line that names
+it and the formats read.
 """
 
 from __future__ import annotations
