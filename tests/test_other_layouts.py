@@ -218,6 +218,10 @@ def test_evaluate_report_export_read_the_layouts(pose, tmp_path):
     code, _, err = run_cli(["report", cm, folder, "--board", "10x6", "--square", "24", "-o", page])
     assert code == 0, err
     assert page.stat().st_size > 1000
+    code, out, err = run_cli(["export", cm, "--format", "opengl", "-o", tmp_path / "cm.json", "--near", "100",
+                            "--far", "5000", "--projector", "x".join(map(str, truth["projector"]["size"]))])
+    assert code == 0, err
+    assert "Result.yml does not store the camera size; assumed" in out + err   # never a silent guess
 
     st = write(tmp_path / "stereo.yml", {"K1": k["Kc"], "D1": np.zeros((1, 5)), "K2": k["Kp"], "D2": np.zeros((1, 5)),
                                          "R": k["R"], "T": k["T"].reshape(3, 1),
