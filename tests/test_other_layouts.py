@@ -205,8 +205,9 @@ def test_evaluate_report_export_read_the_layouts(pose, tmp_path):
     sl = write(tmp_path / "calibration.xml", {"Kc": k["Kc"], "kc": np.zeros((5, 1)), "Kp": k["Kp"],
                                               "kp": np.zeros((5, 1)), "Rp": k["R"], "Tp": k["T"].reshape(3, 1)})
     ev = tmp_path / "ev.json"
-    code, _, err = run_cli(["evaluate", sl, folder, "--board", "10x6", "--square", "24", "-o", ev])
+    code, out, err = run_cli(["evaluate", sl, folder, "--board", "10x6", "--square", "24", "-o", ev])
     assert code == 0, err
+    assert "calibration.xml does not store the camera size; the pose's 640x400 is used" in out
     doc = json.loads(ev.read_text())
     assert doc["format"] == "procam-evaluation" and doc["method"] == "slstudio"
     assert doc["stereo_rms"] < 0.2

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 import typer
 
 from ._app import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, app, assumed_size, console, distinct_poses,
-                   fail, optional_size, output_path, parse_board, plain, pose_options, say, user_errors, value, warn,
-                   with_pose_options)
+                   fail, optional_size, output_path, parse_board, plain, pose_options, pose_sizes, say, user_errors,
+                   value, warn, with_pose_options)
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
     from rich.table import Table
@@ -79,7 +79,7 @@ def evaluate_cmd(
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
         views = pipeline.views_from_folders(poses, brd, size, value(order), options=opts, step=step)
-    calib = io.complete_sizes(calib, views[0].cam_size, views[0].proj_size)  # sizes the file did not store
+    calib = pose_sizes(calib, calibration, views[0].cam_size, views[0].proj_size)  # sizes the file did not store
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from ._app import (OrderOpt, ProjectorOpt, StepOpt, app, console, fail, optional_size, output_path, parse_board,
-                   pose_options, say, user_errors, value, warn, with_pose_options)
+                   pose_options, pose_sizes, say, user_errors, value, warn, with_pose_options)
 
 REPORT_SUFFIXES = (".html", ".htm")
 
@@ -61,7 +61,7 @@ def report_cmd(
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
             for p in poses:
                 v, maps = pipeline.view_from_folder(p, brd, size, value(order), options=opts, step=step)
-                calib = io.complete_sizes(calib, v.cam_size, v.proj_size)  # sizes the file did not store
+                calib = pose_sizes(calib, calibration, v.cam_size, v.proj_size)  # sizes the file did not store
                 if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
                     fail(f"{p}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
                          f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")
