@@ -462,10 +462,15 @@ def test_garbage_calibration_files(content, suffix, tmp_path, poses):
 
 
 def test_calibration_file_without_sizes_says_so(tmp_path, poses):
+    """A file without sizes (other tools' files store none) takes the pose's, and says so (issue 34, item 3: it was
+    refused, '2 (u0, v0) was assumed', which no user of another tool's file can mend)."""
     path = _yaml(tmp_path / "nosize.yml", cam_K=np.array([[700.0, 0, 330], [0, 700, 210], [0, 0, 1]]),
                  proj_K=np.array([[2400.0, 0, 960], [0, 2400, 1000], [0, 0, 1]]), R=np.eye(3),
                  T=np.array([[-170.0], [-40], [-60]]))
-    bad(["evaluate", path, poses[0], *BOARD], "no cam_size", "2 (u0, v0) was assumed")
+    rc, out, err = run_cli(["evaluate", path, poses[0], *BOARD])
+    assert rc == 0, err
+    assert "nosize.yml does not store the camera size; the pose's 640x400 is used" in out
+    assert "nosize.yml does not store the projector size; the pose's 1920x1080 is used" in out
 
 
 # ------------------------------------------------------------------------------------------------

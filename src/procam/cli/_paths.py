@@ -61,6 +61,21 @@ def load_pose(pose_dir, projector, calib, order=None, step=None):
     return cap
 
 
+def pose_sizes(calib, path, cam_size, proj_size):
+    """``calib`` with the image sizes its file did not store (``info["image_size_assumed"]``) taken from the pose
+    (:func:`procam.io.complete_sizes`), each said in a warning (never a silent choice): other tools' result files
+    store no size, or only the camera's."""
+    from .. import io
+
+    before = set((calib.info or {}).get("image_size_assumed", ()))
+    calib = io.complete_sizes(calib, cam_size, proj_size)
+    taken = before - set((calib.info or {}).get("image_size_assumed", ()))
+    for key, name, size in (("cam_size", "camera", cam_size), ("proj_size", "projector", proj_size)):
+        if key in taken:
+            warn(f"{Path(path).name} does not store the {name} size; the pose's {size[0]}x{size[1]} is used")
+    return calib
+
+
 def assumed_size(calib, key: str) -> str:
     """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
     its size was assumed from the principal point; '' otherwise."""

@@ -147,12 +147,12 @@ def calibrate_cmd(
     camera_only: bool = typer.Option(False, "--camera-only", help="Camera intrinsics from photos of the board: one "
                                      "(the single-pose method) or several (Zhang, with checks)."),
     camera_file: Path = typer.Option(None, "--camera", help="The camera's intrinsics from an earlier calibration "
-                                     "(procam JSON, OpenCV or kamino410 YAML/XML): fixed; one pose then calibrates "
-                                     "the projector and R, T."),
+                                     "(procam JSON; OpenCV YAML/XML of procam, kamino410 or another tool): fixed; "
+                                     "one pose then calibrates the projector and R, T."),
     projector_file: Path = typer.Option(None, "--projector-intrinsics", help="The projector's intrinsics and "
-                                        "distortion from an earlier calibration of it (procam JSON, OpenCV YAML/XML, "
-                                        "kamino410 XML): fixed; one pose then calibrates R, T (a projector that was "
-                                        "bumped)."),
+                                        "distortion from an earlier calibration of it (procam JSON; OpenCV YAML/XML of "
+                                        "procam, kamino410 or another tool): fixed; one pose then calibrates R, T (a "
+                                        "projector that was bumped)."),
     throw_ratio: str = typer.Option(None, "--throw-ratio", help="Single-pose: the projector datasheet's throw ratio "
                                     "(distance / image width) as a prior, e.g. 1.26 or 1.26+-0.03 (default "
                                     "tolerance 0.02; docs/datasheet.md)."),

@@ -10,7 +10,7 @@ import typer
 from ._app import app, console, fail, plain, say, user_errors, warn
 from ._options import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size, parse_board, pose_options,
                        value, with_pose_options)
-from ._paths import assumed_size, distinct_poses, output_path
+from ._paths import assumed_size, distinct_poses, output_path, pose_sizes
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
     from rich.table import Table
@@ -49,7 +49,8 @@ def evaluation_tables(ev) -> tuple[Table, Table]:
 def evaluate_cmd(
     board: BoardOpt,
     square: SquareOpt,
-    calibration: Path = typer.Argument(..., help="Calibration file (JSON or OpenCV YAML) to evaluate."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, OpenCV YAML/XML, another "
+                                                 "tool's result file: docs/file-formats.md) to evaluate."),
     poses: list[Path] = typer.Argument(..., help="Pose folders (captured sequences) to evaluate on."),
     out: Path = typer.Option(None, "-o", "--out", help="Write the metrics as JSON here."),
     projector: ProjectorOpt = None,
@@ -79,6 +80,7 @@ def evaluate_cmd(
         size = tuple(calib.projector.image_size)
     with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
         views = pipeline.views_from_folders(poses, brd, size, value(order), options=opts, step=step)
+    calib = pose_sizes(calib, calibration, views[0].cam_size, views[0].proj_size)  # sizes the file did not store
     for v in views:
         if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
             fail(f"{v.name}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "

@@ -165,9 +165,11 @@ def export_cmd(
     calib = io.load_calibration(calibration, pair=pair)
     if projector is not None and fmt != "projector-view":
         calib = io.complete_sizes(calib, proj_size=optional_size(projector))
-    for w in calib.warnings:
+    for w in calib.warnings:   # a size the file does not store (kamino410's, other tools' files) is said
         if "does not store the projector size" in w:
             warn(w + " (--projector WIDTHxHEIGHT)")
+        elif "does not store the camera size" in w:
+            warn(w + " (the exported camera is for images of that size)")
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
     if fmt == "projector-view":

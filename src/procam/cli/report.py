@@ -10,7 +10,7 @@ import typer
 from ._app import app, console, fail, say, user_errors, warn
 from ._options import (OrderOpt, ProjectorOpt, StepOpt, optional_size, parse_board, pose_options, value,
                        with_pose_options)
-from ._paths import output_path
+from ._paths import output_path, pose_sizes
 
 REPORT_SUFFIXES = (".html", ".htm")
 
@@ -19,8 +19,8 @@ REPORT_SUFFIXES = (".html", ".htm")
 @user_errors
 @with_pose_options
 def report_cmd(
-    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, a rig's JSON, or OpenCV YAML with "
-                                                          "pose folders)."),
+    calibration: Path = typer.Argument(..., help="Calibration file (procam JSON, a rig's JSON, or OpenCV YAML/XML, "
+                                                          "another tool's too, with pose folders)."),
     poses: Optional[list[Path]] = typer.Argument(None, help="Pose folders to show and verify (default: the poses "
                                                             "stored in the calibration JSON)."),
     out: Path = typer.Option(..., "-o", "--out", help="The report (.html): one self-contained file."),
@@ -63,6 +63,7 @@ def report_cmd(
         with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext():
             for p in poses:
                 v, maps = pipeline.view_from_folder(p, brd, size, value(order), options=opts, step=step)
+                calib = pose_sizes(calib, calibration, v.cam_size, v.proj_size)  # sizes the file did not store
                 if v.cam_size is not None and tuple(v.cam_size) != tuple(calib.camera.image_size):
                     fail(f"{p}: camera images are {v.cam_size[0]}x{v.cam_size[1]} but the calibration is for "
                          f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}; use captures of the same camera")

@@ -8,6 +8,8 @@
     procam            procam's JSON: calibrations and correspondences (views)
     opencv            OpenCV FileStorage YAML/XML: procam's keys written and read, other tools' camera layouts read
     kamino410         kamino410/procam-calibration's calibration_result.xml and camera_config.json
+    layouts           other tools' result files (structured-light CamMat/ProMat, SLStudio, OpenCV stereo / MATLAB):
+                      their FileStorage layouts as one table, read by opencv.read_layout
     calibration_file  one calibration file, whatever its format: save_calibration (by suffix), load_calibration
                       and load_camera_intrinsics (by content)
     rig               a rig's calibration file (every device, relative pose and pair), written and read back
@@ -23,8 +25,8 @@ from __future__ import annotations
 
 import importlib
 
-_SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "calibration_file",
-               "rig", "maps", "engines", "ply")
+_SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "layouts",
+               "calibration_file", "rig", "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {

@@ -9,16 +9,22 @@ A camera-projector calibration is read from
   (:mod:`procam.io.opencv`);
 * kamino410/procam-calibration's ``calibration_result.xml`` (``cam_int, cam_dist, proj_int, proj_dist, rotation,
   translation``), theirs or procam's export (:mod:`procam.io.kamino410`);
+* other tools' result files, each layout a row of one table (:data:`procam.io.layouts.RESULT_LAYOUTS`: the
+  structured-light ``CamMat, ProMat, R, T``, SLStudio's ``Kc, kc, Kp, kp, Rp, Tp``, OpenCV's stereo ``K1, D1,
+  K2, D2, R, T`` and its variants, MATLAB's stereo parameters exported so), read by one code path
+  (:func:`procam.io.opencv.read_layout`);
 
-one camera's intrinsics from those and from OpenCV's calibration sample (``camera_matrix``), its stereo sample
-(``M1``, ``D1``) and kamino410's ``camera_config.json``.
+one camera's intrinsics from those and from OpenCV's calibration sample (``camera_matrix``) and kamino410's
+``camera_config.json``.
 
 Recognition: a file that starts with ``%YAML``, ``<?xml`` or ``<opencv_storage>`` is a FileStorage file; one that
 starts with ``{`` is JSON (procam's, kamino410's camera file, or a FileStorage JSON holding one of the layouts'
 keys); for anything else the suffix decides (``.json`` JSON; ``.yml``, ``.yaml``, ``.xml`` FileStorage), so the
-error says what is wrong with that kind of file.  In a FileStorage file procam's keys are looked for first, then
-kamino410's.  Every field is checked by the one validator set (:mod:`procam.io.validate`), and a file that
-cannot be read is refused with one line that names it and the formats read.
+error says what is wrong with that kind of file.  In a FileStorage file the layout is the one whose device
+matrices the file holds (procam's, kamino410's or a row of the table); a file holding those of two layouts is
+refused as ambiguous, one holding none names the keys it has and the layouts read.  Every field is checked by the
+one validator set (:mod:`procam.io.validate`), and a file that cannot be read is refused with one line that names
+it and the formats read.
 """
 
 from __future__ import annotations
@@ -29,19 +35,26 @@ from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from . import kamino410, opencv, procam
 from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV, RIG_CALIBRATION_FORMAT
+from .layouts import RESULT_LAYOUTS
 from .validate import check_size, load_json, validate_calibration
 
+#: The FileStorage layouts of a camera-projector calibration :func:`load_calibration` reads: (name, keys).
+STORAGE_LAYOUTS = ((OPENCV.name, "cam_K, cam_kc, proj_K, proj_kc, R, T"),
+                   (KAMINO410.name, "cam_int, cam_dist, proj_int, proj_dist, rotation, translation"),
+                   *((lay.name, lay.keys()) for lay in RESULT_LAYOUTS))
 #: What :func:`load_calibration` reads, as its errors say it.
-CALIBRATION_FORMATS = ("procam reads procam calibration JSON, OpenCV FileStorage YAML/XML with procam's keys "
-                       "(cam_K, cam_kc, proj_K, proj_kc, R, T) and kamino410's calibration_result.xml (cam_int, "
-                       "cam_dist, proj_int, proj_dist, rotation, translation)")
+CALIBRATION_FORMATS = ("procam reads procam calibration JSON and OpenCV FileStorage YAML/XML/JSON in the layouts "
+                       + "; ".join(f"{name} ({keys})" for name, keys in STORAGE_LAYOUTS))
 #: What :func:`load_camera_intrinsics` reads, as its errors say it.
 CAMERA_FORMATS = ("procam reads a camera from procam calibration JSON, kamino410's camera_config.json and OpenCV "
-                  "FileStorage YAML/XML/JSON with " + ", ".join(f"{k}/{d}" for k, d, _ in opencv.CAMERA_LAYOUTS))
+                  "FileStorage YAML/XML/JSON with " + ", ".join(
+                      [f"{k}/{d}" for k, d, _ in opencv.CAMERA_LAYOUTS]
+                      + [f"{'/'.join(lay.cam_K)} ({lay.name})" for lay in RESULT_LAYOUTS]))
 
 #: The keys that make a JSON document a FileStorage file (``cv2.FileStorage`` writes JSON too).
 _STORAGE_KEYS = (OPENCV.cam_K, OPENCV.proj_K, KAMINO410.cam_K, KAMINO410.proj_K,
-                 *(k for k, _, _ in opencv.CAMERA_LAYOUTS))
+                 *(k for k, _, _ in opencv.CAMERA_LAYOUTS),
+                 *(k for lay in RESULT_LAYOUTS for k in lay.cam_K + lay.proj_K))
 
 
 def save_calibration(calib: Calibration, path) -> Path:
@@ -92,12 +105,24 @@ def _read_storage(path: Path, hint: str, read):
 
 
 def _storage_calibration(fs, path) -> Calibration:
-    if any(opencv.has(fs, k) for k in (OPENCV.cam_K, OPENCV.proj_K)):
-        return opencv.read_calibration(fs, path)
-    if any(opencv.has(fs, k) for k in (KAMINO410.cam_K, KAMINO410.proj_K)):
-        return kamino410.read_calibration(fs, path)
-    raise CalibrationFileError(f"{path}: holds no camera-projector calibration (no {OPENCV.cam_K}/{OPENCV.proj_K} "
-                               f"or {KAMINO410.cam_K}/{KAMINO410.proj_K}); {CALIBRATION_FORMATS}")
+    """The calibration of the one layout whose device matrices the open file holds (procam's, kamino410's or a
+    row of :data:`procam.io.layouts.RESULT_LAYOUTS`); none or two are refused, naming the keys found."""
+    hits = [(name, read) for name, keys, read in (
+        (OPENCV.name, (OPENCV.cam_K, OPENCV.proj_K), opencv.read_calibration),
+        (KAMINO410.name, (KAMINO410.cam_K, KAMINO410.proj_K), kamino410.read_calibration))
+        if any(opencv.has(fs, k) for k in keys)]
+    hits += [(lay.name, lambda fs, path, lay=lay: opencv.read_layout(fs, path, lay)) for lay in opencv.layout_of(fs)]
+    if len(hits) == 1:
+        return hits[0][1](fs, path)
+    root = fs.root()
+    found = ", ".join(root.keys()) if root.isMap() else ""
+    found = (found[:200] + " ...") if len(found) > 200 else found or "none"
+    if hits:
+        raise CalibrationFileError(f"{path}: ambiguous: holds the device matrices of {len(hits)} layouts "
+                                   f"({', '.join(n for n, _ in hits)}; keys found: {found}); keep one layout's keys; "
+                                   f"{CALIBRATION_FORMATS}")
+    raise CalibrationFileError(f"{path}: holds no camera-projector calibration of a known layout (keys found: "
+                               f"{found}); {CALIBRATION_FORMATS}")
 
 
 def _rig_pair(path: Path, doc: dict, pair: str | None) -> tuple[str, dict]:
@@ -182,7 +207,7 @@ def complete_sizes(calib: Calibration, cam_size=None, proj_size=None) -> Calibra
         return calib
     info = {**calib.info, "image_size_assumed": assumed} if assumed else \
         {k: v for k, v in calib.info.items() if k != "image_size_assumed"}
-    warnings = tuple(w for w in calib.warnings if "does not store the projector size" not in w or "projector" not in kw)
+    warnings = tuple(w for w in calib.warnings if not any(f"does not store the {name} size" in w for name in kw))
     return calib.replace(info=info, warnings=warnings, **kw)
 
 
@@ -231,7 +256,8 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
     if found is None:
         found = _read_storage(path, CAMERA_FORMATS, opencv.read_camera)
         if found is None:
-            keys = ", ".join(f"{k}/{d} ({what})" for k, d, what in opencv.CAMERA_LAYOUTS)
+            keys = ", ".join([f"{k}/{d} ({what})" for k, d, what in opencv.CAMERA_LAYOUTS]
+                             + [f"{'/'.join(lay.cam_K)} ({lay.name})" for lay in RESULT_LAYOUTS])
             raise CalibrationFileError(f"{path}: no camera matrix found; expected one of {keys}")
     K, dist, size = found
     if image_size is not None:
@@ -249,14 +275,17 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
 def load_projector_intrinsics(path, image_size=None) -> Device:
     """A projector's intrinsics and distortion (a :class:`~procam.calibration.Device`) from a procam calibration
     in any format :func:`load_calibration` reads (procam JSON, OpenCV FileStorage YAML/XML with procam's keys,
-    kamino410's XML): the file's ``projector``.
+    kamino410's XML, other tools' result files): the file's ``projector``.
 
-    ``image_size``: the projector (width, height) the intrinsics will be used with; they must agree.
+    ``image_size``: the projector (width, height) the intrinsics will be used with; they must agree.  A file that
+    does not store the projector's size (``info["image_size_assumed"]``) takes it (:func:`complete_sizes`).
 
     Raises :class:`~procam.errors.CalibrationFileError` when the file holds no projector (a camera-only file) or
     one of another size.
     """
     calib = load_calibration(path)
+    if image_size is not None:
+        calib = complete_sizes(calib, proj_size=check_size(path, "the projector size", image_size))
     if calib.projector is None:
         raise CalibrationFileError(f"{path}: holds no projector (a camera-only calibration); give a procam "
                                    "calibration of this projector")

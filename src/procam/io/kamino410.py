@@ -18,7 +18,8 @@ from ..errors import CalibrationFileError
 from .files import atomic_path
 from .formats import KAMINO410
 from .opencv import cv_message, distortion, has, matrix, open_storage, real, write_devices
-from .validate import bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs, validate_calibration
+from .validate import (bad, check_K, check_rotation, check_size, check_translation, off_centre, opencv_coeffs,
+                       validate_calibration)
 
 #: kamino410/procam-calibration's ``calibration_result.xml`` keys -> meaning (procam's name).
 KAMINO410_KEYS = {
@@ -35,13 +36,6 @@ KAMINO410_KEYS = {
 OLD_ROTATION_KEY = "roration"
 
 
-def _off_centre(K, size) -> float:
-    """How far the principal point of ``K`` sits from the centre of a ``size`` = (w, h) image, as the larger of its
-    two offsets in fractions of the side."""
-    w, h = size
-    return max(abs(K[0, 2] - (w - 1) / 2) / w, abs(K[1, 2] - (h - 1) / 2) / h)
-
-
 def camera_size(path, shape, K) -> tuple[int, int]:
     """The camera's (width, height) from kamino410's ``img_shape`` (``[height, width]``), checked against the
     camera matrix ``K``: a shape written as ``[width, height]`` puts the principal point off the centre of the image
@@ -51,7 +45,7 @@ def camera_size(path, shape, K) -> tuple[int, int]:
     size = check_size(path, "img_shape", np.asarray(shape).ravel()[::-1])
     w, h = size
     if w != h:
-        here, there = _off_centre(K, (w, h)), _off_centre(K, (h, w))
+        here, there = off_centre(K, (w, h)), off_centre(K, (h, w))
         if here > 0.08 and there < here / 2:
             bad(path, "img_shape", f"[{h}, {w}] reads as a {w}x{h} camera (kamino410's img_shape is [height, width]),"
                                    f" but the principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) of {KAMINO410.cam_K} is "

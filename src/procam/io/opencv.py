@@ -5,8 +5,10 @@ back; one camera's intrinsics read from the layouts other tools write.
   the RMS errors, ``cam_size``/``proj_size``, method and verdict; YAML, or XML when the name ends in ``.xml``.
 * :func:`read_calibration` -- the same keys from an open file (a missing ``cam_size``/``proj_size`` is assumed
   ``2 (u0, v0)`` and listed in ``info["image_size_assumed"]``).
+* :func:`read_layout` -- a calibration in any of other tools' layouts (:data:`procam.io.layouts.RESULT_LAYOUTS`:
+  structured-light ``CamMat/ProMat``, SLStudio, OpenCV stereo / MATLAB export), by the table, one code path.
 * :func:`read_camera` -- one camera from any of :data:`CAMERA_LAYOUTS` (procam / Moreno-Taubin, OpenCV's
-  calibration and stereo samples, kamino410).
+  calibration sample, kamino410) or of the result layouts.
 * :func:`open_storage`, :func:`matrix`, :func:`real` -- the FileStorage plumbing the readers share (kamino410's
   too): a matrix may also stand as a sequence of numbers or one number (files written by hand); a file OpenCV
   cannot parse, or a node that is not numbers, gives one line naming the file and the key.
@@ -28,14 +30,15 @@ from ..errors import CalibrationFileError
 from .files import atomic_path
 from .formats import FILESTORAGE_FORMATS, FILESTORAGE_KEY, KAMINO410, OPENCV, FileStorageLayout
 from .procam import VERDICT_MEANING, verdict_level
-from .validate import bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs
+from .layouts import RESULT_LAYOUTS, ResultLayout
+from .validate import bad, check_K, check_rotation, check_size, check_translation, off_centre, opencv_coeffs
 
-#: FileStorage layouts of one camera's intrinsics, in the order they are looked for: (K key, distortion key, whose).
+#: FileStorage layouts of one camera's intrinsics besides :data:`procam.io.layouts.RESULT_LAYOUTS` (whose camera
+#: is read too): (K key, distortion key, whose).
 CAMERA_LAYOUTS = (
     (OPENCV.cam_K, OPENCV.cam_dist, "procam / Moreno-Taubin YAML"),
     ("camera_matrix", "distortion_coefficients", "OpenCV calibration sample"),
     (KAMINO410.cam_K, KAMINO410.cam_dist, "kamino410/procam-calibration"),
-    ("M1", "D1", "OpenCV stereo_calib sample (first camera)"),
 )
 
 
@@ -265,10 +268,116 @@ def _camera_size(fs, path, K_key, K):
 
 
 def read_camera(fs, path) -> tuple[np.ndarray, Distortion, tuple[int, int] | None] | None:
-    """One camera's ``(K, distortion, image size or None)`` from the first of :data:`CAMERA_LAYOUTS` the open
-    file holds; None when it holds none."""
-    for K_key, d_key, _ in CAMERA_LAYOUTS:
-        if has(fs, K_key):
-            K = check_K(path, K_key, matrix(fs, path, K_key))
-            return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key, K)
+    """One camera's ``(K, distortion, image size or None)`` from the layout of :data:`CAMERA_LAYOUTS` or
+    :data:`procam.io.layouts.RESULT_LAYOUTS` whose camera matrix the open file holds; None when it holds none.  A
+    file holding the camera matrices of two layouts is refused (which one is meant?)."""
+    hits = [(K_key, d_key) for K_key, d_key, _ in CAMERA_LAYOUTS if has(fs, K_key)]
+    hits += [layout for layout in RESULT_LAYOUTS if any(has(fs, k) for k in layout.cam_K)]
+    if len(hits) > 1:
+        names = [h[0] if isinstance(h, tuple) else _present(fs, h.cam_K)[0] for h in hits]
+        raise CalibrationFileError(f"{path}: holds the camera matrices of {len(hits)} layouts ({', '.join(names)}); "
+                                   "procam cannot tell which one is meant: keep one")
+    if not hits:
+        return None
+    if isinstance(hits[0], ResultLayout):
+        return _layout_device(fs, path, hits[0], "camera")
+    K_key, d_key = hits[0]
+    K = check_K(path, K_key, matrix(fs, path, K_key))
+    return K, distortion(fs, path, d_key), _camera_size(fs, path, K_key, K)
+
+
+# --------------------------------------------------------------------------------------------------
+# reading: other tools' result files, by the table of layouts
+# --------------------------------------------------------------------------------------------------
+
+def _present(fs, keys: tuple[str, ...]) -> list[str]:
+    return [k for k in keys if has(fs, k)]
+
+
+def _key(fs, path, layout: ResultLayout, keys: tuple[str, ...]) -> str | None:
+    """The one of ``keys`` (names of one field) the file holds, None when none; two at once are refused."""
+    present = _present(fs, keys)
+    if len(present) > 1:
+        bad(path, " and ".join(present), f"are two names of one field of the {layout.name} layout "
+                                         "(procam cannot tell which one is meant)", fix="keep one")
+    return present[0] if present else None
+
+
+def _pair_size(path, key: str, v, order: str, K) -> tuple[int, int]:
+    """A size stored as one pair: ``[width, height]``, or (order ``"either"``) the order the principal point of
+    ``K`` tells: the reading that puts it at most half as far from the image centre as the other does (in fractions
+    of the side, :func:`procam.io.validate.off_centre`); refused when neither does."""
+    a = np.asarray(v, float).ravel()
+    w, h = check_size(path, key, a)
+    if order == "wh" or w == h:
+        return w, h
+    here, there = off_centre(K, (w, h)), off_centre(K, (h, w))
+    if here <= there / 2:
+        return w, h
+    if there <= here / 2:
+        return h, w
+    bad(path, key, f"[{w}, {h}] may be [width, height] (OpenCV) or [height, width] (MATLAB's ImageSize), and the "
+                   f"principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) does not tell which",
+        fix="write image_width and image_height instead")
+
+
+def _layout_size(fs, path, specs, K) -> tuple[int, int] | None:
+    """A device's image size from the first of ``specs`` (:class:`procam.io.layouts.SizeKeys`) the file holds;
+    None when it holds none (a size of two zeros, SLStudio's unset projector, is none)."""
+    for spec in specs:
+        if not all(has(fs, k) for k in spec.keys()):
+            continue
+        if spec.height is None:
+            return _pair_size(path, spec.width, matrix(fs, path, spec.width), spec.order, K)
+        w, h = real(fs, path, spec.width), real(fs, path, spec.height)
+        if w == 0 and h == 0:
+            return None
+        return check_size(path, f"{spec.width}/{spec.height}", (w, h))
     return None
+
+
+def _layout_device(fs, path, layout: ResultLayout, which: str):
+    """``(K, distortion, size or None)`` of the ``which`` device (``"camera"``, ``"projector"``) of ``layout``."""
+    K_keys, d_keys, sizes = ((layout.cam_K, layout.cam_dist, layout.cam_size) if which == "camera" else
+                             (layout.proj_K, layout.proj_dist, layout.proj_size))
+    K_key = _key(fs, path, layout, K_keys)
+    K = check_K(path, K_key, matrix(fs, path, K_key))
+    d_key = _key(fs, path, layout, d_keys)
+    return K, distortion(fs, path, d_key) if d_key else Distortion(), _layout_size(fs, path, sizes, K)
+
+
+def layout_of(fs) -> list[ResultLayout]:
+    """The layouts of :data:`procam.io.layouts.RESULT_LAYOUTS` whose camera or projector matrix the open file
+    holds."""
+    return [lay for lay in RESULT_LAYOUTS if _present(fs, lay.cam_K + lay.proj_K)]
+
+
+def read_layout(fs, path, layout: ResultLayout) -> Calibration:
+    """The calibration in ``layout``'s keys (a row of :data:`procam.io.layouts.RESULT_LAYOUTS`) from the open file
+    ``fs`` of ``path``.  ``R, T`` are read as the layout stores them (``x_projector = R x_camera + T``).  A size
+    the layout does not store (or this file lacks) is assumed ``2 (u0, v0)``, listed in
+    ``info["image_size_assumed"]`` and said in a warning (the commands that read a pose take the real one:
+    :func:`procam.io.complete_sizes`).  Not validated as a whole (:func:`procam.io.validate.validate_calibration`
+    does that)."""
+    path = Path(path)
+    missing = ["/".join(keys) for keys in (layout.cam_K, layout.proj_K, layout.R, layout.T)
+               if _key(fs, path, layout, keys) is None]
+    if missing:
+        raise CalibrationFileError(f"{path}: missing {', '.join(missing)}; the {layout.name} layout has the keys "
+                                   f"{layout.keys()} (? optional)")
+    devices, assumed, warnings = {}, [], []
+    for which, key in (("camera", "cam_size"), ("projector", "proj_size")):
+        K, dist, size = _layout_device(fs, path, layout, which)
+        if size is None:
+            size = (max(1, round(2 * K[0, 2])), max(1, round(2 * K[1, 2])))
+            assumed.append(key)
+            warnings.append(f"{path.name} does not store the {which} size; assumed {size[0]}x{size[1]} from its "
+                            "principal point: give the real size")
+        devices[which] = Device(K, size, dist)
+    R_key, T_key = _key(fs, path, layout, layout.R), _key(fs, path, layout, layout.T)
+    cam_rms, proj_rms, stereo_rms = (real(fs, path, k) if k else float("nan") for k in layout.rms)
+    info = {"source": str(path), "layout": layout.name, **({"image_size_assumed": assumed} if assumed else {})}
+    return Calibration(devices["camera"], devices["projector"], check_rotation(path, R_key, matrix(fs, path, R_key)),
+                       check_translation(path, T_key, matrix(fs, path, T_key)), layout.method, cam_rms=cam_rms,
+                       proj_rms=proj_rms, stereo_rms=stereo_rms, warnings=tuple(warnings), info=info,
+                       verdict="unknown")

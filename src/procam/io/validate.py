@@ -151,6 +151,13 @@ def check_distortion(path, field: str, d) -> Distortion:
     bad(path, f"{field}.model", f"must be none, division or opencv, got {short(model)}")
 
 
+def off_centre(K, size) -> float:
+    """How far the principal point of ``K`` sits from the centre of a ``size`` = (w, h) image, as the larger of its
+    two offsets in fractions of the side (the reader's test of which order a pair of sides is in)."""
+    w, h = size
+    return max(abs(K[0, 2] - (w - 1) / 2) / w, abs(K[1, 2] - (h - 1) / 2) / h)
+
+
 def check_rotation(path, field: str, R) -> np.ndarray:
     """A rotation matrix (module rules), as a (3, 3) float array."""
     R = numbers(path, field, R, (3, 3))
