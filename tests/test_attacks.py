@@ -48,7 +48,7 @@ def test_a_rig_files_device_blocks_are_validated_like_a_pair_files(tmp_path, edi
     image, a relative R that is no rotation, a reference camera away from the reference frame: each refused by
     ``load_rig_calibration`` and ``procam report`` (exit 2) naming the file and the field, no page written."""
     from procam.errors import CalibrationFileError
-    from procam.io.rig import load_rig_calibration, save_rig_calibration
+    from procam.io import load_rig_calibration, save_rig_calibration
 
     path = save_rig_calibration(_rig(), tmp_path / "rig.json")
     load_rig_calibration(path)                         # as written: read
@@ -100,7 +100,7 @@ def test_a_key_given_twice_is_refused_in_json_yaml_and_xml(tmp_path):
     bad.write_text(text[:i] + '"camera": null, ' + text[i:])
     with pytest.raises(CalibrationFileError, match=f"{bad}: key 'camera' is given twice"):
         io.load_calibration(bad)
-    from procam.io.rig import load_rig_calibration, save_rig_calibration
+    from procam.io import load_rig_calibration, save_rig_calibration
 
     rig = save_rig_calibration(_rig(), tmp_path / "rig.json")
     text = rig.read_text()

@@ -65,7 +65,7 @@ def test_rig_page_names_every_device_its_verdict_and_the_relative_std():
 
 def test_rig_file_reads_back_exactly_and_its_page_verifies_on_the_poses_it_keeps(tmp_path):
     from procam.report import build_rig_report
-    from procam.io.rig import is_rig_calibration, load_rig_calibration, save_rig_calibration
+    from procam.io import is_rig_calibration, load_rig_calibration, save_rig_calibration
 
     rc, poses = _rig()
     path = save_rig_calibration(rc, tmp_path / "rig.json")

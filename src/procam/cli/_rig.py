@@ -75,7 +75,7 @@ def write_report(rc, path: Path, *, poses=None, agreement=None, name: str | None
 def report(calibration: Path, poses, *, out: Path, brd, projector=None, order=None, step=None, options=None) -> None:
     """``procam report`` of a rig calibration file: its page, verified on the rig pose folders ``poses`` when
     given (else on the poses its pairs keep)."""
-    from ..io.rig import load_rig_calibration
+    from ..io import load_rig_calibration
 
     rc = load_rig_calibration(calibration)
     views = None

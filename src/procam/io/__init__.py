@@ -39,7 +39,7 @@ _EXPORTS = {
     "load_calibration": "calibration_file", "load_camera_intrinsics": "calibration_file",
     "load_projector_intrinsics": "calibration_file",
     "save_calibration": "calibration_file", "complete_sizes": "calibration_file",
-    "load_rig_calibration": "rig", "save_rig_calibration": "rig", "is_rig_calibration": "rig",
+    "load_rig_calibration": "calibration_file", "save_rig_calibration": "rig", "is_rig_calibration": "rig",
     "load_decoded_maps": "maps", "save_decoded_maps": "maps", "save_maps": "maps",
     "read_ply": "ply", "write_ply": "ply",
 }

@@ -31,12 +31,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..calibration import Calibration, Device, Distortion
+from ..calibration import Calibration, Device, Distortion, RigCalibration
 from ..errors import CalibrationFileError
 from . import kamino410, opencv, procam
 from .formats import CALIBRATION_FORMAT, KAMINO410, OPENCV, RIG_CALIBRATION_FORMAT
 from .layouts import RESULT_LAYOUTS
-from .validate import check_size, load_json, validate_calibration
+from .rig import HINT as RIG_HINT
+from .rig import load_rig_document, rig_devices
+from .validate import bad, check_size, load_json, validate_calibration
 
 #: The FileStorage layouts of a camera-projector calibration :func:`load_calibration` reads: (name, keys).
 STORAGE_LAYOUTS = ((OPENCV.name, "cam_K, cam_kc, proj_K, proj_kc, R, T"),
@@ -170,8 +172,6 @@ def load_calibration(path, pair: str | None = None) -> Calibration:
     if kind == "json":
         doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)
         if isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT:
-            from .rig import rig_devices
-
             rig_devices(path, doc)          # the whole rig checked: a file is read whole or refused
             key, pair_doc = _rig_pair(path, doc, pair)
             where = f"{path} (pair {key})"  # the errors name the pair
@@ -295,3 +295,21 @@ def load_projector_intrinsics(path, image_size=None) -> Device:
                                    f"projector is {int(image_size[0])}x{int(image_size[1])}; give the calibration "
                                    "of this projector at this resolution")
     return calib.projector
+
+
+def load_rig_calibration(path) -> RigCalibration:
+    """The :class:`~procam.calibration.RigCalibration` a rig calibration JSON file holds (every device, relative
+    pose and pair as written): every device block and relative pose checked by the one validator set
+    (:func:`rig_devices`), the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
+    like any calibration.  :class:`CalibrationFileError` naming the file and the field otherwise."""
+    path = Path(path)
+    doc = load_rig_document(path)
+    cams, projs, rel = rig_devices(path, doc)
+    pairs = {key: load_calibration(path, pair=key) for key in doc["pairs"]}
+    verdict = doc.get("verdict") or {}
+    if not isinstance(verdict, dict):
+        bad(path, "verdict", "must be an object", fix=RIG_HINT)
+    return RigCalibration(str(doc.get("method", "")), cams, projs, rel, pairs, tuple(doc.get("poses") or ()),
+                          str(doc.get("uncertainty", "")), dict(doc.get("info") or {}),
+                          tuple(doc.get("warnings") or ()), str(verdict.get("level", "failed")),
+                          tuple(str(r) for r in verdict.get("reasons", ())))

@@ -17,8 +17,8 @@ from ..calibration import Calibration, Device, Distortion
 from ..errors import CalibrationFileError
 from .files import atomic_path
 from .formats import KAMINO410
-from .opencv import cv_message, distortion, has, matrix, open_storage, real, write_devices
-from .validate import (bad, check_K, check_rotation, check_size, check_translation, off_centre, opencv_coeffs,
+from .opencv import camera_size, cv_message, distortion, has, matrix, open_storage, real, write_devices  # noqa: F401
+from .validate import (bad, check_K, check_rotation, check_size, check_translation, opencv_coeffs,
                        validate_calibration)
 
 #: kamino410/procam-calibration's ``calibration_result.xml`` keys -> meaning (procam's name).
@@ -34,25 +34,6 @@ KAMINO410_KEYS = {
 }
 #: Their early files' spelling of ``rotation``.
 OLD_ROTATION_KEY = "roration"
-
-
-def camera_size(path, shape, K) -> tuple[int, int]:
-    """The camera's (width, height) from kamino410's ``img_shape`` (``[height, width]``), checked against the
-    camera matrix ``K``: a shape written as ``[width, height]`` puts the principal point off the centre of the image
-    it describes (by 10-40 % of a side for 16:10 to 4:3 images) and at the centre of the transposed one.  Such a
-    file is refused (one line naming ``img_shape`` and both readings), never read as a camera turned a quarter
-    turn."""
-    size = check_size(path, "img_shape", np.asarray(shape).ravel()[::-1])
-    w, h = size
-    if w != h:
-        here, there = off_centre(K, (w, h)), off_centre(K, (h, w))
-        if here > 0.08 and there < here / 2:
-            bad(path, "img_shape", f"[{h}, {w}] reads as a {w}x{h} camera (kamino410's img_shape is [height, width]),"
-                                   f" but the principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) of {KAMINO410.cam_K} is "
-                                   f"that of a {h}x{w} camera (the centre of a {w}x{h} image is "
-                                   f"({(w - 1) / 2:.0f}, {(h - 1) / 2:.0f}))",
-                fix=f"write img_shape as [{w}, {h}] (height, width) if the camera is {h}x{w}")
-    return size
 
 
 def save_kamino410(calib: Calibration, path) -> Path:

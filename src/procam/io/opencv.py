@@ -248,6 +248,25 @@ def read_calibration(fs, path) -> Calibration:
         info={"image_size_assumed": assumed} if assumed else {}, verdict=verdict_level(string(fs, "verdict")))
 
 
+def camera_size(path, shape, K) -> tuple[int, int]:
+    """The camera's (width, height) from kamino410's ``img_shape`` (``[height, width]``), checked against the
+    camera matrix ``K``: a shape written as ``[width, height]`` puts the principal point off the centre of the image
+    it describes (by 10-40 % of a side for 16:10 to 4:3 images) and at the centre of the transposed one.  Such a
+    file is refused (one line naming ``img_shape`` and both readings), never read as a camera turned a quarter
+    turn."""
+    size = check_size(path, "img_shape", np.asarray(shape).ravel()[::-1])
+    w, h = size
+    if w != h:
+        here, there = off_centre(K, (w, h)), off_centre(K, (h, w))
+        if here > 0.08 and there < here / 2:
+            bad(path, "img_shape", f"[{h}, {w}] reads as a {w}x{h} camera (kamino410's img_shape is [height, width]),"
+                                   f" but the principal point ({K[0, 2]:.0f}, {K[1, 2]:.0f}) of {KAMINO410.cam_K} is "
+                                   f"that of a {h}x{w} camera (the centre of a {w}x{h} image is "
+                                   f"({(w - 1) / 2:.0f}, {(h - 1) / 2:.0f}))",
+                fix=f"write img_shape as [{w}, {h}] (height, width) if the camera is {h}x{w}")
+    return size
+
+
 def _camera_size(fs, path, K_key, K):
     """The camera's image size as its layout stores it (checked against its matrix ``K`` where the layout's order
     of width and height is easily mistaken), or None."""
@@ -260,8 +279,6 @@ def _camera_size(fs, path, K_key, K):
         w, h = real(fs, path, "image_width"), real(fs, path, "image_height")
         return check_size(path, "image_width/image_height", (w, h))
     if K_key == KAMINO410.cam_K:
-        from .kamino410 import camera_size
-
         m = matrix(fs, path, "img_shape")
         return None if m is None else camera_size(path, m, K)
     return None

@@ -13,7 +13,7 @@ an OpenCV reader of procam's files reads the reference camera and the first proj
 ``<name>_K``, ``<name>_kc``, ``<name>_size``, ``<name>_R``, ``<name>_T`` (reference -> device) and the lists
 ``rig_cameras`` / ``rig_projectors``.  Written atomically.
 
-Read back by :func:`load_rig_calibration`: every device block and relative pose is checked by the one validator
+Read back by :func:`procam.io.calibration_file.load_rig_calibration` (the one calibration reader): every device block and relative pose is checked by the one validator
 set (:mod:`procam.io.validate`, as a pair file's devices are: ``K`` sane, a rotation ``R``, a finite ``T``, a known
 distortion), and every pair by :func:`procam.io.load_calibration`.  A JSON key given twice is refused.
 """
@@ -32,7 +32,7 @@ from .formats import RIG_CALIBRATION_FORMAT
 from .validate import (bad, check_distortion, check_K, check_rotation, check_size, check_translation,
                        load_json, numbers, short)
 
-__all__ = ["rig_to_dict", "save_rig_calibration", "load_rig_document", "load_rig_calibration", "is_rig_calibration",
+__all__ = ["rig_to_dict", "save_rig_calibration", "load_rig_document", "is_rig_calibration",
            "RIG_CONVENTIONS"]
 
 RIG_CONVENTIONS = ("reference frame: the first camera's; a device's pose X_dev = R X_ref + T (board units, mm for "
@@ -161,19 +161,19 @@ def is_rig_calibration(path) -> bool:
     return isinstance(doc, dict) and doc.get("format") == RIG_CALIBRATION_FORMAT
 
 
-_HINT = "give a file written by 'procam calibrate' from rig pose folders"
+HINT = "give a file written by 'procam calibrate' from rig pose folders"
 
 
 def load_rig_document(path) -> dict:
     """The JSON document of a rig calibration file, checked to be one (:class:`CalibrationFileError` otherwise;
     a key given twice is refused); its pairs are read by :func:`procam.io.load_calibration` with ``pair=``."""
     path = Path(path)
-    doc = load_json(path, "not a readable rig calibration", _HINT)
+    doc = load_json(path, "not a readable rig calibration", HINT)
     if not isinstance(doc, dict) or doc.get("format") != RIG_CALIBRATION_FORMAT:
         raise CalibrationFileError(f"{path}: not a procam rig calibration (missing format: {RIG_CALIBRATION_FORMAT})")
     for key in ("cameras", "projectors", "pairs", "relative"):
         if not isinstance(doc.get(key), dict):
-            bad(path, key, "must be an object", fix=_HINT)
+            bad(path, key, "must be an object", fix=HINT)
     return doc
 
 
@@ -194,7 +194,7 @@ def _device_from(path, name: str, kind: str, d, reference: bool) -> RigDevice:
 
     where = f"{kind}s.{name}"
     if not isinstance(d, dict):
-        bad(path, where, f"must be an object with K, image_size, distortion, R and T, got {short(d)}", fix=_HINT)
+        bad(path, where, f"must be an object with K, image_size, distortion, R and T, got {short(d)}", fix=HINT)
     dev = Device(check_K(path, f"{where}.K", d.get("K")), check_size(path, f"{where}.image_size", d.get("image_size")),
                  check_distortion(path, f"{where}.distortion", d.get("distortion")))
     R = check_rotation(path, f"{where}.R", d.get("R"))
@@ -204,7 +204,7 @@ def _device_from(path, name: str, kind: str, d, reference: bool) -> RigDevice:
     verdict, std = d.get("verdict") or {}, d.get("std") or {}
     if not isinstance(verdict, dict) or not isinstance(std, dict):
         bad(path, f"{where}.verdict" if not isinstance(verdict, dict) else f"{where}.std", "must be an object",
-            fix=_HINT)
+            fix=HINT)
     return RigDevice(name, kind, dev, R, T, dict(std), str(verdict.get("level", "failed")),
                      tuple(str(r) for r in verdict.get("reasons", ())))
 
@@ -214,19 +214,19 @@ def _relative_from(path, key: str, r) -> RelativePose:
     where = f"relative.{key}"
     a, sep, b = key.partition("->")
     if not (sep and a and b):
-        bad(path, where, "must be named 'a->b' after two devices", fix=_HINT)
+        bad(path, where, "must be named 'a->b' after two devices", fix=HINT)
     if not isinstance(r, dict):
-        bad(path, where, f"must be an object with R, T and std, got {short(r)}", fix=_HINT)
+        bad(path, where, f"must be an object with R, T and std, got {short(r)}", fix=HINT)
     R = check_rotation(path, f"{where}.R", r.get("R"))
     T = numbers(path, f"{where}.T", r.get("T"), (3,))
     s = r.get("std") or {}
     if not isinstance(s, dict):
-        bad(path, f"{where}.std", "must be an object", fix=_HINT)
+        bad(path, f"{where}.std", "must be an object", fix=HINT)
     try:
         return RelativePose(a, b, R, T, np.asarray(s.get("angles_deg", [np.nan] * 3), float).reshape(3),
                             np.asarray(s.get("T", [np.nan] * 3), float).reshape(3), float(s.get("baseline", np.nan)))
     except (TypeError, ValueError) as e:
-        bad(path, f"{where}.std", f"must hold numbers ({e})", fix=_HINT)
+        bad(path, f"{where}.std", f"must hold numbers ({e})", fix=HINT)
 
 
 def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
@@ -235,16 +235,16 @@ def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
     (:mod:`procam.io.validate`).  :func:`procam.io.load_calibration` checks them too when it reads one pair, so a
     rig file is read whole or refused."""
     if not isinstance(doc.get("cameras"), dict) or not doc["cameras"]:
-        raise CalibrationFileError(f"{path}: a rig calibration without cameras; {_HINT}")
+        raise CalibrationFileError(f"{path}: a rig calibration without cameras; {HINT}")
     for key in ("projectors", "relative"):
         if not isinstance(doc.get(key), dict):
-            bad(path, key, "must be an object", fix=_HINT)
+            bad(path, key, "must be an object", fix=HINT)
     reference = doc.get("reference", next(iter(doc["cameras"])))
     if not isinstance(reference, str) or reference not in doc["cameras"]:
-        bad(path, "reference", f"names no camera of the rig (cameras: {', '.join(doc['cameras'])})", fix=_HINT)
+        bad(path, "reference", f"names no camera of the rig (cameras: {', '.join(doc['cameras'])})", fix=HINT)
     both = set(doc["cameras"]) & set(doc["projectors"])
     if both:
-        bad(path, "projectors", f"name {sorted(both)[0]!r} is also a camera's; each device has one name", fix=_HINT)
+        bad(path, "projectors", f"name {sorted(both)[0]!r} is also a camera's; each device has one name", fix=HINT)
     cams = tuple(_device_from(path, n, "camera", d, n == reference) for n, d in doc["cameras"].items())
     cams = tuple(sorted(cams, key=lambda c: c.name != reference))       # the reference first
     projs = tuple(_device_from(path, n, "projector", d, False) for n, d in doc["projectors"].items())
@@ -253,25 +253,5 @@ def rig_devices(path, doc: dict) -> tuple[tuple, tuple, dict]:
     for key, r in rel.items():
         if r.a not in names or r.b not in names:
             bad(path, f"relative.{key}", f"names a device the rig does not have (devices: {', '.join(sorted(names))})",
-                fix=_HINT)
+                fix=HINT)
     return cams, projs, rel
-
-
-def load_rig_calibration(path) -> RigCalibration:
-    """The :class:`~procam.calibration.RigCalibration` a rig calibration JSON file holds (every device, relative
-    pose and pair as written): every device block and relative pose checked by the one validator set
-    (:func:`rig_devices`), the pairs read by :func:`procam.io.load_calibration` with ``pair=``, so validated
-    like any calibration.  :class:`CalibrationFileError` naming the file and the field otherwise."""
-    from .calibration_file import load_calibration
-
-    path = Path(path)
-    doc = load_rig_document(path)
-    cams, projs, rel = rig_devices(path, doc)
-    pairs = {key: load_calibration(path, pair=key) for key in doc["pairs"]}
-    verdict = doc.get("verdict") or {}
-    if not isinstance(verdict, dict):
-        bad(path, "verdict", "must be an object", fix=_HINT)
-    return RigCalibration(str(doc.get("method", "")), cams, projs, rel, pairs, tuple(doc.get("poses") or ()),
-                          str(doc.get("uncertainty", "")), dict(doc.get("info") or {}),
-                          tuple(doc.get("warnings") or ()), str(verdict.get("level", "failed")),
-                          tuple(str(r) for r in verdict.get("reasons", ())))
