@@ -102,7 +102,9 @@ def test_degenerate_pose_figure_does_not_look_clean():
                           title="flat.json", verdict=calibration_verdict(calib).line())
     t = fig._suptitle
     assert t.get_text().startswith("flat.json\nverdict: degenerate: ") and "camera: degenerate pose" in t.get_text()
-    assert t.get_color() == "tab:red" and t.get_weight() == "bold"
+    from procam.style import VERDICT_COLOURS
+
+    assert t.get_color() == VERDICT_COLOURS["degenerate"] and t.get_weight() == "bold"
 
 
 def test_automatic_arrow_scale_and_key_length():

@@ -350,11 +350,16 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         cov_fit = J.linearise(model, f.p, free + held)[2] if held else f.cov
         fits[name] = ModelFit(name, f.p, f.cost, h_out, cov_fit, _embed(C_jk, f.free), f.n_residuals, f.free,
                               f.cov)
-        lowest = min(m.held_out for m in fits.values())
+        lowest = min((m.held_out for m in fits.values() if np.isfinite(m.held_out)), default=np.inf)
         if h_out > (1 + 10 * options.model_tolerance) * lowest:
             break      # the models are nested: the simpler ones left can only fit worse
-    lowest = min(m.held_out for m in fits.values())
-    near = tuple(m.name for m in fits.values() if m.held_out - lowest <= options.model_tolerance * lowest)
+    # a model whose held-out cost is not finite (a fit the data cannot resolve) is never the best; with none finite,
+    # the simplest model is kept and the fit's own +- (infinite where undetermined) says what it is worth
+    held = [m.held_out for m in fits.values() if np.isfinite(m.held_out)]
+    lowest = min(held) if held else np.inf
+    near = tuple(m.name for m in fits.values()
+                 if np.isfinite(m.held_out) and m.held_out - lowest <= options.model_tolerance * lowest)
+    near = near or (next(iter(fits)),)
     best = min((fits[n] for n in near), key=lambda m: len(MODELS.get(m.name, ())))      # the simplest of them
     cov = _reported_covariance(best, [fits[n] for n in near])
     cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
