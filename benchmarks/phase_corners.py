@@ -13,9 +13,9 @@ the family's decoder, the corners' projector coordinates), against the simulator
   scene's ``K_proj``, RMS over the seeds, and its stated ``±``;
 * each against the Gray family's in the same condition of the same run (``vs Gray``).
 
-    python benchmarks/phase_corners.py              # 16 sequences x 4 conditions, seed 1 (about 10 min)
+    python benchmarks/phase_corners.py              # 16 sequences x 4 conditions, seed 1 (about 7 min)
     python benchmarks/phase_corners.py --quick      # Gray and N=4 of each family, 2 conditions (about 1 min)
-    python benchmarks/phase_corners.py --seeds 3    # the full grid over three seeds
+    python benchmarks/phase_corners.py --seeds 3    # the grid over three seeds (about 20 min)
 """
 
 from __future__ import annotations
@@ -67,11 +67,11 @@ def _rms(x) -> float:
 
 
 def measure(renderer, ps, board, truth, true_fp, label, seed):
-    """One render decoded: per-corner errors end to end and at the true camera corners (projector px, valid
-    corners only), the single-pose f_p error and its stated ± (px), the seconds taken; or the error's text."""
+    """One render decoded: per-corner errors end to end and at the true camera corners ((n_corners,) projector px,
+    NaN where the corner has no projector coordinate), the single-pose f_p error and its stated ± (px); or the
+    error's text."""
     rng = np.random.default_rng(seed)
     stack = np.stack([renderer.frame(k, rng) for k in range(ps.count)])
-    t = time.perf_counter()
     try:
         view, _ = pipeline.view_from_stack(stack, ps, board, name=label, keep_maps=False)
         at_truth, _ = pipeline.view_from_stack(stack, ps, board, name=label, keep_maps=False,
@@ -85,9 +85,21 @@ def measure(renderer, ps, board, truth, true_fp, label, seed):
             dfp, sfp = cal.projector.K[0, 0] - true_fp, float((cal.std or {}).get("f_p", np.nan))
         except ProcamError:
             dfp, sfp = np.nan, np.nan
-    return dict(e2e=np.linalg.norm(view.proj_pts - truth["projector"], axis=1)[view.valid],
-                at_t=np.linalg.norm(at_truth.proj_pts - truth["projector"], axis=1)[at_truth.valid],
-                n=int(view.valid.sum()), dfp=dfp, sfp=sfp, t=time.perf_counter() - t)
+
+    def errors(v):
+        return np.where(v.valid, np.linalg.norm(v.proj_pts - truth["projector"], axis=1), np.nan)
+
+    return dict(e2e=errors(view), at_t=errors(at_truth), dfp=dfp, sfp=sfp)
+
+
+def _rms_valid(e) -> float:
+    return _rms(e[np.isfinite(e)])
+
+
+def ratio(m, gray, key) -> float:
+    """RMS of ``m``'s corner errors over Gray's, both over the corners that both decoded (every seed)."""
+    both = np.isfinite(m[key]) & np.isfinite(gray[key])
+    return _rms(m[key][both]) / _rms(gray[key][both]) if both.any() else float("nan")
 
 
 def run(args):
@@ -112,52 +124,65 @@ def run(args):
             if not ok:
                 results[cname, label] = (ps.count, fails[0])
                 continue
+            # a failed seed counts as every corner missing
+            pad = np.full(board.n_corners, np.nan)
             results[cname, label] = (ps.count, dict(
-                e2e=_rms(np.concatenate([g["e2e"] for g in ok])), at_t=_rms(np.concatenate([g["at_t"] for g in ok])),
-                n=min(g["n"] for g in ok), dfp=_rms([g["dfp"] for g in ok]), sfp=float(np.mean([g["sfp"] for g in ok])),
-                fails=len(fails)))
+                e2e=np.concatenate([pad if isinstance(g, str) else g["e2e"] for g in got]),
+                at_t=np.concatenate([pad if isinstance(g, str) else g["at_t"] for g in got]),
+                dfp=_rms([g["dfp"] for g in ok]), sfp=float(np.mean([g["sfp"] for g in ok])), fails=len(fails)))
             m = results[cname, label][1]
-            print(f"  [{time.perf_counter() - t0:5.0f} s] {cname} | {label}: corner {m['e2e']:.4f} px, at truth "
-                  f"{m['at_t']:.4f} px, f_p {m['dfp']:.1f} px", file=sys.stderr)
+            print(f"  [{time.perf_counter() - t0:5.0f} s] {cname} | {label}: corner {_rms_valid(m['e2e']):.4f} px, "
+                  f"at truth {_rms_valid(m['at_t']):.4f} px, f_p {m['dfp']:.1f} px", file=sys.stderr)
     return base, board, true_fp, seqs, conditions, seeds, results
 
 
 def table(base, board, true_fp, seqs, conditions, seeds, results):
+    n = board.n_corners * len(seeds)
     print(f"Preset `paper`: {base.cam_size[0]}x{base.cam_size[1]} camera, {base.proj_size[0]}x{base.proj_size[1]} "
           f"projector, {board.n_corners} corners, projector defocus {base.proj_defocus} px, true f_p {true_fp:.1f} px; "
-          f"seeds {', '.join(map(str, seeds))}. Corner RMS in projector px over the valid corners (*end to end*: "
-          "detected camera corners; *at true cam.*: the true camera corners); f_p: RMS error over the seeds and "
-          "the mean stated ±.\n")
+          f"seeds {', '.join(map(str, seeds))}. *corners*: those with a projector coordinate, of {n} ({board.n_corners} "
+          "per seed); corner RMS in projector px over them, *end to end* (the detected camera corners) and *at true "
+          "cam.* (the true camera corners: the decoder's own share); *vs Gray*: the RMS over Gray's on the corners "
+          "both have; f_p: the RMS error over the seeds and the mean stated ±, *vs Gray* their ratios to Gray's.\n")
     print("| condition | sequence | frames | corners | corner RMS end to end | vs Gray | at true cam. | vs Gray | "
           "f_p error px | vs Gray | f_p ± px | vs Gray |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for cname, *_ in conditions:
-        gcount, gray = results[cname, "gray"]
+        gray = results[cname, "gray"][1]
         for label, *_ in seqs:
             count, m = results[cname, label]
             if isinstance(m, str):
                 print(f"| {cname} | {label} | {count} | failed: {m} |||||||||")
                 continue
-            ok = not isinstance(gray, str)
-            ratio = (lambda k: f"{m[k] / gray[k]:.2f}" if ok and gray[k] > 0 else "-")
+            g = None if isinstance(gray, str) else gray
             note = f" ({m['fails']} seed(s) failed)" if m["fails"] else ""
-            print(f"| {cname} | {label} | {count} | {m['n']}{note} | {m['e2e']:.4f} | {ratio('e2e')} | "
-                  f"{m['at_t']:.4f} | {ratio('at_t')} | {m['dfp']:.1f} | {ratio('dfp')} | {m['sfp']:.1f} | {ratio('sfp')} |")
+            cells = [f"{int(np.isfinite(m['e2e']).sum())}{note}"]
+            for k in ("e2e", "at_t"):
+                cells += [f"{_rms_valid(m[k]):.4f}", f"{ratio(m, g, k):.2f}" if g else "-"]
+            for k in ("dfp", "sfp"):
+                cells += [f"{m[k]:.1f}", f"{m[k] / g[k]:.2f}" if g and g[k] > 0 else "-"]
+            print(f"| {cname} | {label} | {count} | " + " | ".join(cells) + " |")
     print()
-    print("Summary: the corner error's ratio to Gray's over the conditions (min-max); *halves* where every "
-          "condition's ratio is at most 0.5.\n")
-    print("| sequence | end to end vs Gray | halves end to end | at true cam. vs Gray | halves at true cam. |")
-    print("|---|---|---|---|---|")
+    print("Summary over the conditions: the corner error's ratio to Gray's (min-max; *halves* where every "
+          "condition's is at most 0.5 with every seed decoded), and the f_p error and stated ± (min-max, px; Gray's: "
+          + ", ".join(f"{results[c, 'gray'][1]['dfp']:.1f} ± {results[c, 'gray'][1]['sfp']:.1f}" for c, *_ in conditions
+                      if not isinstance(results[c, "gray"][1], str)) + ").\n")
+    print("| sequence | end to end vs Gray | halves end to end | at true cam. vs Gray | halves at true cam. | "
+          "f_p error px | f_p ± px |")
+    print("|---|---|---|---|---|---|---|")
+    rng = (lambda xs, f: f"{f.format(min(xs))}-{f.format(max(xs))}" if xs else "-")
     for label, family, _ in seqs:
         if family == "gray":
             continue
+        ms = [(results[c, label][1], results[c, "gray"][1]) for c, *_ in conditions]
+        ms = [(m, g) for m, g in ms if not isinstance(m, str) and not isinstance(g, str)]
+        complete = len(ms) == len(conditions) and not any(m["fails"] for m, _ in ms)
         cells = []
         for k in ("e2e", "at_t"):
-            rs = [results[c, label][1][k] / results[c, "gray"][1][k] for c, *_ in conditions
-                  if not isinstance(results[c, label][1], str) and not isinstance(results[c, "gray"][1], str)]
-            failed = len(rs) < len(conditions)
-            cells += [f"{min(rs):.2f}-{max(rs):.2f}" if rs else "-",
-                      "no (failed)" if failed else ("yes" if max(rs) <= 0.5 else "no")]
+            rs = [ratio(m, g, k) for m, g in ms]
+            cells += [rng(rs, "{:.2f}"), "yes" if complete and max(rs) <= 0.5 else
+                      ("no (a decode failed)" if not complete else "no")]
+        cells += [rng([m["dfp"] for m, _ in ms], "{:.0f}"), rng([m["sfp"] for m, _ in ms], "{:.0f}")]
         print(f"| {label} | " + " | ".join(cells) + " |")
     print()
 
