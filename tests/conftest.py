@@ -148,3 +148,55 @@ def expect_warning(category, match=None):
     warnings of the same calls (pytest re-emits what does not match) are recorded, not failures."""
     with verdict_warnings(), pytest.warns(category, match=match) as record:
         yield record
+
+
+# ------------------------------------------------------------------------------------------------
+# the default run: long tests with a sibling in it run with `pytest -m slow`
+# ------------------------------------------------------------------------------------------------
+
+#: Parametrised tests whose first case stays in the default run and whose other cases (the same path at other
+#: seeds, poses, orders or labellings, each several seconds) run with ``-m slow``.
+SLOW_SIBLINGS = (
+    "test_real_projector.py::test_a_pose_the_data_cannot_resolve_is_never_good",
+    "test_real_projector.py::test_a_known_projector_gives_R_and_T_within_their_std",
+    "test_decode.py::test_noise_and_low_contrast",
+    "test_export.py::test_rectified_rows_agree_and_hold_the_board_for_any_rig_orientation",
+    "test_descriptions.py::test_every_gray_block_decodes_in_the_order_described",
+    "test_verdicts_words.py::test_camera_only_photo_and_multi_pose_are_the_same_whatever_the_labelling",
+    "test_verdicts_words.py::test_single_pose_is_the_same_whatever_the_boards_labelling",
+    "test_advisor.py::test_projector_angles_and_predicted_stds_across_poses",
+    "test_single_pose.py::test_an_assumed_u0p_costs_what_it_can",
+    "test_single_pose.py::test_fronto_parallel_or_single_axis_camera_pose_is_flagged",
+    "test_cli.py::test_gallery_examples_run",
+    "test_bad_inputs.py::test_every_pose_option_choice",
+    "test_figures.py::test_focal_error_figure_clips_no_point",
+    "test_plausibility.py::test_a_pattern_swapped_with_its_inverse_is_named",
+    "test_background.py::test_check_fires_on_the_paper_rig",
+    "test_background.py::test_check_is_silent_on_the_ideal_rig",
+)
+#: Long tests whose path the default run covers elsewhere (the test named after each), run with ``-m slow``.
+SLOW_COVERED = {
+    "test_cli.py::test_demo_runs": "CI runs procam demo itself; test_cli's calibrate end to end",
+    "test_experiment.py::test_cli_experiment_report_shows_the_experiments_own_all_pose_calibration":
+        "test_experiment.py::test_cli_experiment",
+    "test_multi_pose.py::test_joint_refinement_at_least_as_close_as_frozen_stereo":
+        "test_multi_pose.py::test_noisy_recovery_and_std",
+    "test_report_cli.py::test_calibrate_and_report_a_rendered_capture": "test_report_cli.py::test_report_command",
+    "test_background.py::test_every_output_says_what_the_background_estimated":
+        "test_background.py::test_calibrate_applies_the_background_only_when_the_view_has_one",
+    "test_bad_inputs.py::test_a_second_run_writes_over_its_own_figures_pictures_and_page":
+        "test_ownership.py::test_every_writing_command_leaves_every_byte_of_the_users_files_and_its_inputs",
+}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Mark the slow siblings (:data:`SLOW_SIBLINGS` but their first case, :data:`SLOW_COVERED`) ``slow`` before
+    ``-m 'not slow'`` deselects."""
+    seen = set()
+    for item in items:
+        node = item.nodeid.split("tests/", 1)[-1]
+        base = node.split("[", 1)[0]
+        if base in SLOW_COVERED or (base in SLOW_SIBLINGS and base in seen):
+            item.add_marker(pytest.mark.slow)
+        seen.add(base)
