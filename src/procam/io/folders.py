@@ -184,12 +184,9 @@ def check_writable_dir(folder, label: str | None = None, need_bytes: int = 1 << 
 INPUT_FILES = ("rig.json", "truth.json", "patterns.json", "capture.json", MANIFEST)
 
 
-def input_clash(path: Path, inputs) -> str | None:
-    """Which of the command's ``inputs`` (files and pose or rig folders) writing ``path`` would change (words for a
-    message: ``'is rig.json of rig1, an input of this command'``), after
-    resolving symbolic links (of the file and of its folders), or None: an input file itself, or inside an input
-    folder (at any depth) one of :data:`INPUT_FILES` or a file its folder's manifest lists as a frame, camera
-    frame or side file -- whether it exists yet or not."""
+def _clash(path, inputs, inside) -> str | None:
+    """The words for the first of ``inputs`` that ``path`` is, after resolving symbolic links, or that
+    ``inside(target, input, resolved input)`` names (the loop of :func:`input_clash` and :func:`folder_clash`)."""
     try:
         target = Path(path).resolve()
     except (OSError, RuntimeError):
@@ -202,35 +199,40 @@ def input_clash(path: Path, inputs) -> str | None:
         if target == src:
             return ("is also an input of this command" if Path(p) == Path(path) else
                     f"is {p}, an input of this command (symbolic links followed)")
+        words = inside(target, p, src)
+        if words:
+            return words
+    return None
+
+
+def input_clash(path: Path, inputs) -> str | None:
+    """Which of the command's ``inputs`` (files and pose or rig folders) writing ``path`` would change (words for a
+    message: ``'is rig.json of rig1, an input of this command'``), after
+    resolving symbolic links (of the file and of its folders), or None: an input file itself, or inside an input
+    folder (at any depth) one of :data:`INPUT_FILES` or a file its folder's manifest lists as a frame, camera
+    frame or side file -- whether it exists yet or not."""
+    def needed(target, p, src):
         if not (src.is_dir() and src in target.parents):
-            continue
+            return None
         man = read_manifest(target.parent)
         role = man["files"].get(target.name) if man is not None else None
         if target.name in INPUT_FILES or role in ("frame", "captured", "sidecar"):
             what = {"frame": "a frame", "captured": "a captured frame"}.get(role, target.name)
             return f"is {what} of {p}, an input of this command"
-    return None
+        return None
+
+    return _clash(path, inputs, needed)
 
 
 def folder_clash(folder: Path, inputs) -> str | None:
     """Which of the command's ``inputs`` writing into the output ``folder`` would change (words for a message), after
     resolving symbolic links, or None: ``folder`` is an input folder, or a capture folder inside one (a rig pose's
     pair folder), whose readers would take the files written there for its own."""
-    try:
-        target = Path(folder).resolve()
-    except (OSError, RuntimeError):
-        return None
-    for p in inputs:
-        try:
-            src = Path(p).resolve()
-        except (OSError, RuntimeError):
-            continue
-        if target == src:
-            return "is also an input of this command" if Path(p) == Path(folder) else \
-                f"is {p}, an input of this command (symbolic links followed)"
+    def capture_inside(target, p, src):
         man = read_manifest(target)
         holds_frames = (man is not None and any(r in ("frame", "captured") for r in man["files"].values())) or any(
             (target / n).is_file() for n in ("patterns.json", "capture.json", "rig.json"))
-        if src in target.parents and holds_frames:
-            return f"is a capture folder of {p}, an input of this command"
-    return None
+        return f"is a capture folder of {p}, an input of this command" if src in target.parents and holds_frames \
+            else None
+
+    return _clash(folder, inputs, capture_inside)
