@@ -42,3 +42,26 @@ def test_board_outline_is_the_convex_hull():
     assert out.shape == (4, 2)
     assert {tuple(p) for p in out} == {(0, 0), (10, 0), (10, 5), (0, 5)}
     assert board_outline(c[:2]).shape == (0, 2)
+
+
+def test_a_renumbering_rewords_the_rejected_corners_from_the_data_not_the_text():
+    """Rejected corners are data (indices, residuals, the rule); their message is worded from the data again in the
+    given numbering, and nothing else in a text changes (a number in another message that looks like a corner
+    reference stays as it is)."""
+    from types import SimpleNamespace
+
+    from procam.board.labelling import Labelling, _reworded
+    from procam.single_pose._robust import rejection_message
+
+    order = np.array([3, 0, 2, 1])  # canonical corner k is the given corner order[k]
+    lab = Labelling(order, np.eye(3))
+    words = {"name": "p", "what": "camera", "n_valid": 4, "n_used": 2, "threshold_px": 1.5, "floor_px": 0.5,
+             "k": 5.0, "max_list": 8}
+    sol = SimpleNamespace(info={"rejection": words}, rejected=np.array([0, 3]),
+                          rejected_residuals_px=np.array([2.0, 7.5]))
+    changes = lab.given_words(sol)
+    (old, new), = changes.items()
+    assert "#3 (7.5 px), #0 (2.0 px)" in old and "#1 (7.5 px), #3 (2.0 px)" in new
+    assert new == rejection_message(np.array([3, 1]), sol.rejected_residuals_px, words)
+    other = "pose 'q': frames #0 (white) look swapped"
+    assert _reworded((old, other, f"weak: {old}"), changes) == (new, other, f"weak: {new}")

@@ -315,7 +315,9 @@ def test_real_photos_single_pose_camera_only():
         cam, size = _corners(path)
         which = "left" if path.name.startswith("left") else "right"
         fx = REFERENCE[which][0]
-        cal = sp.calibrate_camera_only(obj, cam, size, name=path.name)
+        with warnings.catch_warnings():  # a weak or degenerate photo says so (its rating, read below)
+            warnings.simplefilter("ignore", ProcamWarning)
+            cal = sp.calibrate_camera_only(obj, cam, size, name=path.name)
         f, s = cal.camera.K[0, 0], cal.std["f_c"]
         adv = cal.poses[0]["advice"]["camera"]
         assert np.isfinite(f) and f > 0 and cal.camera.K[1, 1] > 0

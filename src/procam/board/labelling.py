@@ -22,7 +22,6 @@ turned exactly 45 deg in the image) are measure-zero with real data.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -117,9 +116,6 @@ def canonical_labelling(obj_pts, img_pts):
     return order, obj2, G
 
 
-_CORNER_REF = re.compile(r"#(\d+) \(")
-
-
 @dataclass(frozen=True)
 class Labelling:
     """How a view's corners were renumbered into the canonical labelling (:func:`canonical_labelling`).
@@ -148,11 +144,28 @@ class Labelling:
         out[self.order] = a
         return out
 
-    def given_text(self, text: str) -> str:
-        """A message listing rejected canonical corners (``#k (``) with the given corners' numbers."""
-        if "rejected as outliers" not in text:
-            return text
-        return _CORNER_REF.sub(lambda m: f"#{int(self.order[int(m.group(1))])} (", text)
+    def given_words(self, sol) -> dict:
+        """``{canonical rejection message: the same message with the given corners' numbers}`` of a solution's
+        rejected corners, both worded from its data (:func:`procam.single_pose._robust.rejection_message`); empty
+        when it rejected none."""
+        words = (getattr(sol, "info", None) or {}).get("rejection")
+        rej = np.asarray(getattr(sol, "rejected", ()), int)
+        if words is None or not len(rej):
+            return {}
+        from ..single_pose._robust import rejection_message
+
+        norms = sol.rejected_residuals_px
+        return {rejection_message(rej, norms, words): rejection_message(self.to_given(rej), norms, words)}
+
+
+def _reworded(texts, changes: dict) -> tuple:
+    """``texts`` with every canonical message of ``changes`` replaced by its given-numbered wording."""
+    out = []
+    for t in texts:
+        for old, new in changes.items():
+            t = t.replace(old, new)
+        out.append(t)
+    return tuple(out)
 
 
 def canonical_view(view):
@@ -191,7 +204,7 @@ def _given_solution(sol, lab: Labelling):
                    residuals=lab.given_rows(sol.residuals),
                    mask=None if sol.mask is None else lab.given_rows(sol.mask),
                    rejected=lab.to_given(np.asarray(sol.rejected, int)),
-                   warnings=tuple(lab.given_text(w) for w in sol.warnings))
+                   warnings=_reworded(sol.warnings, lab.given_words(sol)))
 
 
 def given_labelling(calib, view, lab: Labelling | None):
@@ -217,11 +230,13 @@ def given_labelling(calib, view, lab: Labelling | None):
                 p[key] = [float(a) for a in models.board_angles_deg(np.asarray(R, float) @ lab.G, t)]
         poses.append(p)
     info = dict(calib.info)
+    changes = {}
     for k in ("camera", "projector"):
         if k in info:
+            changes.update(lab.given_words(info[k]))
             info[k] = _given_solution(info[k], lab)
     info["labelling"] = {"order": lab.order.tolist(), "G": lab.G.tolist(),
                          "note": "solved in the canonical labelling of the board (procam.board.labelling.canonical_labelling)"}
     return calib.replace(views=calib.views if view is None else (view,), poses=tuple(poses), info=info,
-                         warnings=tuple(lab.given_text(w) for w in calib.warnings),
-                         verdict_reasons=tuple(lab.given_text(r) for r in calib.verdict_reasons))
+                         warnings=_reworded(calib.warnings, changes),
+                         verdict_reasons=_reworded(calib.verdict_reasons, changes))
