@@ -3,7 +3,7 @@
 Each figure is the median wall time of ``--repeat`` fresh processes, the two checkouts alternating (this
 machine's load moves both alike):
 
-1. ``procam --version`` and ``procam --help``;
+1. ``procam --version``, ``procam --help`` and ``procam calibrate --help``;
 2. ``procam calibrate`` of five rendered poses of the ``paper`` rig (multi-pose), and the time its imports
    take: the sum of the top-level cumulative times of ``python -X importtime`` (imports done in a thread
    while the captures are decoded count there too, though they cost no wall time).
@@ -88,6 +88,7 @@ def main():
             work = Path(tmp) / "out"
             work.mkdir()
             cases = {"procam --version": ["--version"], "procam --help": ["--help"],
+                     "procam calibrate --help": ["calibrate", "--help"],
                      "calibrate, 5 poses": ["calibrate", *map(str, poses), "--board", "10x6", "--square", "24",
                                             "-o", str(work / "c.json")]}
             times = {(c, s): [] for c in cases for s in sides}
