@@ -51,7 +51,7 @@ def test_a_renumbering_rewords_the_rejected_corners_from_the_data_not_the_text()
     from types import SimpleNamespace
 
     from procam.board.labelling import Labelling, _reworded
-    from procam.single_pose._robust import rejection_message
+    from procam.verdict import rejection_message
 
     order = np.array([3, 0, 2, 1])  # canonical corner k is the given corner order[k]
     lab = Labelling(order, np.eye(3))

@@ -146,13 +146,13 @@ class Labelling:
 
     def given_words(self, sol) -> dict:
         """``{canonical rejection message: the same message with the given corners' numbers}`` of a solution's
-        rejected corners, both worded from its data (:func:`procam.single_pose._robust.rejection_message`); empty
+        rejected corners, both worded from its data (:func:`procam.verdict.rejection_message`); empty
         when it rejected none."""
         words = (getattr(sol, "info", None) or {}).get("rejection")
         rej = np.asarray(getattr(sol, "rejected", ()), int)
         if words is None or not len(rej):
             return {}
-        from ..single_pose._robust import rejection_message
+        from ..verdict import rejection_message
 
         norms = sol.rejected_residuals_px
         return {rejection_message(rej, norms, words): rejection_message(self.to_given(rej), norms, words)}

@@ -13,6 +13,7 @@ import numpy as np
 from .. import models
 from ..errors import CalibrationError
 from ..stats import robust_sigma
+from ..verdict import rejection_message
 
 
 def clean(obj_pts, img_pts, what):
@@ -215,7 +216,7 @@ def fit_robust(fit, predict, obs, obj, valid, opts: RobustOptions):
 def rejection_report(sol, predict, obs, valid, used, thr, notes, name: str, what: str, opts: RobustOptions,
                      max_list: int = 8):
     """The solution with all valid corners' residuals, the rejected corners and their warning (the words
-    :func:`rejection_message` makes of the data kept in ``info["rejection"]``, so a renumbering of the corners
+    :func:`procam.verdict.rejection_message` makes of the data kept in ``info["rejection"]``, so a renumbering of the corners
     re-words it from the data: :func:`procam.board.labelling.given_labelling`)."""
     with np.errstate(all="ignore"):
         res = obs - predict(sol)  # observed - predicted, as documented on the solutions
@@ -231,19 +232,3 @@ def rejection_report(sol, predict, obs, valid, used, thr, notes, name: str, what
     warnings += [f"pose {name!r}: {what}: {n}" for n in notes]
     return replace(sol, residuals=res, rejected=rej, rejected_residuals_px=norms, outlier_threshold_px=float(thr),
                    warnings=tuple(warnings), info={**(sol.info or {}), "rejection": words})
-
-
-def rejection_message(rejected, norms, words: dict) -> str | None:
-    """The warning that lists the rejected corners (indices ``rejected`` (n,), residual norms ``norms`` (n,) px) by
-    the data of :func:`rejection_report` (``words``: pose name, device, counts, threshold, rule); None when none was
-    rejected."""
-    rej, norms = np.asarray(rejected, int), np.asarray(norms, float)
-    if not len(rej):
-        return None
-    n, max_list = len(rej), words["max_list"]
-    order = np.argsort(-np.nan_to_num(norms, nan=np.inf))
-    listed = ", ".join(f"#{rej[i]} ({norms[i]:.1f} px)" for i in order[:max_list])
-    more = f" and {n - max_list} more" if n > max_list else ""
-    return (f"pose {words['name']!r}: {n} of {words['n_valid']} {words['what']} corners rejected as outliers "
-            f"(residual > {words['threshold_px']:.2f} px = max({words['floor_px']:g} px, {words['k']:g} x robust "
-            f"sigma)): {listed}{more}; the fit uses the other {words['n_used']} (reject_outliers=False keeps them)")

@@ -284,3 +284,22 @@ def flagged(calib, check=None, views=None) -> list[str]:
         for _, r in evidence_reasons(check):
             add(r)
     return out
+
+
+def rejection_message(rejected, norms, words: dict) -> str | None:
+    """The warning that lists the rejected corners (indices ``rejected`` (n,), residual norms ``norms`` (n,) px) by
+    the data of :func:`procam.single_pose._robust.rejection_report` (``words``: pose name, device, counts,
+    threshold, rule); None when none was rejected. Worded here, with the verdict's other words, so that a solver
+    and a renumbering of the board (:mod:`procam.board.labelling`) word it alike."""
+    import numpy as np
+
+    rej, norms = np.asarray(rejected, int), np.asarray(norms, float)
+    if not len(rej):
+        return None
+    n, max_list = len(rej), words["max_list"]
+    order = np.argsort(-np.nan_to_num(norms, nan=np.inf))
+    listed = ", ".join(f"#{rej[i]} ({norms[i]:.1f} px)" for i in order[:max_list])
+    more = f" and {n - max_list} more" if n > max_list else ""
+    return (f"pose {words['name']!r}: {n} of {words['n_valid']} {words['what']} corners rejected as outliers "
+            f"(residual > {words['threshold_px']:.2f} px = max({words['floor_px']:g} px, {words['k']:g} x robust "
+            f"sigma)): {listed}{more}; the fit uses the other {words['n_used']} (reject_outliers=False keeps them)")
