@@ -142,6 +142,9 @@ ExposureOpt = Annotated[Optional[float], typer.Option(
 GainOpt = Annotated[Optional[float], typer.Option("--gain", help="Camera gain in the camera's unit (GenICam: dB).")]
 CameraSizeOpt = Annotated[Optional[str], typer.Option(
     "--camera-size", help="Camera resolution WIDTHxHEIGHT (OpenCV).")]
+DisplayOpt = Annotated[Optional[int], typer.Option(
+    "--display", help="The projector's display (default: the one that is not the primary; procam capture "
+    "--list-devices lists them).")]
 SeedOpt = Annotated[int, typer.Option("--seed", help="The simulator's noise seed (--virtual, --camera virtual): "
                                       "the same seed gives the same frames.")]
 LiveJsonOpt = Annotated[bool, typer.Option(
@@ -160,6 +163,7 @@ EXPOSURE_MS = (0.0, 60_000.0)
 GAIN = (0.0, 1000.0)
 MAX_FRAMES = 10_000_000
 MAX_SEED = 2**32 - 1 - 99  # a session of up to 99 poses seeds pose k with seed + k
+MAX_DISPLAY = 64
 
 
 def parse_pose(text: str) -> tuple[float, float, float]:
@@ -182,9 +186,11 @@ def parse_pose(text: str) -> tuple[float, float, float]:
     return vals[0], vals[1], vals[2]
 
 
-def camera_settings(exposure, gain, camera_size, seed) -> tuple[int, int] | None:
-    """Check the camera options of ``capture``/``advise`` (one line naming the option when one is out of range);
-    returns the camera size ``(width, height)`` or None."""
+def camera_settings(exposure, gain, camera_size, seed, display=None) -> tuple[int, int] | None:
+    """Check the device options of ``capture``/``advise``/``world-check`` (one line naming the option when one is out
+    of range); returns the camera size ``(width, height)`` or None."""
+    number(display, "--display", lo=0, hi=MAX_DISPLAY, what="a display index",
+           unit=" (procam capture --list-devices lists them)")
     number(exposure, "--exposure", lo=EXPOSURE_MS[0], hi=EXPOSURE_MS[1], lo_open=True, unit=" ms",
            what="a finite number")
     number(gain, "--gain", lo=GAIN[0], hi=GAIN[1], what="a finite number")

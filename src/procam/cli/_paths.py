@@ -11,7 +11,6 @@ from ..errors import OutputError
 from ._app import fail, warn
 from ._options import optional_size, value
 
-
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 

@@ -109,8 +109,8 @@ def print_pose_check(check, png=None) -> None:
         say(line)
     say(f"({check.seconds:.1f} s)")
     if png is not None:
-        from ..io.files import write_image
         from ..check import overlay
+        from ..io.files import write_image
 
         write_image(png, overlay(check))
         say(f"wrote {png}")

@@ -12,9 +12,22 @@ from typing import Optional
 import typer
 
 from ._app import app, fail, say, text_on_stderr, user_errors
-from ._options import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, LiveAutoOpt, LiveCalibrationOpt, LiveJsonOpt,
-                       LiveMaxFramesOpt, LiveTargetOpt, SeedOpt, camera_settings, live_limits, parse_board)
 from ._live import live_advice
+from ._options import (
+    BoardOpt,
+    CameraSizeOpt,
+    ExposureOpt,
+    GainOpt,
+    LiveAutoOpt,
+    LiveCalibrationOpt,
+    LiveJsonOpt,
+    LiveMaxFramesOpt,
+    LiveTargetOpt,
+    SeedOpt,
+    camera_settings,
+    live_limits,
+    parse_board,
+)
 
 
 def parse_angles(text: str, option: str) -> tuple[float, float, float]:

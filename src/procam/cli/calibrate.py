@@ -9,8 +9,21 @@ import typer
 
 from .. import choices
 from ._app import app, console, fail, preload, say, user_errors, warn
-from ._options import (BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, choice, number,
-                       optional_size, parse_board, pose_options, value, with_pose_options)
+from ._options import (
+    BackgroundOpt,
+    BoardOpt,
+    OrderOpt,
+    ProjectorOpt,
+    SquareOpt,
+    StepOpt,
+    choice,
+    number,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import FIGURE_SUFFIXES, distinct_poses, output_path
 
 Cod = choice("Cod", choices.COD_MODES)
@@ -183,9 +196,9 @@ def calibrate_cmd(
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     import contextlib
 
-    from .. import pipeline
     from .. import method as calibration_method
     from .. import multi_pose as _mp
+    from .. import pipeline
     from .. import single_pose as _sp
     from ..single_pose.background import BackgroundOptions
     from . import _show

@@ -15,6 +15,7 @@ from ..errors import ProcamError
 from ._app import app, console, err_console, fail, is_tty, plain, text_on_stderr, user_errors
 from ._options import (
     CameraSizeOpt,
+    DisplayOpt,
     ExposureOpt,
     GainOpt,
     LiveAutoOpt,
@@ -73,8 +74,7 @@ def capture_cmd(
                                              "gets pose01 ... poseN). Must not exist, or be empty."),
     projector: Optional[str] = typer.Option(None, "--projector", "-p", help="Pattern size WIDTHxHEIGHT, the projector's "
                                             "native resolution (default: the display's size; 1920x1080 with --virtual)."),
-    display: Optional[int] = typer.Option(None, "--display", help="Display that shows the patterns (default: the one "
-                                          "that is not the primary; --list-devices lists them)."),
+    display: DisplayOpt = None,
     camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | "
                                "folder:PATH | virtual."),
     poses: int = typer.Option(1, "--poses", help="Capture N poses into OUT_DIR/pose01 ..., with a prompt to move the "
@@ -126,15 +126,13 @@ def capture_cmd(
     size = parse_size(projector, "--projector") if projector else None
     if size and max(size) > 16384:
         fail(f"--projector {projector}: larger than 16384 pixels; give the projector's native resolution")
-    if display is not None and not 0 <= display <= 64:
-        fail(f"--display must be a display index >= 0 (see --list-devices), got {display}")
     if not 1 <= poses <= 99:
         fail(f"--poses must be between 1 and 99, got {poses}")
     if not 0 <= retries <= 20:
         fail(f"--retries must be between 0 and 20, got {retries}")
     number(settle_ms, "--settle-ms", lo=0, hi=10000, unit=" ms", what="a finite number")
     number(timeout, "--timeout", lo=0, hi=3600, lo_open=True, unit=" s", what="a finite number")
-    cam_size = camera_settings(exposure, gain, camera_size, seed)
+    cam_size = camera_settings(exposure, gain, camera_size, seed, display)
     live_limits(max_frames)
     order, step, family = value(pattern_args["order"]), pattern_args["step"], pattern_args["family"]
     board_size = parse_size(board, "--board") if board else None

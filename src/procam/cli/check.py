@@ -7,8 +7,20 @@ from pathlib import Path
 import typer
 
 from ._app import app, fail, user_errors
-from ._options import (BackgroundMode, BackgroundOpt, BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt,
-                       optional_size, parse_board, pose_options, value, with_pose_options)
+from ._options import (
+    BackgroundMode,
+    BackgroundOpt,
+    BoardOpt,
+    OrderOpt,
+    ProjectorOpt,
+    SquareOpt,
+    StepOpt,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import output_path
 
 

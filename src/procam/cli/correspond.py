@@ -7,8 +7,18 @@ from pathlib import Path
 import typer
 
 from ._app import app, say, user_errors, warn
-from ._options import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size, parse_board, pose_options,
-                       value, with_pose_options)
+from ._options import (
+    BoardOpt,
+    OrderOpt,
+    ProjectorOpt,
+    SquareOpt,
+    StepOpt,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import FIGURE_SUFFIXES, output_path
 
 
@@ -33,8 +43,8 @@ def correspond_cmd(
     import numpy as np
 
     from .. import capture, io, pipeline
-    from ..io import files as _files
     from .. import correspond as corr
+    from ..io import files as _files
 
     brd = parse_board(board, square)
     opts = pose_options(**pose_args)

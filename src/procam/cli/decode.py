@@ -7,8 +7,19 @@ from pathlib import Path
 import typer
 
 from ._app import app, fail, say, user_errors, warn
-from ._options import (ContrastOpt, DecodeMethod, DecodeOpt, OrderOpt, ProjectorOpt, ShadowOpt, StepOpt, number,
-                       optional_size, pose_options, value)
+from ._options import (
+    ContrastOpt,
+    DecodeMethod,
+    DecodeOpt,
+    OrderOpt,
+    ProjectorOpt,
+    ShadowOpt,
+    StepOpt,
+    number,
+    optional_size,
+    pose_options,
+    value,
+)
 from ._paths import FIGURE_SUFFIXES, output_path
 
 

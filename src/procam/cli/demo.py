@@ -34,15 +34,14 @@ def demo_cmd(
     force: ForceOpt = False,
 ):
     """Render a procam capture at a recommended pose, calibrate it from that one pose, compare with the truth."""
+    import numpy as np
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
-    import numpy as np
-
     # the simulator, the solvers and matplotlib load only when the demo runs, not with every command
     from .. import io, patterns, pipeline, simulate, single_pose
-    from ..io import files as _files
     from ..board import Board
+    from ..io import files as _files
     from ..models import euler_deg
     from ..plots import save_figure
     from ..plots.correspond import correspond_figure

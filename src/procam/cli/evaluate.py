@@ -8,8 +8,18 @@ from typing import TYPE_CHECKING
 import typer
 
 from ._app import app, console, fail, plain, say, user_errors, warn
-from ._options import (BoardOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size, parse_board, pose_options,
-                       value, with_pose_options)
+from ._options import (
+    BoardOpt,
+    OrderOpt,
+    ProjectorOpt,
+    SquareOpt,
+    StepOpt,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import assumed_size, distinct_poses, output_path, pose_sizes
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
@@ -64,8 +74,8 @@ def evaluate_cmd(
     import json
 
     from .. import io, pipeline
-    from ..io import files as _files
     from ..evaluate import check_baseline, evaluate
+    from ..io import files as _files
 
     brd = parse_board(board, square)
     distinct_poses(poses)

@@ -9,8 +9,20 @@ import typer
 
 from ..style import fmt_number
 from ._app import app, console, err_console, fail, is_tty, plain, say, user_errors
-from ._options import (BoardOpt, DistModel, ForceOpt, OrderOpt, ProjectorOpt, SquareOpt, StepOpt, optional_size,
-                       parse_board, pose_options, value, with_pose_options)
+from ._options import (
+    BoardOpt,
+    DistModel,
+    ForceOpt,
+    OrderOpt,
+    ProjectorOpt,
+    SquareOpt,
+    StepOpt,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import distinct_poses, output_dir
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn

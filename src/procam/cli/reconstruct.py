@@ -37,15 +37,14 @@ def reconstruct_cmd(
     step: StepOpt = None,
 ):
     """Decode a pose and triangulate every decoded camera pixel (camera ray x projector planes)."""
-    from rich.table import Table
-
     import numpy as np
+    from rich.table import Table
 
     from .. import board as _board
     from .. import decode, io, pipeline
-    from ..io.formats import PLY_COMMENT
-    from ..io import files as _files
     from .. import reconstruct as rc
+    from ..io import files as _files
+    from ..io.formats import PLY_COMMENT
 
     output_path(out, "-o", (".ply",), inputs=(calibration, pose_dir))
     from ..io.ply import require_plyfile

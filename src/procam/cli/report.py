@@ -8,8 +8,16 @@ from typing import Optional
 import typer
 
 from ._app import app, console, fail, say, user_errors, warn
-from ._options import (OrderOpt, ProjectorOpt, StepOpt, optional_size, parse_board, pose_options, value,
-                       with_pose_options)
+from ._options import (
+    OrderOpt,
+    ProjectorOpt,
+    StepOpt,
+    optional_size,
+    parse_board,
+    pose_options,
+    value,
+    with_pose_options,
+)
 from ._paths import output_path, pose_sizes
 
 REPORT_SUFFIXES = (".html", ".htm")

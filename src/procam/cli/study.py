@@ -8,8 +8,8 @@ from typing import Optional
 
 import typer
 
-from ..style import fmt_number
 from ..errors import ProcamError
+from ..style import fmt_number
 from ._app import app, console, err_console, fail, plain, say, user_errors
 from ._options import DeviceName, ForceOpt, number, value
 from ._paths import output_dir, output_path
@@ -44,7 +44,14 @@ def study(
 
     Reproduces the paper's simulation study and draws the single-pose Cramér–Rao bound into it.
     """
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
     from rich.table import Table
 
     from ..paper.study import StudyConfig, parse_grid, run_study

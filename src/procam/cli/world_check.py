@@ -13,8 +13,21 @@ from typing import Optional
 import typer
 
 from ._app import app, fail, say, user_errors
-from ._options import (BoardOpt, CameraSizeOpt, ExposureOpt, GainOpt, SeedOpt, SimPreset, SquareOpt, camera_settings,
-                       number, parse_board, parse_pose, value)
+from ._options import (
+    BoardOpt,
+    CameraSizeOpt,
+    DisplayOpt,
+    ExposureOpt,
+    GainOpt,
+    SeedOpt,
+    SimPreset,
+    SquareOpt,
+    camera_settings,
+    number,
+    parse_board,
+    parse_pose,
+    value,
+)
 from ._paths import output_path
 
 
@@ -26,8 +39,7 @@ def world_check_cmd(
     square: SquareOpt = None,
     camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | "
                                "folder:PATH (see procam capture --list-devices)."),
-    display: Optional[int] = typer.Option(None, "--display", help="Display of the projector (default: the one that "
-                                          "is not the primary)."),
+    display: DisplayOpt = None,
     exposure: ExposureOpt = None,
     gain: GainOpt = None,
     camera_size: CameraSizeOpt = None,
@@ -56,9 +68,7 @@ def world_check_cmd(
     number(settle_ms, "--settle-ms", lo=0, hi=10000, unit=" ms", what="a finite number")
     number(tolerance_px, "--tolerance-px", lo=0, lo_open=True, hi=1000, unit=" px", what="a finite number")
     number(tolerance, "--tolerance", lo=0, lo_open=True, what="a finite number")
-    cam_size = camera_settings(exposure, gain, camera_size, seed)
-    if display is not None and not 0 <= display <= 64:
-        fail(f"--display must be a display index >= 0, got {display}")
+    cam_size = camera_settings(exposure, gain, camera_size, seed, display)
     angles = parse_pose(pose) if pose is not None else None
     if not virtual:
         for flag, given in (("--pose", pose is not None), ("--preset", value(preset) != "ideal")):

@@ -139,12 +139,7 @@ def from_dict(meta: dict, width: int | None = None, height: int | None = None):
     if family not in PHASE_FAMILIES:
         raise ValueError(f"unknown family {_short(meta.get('family'))} (one of gray, {', '.join(PHASE_FAMILIES)})")
     check_keys(meta)
-    try:
-        w = _number(meta["width"] if width is None else width, "width", 2, 32768, integer=True)
-        h = _number(meta["height"] if height is None else height, "height", 2, 32768, integer=True)
-    except KeyError as e:
-        raise ValueError(f"no {e.args[0]} (the projector's size in pixels)") from None
-    check_keys(meta)
+    w, h = _size(meta, width, height)
     base = Fringe()
     if "fringe" in meta:
         if not isinstance(meta["fringe"], dict):
@@ -224,16 +219,23 @@ def bit_order_of(d: dict, where: str = "") -> str:
     return v
 
 
-def gray_from_dict(meta: dict, width=None, height=None, order=None, step=None) -> PatternSet:
-    """The Gray-code sequence a Gray-family ``patterns.json`` dict describes (its ``width``, ``height``, ``order``,
-    ``step``, ``bit_order``; the arguments, when given, override the file's).  Raises ValueError naming the
-    field."""
-    check_keys(meta)
+def _size(meta: dict, width=None, height=None) -> tuple[int, int]:
+    """The projector's ``(width, height)`` of a description (the arguments, when given, override the file's),
+    bounded; ValueError naming the field."""
     try:
         w = _number(meta["width"] if width is None else width, "width", 2, 32768, integer=True)
         h = _number(meta["height"] if height is None else height, "height", 2, 32768, integer=True)
     except KeyError as e:
         raise ValueError(f"no {e.args[0]} (the projector's size in pixels)") from None
+    return w, h
+
+
+def gray_from_dict(meta: dict, width=None, height=None, order=None, step=None) -> PatternSet:
+    """The Gray-code sequence a Gray-family ``patterns.json`` dict describes (its ``width``, ``height``, ``order``,
+    ``step``, ``bit_order``; the arguments, when given, override the file's).  Raises ValueError naming the
+    field."""
+    check_keys(meta)
+    w, h = _size(meta, width, height)
     order = meta.get("order", "opencv") if order is None else order
     if order not in ORDERS:
         raise ValueError(f"unknown order {_short(order)} (one of {', '.join(ORDERS)})")
