@@ -498,12 +498,6 @@ def capture_device(projector, camera, settle_s: float = 0.25) -> Callable[[np.nd
     :class:`~procam.acquire.projector.ProjectorWindow`, a camera of :func:`~procam.acquire.cameras.open_camera`).
     Each image is shown, held ``settle_s`` seconds, and a frame grabbed after the camera's buffer is flushed; a
     streaming camera is grabbed until two frames agree (the capture loop's own rule)."""
-    from .acquire.session import CaptureOptions, _Run, _steady
+    from .acquire.session import steady_shooter
 
-    run = _Run(projector, camera, CaptureOptions(settle_s=settle_s), None, __import__("time").monotonic)
-
-    def show_and_grab(image: np.ndarray) -> np.ndarray:
-        img, _ = _steady(run, image)
-        return img
-
-    return show_and_grab
+    return steady_shooter(projector, camera, settle_s)

@@ -344,6 +344,16 @@ def _steady(run: _Run, image) -> tuple[np.ndarray, int]:
     return img, run.opts.retries + 2
 
 
+def steady_shooter(projector, camera, settle_s: float = 0.25):
+    """``shoot(image) -> frame``: show ``image`` on the ``projector``, hold it ``settle_s`` seconds and grab by the
+    capture loop's own rule (:func:`_steady`: a streaming camera until two frames agree) -- for a caller that shows
+    images of its own (:func:`procam.world_check.capture_device`)."""
+    import time
+
+    run = _Run(projector, camera, CaptureOptions(settle_s=settle_s), None, time.monotonic)
+    return lambda image: _steady(run, image)[0]
+
+
 def _grab_frame(run: _Run, k: int, image, ps, ref, previous, partner, frames, writer: SequenceWriter) -> np.ndarray:
     """Show pattern ``k``, grab and check it, re-grab up to ``retries`` times; write it; return ``p``.
 
