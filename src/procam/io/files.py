@@ -306,14 +306,6 @@ def read_sidecar(folder, name: str = "patterns.json") -> dict | None:
         raise CaptureError(f"{path}: not valid JSON ({e}); fix or delete it") from None
 
 
-def read_sidecar_quiet(folder, name: str):
-    """:func:`read_sidecar` that returns None for an unreadable file instead of raising."""
-    try:
-        return _jsonfile.load_json(Path(folder) / name, finite=False)
-    except (OSError, ValueError, UnicodeDecodeError):
-        return None
-
-
 _TEMP = re.compile(r"^\..+\.tmp(\d+)(\.[^.]*)?$")
 
 
