@@ -49,7 +49,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
 from procam.single_pose import background as bg  # noqa: E402
-from procam import models, patterns, pipeline, simulate, single_pose, verify  # noqa: E402
+from procam import patterns, pipeline, simulate, single_pose, verify  # noqa: E402
+from procam.single_pose.background_fit import PaperFits  # noqa: E402
 from procam.board import Board, board_region  # noqa: E402
 from procam.errors import ProcamError  # noqa: E402
 
@@ -101,42 +102,18 @@ def board_pixels(view, maps_like, shrink=0.5, max_points=3000):
     return np.column_stack([xx, yy]).astype(float), np.column_stack([col[ok], row[ok]]).astype(float)
 
 
-class DenseJoint(bg._Joint):
-    """The joint fit with the projector's board corners replaced by dense decoded board pixels."""
-
-    dense = None    # (cam (M, 2), proj (M, 2), sigma px)
-
-    def residuals(self, x):
-        r = super().residuals(x)
-        pc, q = self.full(x)
-        Kc, (c, k1, k2), Rc, tc, Kp, _, _, R, T = self.devices(pc, q)
-        cam, proj, sig = self.dense
-        und = models.undistort_division(cam, c, k1, k2)
-        ray = np.column_stack([(und[:, 0] - Kc[0, 2]) / Kc[0, 0], (und[:, 1] - Kc[1, 2]) / Kc[1, 1],
-                               np.ones(len(und))])
-        n = Rc[:, 2]
-        X = ray * ((n @ tc) / (ray @ n))[:, None]
-        Xp = (X @ R.T + T) @ Kp.T
-        rd = ((Xp[:, :2] / Xp[:, 2:3] - proj) / sig).ravel()
-        ncam = 2 * len(self.obj_c) + (2 if self.pp_prior is not None else 0)
-        r = np.concatenate([r[:ncam + 1], r[ncam + 1 + 2 * len(self.obj):]])
-        return np.concatenate([r, np.where(np.isfinite(rd), rd, 1e6)])
-
-
 def dense_variant(base, check, view, dense_pts):
     """The freed model (the default mode's), refitted with dense board pixels (noise = the background's)."""
     cs, ps = base.info["camera"], base.info["projector"]
     name = check.selected if check.selected != "assumed" else "u0p"
     free = tuple(name.split("+"))
     bgc, bgp = view.background.cam_pts, view.background.proj_pts
-    j = DenseJoint(base, cs, ps, bgc, bgp, free, check.noise_px, 0.003)
-    j.dense = (*dense_pts, check.noise_px)
+    j = PaperFits(base, cs, ps, bgc, bgp, free, check.noise_px, 0.003, board=(*dense_pts, check.noise_px))
     sel = check.fits[name]
-    x = j.solve(j.x0(sel.params[:12], sel.params[12:]))
-    r = j.distances(*j.full(x), bgc, bgp)
-    j.keep = np.abs(r) <= 4 * check.noise_px
-    x = j.solve(x)
-    return j.fit_result(x, name).calibration
+    p = j.solve(j.start(sel.params))
+    j.keep = np.abs(j.distances(p)) <= 4 * check.noise_px
+    p = j.solve(p)
+    return j.fit_result(p, name).calibration
 
 
 # ------------------------------------------------------------------------------------------------

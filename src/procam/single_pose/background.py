@@ -66,7 +66,8 @@ from ..correspond import background_points
 from ..errors import CalibrationError, ModelErrorWarning
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
-from ._joint import _N_CAM, _PROJ, BackgroundFit, _epipolar, _Joint, _single_pose_parts
+from . import joint as J
+from .background_fit import BackgroundFit, PaperFits, _single_pose_parts, epipolar
 from .. import choices
 
 __all__ = ["FREEABLE", "MODES", "BackgroundCheck", "BackgroundFit", "BackgroundOptions", "apply", "background_points",
@@ -243,7 +244,7 @@ def epipolar_distances(calibration, cam_pts, proj_pts) -> np.ndarray:
     cam = np.asarray(cam_pts, float).reshape(-1, 2)
     proj = calibration.projector.undistort(np.asarray(proj_pts, float).reshape(-1, 2))
     und = calibration.camera.undistort(cam)
-    return _epipolar(calibration.camera.K, und, np.asarray(calibration.projector.K, float), R, T, proj)
+    return epipolar(calibration.camera.K, und, np.asarray(calibration.projector.K, float), R, T, proj)
 
 
 def _plane_homography(Kc, Rc, tc, Kp, R, T):
@@ -352,11 +353,11 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     sigma0, local = _local_noise(cam, d0)
     sigma0 = max(sigma0, options.noise_floor_px) if np.isfinite(sigma0) else max(robust_sigma(d0), options.noise_floor_px)
     nested = [options.free[:k] for k in range(len(options.free) + 1)]
-    top = _Joint(calibration, cs, ps, cam, proj, nested[-1], sigma0, options.alpha_prior_std)
+    top = PaperFits(calibration, cs, ps, cam, proj, nested[-1], sigma0, options.alpha_prior_std)
     # a model error is a smooth field: points that disagree with their neighbours are decoding errors
     top.keep = np.abs(local) <= options.outlier_k * sigma0
-    x_top = top.solve(top.x0(), robust=True)
-    r = top.distances(*top.full(x_top), cam, proj)
+    warm = top.solve(top.start(), robust=True)
+    r = top.distances(warm)
     sigma_n = max(robust_sigma(r), options.noise_floor_px)
     keep = np.abs(r - np.median(r)) <= options.outlier_k * sigma_n
     if keep.sum() > 20:     # the MAD of a sample with outliers overstates the inliers' noise: once more on them
@@ -367,15 +368,14 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
         return _no_check(f"only {int((keep & off).sum())} background points off the board's plane agree with any "
                          f"epipolar geometry within {options.outlier_k:g} x the noise ({sigma_n:.2f} px); the "
                          "decoded background is unreliable", **base)
-    warm = top.full(x_top)
     fits, solved = {}, {}
     for free in nested:
-        joint = _Joint(calibration, cs, ps, cam, proj, free, sigma_n, options.alpha_prior_std)
+        joint = PaperFits(calibration, cs, ps, cam, proj, free, sigma_n, options.alpha_prior_std)
         joint.keep = keep
         # the assumed model from the single-pose solution too: an unconverged fit would inflate the statistic
-        x = joint.solve_best([joint.x0(), joint.x0(*warm)] if not free else [joint.x0(*warm)])
-        solved[free] = (joint, x)
-        fits[_model_name(free)] = joint.fit_result(x, _model_name(free))
+        p = joint.solve_best([joint.start(), joint.start(warm)] if not free else [joint.start(warm)])
+        solved[free] = (joint, p)
+        fits[_model_name(free)] = joint.fit_result(p, _model_name(free))
     # a background that does not follow ONE epipolar geometry (interreflections, a reflective or moving
     # surface) must not raise an alarm: u0p fitted separately on the quadrants of the points must agree
     split = _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, options, warm,
@@ -388,7 +388,7 @@ def epipolar_check(calibration, cam_pts, proj_pts, options: BackgroundOptions = 
     s0 = first.std[name0]
     limit = options.max_std_fraction * (W if name0 == "u0p" else 1.0)
     last = fits[_model_name(nested[-1])]
-    est = {k: float(last.params[_N_CAM + _PROJ.index(k)]) for k in nested[-1]}
+    est = {k: float(last.params[J.IDX[k]]) for k in nested[-1]}
     est_std = {k: last.std[k] for k in nested[-1]}
     base.update(estimate=est, estimate_std=est_std, fits=fits)
     if not (np.isfinite(s0) and s0 <= limit):
@@ -425,17 +425,17 @@ def _inconsistent_quadrants(calibration, cs, ps, cam, proj, keep, sigma_n, optio
     s = cam @ Vt.T
     groups = (s[:, 0] > np.median(s[keep, 0])).astype(int) + 2 * (s[:, 1] > np.median(s[keep, 1]))
     if one is None:
-        base = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
+        base = PaperFits(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
         base.keep = keep
-        one = (base, base.solve(base.x0(*warm)))
-    base, x1 = one
-    four = _Joint(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std)
-    four.keep, four.groups = keep, groups
-    x4 = four.solve(np.r_[x1, np.full(3, x1[int(four.free_c.sum()) + 1])])
-    stat = base.cost(x1) - four.cost(x4)
+        one = (base, base.solve(base.start(warm)))
+    base, p1 = one
+    four = PaperFits(calibration, cs, ps, cam, proj, ("u0p",), sigma_n, options.alpha_prior_std, groups=groups)
+    four.keep = keep
+    p4 = four.solve(four.start(p1))
+    stat = base.cost(p1) - four.cost(p4)
     thr = _chi2_isf(options.false_alarm, 3)
     if stat > thr:
-        u0 = [four.full(x4)[1][1], *x4[-3:]]
+        u0 = [p4[J.IDX["u0p"]], *p4[len(J.NAMES):]]
         return (f"the background's quadrants do not fit one epipolar geometry: one u0p per quadrant fits their "
                 f"epipolar distances better than one for all by a likelihood ratio of {stat:.0f} (threshold {thr:.0f} "
                 f"for noise {sigma_n:.2f} px; the quadrants' u0p are {', '.join(f'{u:.1f}' for u in u0)} px): "

@@ -16,7 +16,9 @@ but the decoded patterns carry much more than 60 corners:
   with the board this is the second plane that fixes ``u0p`` and ``alpha_p``;
 * the **camera corners**, the camera's own single-pose likelihood, so the camera is estimated jointly and its own
   uncertainty (``f_c`` is known to a percent or two from one pose) is carried into the projector's numbers instead
-  of a camera taken as exact; and
+  of a camera taken as exact;
+* the **projector corners** (a correspondences file's projector data: the board corners decoded at the projector,
+  the paper's data), each a board point imaged by the projector's model, in projector pixels; and
 * **priors** where the user or the model says something: ``alpha_p = 1`` to a few tenths of a percent, a
   datasheet's throw ratio and lens shift, the camera's principal point near the image centre when its centre of
   distortion is unobservable.
@@ -27,8 +29,12 @@ principal point) followed by the projector's :data:`PROJECTOR`: ``f_p, alpha_p, 
 panel pixel that lights it, as ``cv2.projectPoints``), and the board -> projector pose ``(rvec, t)``. A camera or
 projector whose intrinsics are given is held fixed (its pixels undistorted once by its own model, any OpenCV model).
 
-Every residual is divided by its noise (camera corners, board and background samples each have a scale the fit
-measures), so the cost is a chi-square and the Jacobian's covariance is in the data's units. Derivatives are exact
+The paper's projector is this model with ``u0p``, ``alpha_p`` (or its prior) and the lens terms held, on the
+projector corners; the background check (:mod:`.background`) frees ``u0p`` per part of the background
+(:attr:`JointData.back_groups`) and may put a Cauchy loss on the background (:attr:`JointModel.cauchy`).
+
+Every residual is divided by its noise (camera corners, board and background samples, projector corners each have
+a scale the fit measures), so the cost is a chi-square and the Jacobian's covariance is in the data's units. Derivatives are exact
 (forward mode, :mod:`procam._dual`): one pass gives the Jacobian of all ~27 parameters. The lens models are
 :mod:`procam.models`' (the division model, OpenCV's), the covariance and its degeneracy rule
 :func:`procam.uncertainty.covariance`'s.
@@ -98,6 +104,10 @@ class JointData:
     camera_fixed, projector_fixed : a :class:`FixedDevice`, or None (estimated).
     pp_prior : (centre (2,), std) of the camera's principal point, or None.
     priors : list of ``(name, mean, std)`` Gaussian priors on projector parameters.
+    corner_obj, corner_proj : (K, 3) board corners and (K, 2) the projector pixels decoded at them (the projector
+        corners; empty by default).
+    back_groups : (B,) int 0..G-1 or None: background samples of group g >= 1 see their own ``u0p``
+        (:meth:`JointModel.names` gets ``u0p_1 .. u0p_{G-1}``): the background's consistency test.
     """
 
     obj: np.ndarray
@@ -112,6 +122,9 @@ class JointData:
     projector_fixed: FixedDevice | None = None
     pp_prior: tuple | None = None
     priors: list = field(default_factory=list)
+    corner_obj: np.ndarray | None = None
+    corner_proj: np.ndarray | None = None
+    back_groups: np.ndarray | None = None
 
     def __post_init__(self):
         ok = np.isfinite(self.cam).all(1) & np.isfinite(self.obj).all(1)
@@ -123,6 +136,12 @@ class JointData:
             setattr(self, a + "_proj", p[ok])
             wv = getattr(self, w)
             setattr(self, w, np.ones(int(ok.sum())) if wv is None else np.asarray(wv, float)[ok])
+            if a == "back" and self.back_groups is not None:
+                self.back_groups = np.asarray(self.back_groups, int)[ok]
+        o = np.empty((0, 3)) if self.corner_obj is None else np.asarray(self.corner_obj, float).reshape(-1, 3)
+        q = np.empty((0, 2)) if self.corner_proj is None else np.asarray(self.corner_proj, float).reshape(-1, 2)
+        ok = np.isfinite(o).all(1) & np.isfinite(q).all(1)
+        self.corner_obj, self.corner_proj = o[ok], q[ok]
         if self.camera_fixed is not None:
             dev = self.camera_fixed.device
             self._cam_und = dev.undistort(self.cam)
@@ -135,17 +154,20 @@ class JointData:
 
 @dataclass
 class Scales:
-    """The noise of each block (px): camera corners, board samples, background samples."""
+    """The noise of each block (px): camera corners, board samples, background samples, projector corners."""
 
     camera: float
     board: float
     background: float
+    corners: float = 1.0
 
 
 class JointModel:
     """Residuals of :class:`JointData` for a full parameter vector ``p`` (:data:`NAMES`), plain or Dual.
 
     ``keep_board`` / ``keep_back``: (M,) / (B,) bool, the samples in use (outliers out).
+    ``cauchy``: None (least squares), or the scale (in noise sigmas) of a Cauchy loss on the background residuals
+    (residual ``sign(r) c sqrt(log(1 + (r/c)^2))``: the corners and priors stay quadratic).
     """
 
     def __init__(self, data: JointData, scales: Scales):
@@ -153,6 +175,13 @@ class JointModel:
         self.scales = scales
         self.keep_board = np.ones(len(data.board_cam), bool)
         self.keep_back = np.ones(len(data.back_cam), bool)
+        self.cauchy: float | None = None
+
+    @property
+    def names(self) -> tuple:
+        """The parameter vector's names: :data:`NAMES`, then ``u0p_g`` of each background group g >= 1."""
+        g = self.data.back_groups
+        return NAMES + tuple(f"u0p_{k}" for k in range(1, int(g.max()) + 1 if g is not None and len(g) else 1))
 
     # camera side -----------------------------------------------------------------------------------
     def _camera(self, p):
@@ -218,13 +247,17 @@ class JointModel:
         T = [tp[i] - (R[i][0] * tc[0] + R[i][1] * tc[1] + R[i][2] * tc[2]) for i in range(3)]
         Rr = [R[i][0] * rx + R[i][1] * ry + R[i][2] for i in range(3)]
         ln = [T[1] * Rr[2] - T[2] * Rr[1], T[2] * Rr[0] - T[0] * Rr[2], T[0] * Rr[1] - T[1] * Rr[0]]
+        if d.back_groups is not None:          # u0p per group of the background (group 0: the projector's own)
+            g = d.back_groups[m]
+            u0p = u0p + sum((g == k) * (p[len(NAMES) + k - 1] - u0p) for k in range(1, int(g.max(initial=0)) + 1))
         if d.projector_fixed is not None:
             und = d._back_proj_und[m]
             xn, yn = (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp)
         else:
             xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
             xn, yn = xn + ex, yn + ey
-        back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1]) * fp
+        # the distance in (undistorted) projector pixels: the normalised line scaled by fp across, alpha_p fp down
+        back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1] / (ap * ap)) * fp
         # 4. priors
         pri = []
         if d.pp_prior is not None and d.camera_fixed is None:
@@ -234,18 +267,48 @@ class JointModel:
             pri.append((p[IDX[name]] - mu) / sd)
         return cam_res, board_res, back_res, pri
 
+    def corners(self, p):
+        """``(2, K)`` residuals of the projector corners (observed - predicted, projector pixels)."""
+        d = self.data
+        if not len(d.corner_obj):
+            return [np.empty(0), np.empty(0)]
+        fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
+        Rp = D.rotation([p[21], p[22], p[23]])
+        Xp = D.transform(Rp, [p[24], p[25], p[26]], [d.corner_obj[:, 0], d.corner_obj[:, 1], d.corner_obj[:, 2]])
+        bx, by = brown(Xp[0] / Xp[2] - ex, Xp[1] / Xp[2] - ey, *kp)
+        return [d.corner_proj[:, 0] - (fp * (bx + ex) + u0p), d.corner_proj[:, 1] - (ap * fp * (by + ey) + v0p)]
+
     def residuals(self, p):
-        """All residuals in noise sigmas (Dual when ``p`` is), one 1-D vector."""
+        """All residuals in noise sigmas (Dual when ``p`` is), one 1-D vector: camera corners (x then y), board
+        samples (x then y), background, priors, projector corners (x then y)."""
         cam_res, board_res, back_res, pri = self.blocks(p)
         s = self.scales
         d = self.data
         wb = d.board_w[self.keep_board] * s.board
         wg = d.back_w[self.keep_back] * s.background
+        back = back_res / wg
+        if self.cauchy is not None:
+            back = _cauchy(back, self.cauchy)
+        corner = self.corners(p)
         parts = [cam_res[0] / s.camera, cam_res[1] / s.camera, board_res[0] / wb, board_res[1] / wb,
-                 back_res / wg, *pri]
+                 back, *pri, corner[0] / s.corners, corner[1] / s.corners]
         if isinstance(p, D.Dual):
             return D.concatenate([q for q in parts if np.size(D.value(q))])
         return np.concatenate([np.ravel(q) for q in parts if np.size(q)])
+
+
+def _cauchy(r, c: float):
+    """The Cauchy loss as a residual: ``sign(r) c sqrt(log(1 + (r/c)^2))`` (its square is twice the loss), plain or
+    Dual (derivative ``|t| / ((1 + t^2) sqrt(log(1 + t^2)))``, ``t = r/c``, 1 at 0)."""
+    v = D.value(r)
+    t = v / c
+    L = np.log1p(t * t)
+    out = np.sign(t) * c * np.sqrt(L)
+    if not isinstance(r, D.Dual):
+        return out
+    with np.errstate(all="ignore"):
+        g = np.where(np.abs(t) > 1e-6, np.abs(t) / ((1.0 + t * t) * np.sqrt(L)), 1.0)
+    return D.Dual(out, r.d * g[..., None])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -270,14 +333,16 @@ class JointFit:
     nfev: int
 
 
-def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
-    """Least squares of ``model`` from ``p0`` over the parameters ``free`` (names of :data:`NAMES`), with the exact
-    Jacobian; trust-region reflective, steps scaled by the Jacobian's columns."""
+def solve(model: JointModel, p0, free, *, max_nfev: int = 60, tol: float = 1e-10) -> JointFit:
+    """Least squares of ``model`` from ``p0`` over the parameters ``free`` (names of :attr:`JointModel.names`), with
+    the exact Jacobian; trust-region reflective, steps scaled by the Jacobian's columns, stopping at ``tol``
+    (scipy's xtol, ftol and gtol)."""
     from scipy.optimize import least_squares
 
+    names = model.names
     p0 = np.asarray(p0, float)
-    mask = np.array([n in free for n in NAMES])
-    basis = np.eye(len(NAMES))[:, mask]
+    mask = np.array([n in free for n in names])
+    basis = np.eye(len(names))[:, mask]
     cache = {}
 
     def evaluate(x):
@@ -294,14 +359,14 @@ def solve(model: JointModel, p0, free, *, max_nfev: int = 60) -> JointFit:
 
     with np.errstate(all="ignore"):
         res = least_squares(lambda x: evaluate(x)[0], p0[mask], jac=lambda x: evaluate(x)[1], method="trf",
-                            x_scale="jac", xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
+                            x_scale="jac", xtol=tol, ftol=tol, gtol=tol, max_nfev=max_nfev)
     p = p0.copy()
     p[mask] = res.x
     r, J = evaluate(res.x)
-    cov = np.zeros((len(NAMES), len(NAMES)))
+    cov = np.zeros((len(names), len(names)))
     idx = np.flatnonzero(mask)
     cov[np.ix_(idx, idx)] = unc.covariance(J, 1.0)  # residuals in sigmas
-    return JointFit(p=p, free=tuple(n for n in NAMES if n in free), cov=cov, cost=float(r @ r),
+    return JointFit(p=p, free=tuple(n for n in names if n in free), cov=cov, cost=float(r @ r),
                     n_residuals=len(r), jac=J, residuals=r, nfev=int(res.nfev))
 
 
@@ -309,11 +374,12 @@ def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.nd
     """The residuals, the Jacobian over ``free`` (names) and its covariance ``(J^T J)^-1`` (27 + 4 square, zero
     rows and columns outside ``free``) at ``p``, without solving: the cost of an assumption held at ``p`` is the
     covariance with its parameter freed under its prior."""
+    names = model.names
     p = np.asarray(p, float)
-    mask = np.array([n in free for n in NAMES])
-    r = model.residuals(D.Dual(p, np.eye(len(NAMES))[:, mask]))
+    mask = np.array([n in free for n in names])
+    r = model.residuals(D.Dual(p, np.eye(len(names))[:, mask]))
     v, Jm = np.where(np.isfinite(r.v), r.v, 1e6), np.where(np.isfinite(r.d), r.d, 0.0)
-    cov = np.zeros((len(NAMES), len(NAMES)))
+    cov = np.zeros((len(names), len(names)))
     idx = np.flatnonzero(mask)
     cov[np.ix_(idx, idx)] = unc.covariance(Jm, 1.0)
     return v, Jm, cov
