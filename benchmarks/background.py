@@ -147,14 +147,15 @@ def failed_estimate(cal) -> bool:
 
 
 def cross(cals, views):
-    """Every calibration of ``cals`` (pose index -> Calibration or None) verified on every other pose; a failed
-    calibration (an impossible focal length) counts its pairs as failed."""
+    """Every calibration of ``cals`` (pose index -> Calibration or None) verified on every other pose; a calibration
+    whose verdict says not to use it (failed: an impossible focal length; degenerate: an undetermined one) counts its
+    pairs as failed (a degenerate pose's f_p near 0 made the pooled scale errors 1e15 %)."""
     out, failed = [], 0
     for i, cal in cals.items():
         for j, v in enumerate(views):
             if j == i:
                 continue
-            if failed_estimate(cal):
+            if failed_estimate(cal) or cal.verdict == "degenerate":
                 failed += 1
                 continue
             try:
