@@ -101,3 +101,52 @@ def test_the_single_pose_joint_fit_covariance_is_the_one_rule():
     assert np.all(np.isfinite(cov[np.ix_(idx, idx)]))
     _, Jm, cov = joint.linearise(model, p, free + ("u0p",))   # u0p: no residual sees it -> infinite
     assert np.all(np.isinf(cov[np.ix_(idx, idx)]))
+
+
+def test_a_held_cameras_uncertainty_moves_the_free_parameters_as_a_refit_does():
+    """held_covariance's sensitivity is the fit's own: moving the held camera's f_c (or k1) by a small step and
+    refitting moves the projector's parameters by what the linearised rule predicts."""
+    from procam import models, simulate
+    from procam.calibration import Device, Distortion
+    from procam.single_pose import joint
+
+    scene = simulate.preset("lensshift")
+    obj = simulate.board_corners(scene)
+    rng = np.random.default_rng(5)
+    camera = Device(np.array(scene.K_cam, float), scene.cam_size, Distortion("opencv", coeffs=(-0.05, 0.01, 0, 0, 0)))
+    # the board samples: board points seen by the camera (its own model) and lit by the projector
+    X = np.column_stack([rng.uniform(obj[:, 0].min(), obj[:, 0].max(), 600),
+                         rng.uniform(obj[:, 1].min(), obj[:, 1].max(), 600), np.zeros(600)])
+    rvec, t = models.matrix_to_rvec(scene.R_board), np.asarray(scene.t_board, float)
+    import cv2
+    bc = cv2.projectPoints(X, rvec, t, camera.K, np.array(camera.distortion.coeffs))[0].reshape(-1, 2)
+    cc = cv2.projectPoints(obj, rvec, t, camera.K, np.array(camera.distortion.coeffs))[0].reshape(-1, 2)
+    Rp, tp = scene.R_board_proj, np.asarray(scene.t_board_proj, float)
+    bp = models.project(scene.K_proj, Rp, tp, X)
+    data = joint.JointData(obj, cc, bc, bp, np.zeros((0, 2)), np.zeros((0, 2)),
+                           camera_fixed=joint.FixedDevice(camera.K, camera))
+    model = joint.JointModel(data, joint.Scales(0.1, 0.05, 1.0))
+    p0 = np.zeros(len(joint.NAMES))
+    p0[joint.IDX["rx"]:joint.IDX["rx"] + 3], p0[joint.IDX["tx"]:joint.IDX["tx"] + 3] = rvec, t
+    K = scene.K_proj
+    p0[[joint.IDX[n] for n in ("f_p", "alpha_p", "u0p", "v0p")]] = K[0, 0], K[1, 1] / K[0, 0], K[0, 2], K[1, 2]
+    p0[joint.IDX["prx"]:joint.IDX["prx"] + 3], p0[joint.IDX["ptx"]:joint.IDX["ptx"] + 3] = \
+        models.matrix_to_rvec(Rp), tp
+    free = ("f_p", "v0p") + joint.POSE_P + joint.POSE_C     # one plane: u0p and alpha_p held (the paper's)
+    fit = joint.solve(model, p0, free)
+    names = ("f_c", "k1")
+    for k, step in enumerate((2.0, 0.002)):       # 0.1 % of f_c; k1 by 4 % of itself
+        cov = np.zeros((2, 2))
+        cov[k, k] = step ** 2
+        predicted = np.sqrt(np.diag(joint.held_covariance(model, fit.p, free, "camera", names, cov)))
+        moved = joint._moved(camera, names, np.array([camera.K[0, 0], -0.05]) + step * np.eye(2)[k])
+        m2 = joint.JointModel(joint.JointData(obj, cc, bc, bp, np.zeros((0, 2)),
+                                              np.zeros((0, 2)), camera_fixed=joint.FixedDevice(moved.K, moved)),
+                              model.scales)
+        refit = joint.solve(m2, fit.p, free)
+        for n in ("f_p", "v0p", "ptz"):
+            i = joint.IDX[n]
+            assert abs(refit.p[i] - fit.p[i]) == pytest.approx(predicted[i], rel=0.05, abs=1e-6), n
+        assert predicted[joint.IDX["f_p"]] > 0.5 * step if k == 0 else True   # f_c's step reaches f_p
+    infinite = joint.held_covariance(model, fit.p, free, "camera", names, np.full((2, 2), np.inf))
+    assert np.isinf(infinite[joint.IDX["f_p"], joint.IDX["f_p"]])

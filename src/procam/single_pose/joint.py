@@ -383,3 +383,81 @@ def linearise(model: JointModel, p, free) -> tuple[np.ndarray, np.ndarray, np.nd
     idx = np.flatnonzero(mask)
     cov[np.ix_(idx, idx)] = unc.covariance(Jm, 1.0)
     return v, Jm, cov
+
+
+# ------------------------------------------------------------------------------------------------
+# a held device's own uncertainty
+
+#: Where each name of a held device's covariance (:data:`procam.crlb.VIEW_PARAMS`, and the projector's ``f_p, fy_p,
+#: u0p, v0p``) sits: an entry of K, or an OpenCV distortion coefficient (index in OpenCV's order).
+_K_ENTRY = {"f_c": (0, 0), "fy_c": (1, 1), "u0c": (0, 2), "v0c": (1, 2),
+            "f_p": (0, 0), "fy_p": (1, 1), "u0p": (0, 2), "v0p": (1, 2)}
+_COEFF = {"k1": 0, "k2": 1, "p1": 2, "p2": 3, "k3": 4, "k4": 5, "k5": 6, "k6": 7}
+
+
+def _moved(device, names, values):
+    """``device`` (:class:`procam.calibration.Device`) with its parameters ``names`` set to ``values``."""
+    from dataclasses import replace
+
+    K = np.array(device.K, float)
+    dist = device.distortion
+    coeffs = list(dist.coeffs) + [0.0] * 8
+    for n, v in zip(names, values):
+        if n in _K_ENTRY:
+            K[_K_ENTRY[n]] = v
+        elif n in _COEFF and dist.model == "opencv":
+            coeffs[_COEFF[n]] = v
+        else:
+            raise ValueError(f"a held {dist.model!r} device has no parameter {n!r}")
+    if dist.model == "opencv":
+        dist = replace(dist, coeffs=tuple(coeffs[:max(len(dist.coeffs), 1 + max(
+            (_COEFF[n] for n in names if n in _COEFF), default=-1))]))
+    return replace(device, K=K, distortion=dist)
+
+
+def _value(device, name) -> float:
+    if name in _K_ENTRY:
+        return float(np.asarray(device.K, float)[_K_ENTRY[name]])
+    c = list(device.distortion.coeffs) + [0.0] * 8
+    return float(c[_COEFF[name]])
+
+
+def held_covariance(model: JointModel, p, free, which: str, names, cov) -> np.ndarray:
+    """What a held device's own uncertainty adds to the covariance of the free parameters (the delta method
+    through the fit: the estimate moves by ``-(J^T J)^-1 J^T dr/dc`` per unit change of the held parameters ``c``).
+
+    ``model`` has ``which`` (``"camera"`` or ``"projector"``) held (:class:`FixedDevice`); ``p`` the solution;
+    ``free`` the names estimated; ``names`` (k,) and ``cov`` (k, k) the held device's parameters (K entries ``f_c,
+    fy_c, u0c, v0c`` or ``f_p, ...``, OpenCV's coefficients ``k1 ... k6, p1, p2``) and their covariance (a camera
+    file's). Returns (P, P) over :attr:`JointModel.names`, zero outside ``free``; infinite where ``cov`` is.
+    ``dr/dc`` by central differences (the held device undistorts through any of its models).
+    """
+    from dataclasses import replace
+
+    attr = "camera_fixed" if which == "camera" else "projector_fixed"
+    held = getattr(model.data, attr)
+    if held is None:
+        raise ValueError(f"the model's {which} is not held")
+    cov = np.asarray(cov, float)
+    out = np.zeros((len(model.names), len(model.names)))
+    idx = np.flatnonzero([n in free for n in model.names])
+    if not np.all(np.isfinite(cov)):
+        out[np.ix_(idx, idx)] = np.inf
+        return out
+    r0, J, Cp = linearise(model, p, free)
+    c0 = np.array([_value(held.device, n) for n in names])
+    Jc = np.zeros((len(r0), len(names)))
+    for k, n in enumerate(names):
+        h = 1e-6 * max(abs(c0[k]), 1.0) if n in _K_ENTRY else 1e-6
+        rs = []
+        for s in (1.0, -1.0):
+            c = c0.copy()
+            c[k] += s * h
+            dev = _moved(held.device, names, c)
+            m = JointModel(replace(model.data, **{attr: FixedDevice(np.asarray(dev.K, float), dev)}), model.scales)
+            m.keep_board, m.keep_back, m.cauchy = model.keep_board, model.keep_back, model.cauchy
+            rs.append(m.residuals(np.asarray(p, float)))
+        Jc[:, k] = (rs[0] - rs[1]) / (2 * h)
+    G = -Cp[np.ix_(idx, idx)] @ J.T @ Jc           # d(free) / d(held)
+    out[np.ix_(idx, idx)] = G @ cov @ G.T
+    return out
