@@ -209,6 +209,25 @@ def test_advice_rules():
     assert a["camera"]["degenerate"] and a["camera"]["rel_std_f"] == pytest.approx(0.2)
 
 
+def test_a_rating_is_data_before_it_is_words():
+    """Each rating carries what it found as codes and numbers (findings) and the move it asks for, the words
+    built from the same numbers."""
+    a = sp.rate_pose((3, 5, 0), (20, 10, 0))
+    codes = {f["code"]: f for f in a["camera"]["findings"]}
+    assert set(codes) == {"paper-rule", "angle-small"} and a["camera"]["next"] == "tilt the board"
+    assert codes["angle-small"]["angle_deg"] == 3.0 and codes["paper-rule"]["limit_deg"] == 10.0
+    assert [f["code"] for f in a["projector"]["findings"]] == ["paper-rule"]
+    assert a["projector"]["next"] == "turn the board" and "13 deg" in a["projector"]["message"]
+    a = sp.rate_pose((20, 20, 0), None, {"f_c": 300.0}, values={"f_c": 1500.0})
+    (f,) = a["camera"]["findings"]
+    assert f == {"code": "undetermined", "param": "f_c", "rel_std": pytest.approx(0.2), "basis": "fit", "limit": 0.1}
+    assert "±20.0 %" in a["camera"]["message"]
+    a = sp.rate_pose(None, (10.0, -1.4, 0.0), {"f_p": 0.4}, values={"f_p": 19.0}, proj_size=(1920, 1080))
+    assert a["projector"]["findings"] == [{"code": "impossible", "param": "f_p", "value": 19.0}]
+    a = sp.rate_pose((15, 12, 0), (17, 26, -4))
+    assert a["camera"]["findings"] == [] and a["camera"]["next"] is None and a["ok"]
+
+
 def test_never_a_mirror_solution_with_the_board_frame_flipped(ideal):
     """Board z towards the devices (rows reversed): the solution must still be a proper camera."""
     obj, cam, proj = simulate.correspondences(ideal, 0.0, 0.0)

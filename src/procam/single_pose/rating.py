@@ -240,36 +240,54 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
     impossible = None
     if f is not None and size is not None:
         impossible = focal_failure(key, float(f), tuple(size), o.plausible_f_range)
+    # what the rating found, as data (``findings``: code and numbers; ``next``: the move it asks for), then in words
+    findings = []
+    move = "check the data" if bad_data else ("tilt the board" if device == "camera" else "turn the board")
     # 1. stable quantities decide degeneracy
     if angle < o.degenerate_angle_deg:
         level, msg = "degenerate", f"{device}: degenerate pose ({angle_txt}): {unseen}; {turn}"
+        findings.append({"code": "angle-zero", "angle_deg": float(angle), "limit_deg": o.degenerate_angle_deg})
     elif pred_rel is not None and pred_rel > o.degenerate_rel_std:
         level = "degenerate"
         msg = (f"{device}: degenerate pose: here {key} can only be known to {_pct(pred_rel)} (predicted for "
                f"{prediction.sigma_px:.2g} px corner noise; {angle_txt}); {turn}")
+        findings.append({"code": "undetermined", "param": key, "rel_std": float(pred_rel), "basis": "predicted",
+                         "limit": o.degenerate_rel_std})
     # 2. then the estimate
     elif impossible:
         level, msg = "failed", f"{device}: FAILED estimate: {impossible}; {turn}"
+        findings.append({"code": "impossible", "param": key, "value": float(f)})
     elif fit_rel is not None and fit_rel > o.degenerate_rel_std:
         level = "degenerate"
         msg = (f"{device}: degenerate pose: {key} = {f:.1f} ± {fit_rel * abs(f):.3g} px ({_pct(fit_rel)} from the "
                f"fit); {turn}")
+        findings.append({"code": "undetermined", "param": key, "rel_std": float(fit_rel), "basis": "fit",
+                         "limit": o.degenerate_rel_std})
     else:
         reasons = []
         rel, rel_txt = _uncertainty_words(key, pred_rel, fit_rel, prediction)
         rel, rel_txt, by_assumption = _with_assumption(key, rel, rel_txt, fit_rel, assumed)
+        basis = "assumption" if by_assumption else ("predicted" if rel == pred_rel else "fit")
         if rel > o.weak_rel_std:
             reasons.append(f"{rel_txt} (aim for under {_pct(o.weak_rel_std)[1:]})")
+            findings.append({"code": "uncertain", "param": key, "rel_std": float(rel), "basis": basis,
+                             "limit": o.weak_rel_std})
             if by_assumption and not bad_data:
+                move = "measure u0p"
                 turn = ("the board's corners alone cannot measure u0p: calibrate from the decoded pose folder (its "
                         "dense samples and the wall behind the board measure u0p, lens shift and distortion), give "
                         "u0p if it is known (Python: ProjectorOptions(u0=...)), or calibrate from several poses")
         if angle < o.weak_angle_deg:
             reasons.append(f"an angle is close to zero ({angle_txt})")
+            findings.append({"code": "angle-small", "angle_deg": float(angle), "limit_deg": o.weak_angle_deg})
         if not paper_ok and not bad_data:
             reasons.append(rule)
+            findings.append({"code": "paper-rule", "limit_deg": o.camera_rule_deg if device == "camera"
+                             else o.projector_rule_deg})
         if bad_data and not reasons:
             reasons.append("its corners do not fit the model")
+        if bad_data:
+            findings.append({"code": "misfit", "sigma_px": float(sigma), "typical_px": floor})
         if reasons:
             level = "weak"
             msg = f"{device}: weak pose ({angle_txt}): " + "; ".join(reasons) + f" -- {turn}"
@@ -277,7 +295,8 @@ def _rate_device(device: str, angles, prediction: Prediction | None, std_f, f, s
             level, msg = "good", f"{device}: pose OK ({rel_txt}; {angle_txt})"
     out = dict(psi_abs_deg=psi, nu_abs_deg=nu, paper_rule_ok=bool(paper_ok), level=level,
                degenerate=level in ("degenerate", "failed"), weak=level == "weak", failed=level == "failed",
-               rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, bad_data=bool(bad_data), message=msg)
+               rel_std_f=fit_rel, predicted_rel_std_f=pred_rel, bad_data=bool(bad_data), findings=findings,
+               next=None if level == "good" else move, message=msg)
     if assumed and assumed[0] is not None:
         out["assumption_rel_f"] = float(assumed[0])
     if device == "camera":
@@ -309,7 +328,13 @@ def rate_pose(camera_angles_deg=None, projector_angles_deg=None, std=None, *, va
     Returns
     -------
     dict with ``camera`` and ``projector`` sub-dicts (``level`` one of :data:`LEVELS`, ``degenerate`` (not
-    determined, or failed), ``weak``, ``failed``, ``paper_rule_ok``, ``rel_std_f`` (fit), ``predicted_rel_std_f``, ``message``) and
+    determined, or failed), ``weak``, ``failed``, ``paper_rule_ok``, ``rel_std_f`` (fit), ``predicted_rel_std_f``;
+    ``findings``: what the rating found, as data -- a list of ``{"code": ..., numbers}`` with the codes
+    ``angle-zero``, ``angle-small`` (``angle_deg``, ``limit_deg``), ``undetermined``, ``uncertain`` (``param``,
+    ``rel_std``, ``basis``: predicted / fit / assumption, ``limit``), ``impossible`` (``param``, ``value``),
+    ``paper-rule`` (``limit_deg``), ``misfit`` (``sigma_px``, ``typical_px``); ``next``: the move it asks for
+    (``tilt the board``, ``turn the board``, ``check the data``, ``measure u0p``; None when good); and ``message``,
+    the same in words) and
     for the pose: ``level`` (the worst device's), ``ok`` (good), ``degenerate`` and ``failed``. A single-pose
     calibration keeps it as its pose's ``"advice"`` entry (the key the file format has always used).
     """
