@@ -135,8 +135,8 @@ def part1(args):
         r = [rms[0] / cb.std["f_c"], rms[1] / cb.std["f_c"], rms[2] / pb.std["f_p"]]
         for key, v in zip(("staged", "joint", "proj"), r):
             ratios[key].append(v)
-        print(f"| {psi:g}, {nu:g} | {nu_p:.1f} | {cb['f']:.2f} | {rms[0]:.2f} | {r[0]:.2f} | {rms[1]:.2f} | "
-              f"{r[1]:.2f} | {pb['f']:.2f} | {rms[2]:.2f} | {r[2]:.2f} | {fails} | "
+        print(f"| {psi:g}, {nu:g} | {nu_p:.1f} | {cb.std['f_c']:.2f} | {rms[0]:.2f} | {r[0]:.2f} | {rms[1]:.2f} | "
+              f"{r[1]:.2f} | {pb.std['f_p']:.2f} | {rms[2]:.2f} | {r[2]:.2f} | {fails} | "
               f"{fb.get('cod', 0)}/{fb.get('joint', 0)}/{fb.get('image-center', 0)} | {dt:.2f} |")
     med = {k: float(np.nanmedian(v)) for k, v in ratios.items()}
     print(f"\nmedian ratio to the CRLB: staged camera {med['staged']:.2f}, joint camera {med['joint']:.2f}, "
