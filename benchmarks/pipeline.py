@@ -7,9 +7,16 @@ commands round by round (the machine may be shared, so every command sees the sa
 1. ``procam calibrate pose1 .. pose5`` as a cold process (interpreter start and imports included);
 2. a cold process that only reads the 210 PNGs with two threads (``cv2.imread`` grey, the function
    :func:`read_all` below) -- the floor any tool that reads PNGs must pay;
-3. ``procam --help`` as a cold process (start-up);
-4. with ``--kamino410 PATH --kamino410-python PY``: kamino410's ``calibrate.py`` (procam-calibration) on the
+3. ``procam --version`` and ``procam calibrate --help`` as cold processes (start-up; issue 35's targets 0.2 s
+   and 0.3 s);
+4. ``procam decode`` of a 12-frame phase capture (3 steps + the unit-frequency cue per axis, no white or black
+   frame) against a 46-frame Gray capture of the same 1280x800 camera and 1920x1080 projector (the ``paper``
+   rig, rendered into ``--data`` too): what a user waits for per capture (issue 35 item 2: a phase capture
+   must be no slower);
+5. with ``--kamino410 PATH --kamino410-python PY``: kamino410's ``calibrate.py`` (procam-calibration) on the
    same files (linked into its ``capture_*/graycode_*`` layout), run by its own Python (OpenCV contrib).
+
+The first table is the summary: each command against its baseline, as ratios of the medians of one run.
 
 procam's source is byte-compiled first (as an installed package is).
 
@@ -20,6 +27,10 @@ accuracy of the result (parameters and corners against the simulator's truth; ka
 
     OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/pipeline.py [--data DIR] [--repeat 7] [--stages 3]
         [--kamino410 PATH/calibrate.py --kamino410-python PATH/python]
+
+kamino410's script is written for OpenCV 4 (``findChessboardCorners`` corners of shape (N, 1, 2)): its Python
+needs ``opencv-contrib-python-headless<5`` (e.g. ``python -m venv K; K/bin/pip install numpy
+"opencv-contrib-python-headless<5"``).
 
 Stage times are wall seconds summed over calls; stages that run in a background thread (reading the next
 pose while this one is processed) overlap the others, so their sum can exceed the run's wall time.
@@ -85,6 +96,31 @@ def ensure_data(data: Path) -> None:
         print(f"rendered {folder} in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
+#: the decode pair: name -> (folder under --data, pattern_set keywords for a 1920x1080 projector)
+DECODE_PAIR = {"gray": ("decode-gray", {}),
+               "phase": ("decode-phase", dict(family="phase", steps=3, period=64, white_black=False))}
+
+
+def ensure_decode_pair(data: Path) -> dict:
+    """Render (unless there) the ``paper`` rig's board at the recommended pose as a 46-frame Gray capture and as a
+    12-frame 3-step phase capture; name -> (folder, frame count)."""
+    from procam import patterns
+
+    out = {}
+    for name, (sub, kw) in DECODE_PAIR.items():
+        folder, ps = data / sub, patterns.pattern_set(1920, 1080, **kw)
+        if not ((folder / "patterns.json").is_file() and len(list(folder.glob("[0-9][0-9].png"))) == ps.count):
+            from procam import simulate as S
+
+            t0 = time.perf_counter()
+            scene = S.with_board_pose(S.preset("paper"), S.RECOMMENDED_POSE)
+            stack, truth = S.render(scene, order=ps, seed=7)
+            S.write_capture(folder, stack, truth, order=ps)
+            print(f"rendered {folder} in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+        out[name] = (folder, ps.count)
+    return out
+
+
 def png_files(data: Path) -> list[Path]:
     return [f for p in pose_dirs(data) for f in sorted(p.glob("[0-9][0-9].png"))]
 
@@ -124,12 +160,16 @@ def _env():
 
 def commands(args, data: Path, out: Path) -> dict:
     """name -> (argv, cwd)."""
+    procam = [sys.executable, "-c", "import sys; from procam.cli import main; sys.argv[0] = 'procam'; main()"]
     cmds = {
-        "procam": ([sys.executable, "-c", "from procam.cli import main; main()", "calibrate",
-                    *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)], None),
+        "procam": ([*procam, "calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1],
+                    "-o", str(out)], None),
         "read": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "--data", str(data)], None),
-        "help": ([sys.executable, "-c", "from procam.cli import main; main()", "--help"], None),
+        "version": ([*procam, "--version"], None),
+        "calibrate-help": ([*procam, "calibrate", "--help"], None),
     }
+    for name, (folder, _) in ensure_decode_pair(data).items():
+        cmds[f"decode-{name}"] = ([*procam, "decode", str(folder), "-o", str(out.parent / f"{name}.npz")], None)
     if args.kamino410:
         root = kamino_layout(data)
         cmds["kamino410"] = ([args.kamino410_python, str(Path(args.kamino410).resolve()), "768", "1024",
@@ -167,6 +207,7 @@ STAGES = [
     ("capture checks", "procam.capture.read", "check_white_black"),
     ("capture checks", "procam.capture.read", "check_pairs"),
     ("capture checks", "procam.capture.read", "exposure_warnings"),
+    ("capture checks", "procam.capture.read", "check_bit_order"),
     ("decode", "procam.decode", "decode"),
     ("board corners", "procam.pipeline", "find_board"),
     ("local homographies", "procam.correspond", "projector_corners"),
@@ -303,6 +344,36 @@ def _med(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
+#: (what, command, baseline command or a time in seconds, the target ratio) of the summary (issue 35)
+TARGETS = [("5-pose Gray calibrate vs reading its PNGs (the floor)", "procam", "read", 1.5),
+           ("5-pose Gray calibrate vs kamino410's calibrate.py", "procam", "kamino410", 0.8),
+           ("phase capture (12 frames) vs Gray capture (46 frames), procam decode", "decode-phase", "decode-gray", 1.0),
+           ("cold start: procam --version vs 0.2 s", "version", 0.2, 1.0),
+           ("cold start: procam calibrate --help vs 0.3 s", "calibrate-help", 0.3, 1.0)]
+
+
+def summary(runs: dict) -> str:
+    """The one table: each command against its baseline, ratios of the medians of this run's rounds (wall and
+    CPU) and the median of the per-round wall ratios (each round's commands ran back to back, under one load)."""
+    lines = ["| what | seconds (median wall) | baseline | wall ratio | per-round wall ratio | CPU ratio | target |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for what, a, b, target in TARGETS:
+        if a not in runs or (isinstance(b, str) and b not in runs):
+            lines.append(f"| {what} | - | not run | | | | <= {target:g} |")
+            continue
+        wa, ca = [x["wall"] for x in runs[a]], [x["cpu"] for x in runs[a]]
+        if isinstance(b, str):
+            wb, cb = [x["wall"] for x in runs[b]], [x["cpu"] for x in runs[b]]
+            base, per_round = f"{_med(wb):.2f} s", _med([x / y for x, y in zip(wa, wb)])
+            cpu = f"{_med(ca) / _med(cb):.2f}"
+        else:
+            wb, base, per_round, cpu = [b], f"{b:g} s (target)", _med([x / b for x in wa]), ""
+        ratio = _med(wa) / _med(wb)
+        lines.append(f"| {what} | {_med(wa):.3f} | {base} | {ratio:.2f} | {per_round:.2f} | {cpu} | <= {target:g} "
+                     f"{'(met)' if ratio <= target else '(NOT met)'} |")
+    return "\n".join(lines) + "\n"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=HERE / ".cache" / "pipeline",
@@ -371,17 +442,22 @@ def main():
           f"commands alternating; 1-min load average during the rounds: median {_med(loads):.1f} "
           f"(min {min(loads):.1f}, max {max(loads):.1f}); OPENBLAS_NUM_THREADS="
           f"{os.environ.get('OPENBLAS_NUM_THREADS', '-')}\n")
+    print(summary(runs))
     print("| command | wall median (s) | wall min | CPU median (s) | peak memory (MB) |")
     print("| --- | --- | --- | --- | --- |")
-    label = {"procam": "procam calibrate (cold process)", "read": "read the 210 PNGs, 2 threads (cold process)",
-             "kamino410": "kamino410 calibrate.py (cold process)", "help": "procam --help (cold process)"}
+    pair = ensure_decode_pair(data)
+    label = {"procam": "procam calibrate, 5 poses (cold process)", "read": "read the 210 PNGs, 2 threads (cold process)",
+             "kamino410": "kamino410 calibrate.py, 5 poses (cold process)", "version": "procam --version",
+             "calibrate-help": "procam calibrate --help",
+             **{f"decode-{n}": f"procam decode, {n} capture ({k} frames)" for n, (_, k) in pair.items()}}
     for n in names:
         w = [x["wall"] for x in runs[n]]
         print(f"| {label[n]} | {_med(w):.2f} | {min(w):.2f} | {_med([x['cpu'] for x in runs[n]]):.2f} | "
               f"{max(x['rss'] for x in runs[n]):.0f} |")
     print("\n| ratio | median of the per-round ratios | ratio of the medians | ratio of the minima |")
     print("| --- | --- | --- | --- |")
-    pairs = [("procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else [])
+    pairs = [("procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else []) + \
+        [("decode-phase", "decode-gray")]
     for a, b in pairs:
         wa, wb = [x["wall"] for x in runs[a]], [x["wall"] for x in runs[b]]
         per_round = [x / y for x, y in zip(wa, wb)]

@@ -189,6 +189,33 @@ def test_a_gray_block_described_in_the_wrong_bit_order_is_refused_naming_the_ord
     assert code == 2 and f'"bit_order": "{rendered}"' in " ".join((out + err).split())
 
 
+def test_the_bit_order_check_on_integers_is_the_float_check_bit_for_bit():
+    """The check reads an 8- or 16-bit capture's pattern/inverse pairs as integers and their 99th percentile off a
+    histogram (issue 35: a third of its time): the same densities as the float copies and np.percentile gave."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from sim_small import small_capture
+
+    from procam import patterns
+    from procam.capture import bit_order
+
+    rng = np.random.default_rng(35)
+    for n, top in [(1, 2), (2, 3), (7, 256), (1001, 256), (4096, 4), (5000, 65536), (99, 1)]:
+        for _ in range(20):
+            c = np.minimum(rng.integers(0, top, n), rng.integers(0, top))  # ties, and a cut that piles them up
+            assert bit_order._percentile99_of_integers(c) == float(np.percentile(c.astype(np.float32), 99))
+    scene, stack, _, _ = small_capture()
+    ps = patterns.pattern_set(*scene.proj_size, "opencv")
+    for axis in ("col", "row"):
+        frames = bit_order._bits_in_described_order(ps, axis)[0]
+        for st in (stack, stack.astype(np.uint16) * 257):
+            got = bit_order._edge_densities(st, frames, 1)
+            want = bit_order._edge_densities(st.astype(np.float32), frames, 1)  # the float path
+            assert np.isfinite(got).sum() >= 5 and np.array_equal(got, want, equal_nan=True)
+
+
 # ------------------------------------------------------------------------------------------------------------------
 # the shift's direction, checked by the direction the fringes move (issue 36 item 5)
 

@@ -266,3 +266,37 @@ def test_gray_family_decode_is_unchanged_by_the_dispatch():
     b = decode.decode_with(st, ps, decode.DecodeOptions())
     assert np.array_equal(a.col, b.col, equal_nan=True) and a.sigma_col is None and not a.subpixel
     assert np.allclose(a.coordinate_sigma("col")[a.valid_col], 1 / np.sqrt(12))
+
+
+def test_the_response_fits_brent_search_is_scipys_bounded_search_bit_for_bit():
+    """The gamma search runs Brent's bounded method itself (importing scipy.optimize cost a phase decode more than
+    its own fit, issue 35): the same minimum, to the bit, as scipy's minimize_scalar(method="bounded")."""
+    from scipy.optimize import minimize_scalar
+
+    rng = np.random.default_rng(35)
+    for k in range(600):
+        c, lo, hi, tol = rng.uniform(-3, 5), *sorted(rng.uniform(-4, 6, 2)), 10 ** rng.uniform(-8, -1)
+        f = [lambda x: (x - c) ** 2, lambda x: abs(x - c) ** 1.5 + 0.1 * np.sin(7 * x), lambda x: np.cos(x * c),
+             lambda x: round((x - c) ** 2, 2)][k % 4]  # smooth, bumpy, several minima, flat steps
+        want = float(minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": tol}).x)
+        assert response._brent(f, lo, hi, tol) == want
+
+
+def test_a_phase_decode_imports_no_scipy(tmp_path):
+    """Nothing paid at start-up that a phase decode does not need (issue 35): the response fit, the decode and
+    the capture checks run without scipy."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    ps = patterns.pattern_set(W, H, family="phase", steps=3, period=32, white_black=False)
+    stack = panel(ps, noise=1.0, gamma=2.2, beta=220.0, seed=5)  # made here: this module imports scipy.ndimage
+    path = Path(tmp_path) / "stack.npy"
+    np.save(path, stack)
+    code = ("import sys\nimport numpy as np\nfrom procam import patterns, decode\n"
+            f"ps = patterns.pattern_set({W}, {H}, family='phase', steps=3, period=32, white_black=False)\n"
+            f"res = decode.decode_with(np.load({str(path)!r}), ps)\n"
+            "assert abs(res.phase.gamma - 2.2) < 0.1, res.phase.gamma\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

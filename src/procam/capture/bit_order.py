@@ -51,19 +51,24 @@ def _bits_in_described_order(ps, axis: str) -> tuple[list[tuple[int, int | None]
 def _edge_densities(stack: np.ndarray, frames, stride: int) -> np.ndarray:
     """(n,) share of neighbouring pixels (across and down, every ``stride``-th pixel) whose bit differs, among
     those sure of it; NaN where fewer than :data:`MIN_PAIRS` are."""
-    imgs = [(stack[a, ::stride, ::stride].astype(np.float32),
-             None if i is None else stack[i, ::stride, ::stride].astype(np.float32)) for a, i in frames]
-    if imgs[0][1] is None:
-        p = np.stack([a for a, _ in imgs])
+    integer = stack.dtype.kind in "ui"
+    if frames[0][1] is None:
+        p = np.stack([stack[a, ::stride, ::stride].astype(np.float32) for a, _ in frames])
         lo, hi = p.min(axis=0), p.max(axis=0)
         span = hi - lo
         thr = (lo + hi) / 2.0
         sure_lit = span > 0.25 * float(np.percentile(span, 99))
-    out = np.full(len(imgs), np.nan)
-    for k, (a, i) in enumerate(imgs):
+    out = np.full(len(frames), np.nan)
+    for k, (a, i) in enumerate(frames):
         if i is None:
+            a = p[k]
             bit, sure = a > thr, sure_lit & (np.abs(a - thr) > 0.25 * span)
+        elif integer:  # the same test on the integers: no float copies, the percentile from their histogram
+            a, i = stack[a, ::stride, ::stride], stack[i, ::stride, ::stride]
+            c = np.abs(a.astype(np.int16 if a.dtype.itemsize == 1 else np.int32) - i)
+            bit, sure = a > i, c > 0.25 * _percentile99_of_integers(c)
         else:
+            a, i = stack[a, ::stride, ::stride].astype(np.float32), stack[i, ::stride, ::stride].astype(np.float32)
             c = np.abs(a - i)
             bit, sure = a > i, c > 0.25 * float(np.percentile(c, 99))
         n, d = 0, 0
@@ -72,11 +77,23 @@ def _edge_densities(stack: np.ndarray, frames, stride: int) -> np.ndarray:
             s1 = [slice(None), slice(None)]
             s0[ax], s1[ax] = slice(None, -1), slice(1, None)
             both = sure[tuple(s0)] & sure[tuple(s1)]
-            n += int(both.sum())
-            d += int(np.sum(both & (bit[tuple(s0)] != bit[tuple(s1)])))
+            n += int(np.count_nonzero(both))
+            d += int(np.count_nonzero(both & (bit[tuple(s0)] != bit[tuple(s1)])))
         if n >= MIN_PAIRS:
             out[k] = d / n
     return out
+
+
+def _percentile99_of_integers(c: np.ndarray) -> float:
+    """``float(np.percentile(c.astype(np.float32), 99))`` of non-negative integers ``c``, without sorting them:
+    the two order statistics the linear rule interpolates are read off the histogram, and numpy interpolates
+    them with the same weight (the same float32 arithmetic, so the same bits)."""
+    n = c.size
+    pos = (n - 1) * 0.99  # numpy's virtual index of the linear rule (q = 99 / 100)
+    lo = int(np.floor(pos))
+    cum = np.cumsum(np.bincount(c.ravel()))
+    v_lo, v_hi = np.searchsorted(cum, [lo, min(lo + 1, n - 1)], side="right")
+    return float(np.quantile(np.array([v_lo, v_hi], np.float32), pos - lo))
 
 
 def _spearman(x: np.ndarray) -> float:

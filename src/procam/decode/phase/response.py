@@ -354,12 +354,78 @@ def _sandwich_std(data, gamma: float, blur: float, step: float = 0.02) -> float:
     return float(np.sqrt(np.sum(d1[keep] ** 2)) / curv) if curv > 0 else float("inf")
 
 
-def _brent(f, lo: float, hi: float, tol: float) -> float:
+def _brent(f, lo: float, hi: float, tol: float, max_evaluations: int = 500) -> float:
     """The minimum of ``f`` on ``[lo, hi]`` to ``tol`` (Brent's bounded method: golden sections with parabolic steps;
-    about 7 evaluations per search here, against 8-14 for golden sections alone)."""
-    from scipy.optimize import minimize_scalar
+    about 7 evaluations per search here, against 8-14 for golden sections alone).
 
-    return float(minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": tol}).x)
+    Forsythe, Malcolm & Moler's ``fmin``, step for step as scipy's ``minimize_scalar(method="bounded")`` takes it
+    (the same evaluations, the same minimum to the bit: tests/test_phase_response.py): written out here because
+    importing ``scipy.optimize`` costs a phase decode more than its own fit (issue 35)."""
+    sqrt_eps = math.sqrt(2.2e-16)
+    golden_mean = 0.5 * (3.0 - math.sqrt(5.0))
+    a, b = lo, hi
+    # x the best point so far, w the second best, v the previous w (f of each in fx, fw, fv)
+    x = w = v = a + golden_mean * (b - a)
+    fx = fw = fv = f(x)
+    d = e = 0.0  # the step taken and the one before it
+    n = 1
+    mid = 0.5 * (a + b)
+    tol1 = sqrt_eps * abs(x) + tol / 3.0
+    tol2 = 2.0 * tol1
+    while abs(x - mid) > tol2 - 0.5 * (b - a):
+        golden = True
+        if abs(e) > tol1:  # a parabola through x, w, v
+            golden = False
+            r = (x - w) * (fx - fv)
+            q = (x - v) * (fx - fw)
+            p = (x - v) * q - (x - w) * r
+            q = 2.0 * (q - r)
+            if q > 0.0:
+                p = -p
+            q = abs(q)
+            r, e = e, d
+            if abs(p) < abs(0.5 * q * r) and q * (a - x) < p < q * (b - x):  # its minimum inside, the step shrinking
+                d = (p + 0.0) / q
+                u = x + d
+                if u - a < tol2 or b - u < tol2:
+                    d = tol1 * _sign1(mid - x)
+            else:
+                golden = True
+        if golden:
+            e = (a - x) if x >= mid else (b - x)
+            d = golden_mean * e
+        u = x + _sign1(d) * max(abs(d), tol1)
+        fu = f(u)
+        n += 1
+        if fu <= fx:
+            if u >= x:
+                a = x
+            else:
+                b = x
+            v, fv = w, fw
+            w, fw = x, fx
+            x, fx = u, fu
+        else:
+            if u < x:
+                a = u
+            else:
+                b = u
+            if fu <= fw or w == x:
+                v, fv = w, fw
+                w, fw = u, fu
+            elif fu <= fv or v == x or v == w:
+                v, fv = u, fu
+        mid = 0.5 * (a + b)
+        tol1 = sqrt_eps * abs(x) + tol / 3.0
+        tol2 = 2.0 * tol1
+        if n >= max_evaluations:
+            break
+    return float(x)
+
+
+def _sign1(t: float) -> float:
+    """The sign of ``t``, 1 for zero."""
+    return -1.0 if t < 0 else 1.0
 
 
 def _noise(rss, beta, level, dof: int, floor: float):
