@@ -152,14 +152,14 @@ def _wall_truth(calib, q):
 def test_the_walls_spots_land_on_their_epipolar_lines_only_when_the_calibration_is_right(kind):
     """Spots on the wall behind the board (``wall=(8, 5)``): each is found where the true geometry puts it (within
     0.3 px) and its miss is its distance from the calibration's epipolar curve as the true geometry predicts
-    (within three times the centroid's own sd, + 0.05 px): 0.07 px RMS for the truth (the wall 'holds'), 1-2 px with f_p +1 % or R turned 0.2 deg (the
+    (within three times the centroid's own sd, + 0.05 px): 0.03 px RMS for the truth (the wall 'holds'), 1-2 px with f_p +1 % or R turned 0.2 deg (the
     wall's part says 'off', as the board's does)."""
     sc = small_scene()
     calib = simulate.truth_calibration(sc) if kind == "truth" else _perturbed(kind)
     wc = world_check(calib, _board(sc), _device(), wall=(8, 5))
     wall = wc.wall
     ok = np.array([st == "found" for st in wall.status])
-    assert ok.sum() >= 12 and set(wall.status) <= {"found", "faint", "board", "edge"}
+    assert ok.sum() >= 10 and set(wall.status) <= {"found", "faint", "board", "edge"}
     assert len(set(wall.frame)) > 1          # spots on nearby epipolar lines are shown in different frames
     lands, dist = _wall_truth(calib, wall.proj_pts[ok])
     assert np.abs(wall.found[ok] - lands).max() <= 0.3
@@ -281,7 +281,7 @@ def test_cli_world_check_wall(tmp_path, small_rig):
     assert code == 0, err
     assert "wall: " in out and "from their epipolar lines" in out and "verdict: holds" in out
     doc = json.loads((tmp_path / "wc.json").read_text())
-    assert doc["wall"]["found"] >= 12 and doc["wall"]["rms_px"] <= 0.3
+    assert doc["wall"]["found"] >= 10 and doc["wall"]["rms_px"] <= 0.3
     assert doc["reasons"][-1].startswith("the wall:")
     assert (tmp_path / "wc.png").read_bytes()[:4] == b"\x89PNG"
 

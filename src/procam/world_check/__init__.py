@@ -43,7 +43,7 @@ __all__ = ["VERDICTS", "WALL_GRID_MAX", "WorldCheck", "WorldCheckOptions", "capt
 #: The verdict words: the calibration holds in the world, is off, or the check cannot tell.
 VERDICTS = ("holds", "off", "inconclusive")
 #: The most spots a side of the wall's grid may have (``wall=(cols, rows)``).
-WALL_GRID_MAX = 40
+WALL_GRID_MAX = 12
 
 
 @dataclass(frozen=True)
@@ -317,7 +317,7 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
               & (predicted[:, 1] >= 0) & (predicted[:, 1] <= h - 1))
 
     lit = _gray(show_and_grab(spots_image((Wp, Hp), q[inside], sigma)))
-    plan = _wall_plan(calib, board, wall, R_b, t_b, R_p, t_p, sigma_cam, sq_cam) if wall is not None else None
+    plan = _wall_plan(calib, board, wall, R_b, t_b, R_p, t_p, sigma, sigma_cam, sq_cam) if wall is not None else None
     wall_lit = [] if plan is None else [_gray(show_and_grab(spots_image((Wp, Hp), plan[0][plan[1] == f], sigma)))
                                         for f in range(int(plan[1].max()) + 1 if len(plan[1]) else 0)]
     dark = _gray(show_and_grab(np.zeros((Hp, Wp), np.uint8)))
@@ -391,12 +391,12 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
                       white, float(sigma), float(options.tolerance_px), float(tol), wall_check)
 
 
-def _wall_plan(calib, board, shape, R_b, t_b, R_p, t_p, sigma_cam, sq_cam):
+def _wall_plan(calib, board, shape, R_b, t_b, R_p, t_p, sigma, sigma_cam, sq_cam):
     """The wall's spots (:mod:`.wall`): (projector px (M, 2), frame per spot (M,), epipolar curves (M, n, 2), the
     board's footprint in the camera (4, 2), the search band's half-width, camera px)."""
     from . import wall as _wall
 
-    qw = _wall.grid(calib.projector.image_size, shape, _wall.footprint(calib.projector, R_p, t_p, board))
+    qw = _wall.grid(calib.projector.image_size, shape, _wall.footprint(calib.projector, R_p, t_p, board), sigma * 3)
     curves = _wall.curves(calib, qw, float(t_p[2]))
     seen = np.isfinite(curves).all(2).any(1)        # rays the camera sees at some depth
     qw, curves = qw[seen], curves[seen]

@@ -13,7 +13,7 @@ normal of the epipolar planes -- is invisible on the wall; the board's targets s
 
 Spots whose epipolar curves pass near each other are shown in different frames (:func:`frames`), so each is
 searched for only in a band around its own curve (:func:`band_peak`); spots that would land on the board or its
-shadow are not shown (:func:`grid`), and spots found next to the board in the camera image or at its border are
+shadow, or be cut by the panel's border, are not shown (:func:`grid`), and spots found next to the board in the camera image or at its border are
 set aside (status ``"board"``, ``"edge"``).
 """
 
@@ -75,7 +75,12 @@ class WallCheck:
                                                            self.miss_px, self.gap, self.points)]}
 
 
-def footprint(device, R, t, board, grow: float = 1.5) -> np.ndarray:
+#: How far beyond the outer inner corners the board's footprint reaches, in squares: the outer squares (1), a
+#: printed white border of up to a square (1), and half a square to spare.
+GROW = 2.5
+
+
+def footprint(device, R, t, board, grow: float = GROW) -> np.ndarray:
     """(4, 2) ``device`` pixels of the board's outer corners' rectangle grown by ``grow`` squares on every side
     (the printed board with its border, generously), board at pose ``(R, t)`` (board -> device)."""
     obj = board.object_points()
@@ -93,15 +98,17 @@ def inside(poly: np.ndarray, pts: np.ndarray, margin: float = 0.0) -> np.ndarray
                      for p in np.asarray(pts, float)], bool)
 
 
-def grid(proj_size, shape, keep_out: np.ndarray) -> np.ndarray:
+def grid(proj_size, shape, keep_out: np.ndarray, edge: float = 0.0) -> np.ndarray:
     """(M, 2) projector pixels: the centres of a ``shape = (cols, rows)`` grid of cells over the panel
-    ``proj_size = (W, H)``, those inside the polygon ``keep_out`` (the board's footprint) left out."""
+    ``proj_size = (W, H)``, those inside the polygon ``keep_out`` (the board's footprint) or within ``edge`` px of
+    the panel's border (a spot cut by it would be shown off centre) left out."""
     W, H = proj_size
     cols, rows = shape
     x = (np.arange(cols) + 0.5) * W / cols - 0.5
     y = (np.arange(rows) + 0.5) * H / rows - 0.5
     q = np.stack(np.meshgrid(x, y), -1).reshape(-1, 2)
-    return q[~inside(keep_out, q)]
+    on_panel = (q[:, 0] >= edge) & (q[:, 0] <= W - 1 - edge) & (q[:, 1] >= edge) & (q[:, 1] <= H - 1 - edge)
+    return q[on_panel & ~inside(keep_out, q)]
 
 
 def curves(calib, q: np.ndarray, depth: float, n: int = 128) -> np.ndarray:
