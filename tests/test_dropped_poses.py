@@ -66,10 +66,12 @@ def test_too_few_poses_with_a_board_is_an_error(poses_and_empty, tmp_path):
 
 
 #: A board printed with a speckled texture (the albedo's standard deviation 0.3, cells of 1 mm, fixed in every
-#: frame: the capture's own checks pass).  The classic detector finds no board in any of its frames; SB does.
-#: Measured at this pose's white, white - black and black frames (3 noise seeds each): classic finds it at grain
-#: 0.2, at 0.22 on 2 seeds of 3 and from 0.25 on 0 of 3; SB finds it on every seed from 0 to 0.36 and on none at
-#: 0.4.  At 0.3 classic fails and SB succeeds at all three poses of the small rig and at read noise 0.5 to 3 DN.
+#: frame: the capture's own checks pass).  The classic detector finds no board in any of the frames procam tries
+#: (white, white - black, black); SB does.  Measured: full renders of this pose at 9 noise seeds (0-8), classic in
+#: none of the three frames at any seed, SB in the black frame at 9, white - black at 8 (not seed 7, the fixture's),
+#: white at 4.  Over the grain (white and black frames at 8 seeds): classic finds the board at 0.2, on 2 of 3 seeds
+#: at 0.22 and on none from 0.26; SB in white - black on 8 of 8 at 0.26, 0.3 and 0.34, on 1 of 8 at 0.38.  At 0.3
+#: the same holds at the small rig's other two poses.
 GRAINY = {"board_grain": 0.3}
 GRAINY_ANGLES = (-12.0, 15.0, 5.0)
 
@@ -92,8 +94,7 @@ def grainy_pose(tmp_path_factory):
 
 def test_a_board_only_sb_finds_is_found_by_auto(grainy_pose):
     """The grainy pose: procam's pipeline with the classic detector finds no board in its white, white - black or
-    black frame, SB finds it in the white frame, and ``auto`` finds every corner, 0.3 px RMS of the truth at
-    most."""
+    black frame, SB finds it in one of them, and ``auto`` finds every corner, 0.3 px RMS of the truth at most."""
     from procam.board import corners as _corners
     from procam.errors import BoardNotFoundError
     from procam.pipeline import find_board
@@ -101,7 +102,9 @@ def test_a_board_only_sb_finds_is_found_by_auto(grainy_pose):
     _, stack, ps, true_corners = grainy_pose
     with pytest.raises(BoardNotFoundError, match="not found"):    # tries the white, white - black and black frames
         find_board(stack, ps, (10, 6), detector="classic")
-    assert _corners.find_grid(stack[ps.white], (10, 6), detector="sb") is not None
+    white, black = stack[ps.white], stack[ps.black]
+    candidates = (white, np.clip(white.astype(np.float32) - black.astype(np.float32), 0, None), black)
+    assert any(_corners.find_grid(image, (10, 6), detector="sb") is not None for image in candidates)
     c = find_board(stack, ps, (10, 6), detector="auto")
     err = np.hypot(*(c - true_corners).T)           # 0.23 px RMS, 0.54 max: the grain biases the corners a little
     assert np.sqrt(np.mean(err ** 2)) < 0.3 and err.max() < 1.0
