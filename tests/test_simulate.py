@@ -389,3 +389,31 @@ def test_corners_strong_distortion_slow(name):
     c = _canonical(cv2.cornerSubPix(stack[44], corners, (11, 11), (-1, -1), crit).reshape(-1, 2))
     e = c - np.array(t["corners"]["camera_distorted"])
     assert np.sqrt((e ** 2).sum(axis=1).mean()) < 0.1
+
+
+def test_board_grain_is_a_fixed_texture_of_the_print():
+    """``board_grain``: a texture of the board's print, the same in every frame (two noise seeds' white frames carry
+    the same one), of the order of the stated albedo deviation, on the board only; refused outside [0, 1]."""
+    import sim_small
+
+    sc = sim.with_board_pose(sim_small.small_scene(), (-12.0, 15.0, 5.0))
+    plain, grainy = sim.Renderer(sc), sim.Renderer(sc.replace(board_grain=0.3))
+    k = plain.pattern_set.white
+    lit = plain.linear(k)
+    white = lit > 0.7 * lit.max()                   # the board's white squares (and its white margin)
+    texture = [grainy.frame(k, np.random.default_rng(s)).astype(float)
+               - plain.frame(k, np.random.default_rng(s)).astype(float) for s in (0, 1)]
+    assert np.corrcoef(texture[0][white], texture[1][white])[0, 1] > 0.95
+    rel = texture[0][white] / (lit[white] / sc.albedo_white * 255)   # in albedo units
+    # 0.15 here: a camera pixel (0.8 mm at this pose, 2x2 rays) averages the 1 mm cells, and bright grains saturate
+    assert 0.1 < rel.std() < 0.3 and abs(rel.mean()) < 0.1       # -0.06: the clipped bright grains
+    x0, x1, y0, y1 = sim.board_extent(sc)
+    outline = sim.project_points(sc, np.array([[x0, y0, 0], [x1, y0, 0], [x1, y1, 0], [x0, y1, 0]])
+                                 @ np.asarray(sc.R_board).T + sc.t_board)
+    board = np.zeros(lit.shape, np.uint8)
+    cv2.fillConvexPoly(board, np.round(outline).astype(np.int32), 1)
+    board = cv2.dilate(board, np.ones((5, 5), np.uint8)) > 0      # the printed board, one blurred pixel more
+    grain = grainy.linear(k) - lit                 # noise-free
+    assert np.abs(grain[board]).max() > 0.2 and np.abs(grain[~board]).max() < 1e-6
+    with pytest.raises(ValueError, match="board_grain"):
+        sc.replace(board_grain=1.5)

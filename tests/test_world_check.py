@@ -15,7 +15,7 @@ from sim_small import small_scene
 from procam import simulate
 from procam.board import Board
 from procam.calibration import Device
-from procam.errors import BoardNotFoundError, CalibrationError
+from procam.errors import BoardNotFoundError, CalibrationError, ProcamError
 from procam.world_check import WorldCheckOptions, draw, white_square_centres, world_check
 
 
@@ -125,6 +125,60 @@ def test_a_wrong_calibration_misses_by_what_the_geometry_predicts(kind, words):
         assert wc.pattern["scale"] == pytest.approx(0.01, abs=5e-4)
 
 
+def _wall_truth(calib, q):
+    """Independently of procam.world_check: where each wall spot shown at projector pixel ``q`` (M, 2) lands in the
+    camera by the scene's TRUE geometry (the true projector ray meets the scene's wall), and how far that is from
+    the epipolar curve ``calib`` gives ``q`` (its projector ray, sampled every 0.5 mm of depth from 200 to 3000 mm,
+    seen by the true camera, which ``calib`` shares).  Returns (true pixels (M, 2), distances (M,) camera px)."""
+    sc = small_scene()
+    assert sc.proj_distortion == "none" and calib.projector.distortion.model == "none"
+    (wall,) = sc.surfaces().surfaces
+    hom = np.column_stack([q, np.ones(len(q))])
+    Rt, Tt = np.asarray(sc.R), np.asarray(sc.T)
+    o, d = -Rt.T @ Tt, (hom @ np.linalg.inv(np.asarray(sc.K_proj)).T) @ Rt
+    s = ((np.asarray(wall.point) - o) @ wall.normal) / (d @ wall.normal)
+    lands = simulate.project_points(sc, o + d * s[:, None])
+    R, T = np.asarray(calib.R), np.asarray(calib.T)
+    oc, dc = -R.T @ T, (hom @ np.linalg.inv(np.asarray(calib.projector.K)).T) @ R
+    z = np.arange(200.0, 3000.0, 0.5)
+    dist = np.empty(len(q))
+    for k in range(len(q)):
+        curve = simulate.project_points(sc, oc + np.outer(z, dc[k]))
+        dist[k] = np.min(np.hypot(*(curve - lands[k]).T))
+    return lands, dist
+
+
+@pytest.mark.parametrize("kind", ["truth", "f_p +1%", "R 0.2 deg"])
+def test_the_walls_spots_land_on_their_epipolar_lines_only_when_the_calibration_is_right(kind):
+    """Spots on the wall behind the board (``wall=(8, 5)``): each is found where the true geometry puts it (within
+    0.3 px) and its miss is its distance from the calibration's epipolar curve as the true geometry predicts
+    (within three times the centroid's own sd, + 0.05 px): 0.03 px RMS for the truth (the wall 'holds'), 1-2 px with f_p +1 % or R turned 0.2 deg (the
+    wall's part says 'off', as the board's does)."""
+    sc = small_scene()
+    calib = simulate.truth_calibration(sc) if kind == "truth" else _perturbed(kind)
+    wc = world_check(calib, _board(sc), _device(), wall=(8, 5))
+    wall = wc.wall
+    ok = np.array([st == "found" for st in wall.status])
+    assert ok.sum() >= 10 and set(wall.status) <= {"found", "faint", "board", "edge"}
+    assert len(set(wall.frame)) > 1          # spots on nearby epipolar lines are shown in different frames
+    lands, dist = _wall_truth(calib, wall.proj_pts[ok])
+    assert np.abs(wall.found[ok] - lands).max() <= 0.3
+    assert (np.abs(np.hypot(*wall.miss_px[ok].T) - dist) <= 0.05 + 3 * wall.sd_px[ok]).all()
+    wall_reason = wc.reasons[-1]
+    if kind == "truth":
+        assert wc.verdict == "holds" and wall.rms_px <= 0.3 and wall.max_px <= 0.3, wc.reasons
+        assert "within 0.5 px" in wall_reason and wall_reason.startswith("the wall:")
+        # the wall the calibration triangulates is the scene's (950 mm deep; 0.1 px along the line is ~0.6 mm there)
+        (plane,) = sc.surfaces().surfaces
+        assert np.abs((wall.points[ok] - plane.point) @ plane.normal).max() < 3.0
+    else:
+        assert np.sqrt(np.mean(dist ** 2)) > 0.9                  # a miss the wall must see
+        assert wc.verdict == "off" and wall.rms_px > 0.9 and "more than 0.5 px" in wall_reason
+        assert "the wall's spots lie" in wc.diagnosis
+    doc = wc.to_dict()["wall"]
+    assert doc["found"] == ok.sum() and len(doc["markers"]) == len(wall.status)
+
+
 def test_spots_not_seen_are_reported_not_guessed():
     """A projector that shows the white frame but not the spots: no spot found, the verdict 'inconclusive'."""
     sc = small_scene()
@@ -152,6 +206,8 @@ def test_no_board_or_no_projector_is_a_one_line_error():
         world_check(calib.replace(projector=None, R=None, T=None), _board(sc), _device())
     with pytest.raises(Exception, match="tolerance_px"):
         WorldCheckOptions(tolerance_px=0.0)
+    with pytest.raises(ProcamError, match="wall must be"):
+        world_check(calib, _board(sc), _device(), wall=(8, 1))
 
 
 def test_capture_device_shows_and_grabs_through_the_capture_layer():
@@ -215,6 +271,21 @@ def test_cli_world_check_virtual(tmp_path, small_rig):
     assert code == 3 and "off:" in err and "focal length looks too long" in err and "Traceback" not in err
 
 
+def test_cli_world_check_wall(tmp_path, small_rig):
+    """``--wall 8x5``: the wall's numbers printed and in the JSON, its reason in the verdict; the picture drawn."""
+    from procam.io import save_calibration
+
+    save_calibration(simulate.truth_calibration(small_scene()), tmp_path / "truth.json")
+    code, out, err = run_cli(["world-check", tmp_path / "truth.json", "--virtual", "--wall", "8x5",
+                              "--json", tmp_path / "wc.json", "--png", tmp_path / "wc.png"])
+    assert code == 0, err
+    assert "wall: " in out and "from their epipolar lines" in out and "verdict: holds" in out
+    doc = json.loads((tmp_path / "wc.json").read_text())
+    assert doc["wall"]["found"] >= 10 and doc["wall"]["rms_px"] <= 0.3
+    assert doc["reasons"][-1].startswith("the wall:")
+    assert (tmp_path / "wc.png").read_bytes()[:4] == b"\x89PNG"
+
+
 @pytest.mark.parametrize("args, message", [
     (["{missing}", "--virtual"], "no such calibration file"),
     (["{cal}", "--pose", "10,10"], "--pose belongs to --virtual"),
@@ -224,7 +295,9 @@ def test_cli_world_check_virtual(tmp_path, small_rig):
     (["{cal}", "--virtual", "--camera", "opencv:1"], "--virtual uses the simulator"),
     (["{camonly}", "--virtual"], "camera-only calibration"),
     (["{wrongsize}", "--virtual"], "--virtual checks a calibration of that rig"),
-], ids=["missing", "pose", "board", "png", "tolerance", "camera", "camera-only", "size"])
+    (["{cal}", "--virtual", "--wall", "8"], "--wall must look like COLSxROWS"),
+    (["{cal}", "--virtual", "--wall", "1x5"], "--wall must look like COLSxROWS"),
+], ids=["missing", "pose", "board", "png", "tolerance", "camera", "camera-only", "size", "wall", "wall-1"])
 def test_cli_world_check_bad_inputs(tmp_path, small_rig, args, message):
     """Bad input: one line naming what is wrong, exit 2, nothing written, before any device opens."""
     from procam.io import save_calibration

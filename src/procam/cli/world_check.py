@@ -14,6 +14,7 @@ import typer
 
 from ._app import app, fail, say, user_errors
 from ._options import (
+    _SIZE,
     BoardOpt,
     CameraSizeOpt,
     DisplayOpt,
@@ -58,6 +59,10 @@ def world_check_cmd(
     png: Optional[Path] = typer.Option(None, "--png", help="Picture: the board, where each spot should be and where "
                                        "it landed, the misses magnified 10x."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="The numbers, per spot, as JSON."),
+    wall: Optional[str] = typer.Option(None, "--wall", help="Also a COLSxROWS grid of spots over the projector's "
+                                       "image, on the wall behind the board (the board's footprint left out), each "
+                                       "checked against the line the calibration says it must fall on "
+                                       "(docs/world-check.md), e.g. 8x5."),
 ):
     """Does the calibration hold in the world? Projects a spot onto the centre of each white square of the board
     in view, where the calibration says it is, finds the spots with the camera and reports how far each landed
@@ -69,6 +74,7 @@ def world_check_cmd(
     number(tolerance_px, "--tolerance-px", lo=0, lo_open=True, hi=1000, unit=" px", what="a finite number")
     number(tolerance, "--tolerance", lo=0, lo_open=True, what="a finite number")
     cam_size = camera_settings(exposure, gain, camera_size, seed, display)
+    wall_grid = _wall_grid(wall) if wall is not None else None
     angles = parse_pose(pose) if pose is not None else None
     if not virtual:
         for flag, given in (("--pose", pose is not None), ("--preset", value(preset) != "ideal")):
@@ -90,14 +96,25 @@ def world_check_cmd(
     options = WorldCheckOptions(tolerance_px=tolerance_px, tolerance=tolerance)
 
     if virtual:
-        check = _virtual(calib, calibration, board, square, value(preset), angles, seed, gain, options)
+        check = _virtual(calib, calibration, board, square, value(preset), angles, seed, gain, options, wall_grid)
     else:
         check = _devices(calib, parse_board(board, 1.0 if square is None else square), camera, display, cam_size,
-                         exposure, gain, settle_ms, options)
+                         exposure, gain, settle_ms, options, wall_grid)
     _report(check, png, json_out)
 
 
-def _virtual(calib, path, board, square, preset, angles, seed, gain, options):
+def _wall_grid(text: str) -> tuple[int, int]:
+    """``--wall COLSxROWS`` -> (cols, rows), each from 2 to :data:`procam.world_check.WALL_GRID_MAX`."""
+    from ..world_check import WALL_GRID_MAX
+
+    m = _SIZE.match(text)
+    if not m or not all(2 <= int(v) <= WALL_GRID_MAX for v in m.groups()):
+        fail(f"--wall must look like COLSxROWS, each from 2 to {WALL_GRID_MAX} spots across the projector's image "
+             f"(e.g. 8x5), got {text!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def _virtual(calib, path, board, square, preset, angles, seed, gain, options, wall):
     """The check in the simulator's rig (its board unless --board), the board at ``angles``."""
     from ..acquire import cameras
     from ..board import Board
@@ -114,10 +131,10 @@ def _virtual(calib, path, board, square, preset, angles, seed, gain, options):
         Board(scene.board_cols, scene.board_rows, scene.square if square is None else square)
     if square is not None and abs(square - scene.square) > 1e-9 * scene.square:
         say(f"note: the simulator's board squares are {scene.square:g}; lengths are in units of --square {square:g}")
-    return world_check(calib, brd, virtual_device(scene, seed), options=options)
+    return world_check(calib, brd, virtual_device(scene, seed), options=options, wall=wall)
 
 
-def _devices(calib, brd, camera, display, cam_size, exposure, gain, settle_ms, options):
+def _devices(calib, brd, camera, display, cam_size, exposure, gain, settle_ms, options, wall):
     """The check with a projector window on ``display`` and the camera of the ``--camera`` spec."""
     from ..acquire.cameras import open_camera
     from ..acquire.projector import ProjectorWindow
@@ -125,7 +142,7 @@ def _devices(calib, brd, camera, display, cam_size, exposure, gain, settle_ms, o
 
     with ProjectorWindow(tuple(calib.projector.image_size), display, title="procam world-check") as proj, \
             open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain) as cam:
-        return world_check(calib, brd, capture_device(proj, cam, settle_ms / 1000.0), options=options)
+        return world_check(calib, brd, capture_device(proj, cam, settle_ms / 1000.0), options=options, wall=wall)
 
 
 def _report(check, png, json_out) -> None:
@@ -138,6 +155,10 @@ def _report(check, png, json_out) -> None:
         f"centroid noise {check.noise_px:.3f} px")
     say(f"miss: {check.rms_px:.3f} px RMS, {check.max_px:.3f} px max (camera); {check.rms:.4g} RMS, "
         f"{check.max:.4g} max (board units)")
+    if check.wall is not None:
+        w = check.wall
+        say(f"wall: {w.n_found} of {len(w.status)} spots found, {w.rms_px:.3f} px RMS, {w.max_px:.3f} px max from "
+            f"their epipolar lines (camera); rays {w.rms_gap:.4g} apart RMS (board units)")
     if png is not None:
         write_image(png, draw(check))
         say(f"picture: {png}")

@@ -26,7 +26,7 @@ import numpy as np
 
 from .background import Plane
 from .lens import undistort
-from .scene import Scene, board_extent
+from .scene import BOARD_GRAIN_MM, Scene, board_extent
 
 __all__ = ["ProjectorMaps", "true_projector_maps"]
 
@@ -66,6 +66,23 @@ def _board_albedo(scene: Scene, bx, by, wx, wy):
     inside = _box_filtered_step(u, wu, nx) * _box_filtered_step(v, wv, ny)
     checker = _box_filtered_square_wave(u, wu, nx) * _box_filtered_square_wave(v, wv, ny)
     return scene.albedo_white + (scene.albedo_black - scene.albedo_white) * 0.5 * (inside + checker)
+
+
+def _grain(scene: Scene, bx, by):
+    """The board's print texture at board coords (bx, by) mm: a fixed field (seed 0) of unit-variance normal values
+    on a grid of :data:`~procam.simulate.scene.BOARD_GRAIN_MM` cells over the printed board, bilinear (scaled by 3/2,
+    so its mean variance stays 1)."""
+    x0, x1, y0, y1 = board_extent(scene)
+    c = BOARD_GRAIN_MM
+    nx, ny = int(np.ceil((x1 - x0) / c)) + 2, int(np.ceil((y1 - y0) / c)) + 2
+    field = np.random.default_rng(0).standard_normal((ny, nx))
+    u = np.clip((np.asarray(bx, float) - x0) / c, 0, nx - 1.001)
+    v = np.clip((np.asarray(by, float) - y0) / c, 0, ny - 1.001)
+    i, j = u.astype(int), v.astype(int)
+    fu, fv = u - i, v - j
+    val = ((1 - fu) * (1 - fv) * field[j, i] + fu * (1 - fv) * field[j, i + 1] + (1 - fu) * fv * field[j + 1, i]
+           + fu * fv * field[j + 1, i + 1])
+    return 1.5 * val
 
 
 def _background_normals(bg, on, idx, X, Y, Z):
@@ -156,6 +173,8 @@ def _geometry_band(scene: Scene, ys, xs, detail: bool = False):
         else:
             albedo = np.where(wall, np.array([k.albedo for k in bg.surfaces])[np.maximum(idx, 0)], 0.0)
         albedo[board] = _board_albedo(scene, bx[board], by[board], footprint(bx)[board], footprint(by)[board])
+        if scene.board_grain:
+            albedo[board] = np.clip(albedo[board] + scene.board_grain * _grain(scene, bx[board], by[board]), 0.0, 1.0)
         del bx, by
 
         # projector coordinates

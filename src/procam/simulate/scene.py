@@ -25,6 +25,9 @@ from .lens import _K, Lens, euler_matrix
 
 __all__ = ["Scene", "DEFAULT_DISTANCE", "board_corners", "board_extent"]
 
+#: Cell size (mm) of the board's print texture (:attr:`Scene.board_grain`).
+BOARD_GRAIN_MM = 1.0
+
 #: Depth (mm, along the device's optical axis) tried first by :func:`with_board_pose` when no
 #: distance is given (the board distance of the paper's simulation study).
 DEFAULT_DISTANCE = 500.0
@@ -76,6 +79,10 @@ class Scene:
     Photometry (linear values are fractions of the camera's full scale)
 
     albedo_white, albedo_black, albedo_wall : diffuse reflectances.
+    board_grain : the print's texture (a speckled print, a board on grainy stock): ``board_grain * n`` added
+        to the board's albedo (then clipped to [0, 1]), ``n`` a fixed zero-mean, unit-variance field in board
+        coordinates (cells of :data:`BOARD_GRAIN_MM`, bilinear); the same in every frame, so it is not noise but a
+        busy board surface.  0 (default) = a uniform print.
     gain : camera exposure x gain: full-white projector light at the board-centre distance on a
         frontal albedo-1 surface gives ``gain`` of full scale.
     ambient : ambient irradiance as a fraction of full projector white.
@@ -122,6 +129,7 @@ class Scene:
     albedo_white: float = 0.85
     albedo_black: float = 0.1
     albedo_wall: float = 0.5
+    board_grain: float = 0.0
     gain: float = 0.95
     ambient: float = 0.04
     proj_black: float = 0.03
@@ -160,6 +168,9 @@ class Scene:
         if int(self.supersample) < 1:
             raise ValueError(f"supersample must be >= 1, got {self.supersample}")
         s(self, "supersample", int(self.supersample))
+        if not 0.0 <= float(self.board_grain) <= 1.0:
+            raise ValueError(f"board_grain must be from 0 to 1 (an albedo's standard deviation), got "
+                             f"{self.board_grain}")
         if not float(self.proj_gamma) > 0:
             raise ValueError(f"proj_gamma must be positive, got {self.proj_gamma}")
         if self.background is not None:

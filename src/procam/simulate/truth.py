@@ -76,6 +76,8 @@ def _scene_params(scene: Scene) -> dict:
     board = {"cols": scene.board_cols, "rows": scene.board_rows, "square": scene.square,
              "margin": scene.margin, "extent": list(board_extent(scene)),
              "albedo_white": scene.albedo_white, "albedo_black": scene.albedo_black}
+    if scene.board_grain:      # only when set: the truth of a uniform print stays what it was
+        board["grain"] = scene.board_grain
     wall = None
     if scene.background is None:
         wall = {"normal": scene.wall_normal.tolist(), "offset": scene.wall_offset,

@@ -32,14 +32,18 @@ from typing import Callable
 
 import numpy as np
 
-from .board import Board
-from .errors import BoardNotFoundError, CalibrationError, ProcamError
+from ..board import Board
+from ..errors import BoardNotFoundError, CalibrationError, ProcamError
+from .spots import centroid, spot_levels, spots_image
+from .wall import WallCheck
 
-__all__ = ["VERDICTS", "WorldCheck", "WorldCheckOptions", "capture_device", "draw", "virtual_device",
+__all__ = ["VERDICTS", "WALL_GRID_MAX", "WorldCheck", "WorldCheckOptions", "capture_device", "draw", "virtual_device",
            "white_square_centres", "world_check"]
 
 #: The verdict words: the calibration holds in the world, is off, or the check cannot tell.
 VERDICTS = ("holds", "off", "inconclusive")
+#: The most spots a side of the wall's grid may have (``wall=(cols, rows)``).
+WALL_GRID_MAX = 12
 
 
 @dataclass(frozen=True)
@@ -97,6 +101,8 @@ class WorldCheck:
     R_board, t_board : the board's pose (board -> camera) from the white frame.
     white : (H, W) the white frame (the picture's background); marker_sigma : the spots' sigma, projector px.
     tolerance_px, tolerance : the thresholds the verdict used.
+    wall : the wall's targets (:class:`~procam.world_check.wall.WallCheck`; their verdict is in ``verdict`` and
+        ``reasons``), or None when the check was asked for the board only.
     """
 
     verdict: str
@@ -122,10 +128,11 @@ class WorldCheck:
     marker_sigma: float = float("nan")
     tolerance_px: float = float("nan")
     tolerance: float = float("nan")
+    wall: WallCheck | None = None
 
     def to_dict(self) -> dict:
         """The numbers as JSON-ready types (no image), ``"format": "procam-world-check"``."""
-        from .io.formats import WORLD_CHECK_FORMAT
+        from ..io.formats import WORLD_CHECK_FORMAT
         def arr(a):
             return [[None if not np.isfinite(v) else round(float(v), 4) for v in row] for row in np.asarray(a)]
 
@@ -143,7 +150,8 @@ class WorldCheck:
                              "predicted": [num(p[0]), num(p[1])], "status": s,
                              "found": arr([f])[0], "miss_px": arr([m])[0], "miss": arr([b])[0]}
                             for t, q, p, s, f, m, b in zip(self.targets, self.proj_pts, self.predicted, self.status,
-                                                           self.found, self.miss_px, self.miss)]}
+                                                           self.found, self.miss_px, self.miss)],
+                "wall": None if self.wall is None else self.wall.to_dict(num, arr)}
 
 
 # --------------------------------------------------------------------------------------------
@@ -172,7 +180,7 @@ def _sample(image: np.ndarray, pts: np.ndarray, r: int = 1) -> np.ndarray:
 
 def _on_board(calib, pts: np.ndarray, R_b: np.ndarray, t_b: np.ndarray) -> np.ndarray:
     """Board-frame points (N, 3) where the camera rays of distorted camera pixels ``pts`` (N, 2) meet the board."""
-    from .triangulate import rays
+    from ..triangulate import rays
 
     d = rays(calib.camera, pts)
     n = R_b[:, 2]
@@ -180,61 +188,6 @@ def _on_board(calib, pts: np.ndarray, R_b: np.ndarray, t_b: np.ndarray) -> np.nd
         s = (n @ t_b) / (d @ n)
     X = d * s[:, None]
     return (X - t_b) @ R_b          # R_b^T (X - t_b), row-wise
-
-
-def _spots_image(size, pts: np.ndarray, sigma: float) -> np.ndarray:
-    """(H, W) uint8 projector image: a Gaussian spot of ``sigma`` px, peak 255, at each of ``pts`` (N, 2)."""
-    W, H = size
-    img = np.zeros((H, W), np.float32)
-    r = int(np.ceil(4 * sigma))
-    for x, y in pts:
-        x0, x1 = max(0, int(np.floor(x)) - r), min(W, int(np.floor(x)) + r + 2)
-        y0, y1 = max(0, int(np.floor(y)) - r), min(H, int(np.floor(y)) + r + 2)
-        if x0 >= x1 or y0 >= y1:
-            continue
-        gx = np.exp(-0.5 * ((np.arange(x0, x1) - x) / sigma) ** 2)
-        gy = np.exp(-0.5 * ((np.arange(y0, y1) - y) / sigma) ** 2)
-        np.maximum(img[y0:y1, x0:x1], np.outer(gy, gx).astype(np.float32), out=img[y0:y1, x0:x1])
-    return np.rint(img * 255).astype(np.uint8)
-
-
-def _robust_sigma(a: np.ndarray) -> float:
-    a = a[np.isfinite(a)]
-    return float(1.4826 * np.median(np.abs(a - np.median(a)))) if a.size else float("nan")
-
-
-def _centroid(diff, smooth, p, search, sigma_cam, floor, noise):
-    """The spot near ``p``: (centroid (2,), its sd px) or None when nothing stands above ``floor`` in ``smooth``."""
-    h, w = diff.shape
-    x0, x1 = int(max(0, np.floor(p[0] - search))), int(min(w, np.ceil(p[0] + search) + 1))
-    y0, y1 = int(max(0, np.floor(p[1] - search))), int(min(h, np.ceil(p[1] + search) + 1))
-    if x1 - x0 < 3 or y1 - y0 < 3:
-        return None
-    yy, xx = np.mgrid[y0:y1, x0:x1]
-    win = np.where((xx - p[0]) ** 2 + (yy - p[1]) ** 2 <= search ** 2, smooth[y0:y1, x0:x1], -np.inf)
-    k = int(np.argmax(win))
-    amp = float(win.flat[k])
-    if not amp > floor:
-        return None
-    c = np.array([xx.flat[k], yy.flat[k]], float)
-    rw = 3.0 * sigma_cam
-    for _ in range(5):  # a window that follows the spot, so its edge does not pull the centroid
-        x0, x1 = int(max(0, np.floor(c[0] - rw))), int(min(w, np.ceil(c[0] + rw) + 1))
-        y0, y1 = int(max(0, np.floor(c[1] - rw))), int(min(h, np.ceil(c[1] + rw) + 1))
-        yy, xx = np.mgrid[y0:y1, x0:x1]
-        inside = (xx - c[0]) ** 2 + (yy - c[1]) ** 2 <= rw ** 2
-        wgt = np.where(inside, np.maximum(diff[y0:y1, x0:x1] - 0.1 * amp, 0.0), 0.0)
-        tot = wgt.sum()
-        if not tot > 0:
-            return None
-        new = np.array([(wgt * xx).sum(), (wgt * yy).sum()]) / tot
-        done = np.hypot(*(new - c)) < 1e-3
-        c = new
-        if done:
-            break
-    # the centroid's sd: each pixel of the window carries the image noise
-    var = noise ** 2 * (((xx - c[0]) ** 2 + (yy - c[1]) ** 2) * (wgt > 0)).sum() / tot ** 2
-    return c, float(np.sqrt(var / 2.0))
 
 
 def _pattern(calib, X_found: np.ndarray, q: np.ndarray, R_p: np.ndarray, t_p: np.ndarray):
@@ -289,7 +242,7 @@ def _diagnosis(pattern: dict | None, calib) -> str:
 # --------------------------------------------------------------------------------------------
 
 def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.ndarray], *,
-                options: WorldCheckOptions = WorldCheckOptions()) -> WorldCheck:
+                options: WorldCheckOptions = WorldCheckOptions(), wall: tuple[int, int] | None = None) -> WorldCheck:
     """Project spots where the calibration says the board's white squares are, and measure where they land.
 
     Parameters
@@ -298,8 +251,12 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     board : the :class:`~procam.board.Board` in view (its ``square`` is the unit of ``miss``).
     show_and_grab : ``f(image (Hp, Wp) uint8) -> (H, W) or (H, W, 3) uint8/uint16`` camera frame with ``image``
         on the projector (:func:`virtual_device`, :func:`capture_device`); called three times (white, spots,
-        black).
+        black), and once more per frame of the wall's spots.
     options : :class:`WorldCheckOptions`.
+    wall : ``(cols, rows)``: also a grid of spots over the projector's panel, on the wall behind the board (the
+        board's footprint left out), each checked against its epipolar curve in the camera
+        (:mod:`procam.world_check.wall`: the wall's geometry is not known to the calibration); None: the board's
+        targets only.
 
     Returns
     -------
@@ -310,14 +267,16 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     CalibrationError : no projector in ``calib``, or no board pose.
     BoardNotFoundError : the board is not in the white frame.
     """
-    import cv2
-
-    from .board import corners as _corners
-    from .residuals import pnp
+    from ..board import corners as _corners
+    from ..residuals import pnp
 
     if calib.projector is None or calib.R is None or calib.T is None:
         raise CalibrationError("the calibration has no projector or no camera->projector R, T; the world check "
                                "needs a procam calibration with a projector")
+    if wall is not None and not (isinstance(wall, (tuple, list)) and len(wall) == 2 and all(
+            isinstance(v, (int, np.integer)) and 2 <= v <= WALL_GRID_MAX for v in wall)):
+        raise ProcamError(f"world check: wall must be (cols, rows), each an integer from 2 to {WALL_GRID_MAX}, got "
+                          f"{wall!r}")
     Wp, Hp = (int(v) for v in calib.projector.image_size)
     R, T = np.asarray(calib.R, float), np.asarray(calib.T, float).reshape(3)
 
@@ -357,14 +316,14 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
               & (q[:, 1] <= Hp - 1 - m) & (predicted[:, 0] >= 0) & (predicted[:, 0] <= w - 1)
               & (predicted[:, 1] >= 0) & (predicted[:, 1] <= h - 1))
 
-    lit = _gray(show_and_grab(_spots_image((Wp, Hp), q[inside], sigma)))
+    lit = _gray(show_and_grab(spots_image((Wp, Hp), q[inside], sigma)))
+    plan = _wall_plan(calib, board, wall, R_b, t_b, R_p, t_p, sigma, sigma_cam, sq_cam) if wall is not None else None
+    wall_lit = [] if plan is None else [_gray(show_and_grab(spots_image((Wp, Hp), plan[0][plan[1] == f], sigma)))
+                                        for f in range(int(plan[1].max()) + 1 if len(plan[1]) else 0)]
     dark = _gray(show_and_grab(np.zeros((Hp, Wp), np.uint8)))
-    if lit.shape != white.shape or dark.shape != white.shape:
+    if any(f.shape != white.shape for f in (lit, dark, *wall_lit)):
         raise ProcamError("world check: the camera's frames changed size during the check")
-    diff = lit.astype(np.float32) - dark.astype(np.float32)
-    noise = max(_robust_sigma(diff[::2, ::2]), 0.5)       # at least the quantisation of one level
-    smooth = cv2.GaussianBlur(diff, (0, 0), sigmaX=max(sigma_cam, 0.5))
-    floor = options.min_snr * max(_robust_sigma(smooth[::2, ::2]), 0.5 / (2 * np.sqrt(np.pi) * max(sigma_cam, 0.5)))
+    diff, smooth, noise, floor = spot_levels(lit, dark, sigma_cam, options.min_snr)
 
     n = len(targets)
     found = np.full((n, 2), np.nan)
@@ -374,7 +333,7 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
         if not inside[k]:
             status.append("outside")
             continue
-        got = _centroid(diff, smooth, predicted[k], 0.5 * sq_cam, sigma_cam, floor, noise)
+        got = centroid(diff, smooth, predicted[k], 0.5 * sq_cam, sigma_cam, floor, noise)
         if got is None:
             status.append("faint")
             continue
@@ -417,14 +376,94 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
                        f"the board) from where the calibration puts them: more than {options.tolerance_px:g} px or "
                        f"{tol:.3g}")
     diagnosis = _diagnosis(pattern, calib) if verdict == "off" else ""
+    wall_check = None
+    if plan is not None:
+        wall_check = _wall_spots(calib, plan, wall_lit, dark, sigma_cam, options)
+        verdict, why = _wall_verdict(verdict, wall_check, options)
+        reasons.append(why)
+        if wall_check.rms_px > options.tolerance_px:
+            diagnosis = "; ".join(filter(None, [diagnosis, (
+                f"the wall's spots lie {wall_check.rms_px:.2f} px RMS across the lines the calibration says they must "
+                "fall on, wherever the wall is: the projector's rays are not where the calibration puts them (R, T, "
+                "or the projector's intrinsics or distortion)")]))
     return WorldCheck(verdict, tuple(reasons), targets[:, :2].copy(), q, predicted, found, tuple(status), miss_px,
                       miss, sd, rms_px, largest(miss_px), rms_b, largest(miss), noise_px, pattern, diagnosis, R_b, t_b,
-                      white, float(sigma), float(options.tolerance_px), float(tol))
+                      white, float(sigma), float(options.tolerance_px), float(tol), wall_check)
+
+
+def _wall_plan(calib, board, shape, R_b, t_b, R_p, t_p, sigma, sigma_cam, sq_cam):
+    """The wall's spots (:mod:`.wall`): (projector px (M, 2), frame per spot (M,), epipolar curves (M, n, 2), the
+    board's footprint in the camera (4, 2), the search band's half-width, camera px)."""
+    from . import wall as _wall
+
+    qw = _wall.grid(calib.projector.image_size, shape, _wall.footprint(calib.projector, R_p, t_p, board), sigma * 3)
+    curves = _wall.curves(calib, qw, float(t_p[2]))
+    seen = np.isfinite(curves).all(2).any(1)        # rays the camera sees at some depth
+    qw, curves = qw[seen], curves[seen]
+    band = max(5.0, 0.5 * sq_cam)
+    return qw, _wall.frames(curves, 2 * band + 6 * sigma_cam), curves, _wall.footprint(calib.camera, R_b, t_b,
+                                                                                        board), band
+
+
+def _wall_spots(calib, plan, wall_lit, dark, sigma_cam, options) -> WallCheck:
+    """Find each wall spot near its epipolar curve in its frame's difference image and measure it (:mod:`.wall`)."""
+    from . import wall as _wall
+
+    qw, frame, curves, keep_out, band = plan
+    M = len(qw)
+    W, H = calib.camera.image_size
+    m = 4 * sigma_cam + 1
+    found, sd, status = np.full((M, 2), np.nan), np.full(M, np.nan), ["faint"] * M
+    for f, lit in enumerate(wall_lit):
+        diff, smooth, noise, floor = spot_levels(lit, dark, sigma_cam, options.min_snr)
+        for k in np.flatnonzero(frame == f):
+            peak = _wall.band_peak(smooth, curves[k], band)
+            got = None if peak is None or not peak[1] > floor else centroid(
+                diff, smooth, peak[0], 2 * sigma_cam + 1, sigma_cam, floor, noise)
+            if got is None:
+                continue
+            if _wall.inside(keep_out, got[0][None], 3 * sigma_cam)[0]:
+                status[k] = "board"
+                continue
+            if not (m <= got[0][0] <= W - 1 - m and m <= got[0][1] <= H - 1 - m):
+                status[k] = "edge"          # cut by the image's border: its centroid is pulled inwards
+                continue
+            found[k], sd[k], status[k] = got[0], got[1], "found"
+    nearest, points, gap = _wall.on_ray(calib, qw, found)
+    miss = found - nearest
+    ok = np.isfinite(miss).all(1)
+    d = np.hypot(miss[:, 0], miss[:, 1])
+    return WallCheck(qw, frame, found, tuple(status), miss, gap, points, sd,
+                     float(np.sqrt(np.mean(d[ok] ** 2))) if ok.any() else float("nan"),
+                     float(d[ok].max()) if ok.any() else float("nan"),
+                     float(np.sqrt(np.mean(gap[ok] ** 2))) if ok.any() else float("nan"),
+                     float(np.nanmedian(sd)) if ok.any() else float("nan"))
+
+
+def _wall_verdict(verdict: str, wall, options) -> tuple[str, str]:
+    """The verdict with the wall's spots (off if either part is off, else inconclusive if either is) and the
+    wall's reason."""
+    shown = sum(s not in ("board", "edge") for s in wall.status)
+    need = max(4, int(np.ceil(options.min_found * shown)))
+    if wall.n_found < need:
+        part, why = "inconclusive", (f"the wall: only {wall.n_found} of {len(wall.status)} spots found on it; bring "
+                                     "more of the wall into both views, or light it better")
+    elif wall.noise_px > options.tolerance_px / 3:
+        part, why = "inconclusive", (f"the wall: its spots' centroids are uncertain by {wall.noise_px:.2f} px, too "
+                                     f"much for a tolerance of {options.tolerance_px:g} px")
+    elif wall.rms_px <= options.tolerance_px:
+        part, why = "holds", (f"the wall: {wall.n_found} spots lie {wall.rms_px:.2f} px RMS from their epipolar "
+                              f"lines (rays {wall.rms_gap:.3g} apart): within {options.tolerance_px:g} px")
+    else:
+        part, why = "off", (f"the wall: {wall.n_found} spots lie {wall.rms_px:.2f} px RMS, {wall.max_px:.2f} px at "
+                            f"most from their epipolar lines: more than {options.tolerance_px:g} px")
+    order = ("off", "inconclusive", "holds")
+    return min(verdict, part, key=order.index), why
 
 
 def _gray(frame) -> np.ndarray:
     """A camera frame as (H, W) grey, its own dtype."""
-    from .board.corners import _gray as gray
+    from ..board.corners import _gray as gray
 
     frame = np.asarray(frame)
     if frame.ndim not in (2, 3):
@@ -442,12 +481,13 @@ _COLOURS = {"holds": "good", "off": "failed", "inconclusive": "weak"}
 
 def draw(check: WorldCheck, magnify: float = 10.0, max_width: int = 1600) -> np.ndarray:
     """The picture: the white frame (dimmed), each target where the camera should see it (grey ring), the spot
-    found (a dot in the verdict's colour) and its miss as a line ``magnify`` times as long; the verdict on top.
+    found (a dot in the verdict's colour) and its miss as a line ``magnify`` times as long; the wall's spots found
+    (grey diamonds) with their miss across their epipolar lines likewise; the verdict on top.
     Returns (H', W', 3) uint8 BGR (at most ``max_width`` wide)."""
     import cv2
 
-    from .board.corners import to_gray8
-    from .style import NEUTRAL, VERDICT_COLOURS, bgr
+    from ..board.corners import to_gray8
+    from ..style import NEUTRAL, VERDICT_COLOURS, bgr
 
     img = cv2.cvtColor((to_gray8(check.white) * 0.6).astype(np.uint8), cv2.COLOR_GRAY2BGR)
     scale = min(1.0, max_width / img.shape[1])
@@ -466,8 +506,15 @@ def draw(check: WorldCheck, magnify: float = 10.0, max_width: int = 1600) -> np.
         if s == "found":
             cv2.line(img, pt(p), pt(p + magnify * (f - p)), colour, 2, cv2.LINE_AA)
             cv2.circle(img, pt(f), 2, colour, -1, cv2.LINE_AA)
-    lines = [f"world check: {check.verdict}  {check.rms_px:.2f} px RMS, {check.rms:.3g} on the board",
-             f"misses drawn x{magnify:g}; ring: where the camera should see the spot"]
+    wall = check.wall
+    for f, m, s in zip(*((wall.found, wall.miss_px, wall.status) if wall is not None else ((), (), ()))):
+        if s == "found":        # the wall: a diamond at the spot, its miss across its epipolar line drawn magnified
+            cv2.drawMarker(img, pt(f), grey, cv2.MARKER_DIAMOND, 10, 1, cv2.LINE_AA)
+            cv2.line(img, pt(f - m), pt(f - m + magnify * m), colour, 2, cv2.LINE_AA)
+    lines = [f"world check: {check.verdict}  {check.rms_px:.2f} px RMS, {check.rms:.3g} on the board"
+             + (f"; wall {wall.rms_px:.2f} px RMS off its lines" if wall is not None else ""),
+             f"misses drawn x{magnify:g}; ring: where the camera should see the spot"
+             + ("; diamond: a wall spot" if wall is not None else "")]
     for k, t in enumerate(lines):
         cv2.putText(img, t, (10, 24 + 22 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.6 if k == 0 else 0.45,
                     colour if k == 0 else (230, 230, 230), 1, cv2.LINE_AA)
@@ -482,7 +529,7 @@ def virtual_device(scene, seed: int = 0) -> Callable[[np.ndarray], np.ndarray]:
     """``show_and_grab`` of the simulator: each projector image rendered as the camera sees it in ``scene``
     (:meth:`procam.simulate.Renderer.linear_image`, the camera's blur and noise from one generator seeded by
     ``seed``)."""
-    from .simulate import Renderer
+    from ..simulate import Renderer
 
     renderer = Renderer(scene)
     rng = np.random.default_rng(seed)
@@ -498,6 +545,6 @@ def capture_device(projector, camera, settle_s: float = 0.25) -> Callable[[np.nd
     :class:`~procam.acquire.projector.ProjectorWindow`, a camera of :func:`~procam.acquire.cameras.open_camera`).
     Each image is shown, held ``settle_s`` seconds, and a frame grabbed after the camera's buffer is flushed; a
     streaming camera is grabbed until two frames agree (the capture loop's own rule)."""
-    from .acquire.session import steady_shooter
+    from ..acquire.session import steady_shooter
 
     return steady_shooter(projector, camera, settle_s)
