@@ -18,7 +18,7 @@ import sys
 #: Sub-command -> the module of this package that registers it, in the order ``procam --help`` lists them.
 COMMANDS = {name: name for name in ("advise", "capture", "check", "patterns", "decode", "simulate", "correspond",
                                     "calibrate", "evaluate", "report", "reconstruct", "export", "blend",
-                                    "experiment", "study", "demo")}
+                                    "experiment", "study", "demo", "app")}
 COMMANDS["world-check"] = "world_check"
 
 

@@ -1,0 +1,231 @@
+// procam app: the page's behaviour. Plain JS, no build step; every request carries the session's token.
+"use strict";
+const TOKEN = document.querySelector('meta[name="procam-token"]').content;
+const $ = (id) => document.getElementById(id);
+let STATE = null;
+let JOB = null;          // the running job (its dict) or null
+let PREVIEW_BUSY = false;
+let frames = [];
+
+function url(path) { return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN); }
+function fileUrl(name, download) { return url("files/" + name.split("/").map(encodeURIComponent).join("/")) + (download ? "&download=1" : "") + "&t=" + Date.now(); }
+
+async function api(path, body) {
+  const opts = { headers: { "X-Procam-Token": TOKEN } };
+  if (body !== undefined) {
+    opts.method = "POST";
+    opts.headers["Content-Type"] = "application/json";
+    opts.body = JSON.stringify(body);
+  }
+  const r = await fetch(path, opts);
+  const data = await r.json().catch(() => ({ error: r.status + " " + r.statusText }));
+  if (!r.ok) throw new Error(data.error || (r.status + " " + r.statusText));
+  return data;
+}
+
+function showError(msg) { const e = $("error"); e.textContent = msg; e.hidden = !msg; }
+function text(id, s) { $(id).textContent = s; }
+function list(id, items) {
+  const ul = $(id); ul.replaceChildren();
+  for (const it of items || []) { const li = document.createElement("li"); li.textContent = it; ul.appendChild(li); }
+}
+function verdictClass(el, verdict) { el.className = "status verdict-" + (verdict || "none"); }
+function setImg(id, name) { const im = $(id); if (name) { im.src = fileUrl(name); im.hidden = false; } else { im.hidden = true; } }
+
+async function guarded(fn) {
+  showError("");
+  try { await fn(); } catch (e) { showError(e.message); }
+}
+
+// ---- state -----------------------------------------------------------------------------
+async function refresh() {
+  STATE = await api("api/state");
+  render();
+}
+
+function render() {
+  const s = STATE, st = s.state, d = s.devices;
+  text("project-root", s.root);
+  // devices
+  const dl = $("devices-list"); dl.replaceChildren();
+  for (const [k, v] of [["projector", d.projector], ["camera", d.camera]]) {
+    const dt = document.createElement("dt"); dt.textContent = k; const dd = document.createElement("dd"); dd.textContent = v;
+    dl.append(dt, dd);
+  }
+  for (const disp of d.displays || []) {
+    const dd = document.createElement("dd"); dd.textContent = disp.label + (disp.projector ? "  <- the projector" : ""); dl.append(dd);
+  }
+  $("devices-virtual").hidden = !d.virtual;
+  $("virtual-board").hidden = !d.virtual;
+  if (d.virtual) {
+    $("devices-projector-size").value = d.projector_size.join("x");
+    const sel = $("virtual-pose");
+    if (sel.options.length !== d.poses.length) {
+      sel.replaceChildren(...d.poses.map((p, i) => { const o = document.createElement("option"); o.value = i; o.textContent = `pose ${i + 1} (${p.join(", ")} deg)`; return o; }));
+    }
+    sel.value = d.pose_index;
+  }
+  text("devices-status", d.virtual ? "virtual devices: the simulator plays projector, camera and board" : "");
+  // board
+  if (document.activeElement.tagName !== "INPUT") {
+    $("board-cols").value = st.board.cols; $("board-rows").value = st.board.rows; $("board-square").value = st.board.square;
+  }
+  const boardDone = !!s.files.board;
+  $("board-svg").hidden = !boardDone;
+  if (boardDone) $("board-svg").href = fileUrl(s.files.board);
+  text("board-status", boardDone ? `board ${st.board.cols}x${st.board.rows} inner corners, square ${st.board.square} ${st.unit}` : "give the board and press Use this board");
+  // camera
+  text("camera-status", st.camera_file ? `camera: ${st.camera_file}` + (s.photos.length ? ` (from ${s.photos.length} photo(s))` : "") : (s.photos.length ? `${s.photos.length} photo(s); the camera is not trusted yet` : "no camera file: the projector pose calibrates the camera too"));
+  // pose
+  const pose = st.pose;
+  if (pose) {
+    text("pose-verdict", `${pose.name}: ${pose.verdict}`); verdictClass($("pose-verdict"), pose.verdict);
+    setImg("pose-check", s.pose_check);
+  }
+  // calibration
+  if (s.calibration) showCalibration(s.calibration, !!s.files.calibration);
+  renderExports(s.exports);
+  gate();
+}
+
+function gate() {
+  const s = STATE, st = s.state, busy = !!JOB;
+  const boardDone = !!s.files.board;
+  const poseOk = st.pose && (st.pose.verdict === "good" || st.pose.verdict === "weak");
+  const calibOk = !!(s.calibration && s.calibration.trusted && s.files.calibration);
+  for (const id of ["board-save", "devices-projector-size"]) $(id).disabled = busy;
+  for (const id of ["camera-photo", "camera-load", "camera-none", "pose-capture"]) $(id).disabled = busy || !boardDone;
+  $("calibrate-run").disabled = busy || !poseOk;
+  $("world-run").disabled = busy || !calibOk;
+  $("export-run").disabled = busy || !calibOk;
+  $("pose-cancel").disabled = !busy;
+  for (const [id, ok] of [["step-camera", boardDone], ["step-pose", boardDone], ["step-calibrate", poseOk],
+                          ["step-world", calibOk], ["step-export", calibOk]]) $(id).classList.toggle("locked", !ok);
+}
+
+function showCalibration(c, written) {
+  text("calibrate-verdict", `verdict: ${c.verdict} - ${c.meaning}` + (written ? "" : " (not written: procam does not write a calibration it cannot trust)"));
+  verdictClass($("calibrate-verdict"), c.verdict);
+  list("calibrate-reasons", c.reasons);
+  const t = $("calibrate-table"); t.replaceChildren();
+  const head = t.insertRow(); for (const h of c.header) { const th = document.createElement("th"); th.textContent = h; head.appendChild(th); }
+  for (const r of c.rows) { const tr = t.insertRow(); for (const cell of r) tr.insertCell().textContent = cell; }
+  const cap = t.createCaption(); cap.textContent = c.plus_minus;
+  list("calibrate-rests-on", (c.rests_on || []).map((l) => "projector: " + l));
+  setImg("calibrate-residuals", written && STATE.files.residuals ? STATE.files.residuals : null);
+  const rep = $("calibrate-report"); rep.hidden = !(written && STATE.files.report);
+  if (!rep.hidden) rep.href = fileUrl(STATE.files.report);
+}
+
+function renderExports(files) {
+  const ul = $("export-files"); ul.replaceChildren();
+  const all = (files || []).slice();
+  if (STATE.files.report) all.push(STATE.files.report);
+  for (const f of all) {
+    const li = document.createElement("li"); const a = document.createElement("a");
+    a.href = fileUrl(f, true); a.textContent = f; a.setAttribute("download", f.split("/").pop());
+    li.appendChild(a); ul.appendChild(li);
+  }
+}
+
+// ---- jobs ------------------------------------------------------------------------------
+async function runJob(path, progressId, onDone) {
+  JOB = await api(path, {});
+  gate();
+  while (JOB && JOB.state === "running") {
+    await new Promise((r) => setTimeout(r, 200));
+    JOB = await api(`api/jobs/${JOB.id}`);
+    text("job-line", `${JOB.kind}: ${JOB.message} (${JOB.done}/${JOB.total || "?"})`);
+    if (progressId) { $(progressId).max = JOB.total || 1; $(progressId).value = JOB.done; }
+  }
+  const job = JOB; JOB = null;
+  text("job-line", `${job.kind}: ${job.state} (${job.seconds} s)`);
+  await refresh();
+  if (job.state === "done") onDone(job.result);
+  else showError(job.error || job.state);
+}
+
+// ---- the live view ---------------------------------------------------------------------
+async function previewLoop() {
+  for (;;) {
+    if (!$("preview-live").checked || JOB || !STATE) { await new Promise((r) => setTimeout(r, 300)); continue; }
+    try {
+      const p = await api("api/preview");
+      if (!p.busy) await drawPreview(p);
+    } catch (e) { text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
+    await new Promise((r) => setTimeout(r, 30));
+  }
+}
+
+function drawPreview(p) {
+  return new Promise((resolve) => {
+    const img = new Image();
+    img.onload = () => {
+      const cv = $("preview"), ctx = cv.getContext("2d");
+      if (cv.width !== img.width) { cv.width = img.width; cv.height = img.height; }
+      ctx.drawImage(img, 0, 0);
+      const a = p.advice;
+      const colour = { ready: "#2e7d32", good: "#2e7d32", adjust: "#f9a825", "no-board": "#c62828" }[a.state] || "#888";
+      if (a.corners) {
+        ctx.fillStyle = colour;
+        for (const [x, y] of a.corners) { ctx.beginPath(); ctx.arc(x, y, 4, 0, 2 * Math.PI); ctx.fill(); }
+      }
+      if (a.outline) {
+        ctx.strokeStyle = colour; ctx.lineWidth = 4; ctx.beginPath();
+        a.outline.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y))); ctx.closePath(); ctx.stroke();
+      }
+      const lines = [a.message, ...a.actions.map((x) => x.text)];
+      ctx.font = "28px sans-serif"; ctx.fillStyle = "rgba(0,0,0,0.6)"; ctx.fillRect(0, 0, cv.width, 40 * lines.length + 8);
+      ctx.fillStyle = colour; lines.forEach((l, i) => ctx.fillText(l, 12, 36 + 40 * i));
+      const cam = a.camera ? ` camera f ± ${fmtPct(a.camera)}` : "", proj = a.projector ? `, projector f ± ${fmtPct(a.projector)}` : "";
+      text("advice", `${a.state}: ${a.message}${cam}${proj}`);
+      $("camera-view").dataset.state = a.state;
+      const now = performance.now(); frames.push(now); frames = frames.filter((t) => now - t < 2000);
+      text("preview-fps", `${(frames.length / 2).toFixed(1)} frames/s`);
+      resolve();
+    };
+    img.onerror = () => resolve();
+    img.src = p.image;
+  });
+}
+function fmtPct(dev) { return dev.rel_std_f_pct == null ? "?" : dev.rel_std_f_pct.toFixed(2) + " %"; }
+
+// ---- the controls ----------------------------------------------------------------------
+function wire() {
+  $("board-save").onclick = () => guarded(async () => {
+    await api("api/board", { cols: parseInt($("board-cols").value, 10), rows: parseInt($("board-rows").value, 10),
+                             square: parseFloat($("board-square").value) });
+    await refresh();
+  });
+  $("devices-projector-size").onchange = () => guarded(async () => {
+    await api("api/devices", { projector_size: $("devices-projector-size").value.split("x").map(Number) }); await refresh();
+  });
+  $("virtual-pose").onchange = () => guarded(async () => { await api("api/devices", { pose: parseInt($("virtual-pose").value, 10) }); });
+  for (const [id, move] of [["turn-left", { turn: -5 }], ["turn-right", { turn: 5 }], ["tilt-up", { tilt: 5 }], ["tilt-down", { tilt: -5 }]])
+    $(id).onclick = () => guarded(async () => { await api("api/devices", move); });
+  $("camera-photo").onclick = () => guarded(async () => {
+    const r = await api("api/camera", { action: "photo" });
+    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)} ± ${r.f_std.toFixed(1)} px, ${r.verdict}` + (r.enough ? " - enough" : " - take another photo, the board turned another way"));
+    await refresh();
+    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)} ± ${r.f_std.toFixed(1)} px, ${r.verdict}` + (r.enough ? " - enough" : " - take another photo, the board turned another way"));
+  });
+  $("camera-load").onclick = () => guarded(async () => { await api("api/camera", { action: "file", name: $("camera-file").value }); await refresh(); });
+  $("camera-none").onclick = () => guarded(async () => { await api("api/camera", { action: "none" }); await refresh(); });
+  $("pose-capture").onclick = () => guarded(() => runJob("api/capture", "pose-progress", (r) => {
+    text("pose-verdict", `${r.pose}: ${r.verdict}`); verdictClass($("pose-verdict"), r.verdict);
+    list("pose-lines", r.lines); setImg("pose-check", r.check);
+  }));
+  $("pose-cancel").onclick = () => guarded(async () => { if (JOB) await api(`api/jobs/${JOB.id}/cancel`, {}); });
+  $("calibrate-run").onclick = () => guarded(() => runJob("api/calibrate", "calibrate-progress", (r) => showCalibration(r, r.written.length > 0)));
+  $("world-run").onclick = () => guarded(() => runJob("api/world", null, (r) => {
+    text("world-verdict", `${r.verdict}: ${r.found} of ${r.targets} spots found, miss ${r.rms_px.toFixed(3)} px RMS (${r.max_px.toFixed(3)} max); ${r.reasons.join("; ")}`);
+    verdictClass($("world-verdict"), r.verdict === "holds" ? "good" : "degenerate"); setImg("world-picture", r.picture);
+  }));
+  $("export-run").onclick = () => guarded(async () => {
+    const formats = [...document.querySelectorAll("#export-formats input:checked")].map((x) => x.value);
+    await api("api/export", { formats, near: parseFloat($("export-near").value), far: parseFloat($("export-far").value) });
+    await refresh();
+  });
+}
+
+window.addEventListener("DOMContentLoaded", () => { wire(); guarded(refresh); previewLoop(); });
