@@ -9,6 +9,7 @@ its one line; anything else ends it ``failed`` as an internal error that says so
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import threading
 import time
@@ -17,6 +18,15 @@ import warnings
 from typing import Callable
 
 from ..errors import ProcamError, ProcamWarning
+
+
+@contextlib.contextmanager
+def results_carry_warnings():
+    """Silence procam's warnings while the app works: every result carries its verdict and reasons, which the page
+    shows (as the command line does in :func:`procam.cli._app.user_errors`)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        yield
 
 
 class Cancelled(ProcamError):
@@ -100,8 +110,7 @@ class Jobs:
     @staticmethod
     def _run(job: Job, work) -> None:
         try:
-            with warnings.catch_warnings():  # results carry their warnings; the page shows them
-                warnings.simplefilter("ignore", ProcamWarning)
+            with results_carry_warnings():
                 job.result = work(job)
             job.state = "done"
         except Cancelled as e:

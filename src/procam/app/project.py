@@ -19,7 +19,8 @@ from ..errors import ProcamError
 STATE_FORMAT = "procam-app-project"
 
 #: What lands where in the project folder.
-FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "camera": "camera.json", "calibration": "calib.json", "yaml": "calib.yml",
+FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "camera": "camera.json",
+         "calibration": "calib.json", "yaml": "calib.yml",
          "residuals": "calib.residuals.png", "report": "calib.html", "world": "world.png",
          "world_json": "world.json", "export": "export"}
 

@@ -23,7 +23,7 @@ from starlette.routing import Route
 from ..errors import ProcamError
 from . import work
 from .devices import Devices
-from .jobs import Busy, Jobs, error_line
+from .jobs import Busy, Jobs, error_line, results_carry_warnings
 from .project import Project
 
 STATIC = Path(__file__).with_name("static")
@@ -91,7 +91,8 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
     def guarded(handler):
         async def route(request: Request):
             try:
-                return await handler(request)
+                with results_carry_warnings():
+                    return await handler(request)
             except Exception as e:  # noqa: BLE001 - every error is one line for the page
                 return _error(e)
         return route
@@ -154,11 +155,16 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
             return JSONResponse(work.use_camera_file(project, None))
         raise ProcamError(f"camera action: give photo, file or none, got {action!r}")
 
-    def start(kind, fn):
+    def start(kind, fn, ready):
         async def route(request: Request):
+            ready()  # a step procam knows cannot go on is refused now, with its reason
             job = st.jobs.start(kind, lambda job: fn(job))
             return JSONResponse(job.to_dict(), status_code=202)
         return route
+
+    capture = start("capture", lambda job: work.capture(job, project, devices), project.board)
+    world = start("world check", lambda job: work.check_world(job, project, devices),
+                  lambda: work.need_calibration(project))
 
     def after_calibrate(job):
         result = work.calibrate(job, project)
@@ -166,6 +172,8 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         if calib is not None:
             st.advising.learn(calib, work.FILES["calibration"])
         return result
+
+    calibrate = start("calibrate", after_calibrate, lambda: work.usable_pose(project))
 
     async def job(request: Request):
         try:
@@ -181,7 +189,10 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
 
     async def export(request: Request):
         b = await _body(request)
-        return JSONResponse(work.export(project, b.get("formats"), b.get("near", 100.0), b.get("far", 10000.0)))
+        formats, near, far = b.get("formats"), b.get("near", 100.0), b.get("far", 10000.0)
+        work.export_checked(project, formats, near, far)  # a mistake is answered now, not by a failed job
+        job = st.jobs.start("export", lambda job: work.export(project, formats, near, far, job=job))
+        return JSONResponse(job.to_dict(), status_code=202)
 
     async def files(request: Request):
         name = request.path_params["path"]
@@ -201,11 +212,9 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
               Route("/api/state", guarded(state)), Route("/api/board", guarded(set_board), methods=["POST"]),
               Route("/api/devices", guarded(set_devices), methods=["POST"]),
               Route("/api/preview", guarded(preview)), Route("/api/camera", guarded(camera), methods=["POST"]),
-              Route("/api/capture", guarded(start("capture", lambda j: work.capture(j, project, devices))),
-                    methods=["POST"]),
-              Route("/api/calibrate", guarded(start("calibrate", after_calibrate)), methods=["POST"]),
-              Route("/api/world", guarded(start("world check", lambda j: work.check_world(j, project, devices))),
-                    methods=["POST"]),
+              Route("/api/capture", guarded(capture), methods=["POST"]),
+              Route("/api/calibrate", guarded(calibrate), methods=["POST"]),
+              Route("/api/world", guarded(world), methods=["POST"]),
               Route("/api/export", guarded(export), methods=["POST"]),
               Route("/api/jobs/{job_id}", guarded(job)),
               Route("/api/jobs/{job_id}/cancel", guarded(cancel), methods=["POST"]),

@@ -7,6 +7,7 @@ anything about a calibration: the verdicts are the library's.
 from __future__ import annotations
 
 import json
+import math
 import re
 from contextlib import ExitStack
 from pathlib import Path
@@ -115,10 +116,11 @@ def camera_from_photos(project: Project) -> dict:
     board = project.board()
     views = [pipeline.camera_only_view(p, board) for p in files]
     calib = method.calibrate(views, method="camera-only")
-    f, sf = float(calib.camera.K[0, 0]), float(calib.std.get("f_c", float("nan")) if calib.std else float("nan"))
+    f, sf = float(calib.camera.K[0, 0]), calib.std.get("f_c")
+    sf = float(sf) if sf is not None and math.isfinite(sf) else None
     out = {"photos": [_rel(project, p) for p in files], "verdict": calib.verdict,
            "reasons": list(calib.verdict_reasons), "f": f, "f_std": sf,
-           "enough": bool(calib.trusted and sf == sf and sf <= CAMERA_ENOUGH * f)}
+           "enough": bool(calib.trusted and sf is not None and sf <= CAMERA_ENOUGH * f)}
     if calib.trusted:
         io.save_calibration(calib, project.file("camera"))
         project.state["camera_file"] = FILES["camera"]
@@ -304,7 +306,7 @@ def saved_calibration(project: Project):
     return io.load_calibration(f) if f.is_file() else None
 
 
-def _need_calibration(project: Project):
+def need_calibration(project: Project):
     calib = saved_calibration(project)
     if calib is None:
         raise ProcamError(f"no calibration in the project yet ({FILES['calibration']}): calibrate first")
@@ -322,7 +324,7 @@ def check_world(job: Job, project: Project, devices) -> dict:
     from ..io.files import write_image, write_text
     from ..world_check import draw, world_check
 
-    calib = _need_calibration(project)
+    calib = need_calibration(project)
     job.step(0, 2, "projecting the spots and finding them")
     with ExitStack() as stack, devices.lock:
         show_and_grab = devices.show_and_grab(stack, calib.projector.image_size)
@@ -343,31 +345,35 @@ EXPORTS = {"blender": ("blender.json", "Blender cameras (+ the script that makes
            "yaml": ("calib.yml", "OpenCV YAML (cam_K, cam_kc, proj_K, proj_kc, R, T)")}
 
 
-def export(project: Project, formats, near: float, far: float) -> dict:
-    """Write the calibration for the next tools into ``export/`` (``procam export --format F``); ``near``,
-    ``far`` the OpenGL clipping distances in the board's unit."""
-    import math
+def export_checked(project: Project, formats, near, far):
+    """The calibration to export, after checking the request (one line naming the wrong field)."""
+    calib = need_calibration(project)
+    if not isinstance(formats, list) or not formats or any(f not in EXPORTS for f in formats):
+        raise ProcamError(f"export formats: give a list of some of {', '.join(EXPORTS)}, got {formats!r}")
+    for name, v in (("near", near), ("far", far)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ProcamError(f"export {name}: give a clipping distance in the board's unit, got {v!r}")
+    if not 0 < near < far <= 1e12 or far / near > 1e7:
+        raise ProcamError(f"export near/far: need 0 < near < far and far/near <= 1e7, got {near:g} and {far:g}")
+    return calib
 
+
+def export(project: Project, formats, near: float, far: float, job: Job | None = None) -> dict:
+    """Write the calibration for the next tools into ``export/`` (``procam export --format F``); ``near``,
+    ``far`` the clipping distances in the board's unit."""
     from .. import export as ex
     from .. import io
     from ..export.frames import metres_per_unit
     from ..export.maps import distortion_maps
     from ..io.engines import save_distortion_maps
 
-    calib = _need_calibration(project)
-    formats = list(formats or [])
-    unknown = [f for f in formats if f not in EXPORTS]
-    if unknown or not formats:
-        raise ProcamError(f"export formats: give some of {', '.join(EXPORTS)}, got {', '.join(unknown) or 'none'}")
-    for name, v in (("near", near), ("far", far)):
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ProcamError(f"export {name}: give a clipping distance in the board's unit, got {v!r}")
-    if not 0 < near < far <= 1e12 or far / near > 1e7:
-        raise ProcamError(f"export near/far: need 0 < near < far and far/near <= 1e7, got {near:g} and {far:g}")
+    calib = export_checked(project, formats, near, far)
     unit = project.state["unit"]
     folder = project.file("export")
     written = []
-    for fmt in formats:
+    for k, fmt in enumerate(formats):
+        if job is not None:
+            job.step(k, len(formats), f"writing {EXPORTS[fmt][0]}")
         out = folder / EXPORTS[fmt][0]
         if fmt == "yaml":
             written.append(io.save_opencv_yaml(calib, out))

@@ -16,8 +16,9 @@ from ._options import DisplayOpt, SeedOpt
 @app.command("app")
 @user_errors
 def app_cmd(
-    project: Path = typer.Argument(Path("procam-project"), metavar="PROJECT_DIR", help="The project folder: captures, camera file, "
-                                   "calibration, report and exports land here; reopening it resumes."),
+    project: Path = typer.Argument(Path("procam-project"), metavar="PROJECT_DIR", help="The project folder: "
+                                   "captures, camera file, calibration, report and exports land here; reopening it "
+                                   "resumes."),
     virtual: bool = typer.Option(False, "--virtual", help="The simulator as the projector and camera (the demo)."),
     camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | "
                                "folder:PATH (procam capture --list-devices)."),

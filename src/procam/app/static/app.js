@@ -129,8 +129,8 @@ function renderExports(files) {
 }
 
 // ---- jobs ------------------------------------------------------------------------------
-async function runJob(path, progressId, onDone) {
-  JOB = await api(path, {});
+async function runJob(path, progressId, onDone, body) {
+  JOB = await api(path, body || {});
   gate();
   while (JOB && JOB.state === "running") {
     await new Promise((r) => setTimeout(r, 200));
@@ -205,9 +205,11 @@ function wire() {
     $(id).onclick = () => guarded(async () => { await api("api/devices", move); });
   $("camera-photo").onclick = () => guarded(async () => {
     const r = await api("api/camera", { action: "photo" });
-    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)} ± ${r.f_std.toFixed(1)} px, ${r.verdict}` + (r.enough ? " - enough" : " - take another photo, the board turned another way"));
     await refresh();
-    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)} ± ${r.f_std.toFixed(1)} px, ${r.verdict}` + (r.enough ? " - enough" : " - take another photo, the board turned another way"));
+    const pm = r.f_std == null ? "" : ` ± ${r.f_std.toFixed(1)}`;
+    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)}${pm} px, ${r.verdict}` +
+      (r.enough ? " - enough" : " - take another photo, the board turned another way") +
+      (r.reasons.length ? ` (${r.reasons.join("; ")})` : ""));
   });
   $("camera-load").onclick = () => guarded(async () => { await api("api/camera", { action: "file", name: $("camera-file").value }); await refresh(); });
   $("camera-none").onclick = () => guarded(async () => { await api("api/camera", { action: "none" }); await refresh(); });
@@ -223,8 +225,7 @@ function wire() {
   }));
   $("export-run").onclick = () => guarded(async () => {
     const formats = [...document.querySelectorAll("#export-formats input:checked")].map((x) => x.value);
-    await api("api/export", { formats, near: parseFloat($("export-near").value), far: parseFloat($("export-far").value) });
-    await refresh();
+    await runJob("api/export", null, () => {}, { formats, near: parseFloat($("export-near").value), far: parseFloat($("export-far").value) });
   });
 }
 
