@@ -55,7 +55,7 @@ def make(project_dir, *, virtual: bool, token: str, camera: str = "opencv:0", di
     return create_app(project, devices, token, hosts=tuple(hosts or LOCAL_HOSTS))
 
 
-def server(app, host: str, port: int):
+def uvicorn_server(app, host: str, port: int):
     """A uvicorn server of ``app`` on ``host:port`` (not started: ``.run()``, or in a thread)."""
     import uvicorn
 

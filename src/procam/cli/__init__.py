@@ -18,8 +18,9 @@ import sys
 #: Sub-command -> the module of this package that registers it, in the order ``procam --help`` lists them.
 COMMANDS = {name: name for name in ("advise", "capture", "check", "patterns", "decode", "simulate", "correspond",
                                     "calibrate", "evaluate", "report", "reconstruct", "export", "blend",
-                                    "experiment", "study", "demo", "app")}
+                                    "experiment", "study", "demo")}
 COMMANDS["world-check"] = "world_check"
+COMMANDS["app"] = "webapp"  # not cli/app.py: that module would shadow the package's ``app`` (the typer app)
 
 
 def register(names=None) -> None:

@@ -174,9 +174,10 @@ function drawPreview(p) {
         ctx.strokeStyle = colour; ctx.lineWidth = 4; ctx.beginPath();
         a.outline.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y))); ctx.closePath(); ctx.stroke();
       }
-      const lines = [a.message, ...a.actions.map((x) => x.text)];
-      ctx.font = "28px sans-serif"; ctx.fillStyle = "rgba(0,0,0,0.6)"; ctx.fillRect(0, 0, cv.width, 40 * lines.length + 8);
-      ctx.fillStyle = colour; lines.forEach((l, i) => ctx.fillText(l, 12, 36 + 40 * i));
+      const lines = [a.message, ...a.actions.map((x) => x.text).filter((l) => l !== a.message)];
+      const px = Math.round(cv.width / 32);
+      ctx.font = `${px}px sans-serif`; ctx.fillStyle = "rgba(0,0,0,0.6)"; ctx.fillRect(0, 0, cv.width, 1.4 * px * lines.length + px / 2);
+      ctx.fillStyle = colour; lines.forEach((l, i) => ctx.fillText(l, px / 2, 1.2 * px + 1.4 * px * i));
       const cam = a.camera ? ` camera f ± ${fmtPct(a.camera)}` : "", proj = a.projector ? `, projector f ± ${fmtPct(a.projector)}` : "";
       text("advice", `${a.state}: ${a.message}${cam}${proj}`);
       $("camera-view").dataset.state = a.state;

@@ -1,4 +1,5 @@
-"""``procam app``: the guided calibration in a browser (:mod:`procam.app`, docs/app.md).
+"""``procam app``: the guided calibration in a browser (:mod:`procam.app`, docs/app.md).  (Named ``webapp``: a
+module ``procam.cli.app`` would shadow the package's typer object :data:`procam.cli.app`.)
 
 Importing this module registers the command on :data:`procam.cli._app.app`.
 """
@@ -52,4 +53,4 @@ def app_cmd(
         import webbrowser
 
         threading.Timer(0.8, webbrowser.open, args=(url,)).start()
-    procam_app.server(asgi, host, port).run()
+    procam_app.uvicorn_server(asgi, host, port).run()
