@@ -375,6 +375,8 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     through in Chromium on the virtual devices: the calibration's f_p and f_c within the simulator's truth, the
     world check holds, the exported Blender file is the calibration's; a screenshot of every step; no console
     errors."""
+    from playwright.sync_api import expect
+
     from procam import export, io
 
     url, folder = served
@@ -400,7 +402,7 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     page.select_option("#virtual-pose", "0")
     page.click("#pose-capture")
     _expect(page, "#pose-verdict", "pose1: good", 180)
-    assert page.locator("#pose-check").is_visible()
+    expect(page.locator("#pose-check")).to_be_visible()
     _shot(page, shots, "4-pose")
     page.click("#calibrate-run")
     _expect(page, "#calibrate-verdict", "verdict: good", 120)
@@ -428,7 +430,7 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     doc = json.loads((folder / "export" / "blender.json").read_text())
     assert downloaded.read_bytes() == (folder / "export" / "blender.json").read_bytes()
     fresh = export.blender_document(calib, unit="mm", near_m=0.1, far_m=10.0)
-    assert doc["format"] == "procam-blender" and doc["cameras"] == json.loads(json.dumps(fresh["cameras"]))
+    assert doc["format"] == "procam-blender" and doc["devices"] == json.loads(json.dumps(fresh["devices"]))
     assert (folder / "export" / "blender.py").is_file() and (folder / "calib.html").is_file()
     assert sorted(p.name for p in shots.iterdir()) == ["1-devices.png", "2-board.png", "3-camera.png", "4-pose.png",
                                                        "5-calibrate.png", "6-world.png", "7-export.png"]
