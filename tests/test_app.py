@@ -41,6 +41,13 @@ def client(tmp_path):
     c.app.state.procam.jobs.wait(120)
 
 
+def _advice(c):
+    """A live-view frame (JSON) whose advice is of that very frame (the advisor runs beside the frames)."""
+    p = c.get("/api/preview", headers=H).json()
+    c.app.state.procam.live.wait(30)
+    return {**p, "advice": c.app.state.procam.live.latest}
+
+
 def _wait(c, job, timeout=180.0):
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:
@@ -196,7 +203,7 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     s = c2.get("/api/state", headers=H).json()
     assert s["state"]["camera_file"] == "camera.json" and s["photos"] == ["photo01.png", "photo02.png"]
     assert s["state"]["board"] == {"cols": 10, "rows": 6, "square": 24.0}
-    advice = c2.get("/api/preview", headers=H).json()["advice"]
+    advice = _advice(c2)["advice"]
     assert advice["intrinsics"] == "intrinsics from camera.json" and len(advice["corners"]) == 60
     r = c2.post("/api/camera", headers=H, json={"action": "none"})
     assert r.json()["camera_file"] is None
@@ -206,7 +213,8 @@ def test_the_live_view_shows_the_board_with_its_corners_and_advice(client):
     from procam.board import corners as _corners
 
     client.post("/api/board", headers=H, json={"cols": 10, "rows": 6, "square": 24})
-    p = client.get("/api/preview", headers=H).json()
+    p = _advice(client)
+    assert p["advice"]["of_frame"] == p["frame"] == 1
     import base64
 
     import cv2
@@ -221,7 +229,7 @@ def test_the_live_view_shows_the_board_with_its_corners_and_advice(client):
     # the virtual board turns when told, and the advice follows
     before = a["camera"]["nu"]
     assert client.post("/api/devices", headers=H, json={"turn": 10}).status_code == 200
-    after = client.get("/api/preview", headers=H).json()["advice"]["camera"]["nu"]
+    after = _advice(client)["advice"]["camera"]["nu"]
     assert abs(abs(after - before) - 10) < 1.5
     r = client.post("/api/devices", headers=H, json={"turn": 90})
     assert r.status_code == 400 and "-45 to 45" in r.json()["error"]

@@ -14,6 +14,7 @@ import secrets
 from pathlib import Path
 
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
@@ -66,7 +67,7 @@ class AppState:
     def __init__(self, project: Project, devices: Devices):
         self.project, self.devices = project, devices
         self.jobs = Jobs()
-        self.advising = work.Advising()
+        self.live = work.LiveView()
 
 
 def _error(e: Exception, status: int = 400) -> JSONResponse:
@@ -141,8 +142,9 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
     async def preview(request: Request):
         if st.jobs.running() is not None:
             return JSONResponse({"busy": True})
-        jpeg, advice = work.preview(project, devices, st.advising)
-        return JSONResponse({"image": "data:image/jpeg;base64," + base64.b64encode(jpeg).decode(), "advice": advice})
+        jpeg, frame, advice = await run_in_threadpool(st.live.preview, project, devices)
+        return JSONResponse({"image": "data:image/jpeg;base64," + base64.b64encode(jpeg).decode(), "frame": frame,
+                             "advice": advice})
 
     async def camera(request: Request):
         b = await _body(request)
@@ -170,7 +172,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         result = work.calibrate(job, project)
         calib = work.saved_calibration(project) if result["written"] else None
         if calib is not None:
-            st.advising.learn(calib, work.FILES["calibration"])
+            st.live.advising.learn(calib, work.FILES["calibration"])
         return result
 
     calibrate = start("calibrate", after_calibrate, lambda: work.usable_pose(project))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import threading
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -38,8 +39,8 @@ def board_svg(project: Project) -> dict:
 # the camera's live view with the advisor's advice
 # ---------------------------------------------------------------------------------------------------------------
 class Advising:
-    """The advisor (:class:`procam.advisor.Advisor`) of the live view, made again when the board or image size
-    changes; it knows the camera file's intrinsics and, once calibrated, the projector side."""
+    """The advisor (:class:`procam.advisor.Advisor`) of the live view, made again when the board, the image size or
+    the camera file changes; it knows the camera file's intrinsics and, once calibrated, the projector side."""
 
     def __init__(self):
         self.advisor = None
@@ -54,7 +55,11 @@ class Advising:
             self.advisor = Advisor(board, (image.shape[1], image.shape[0]))
             self.key = key
             camera_file = project.state.get("camera_file")
-            if camera_file:
+            calib = saved_calibration(project)
+            if calib is not None and calib.projector is not None and tuple(calib.camera.image_size) == \
+                    self.advisor.image_size:
+                self.advisor.set_calibration(calib, FILES["calibration"])
+            elif camera_file:
                 from ..io import load_camera_intrinsics
 
                 self.advisor.set_camera(load_camera_intrinsics(project.path(camera_file), self.advisor.image_size),
@@ -67,18 +72,51 @@ class Advising:
             self.advisor.set_calibration(calib, source)
 
 
-def preview(project: Project, devices, advising: Advising) -> tuple[bytes, dict]:
-    """One camera frame as JPEG bytes (8-bit) and the advisor's advice on it (its corners included)."""
-    import cv2
-    import numpy as np
+class LiveView:
+    """The camera's live view: each request gets the newest frame at once, and the advice of the newest frame the
+    advisor has finished; the advisor works on the latest frame in a thread of its own, so neither waits for the
+    other (the frame rate is the camera's, the advice's rate the advisor's)."""
 
-    image = devices.grab()
-    advice = advising.advice(project, image)
-    shown = image if image.dtype == np.uint8 else (image >> 8).astype(np.uint8)
-    ok, buf = cv2.imencode(".jpg", shown, [cv2.IMWRITE_JPEG_QUALITY, 80])
-    if not ok:
-        raise ProcamError("the camera frame could not be encoded as JPEG")
-    return buf.tobytes(), advice.to_dict(corners=True)
+    def __init__(self):
+        self.advising = Advising()
+        self.frame = 0
+        self.latest: dict | None = None
+        self._thread: threading.Thread | None = None
+
+    def _advise(self, project: Project, image, frame: int) -> None:
+        from .jobs import error_line, results_carry_warnings
+
+        try:
+            with results_carry_warnings():
+                advice = self.advising.advice(project, image)
+            self.latest = {**advice.to_dict(corners=True), "of_frame": frame}
+        except Exception as e:  # noqa: BLE001 - the page shows why there is no advice
+            self.latest = {"error": error_line(e), "of_frame": frame}
+
+    def preview(self, project: Project, devices) -> tuple[bytes, int, dict | None]:
+        """(JPEG bytes of a new 8-bit camera frame, its number, the newest advice or None): the advice (a
+        :meth:`procam.advisor.Advice.to_dict` with its corners, and ``of_frame``, the frame it was made from) is
+        of this frame or an earlier one."""
+        import cv2
+        import numpy as np
+
+        image = devices.grab()
+        self.frame += 1
+        if self._thread is None or not self._thread.is_alive():
+            self._thread = threading.Thread(target=self._advise, args=(project, image, self.frame),
+                                            name="procam-app-advice", daemon=True)
+            self._thread.start()
+        shown = image if image.dtype == np.uint8 else (image >> 8).astype(np.uint8)
+        ok, buf = cv2.imencode(".jpg", shown, [cv2.IMWRITE_JPEG_QUALITY, 80])
+        if not ok:
+            raise ProcamError("the camera frame could not be encoded as JPEG")
+        return buf.tobytes(), self.frame, self.latest
+
+    def wait(self, timeout: float | None = None) -> dict | None:
+        """The advice once the advisor's running frame is done (tests, scripts)."""
+        if self._thread is not None:
+            self._thread.join(timeout)
+        return self.latest
 
 
 # ---------------------------------------------------------------------------------------------------------------

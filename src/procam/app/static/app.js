@@ -164,7 +164,8 @@ function drawPreview(p) {
       const cv = $("preview"), ctx = cv.getContext("2d");
       if (cv.width !== img.width) { cv.width = img.width; cv.height = img.height; }
       ctx.drawImage(img, 0, 0);
-      const a = p.advice;
+      const a = p.advice || { state: "none", message: "the advisor is looking at the first frame", actions: [] };
+      if (a.error) { a.state = "none"; a.message = a.error; a.actions = []; }
       const colour = { ready: "#2e7d32", good: "#2e7d32", adjust: "#f9a825", "no-board": "#c62828" }[a.state] || "#888";
       if (a.corners) {
         ctx.fillStyle = colour;
