@@ -179,7 +179,7 @@ def test_a_step_does_not_go_on_with_what_procam_knows_is_wrong(client):
 
 
 def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_path):
-    """Camera step: photos at two virtual poses calibrate the camera (camera.json, f within the simulator's
+    """Camera step: a photo calibrates the camera (camera.json, f within the simulator's
     truth); the app stopped and started again on the folder uses that camera (its advice names it)."""
     from procam import io
     from procam.acquire.cameras import demo_scene
@@ -187,12 +187,10 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     folder = tmp_path / "project"
     c = _client(folder)
     assert c.post("/api/board", headers=H, json={"cols": 10, "rows": 6, "square": 24}).status_code == 200
-    for i in range(2):
-        assert c.post("/api/devices", headers=H, json={"pose": i}).status_code == 200
-        r = c.post("/api/camera", headers=H, json={"action": "photo"})
-        assert r.status_code == 200, r.text
+    r = c.post("/api/camera", headers=H, json={"action": "photo"})
+    assert r.status_code == 200, r.text
     r = r.json()
-    assert r["photos"] == ["camera/photo01.png", "camera/photo02.png"]
+    assert r["photos"] == ["camera/photo01.png"]
     assert r["file"] == "camera.json" and r["enough"] and r["f_std"] < 0.005 * r["f"]
     f_true = demo_scene((1920, 1080)).K_cam[0][0]
     cam = io.load_camera_intrinsics(folder / "camera.json")
@@ -201,7 +199,7 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     # started again
     c2 = _client(folder)
     s = c2.get("/api/state", headers=H).json()
-    assert s["state"]["camera_file"] == "camera.json" and s["photos"] == ["photo01.png", "photo02.png"]
+    assert s["state"]["camera_file"] == "camera.json" and s["photos"] == ["photo01.png"]
     assert s["state"]["board"] == {"cols": 10, "rows": 6, "square": 24.0}
     advice = _advice(c2)["advice"]
     assert advice["intrinsics"] == "intrinsics from camera.json" and len(advice["corners"]) == 60
@@ -233,6 +231,63 @@ def test_the_live_view_shows_the_board_with_its_corners_and_advice(client):
     assert abs(abs(after - before) - 10) < 1.5
     r = client.post("/api/devices", headers=H, json={"turn": 90})
     assert r.status_code == 400 and "-45 to 45" in r.json()["error"]
+
+
+def _truth_calibration(folder):
+    """The virtual rig's own calibration (the simulator's truth) written as the project's calib.json."""
+    from procam import io, simulate
+    from procam.acquire.cameras import VIRTUAL_POSES, demo_scene
+
+    calib = simulate.truth_calibration(demo_scene((1920, 1080), VIRTUAL_POSES[0]))
+    io.save_calibration(calib, Path(folder) / "calib.json")
+    return io.load_calibration(Path(folder) / "calib.json")
+
+
+def test_export_writes_the_calibration_for_the_next_tools(client):
+    from procam import export
+
+    project = Path(client.app.state.procam.project.root)
+    calib = _truth_calibration(project)
+    for body, words in (({"formats": ["maya"]}, "export formats"), ({"formats": "blender"}, "export formats"),
+                        ({"formats": ["blender"], "near": 10, "far": 5}, "near < far"),
+                        ({"formats": ["blender"], "near": "x"}, "export near")):
+        r = client.post("/api/export", headers=H, json=body)
+        assert r.status_code == 400 and words in r.json()["error"], body
+    assert not (project / "export").exists()
+    r = client.post("/api/export", headers=H, json={"formats": ["blender", "yaml"], "near": 100, "far": 10000})
+    assert r.status_code == 202
+    j = _wait(client, r.json())
+    assert j["state"] == "done", j
+    assert {"export/blender.json", "export/blender.py", "export/calib.yml"} <= set(j["result"]["written"])
+    doc = json.loads((project / "export" / "blender.json").read_text())
+    fresh = export.blender_document(calib, unit="mm", near_m=0.1, far_m=10.0)
+    assert doc["devices"] == json.loads(json.dumps(fresh["devices"]))
+    assert client.get("/api/state", headers=H).json()["exports"] == sorted(j["result"]["written"])
+    r = client.get(f"/files/export/blender.json?token={TOKEN}&download=1")
+    assert r.content == (project / "export" / "blender.json").read_bytes()
+    assert r.headers["content-disposition"].startswith("attachment")
+    # a file of the user's in the way: the job fails with its one line and the file keeps every byte
+    (project / "export" / "unity.json").write_text('{"mine": true}')
+    j = _wait(client, client.post("/api/export", headers=H, json={"formats": ["unity"]}).json())
+    assert j["state"] == "failed" and "procam did not write" in j["error"]
+    assert (project / "export" / "unity.json").read_text() == '{"mine": true}'
+
+
+@pytest.mark.slow
+def test_a_cancelled_capture_leaves_no_pose(client):
+    project = Path(client.app.state.procam.project.root)
+    client.post("/api/board", headers=H, json={"cols": 10, "rows": 6, "square": 24})
+    job = client.post("/api/capture", headers=H, json={}).json()
+    t0 = time.monotonic()
+    while client.get(f"/api/jobs/{job['id']}", headers=H).json()["done"] < 3:
+        assert time.monotonic() - t0 < 120
+        time.sleep(0.05)
+    assert client.post(f"/api/jobs/{job['id']}/cancel", headers=H, json={}).status_code == 200
+    j = _wait(client, job)
+    assert j["state"] == "cancelled" and j["error"] == "capture cancelled"
+    assert sorted(p.name for p in project.iterdir()) == ["board.svg", "procam-app.json"]  # no pose, no partial one
+    assert client.get("/api/state", headers=H).json()["state"]["pose"] is None
+    assert client.post("/api/calibrate", headers=H, json={}).status_code == 400
 
 
 def test_the_job_runner_reports_cancels_and_refuses_a_second_job():
@@ -276,7 +331,7 @@ def test_procam_app_without_its_extra_says_how_to_install_it(tmp_path, monkeypat
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "starlette" else real(name, *a))
-    code, out, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser"])
+    code, _, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser"])
     assert code == 2 and err.count("\n") == 1 and 'pip install "procam[app]"' in err and "starlette" in err
     assert not (tmp_path / "p").exists()
 
@@ -287,7 +342,7 @@ def test_procam_app_checks_its_options(tmp_path):
     (tmp_path / "file").write_text("x")
     for args, words in ((["--port", "70000"], "--port must be"), (["--camera", "opencv:1", "--virtual"], "leave out"),
                         ([], "not a folder")):
-        code, out, err = run_cli(["app", tmp_path / "file" if not args else tmp_path / "p", "--no-browser", *args])
+        code, _, err = run_cli(["app", tmp_path / "file" if not args else tmp_path / "p", "--no-browser", *args])
         assert code == 2 and words in err and err.count("\n") == 1, (args, err)
 
 
@@ -321,7 +376,8 @@ def served(tmp_path):
 @pytest.fixture
 def page():
     """A Playwright page in the system's Chromium, and the console errors and uncaught exceptions it records."""
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install \".[test]\")")
+    sync_api = pytest.importorskip("playwright.sync_api",
+                                   reason="Playwright is not installed (pip install \".[test]\")")
     if not Path(CHROMIUM).exists():
         pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium, or set PROCAM_CHROMIUM)")
     with sync_api.sync_playwright() as pw:

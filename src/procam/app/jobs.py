@@ -15,7 +15,7 @@ import threading
 import time
 import traceback
 import warnings
-from typing import Callable
+from collections.abc import Callable
 
 from ..errors import ProcamError, ProcamWarning
 

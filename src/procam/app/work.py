@@ -255,7 +255,13 @@ def capture(job: Job, project: Project, devices) -> dict:
     verdict = check.verdict if check is not None else "failed"
     project.state["pose"] = {"name": name, "verdict": verdict}
     project.save()
-    return {"pose": name, "verdict": verdict, "lines": list(check.lines) if check else [hooks.error],
+    pre = hooks.preflight or {}
+    preflight = []
+    if pre.get("ok"):
+        preflight = [(f"pre-flight: white {pre['white_level']:.0%} of full scale on the {pre['region']} "
+                      f"({pre['white_saturated']:.1%} saturated), black {pre['dark_level']:.0%}, contrast "
+                      f"{pre['contrast']:.0%}"), *pre.get("suggestions", [])]
+    return {"pose": name, "verdict": verdict, "lines": preflight + (list(check.lines) if check else [hooks.error]),
             "reasons": list(check.reasons) if check else [hooks.error],
             "check": _rel(project, hooks.png) if hooks.png else None, "preflight": hooks.preflight}
 
