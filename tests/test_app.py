@@ -121,6 +121,11 @@ def test_paths_outside_the_project_are_refused(client, tmp_path):
         assert r.status_code == 400 and "outside the project folder" in r.json()["error"] or \
             "inside the project folder" in r.json()["error"], (name, r.text)
     assert client.get("/api/state", headers=H).json()["state"]["camera_file"] is None
+    # a page in the project folder (the report, or anything dropped there) is shown as a sandbox of its own
+    (project / "page.html").write_text("<script>fetch('/api/state')</script>")
+    r = client.get(f"/files/page.html?token={TOKEN}")
+    assert r.status_code == 200 and "sandbox allow-scripts" in r.headers["content-security-policy"]
+    assert r.headers["x-content-type-options"] == "nosniff"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -176,6 +181,13 @@ def test_a_step_does_not_go_on_with_what_procam_knows_is_wrong(client):
     r = client.post("/api/calibrate", headers=H, json={})
     assert r.status_code == 400 and "pose1 is degenerate: turn the board" in r.json()["error"]
     assert client.get("/api/state", headers=H).json()["job"] is None and not (project / "calib.json").exists()
+    # a calibration file from before, but the latest calibration was not trusted (not written): nothing goes on
+    _truth_calibration(project)
+    client.app.state.procam.project.state["calibration"] = {"verdict": "degenerate", "trusted": False}
+    for path, body in (("/api/world", {}), ("/api/export", {"formats": ["blender"]})):
+        r = client.post(path, headers=H, json=body)
+        assert r.status_code == 400 and "latest calibration is degenerate and was not written" in r.json()["error"]
+    assert not (project / "export").exists()
 
 
 def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_path):
@@ -192,6 +204,7 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     r = r.json()
     assert r["photos"] == ["camera/photo01.png"]
     assert r["file"] == "camera.json" and r["enough"] and r["f_std"] < 0.005 * r["f"]
+    assert 0.05 < r["coverage"] < 0.5 and len(c.get("/api/state", headers=H).json()["state"]["photos"]["outlines"]) == 1
     f_true = demo_scene((1920, 1080)).K_cam[0][0]
     cam = io.load_camera_intrinsics(folder / "camera.json")
     assert abs(cam.K[0, 0] - f_true) < max(3 * r["f_std"], 0.002 * f_true)

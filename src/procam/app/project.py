@@ -26,7 +26,7 @@ FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "
 
 #: The defaults of a new project.
 DEFAULTS = {"board": {"cols": 10, "rows": 6, "square": 24.0}, "unit": "mm", "camera_file": None,
-            "projector_size": [1920, 1080], "pose": None, "calibration": None}
+            "projector_size": [1920, 1080], "pose": None, "calibration": None, "photos": None}
 
 
 class Project:

@@ -28,6 +28,10 @@ from .jobs import Busy, Jobs, error_line, results_carry_warnings
 from .project import Project
 
 STATIC = Path(__file__).with_name("static")
+#: A project file shown in the browser (the report, a picture, an SVG) is a sandbox of its own: its scripts run (the
+#: report's 3-D view) in an opaque origin, which can neither read the app's pages nor pass its guards.
+FILES_POLICY = ("default-src 'none'; img-src 'self' data: blob:; style-src 'unsafe-inline'; "
+                "script-src 'unsafe-inline'; sandbox allow-scripts")
 #: The hosts the app answers to (the ``Host`` header without its port).
 LOCAL_HOSTS = ("127.0.0.1", "localhost")
 
@@ -207,8 +211,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         return FileResponse(path, filename=path.name if download else None,
                             content_disposition_type="attachment" if download else "inline",
                             headers={"Cache-Control": "no-store", "X-Content-Type-Options": "nosniff",
-                                     "Content-Security-Policy": "default-src 'none'; img-src 'self'; "
-                                                                "style-src 'unsafe-inline'"})
+                                     "Content-Security-Policy": FILES_POLICY})
 
     routes = [Route("/", index), Route("/static/{name}", static),
               Route("/api/state", guarded(state)), Route("/api/board", guarded(set_board), methods=["POST"]),

@@ -84,19 +84,21 @@ class LiveView:
         self._thread: threading.Thread | None = None
 
     def _advise(self, project: Project, image, frame: int) -> None:
+        from ..acquire.preview import advice_lines  # the preview window's text panel, word for word
         from .jobs import error_line, results_carry_warnings
 
         try:
             with results_carry_warnings():
                 advice = self.advising.advice(project, image)
-            self.latest = {**advice.to_dict(corners=True), "of_frame": frame}
+            lines = [{"style": style, "text": text} for style, text in advice_lines(advice)]
+            self.latest = {**advice.to_dict(corners=True), "lines": lines, "of_frame": frame}
         except Exception as e:  # noqa: BLE001 - the page shows why there is no advice
             self.latest = {"error": error_line(e), "of_frame": frame}
 
     def preview(self, project: Project, devices) -> tuple[bytes, int, dict | None]:
         """(JPEG bytes of a new 8-bit camera frame, its number, the newest advice or None): the advice (a
-        :meth:`procam.advisor.Advice.to_dict` with its corners, and ``of_frame``, the frame it was made from) is
-        of this frame or an earlier one."""
+        :meth:`procam.advisor.Advice.to_dict` with its corners, ``lines`` the text panel of ``procam advise``'s window
+        and ``of_frame``, the frame it was made from) is of this frame or an earlier one."""
         import cv2
         import numpy as np
 
@@ -146,6 +148,8 @@ def take_photo(project: Project, devices) -> dict:
 def camera_from_photos(project: Project) -> dict:
     """The camera calibrated from the photos (``procam calibrate --camera-only``), written to ``camera.json``
     and used by the next steps when it can be trusted; its focal length's ± and whether that is enough."""
+    import numpy as np
+
     from .. import io, method, pipeline
 
     files = photos(project)
@@ -156,14 +160,20 @@ def camera_from_photos(project: Project) -> dict:
     calib = method.calibrate(views, method="camera-only")
     f, sf = float(calib.camera.K[0, 0]), calib.std.get("f_c")
     sf = float(sf) if sf is not None and math.isfinite(sf) else None
+    from ..board import board_outline
+    from ..report.coverage import coverage_fractions
+
+    covered = coverage_fractions(views, views[0].cam_size)["camera"]
+    project.state["photos"] = {"outlines": [np.round(board_outline(v.cam_pts), 1).tolist() for v in views],
+                               "coverage": covered}
     out = {"photos": [_rel(project, p) for p in files], "verdict": calib.verdict,
-           "reasons": list(calib.verdict_reasons), "f": f, "f_std": sf,
+           "reasons": list(calib.verdict_reasons), "f": f, "f_std": sf, "coverage": covered,
            "enough": bool(calib.trusted and sf is not None and sf <= CAMERA_ENOUGH * f)}
     if calib.trusted:
         io.save_calibration(calib, project.file("camera"))
         project.state["camera_file"] = FILES["camera"]
-        project.save()
         out["file"] = FILES["camera"]
+    project.save()
     return out
 
 
@@ -351,6 +361,11 @@ def saved_calibration(project: Project):
 
 
 def need_calibration(project: Project):
+    """The project's calibration, when the next steps may use it (a one-line :class:`ProcamError` says why not)."""
+    latest = project.state.get("calibration") or {}
+    if latest and not latest.get("trusted"):
+        raise ProcamError(f"the latest calibration is {latest.get('verdict')} and was not written; capture a better "
+                          "pose and calibrate again (an earlier calibration file is not used in its place)")
     calib = saved_calibration(project)
     if calib is None:
         raise ProcamError(f"no calibration in the project yet ({FILES['calibration']}): calibrate first")

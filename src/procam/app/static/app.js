@@ -83,7 +83,7 @@ function render() {
     setImg("pose-check", s.pose_check);
   }
   // calibration
-  if (s.calibration) showCalibration(s.calibration, !!s.files.calibration);
+  if (s.calibration && !(st.calibration && !st.calibration.trusted)) showCalibration(s.calibration, !!s.files.calibration);
   renderExports(s.exports);
   gate();
 }
@@ -92,7 +92,8 @@ function gate() {
   const s = STATE, st = s.state, busy = !!JOB;
   const boardDone = !!s.files.board;
   const poseOk = st.pose && (st.pose.verdict === "good" || st.pose.verdict === "weak");
-  const calibOk = !!(s.calibration && s.calibration.trusted && s.files.calibration);
+  const latest = st.calibration;  // the latest attempt: an untrusted one is not written, and nothing goes on from it
+  const calibOk = !!(s.calibration && s.calibration.trusted && s.files.calibration && (!latest || latest.trusted));
   for (const id of ["board-save", "devices-projector-size"]) $(id).disabled = busy;
   for (const id of ["camera-photo", "camera-load", "camera-none", "pose-capture"]) $(id).disabled = busy || !boardDone;
   $("calibrate-run").disabled = busy || !poseOk;
@@ -175,10 +176,19 @@ function drawPreview(p) {
         ctx.strokeStyle = colour; ctx.lineWidth = 4; ctx.beginPath();
         a.outline.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y))); ctx.closePath(); ctx.stroke();
       }
-      const lines = [a.message, ...a.actions.map((x) => x.text).filter((l) => l !== a.message)];
-      const px = Math.round(cv.width / 32);
-      ctx.font = `${px}px sans-serif`; ctx.fillStyle = "rgba(0,0,0,0.6)"; ctx.fillRect(0, 0, cv.width, 1.4 * px * lines.length + px / 2);
-      ctx.fillStyle = colour; lines.forEach((l, i) => ctx.fillText(l, px / 2, 1.2 * px + 1.4 * px * i));
+      const photos = STATE && STATE.state.photos;
+      if (photos) {  // the camera step's coverage: where the board was in the photos so far
+        ctx.fillStyle = "rgba(0,200,255,0.15)";
+        for (const o of photos.outlines) { ctx.beginPath(); o.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y))); ctx.closePath(); ctx.fill(); }
+      }
+      if (a.outline) drawMoves(ctx, a, colour);
+      const lines = a.lines || [{ style: "head", text: a.message }];
+      const px = Math.round(cv.width / 40);
+      ctx.fillStyle = "rgba(0,0,0,0.65)"; ctx.fillRect(0, 0, cv.width, 1.4 * px * lines.length + px / 2);
+      lines.forEach((l, i) => {
+        ctx.font = `${l.style === "head" ? Math.round(1.2 * px) : px}px sans-serif`;
+        ctx.fillStyle = l.style === "head" ? colour : "#fff"; ctx.fillText(l.text, px / 2, 1.2 * px + 1.4 * px * i);
+      });
       const cam = a.camera ? ` camera f ± ${fmtPct(a.camera)}` : "", proj = a.projector ? `, projector f ± ${fmtPct(a.projector)}` : "";
       text("advice", `${a.state}: ${a.message}${cam}${proj}`);
       $("camera-view").dataset.state = a.state;
@@ -189,6 +199,32 @@ function drawPreview(p) {
     img.onerror = () => resolve();
     img.src = p.image;
   });
+}
+// the advisor's next move on the picture, as procam advise's window draws it: turn / tilt an arrow from the board's
+// centre to the edge that goes away, move an arrow the way to move
+function drawMoves(ctx, a, colour) {
+  const o = a.outline, mid = (p, q) => [(p[0] + q[0]) / 2, (p[1] + q[1]) / 2];
+  const c = o.reduce(([x, y], [u, v]) => [x + u / o.length, y + v / o.length], [0, 0]);
+  const side = { left: mid(o[0], o[3]), right: mid(o[1], o[2]), top: mid(o[0], o[1]), bottom: mid(o[2], o[3]) };
+  const w = ctx.canvas.width, step = 0.25 * Math.min(w, ctx.canvas.height);
+  for (const act of a.actions) {
+    let end = null, label = "", col = "#00c8ff";
+    if ((act.kind === "turn" || act.kind === "tilt") && act.degrees) {
+      const s = act.kind === "turn" ? (act.degrees > 0 ? "right" : "left") : (act.degrees > 0 ? "top" : "bottom");
+      end = side[s]; label = `${act.kind} ~${Math.abs(act.degrees).toFixed(0)} deg: ${s} edge away`;
+    } else if (act.kind === "move" && act.direction) {
+      const v = { left: [-1, 0], right: [1, 0], up: [0, -1], down: [0, 1] }[act.direction];
+      end = [c[0] + step * v[0], c[1] + step * v[1]]; col = colour;
+    }
+    if (!end) continue;
+    const d = [end[0] - c[0], end[1] - c[1]], n = Math.hypot(d[0], d[1]) || 1, u = [d[0] / n, d[1] / n];
+    const h = w / 60;
+    ctx.strokeStyle = col; ctx.fillStyle = col; ctx.lineWidth = w / 250;
+    ctx.beginPath(); ctx.moveTo(c[0], c[1]); ctx.lineTo(end[0], end[1]); ctx.stroke();
+    ctx.beginPath(); ctx.moveTo(end[0] + u[0] * h, end[1] + u[1] * h); ctx.lineTo(end[0] - u[1] * h, end[1] + u[0] * h);
+    ctx.lineTo(end[0] + u[1] * h, end[1] - u[0] * h); ctx.closePath(); ctx.fill();
+    if (label) { ctx.font = `${Math.round(w / 45)}px sans-serif`; ctx.fillText(label, Math.min(end[0], w - ctx.measureText(label).width), end[1] + w / 30); }
+  }
 }
 function fmtPct(dev) { return dev.rel_std_f_pct == null ? "?" : dev.rel_std_f_pct.toFixed(2) + " %"; }
 
@@ -209,7 +245,8 @@ function wire() {
     const r = await api("api/camera", { action: "photo" });
     await refresh();
     const pm = r.f_std == null ? "" : ` ± ${r.f_std.toFixed(1)}`;
-    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)}${pm} px, ${r.verdict}` +
+    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)}${pm} px, ${r.verdict}, ` +
+      `${Math.round(100 * r.coverage)} % of the image covered` +
       (r.enough ? " - enough" : " - take another photo, the board turned another way") +
       (r.reasons.length ? ` (${r.reasons.join("; ")})` : ""));
   });
