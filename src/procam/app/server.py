@@ -74,8 +74,11 @@ class AppState:
         self.live = work.LiveView()
 
 
-def _error(e: Exception, status: int = 400) -> JSONResponse:
-    return JSONResponse({"error": error_line(e)}, status_code=409 if isinstance(e, Busy) else status)
+def _error(e: Exception) -> JSONResponse:
+    """One line for the page: 409 while another job runs, 400 for the user's input (a ProcamError, an OS error
+    naming the path), 500 for a bug (which the line asks to report)."""
+    status = 409 if isinstance(e, Busy) else 400 if isinstance(e, (ProcamError, OSError)) else 500
+    return JSONResponse({"error": error_line(e)}, status_code=status)
 
 
 async def _body(request: Request) -> dict:
