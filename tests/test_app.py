@@ -38,7 +38,9 @@ def _client(folder, **kw):
 def client(tmp_path):
     c = _client(tmp_path / "project")
     yield c
-    c.app.state.procam.jobs.wait(120)
+    from procam import app
+
+    app.shutdown(c.app, 120)
 
 
 def _advice(c):
@@ -381,9 +383,9 @@ def served(tmp_path):
         time.sleep(0.05)
     assert server.started
     yield f"http://127.0.0.1:{port}/?token={TOKEN}", folder
-    asgi.state.procam.jobs.wait(120)
     server.should_exit = True
     thread.join(20)
+    app.shutdown(asgi, 120)
 
 
 @pytest.fixture

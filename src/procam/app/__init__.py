@@ -61,3 +61,15 @@ def uvicorn_server(app, host: str, port: int):
 
     return uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level="warning", access_log=False,
                                          lifespan="off"))
+
+
+def shutdown(asgi, timeout: float = 60.0) -> None:
+    """After the server stopped: cancel the running job and wait for it (a capture removes its partial folder),
+    wait for the live view's advisor, close the camera."""
+    st = asgi.state.procam
+    job = st.jobs.running()
+    if job is not None:
+        job.cancel()
+        st.jobs.wait(timeout)
+    st.live.wait(timeout)
+    st.devices.release()

@@ -106,7 +106,7 @@ class LiveView:
         self.frame += 1
         if self._thread is None or not self._thread.is_alive():
             self._thread = threading.Thread(target=self._advise, args=(project, image, self.frame),
-                                            name="procam-app-advice", daemon=True)
+                                            name="procam-app-advice")  # short: the interpreter waits for it
             self._thread.start()
         shown = image if image.dtype == np.uint8 else (image >> 8).astype(np.uint8)
         ok, buf = cv2.imencode(".jpg", shown, [cv2.IMWRITE_JPEG_QUALITY, 80])

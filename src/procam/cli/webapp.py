@@ -53,4 +53,10 @@ def app_cmd(
         import webbrowser
 
         threading.Timer(0.8, webbrowser.open, args=(url,)).start()
-    procam_app.uvicorn_server(asgi, host, port).run()
+    try:
+        procam_app.uvicorn_server(asgi, host, port).run()
+    except KeyboardInterrupt:  # Ctrl+C is how the app is stopped (uvicorn raises it again after its shutdown)
+        pass
+    finally:
+        procam_app.shutdown(asgi)  # a running capture is cancelled, and removes its partial folder
+    say(f"stopped; {project} keeps everything (procam app {project} resumes)")

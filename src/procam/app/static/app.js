@@ -154,7 +154,7 @@ async function previewLoop() {
       const p = await api("api/preview");
       if (!p.busy) await drawPreview(p);
     } catch (e) { text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
-    await new Promise((r) => setTimeout(r, 30));
+    await new Promise((r) => requestAnimationFrame(r));  // the next frame as soon as the page has drawn this one
   }
 }
 
