@@ -15,8 +15,7 @@ import math
 from pathlib import Path
 
 from ..errors import ProcamError
-
-STATE_FORMAT = "procam-app-project"
+from ..io.formats import APP_PROJECT_FORMAT as STATE_FORMAT
 
 #: What lands where in the project folder.
 FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "camera": "camera.json",
