@@ -321,7 +321,10 @@ def test_the_job_runner_reports_cancels_and_refuses_a_second_job():
     job = jobs.start("capture", slow)
     with pytest.raises(Busy, match="the capture is still running"):
         jobs.start("calibrate", lambda j: {})
-    time.sleep(0.05)
+    t0 = time.monotonic()
+    while job.done < 2:  # running, and reporting
+        assert time.monotonic() - t0 < 10
+        time.sleep(0.01)
     job.cancel()
     jobs.wait(5)
     assert job.state == "cancelled" and job.result is None and 0 < job.done < 999
