@@ -202,8 +202,10 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     c = _client(folder)
     assert c.post("/api/board", headers=H, json={"cols": 10, "rows": 6, "square": 24}).status_code == 200
     r = c.post("/api/camera", headers=H, json={"action": "photo"})
-    assert r.status_code == 200, r.text
-    r = r.json()
+    assert r.status_code == 202, r.text
+    j = _wait(c, r.json())
+    assert j["state"] == "done", j
+    r = j["result"]
     assert r["photos"] == ["camera/photo01.png"]
     assert r["file"] == "camera.json" and r["enough"] and r["f_std"] < 0.005 * r["f"]
     assert 0.05 < r["coverage"] < 0.5 and len(c.get("/api/state", headers=H).json()["state"]["photos"]["outlines"]) == 1

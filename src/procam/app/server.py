@@ -156,8 +156,10 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
     async def camera(request: Request):
         b = await _body(request)
         action = b.get("action")
-        if action == "photo":
-            return JSONResponse(work.take_photo(project, devices))
+        if action == "photo":  # a grab and the camera's calibration from every photo so far: a job
+            project.board()
+            job = st.jobs.start("photo", lambda job: work.take_photo(project, devices, job))
+            return JSONResponse(job.to_dict(), status_code=202)
         if action == "file":
             return JSONResponse(work.use_camera_file(project, b.get("name")))
         if action == "none":

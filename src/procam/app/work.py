@@ -129,12 +129,14 @@ def photos(project: Project) -> list[Path]:
     return sorted(folder.glob("photo[0-9][0-9].png")) if folder.is_dir() else []
 
 
-def take_photo(project: Project, devices) -> dict:
+def take_photo(project: Project, devices, job: Job | None = None) -> dict:
     """Grab a photo of the board into ``camera/photoNN.png`` (refused when the board is not found in it), then
     calibrate the camera from all photos so far (:func:`camera_from_photos`)."""
     from ..board import corners as _corners
     from ..io.files import write_image
 
+    if job is not None:
+        job.step(0, 2, "taking the photo")
     image = devices.grab()
     found, _ = _corners.find_corners([image], project.board().pattern_size)
     if found is None:
@@ -142,6 +144,8 @@ def take_photo(project: Project, devices) -> dict:
                           "image, then take the photo")
     n = len(photos(project)) + 1
     write_image(project.file("photos") / f"photo{n:02d}.png", image)
+    if job is not None:
+        job.step(1, 2, f"calibrating the camera from {n} photo(s)")
     return camera_from_photos(project)
 
 

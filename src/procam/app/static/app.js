@@ -241,15 +241,13 @@ function wire() {
   $("virtual-pose").onchange = () => guarded(async () => { await api("api/devices", { pose: parseInt($("virtual-pose").value, 10) }); });
   for (const [id, move] of [["turn-left", { turn: -5 }], ["turn-right", { turn: 5 }], ["tilt-up", { tilt: 5 }], ["tilt-down", { tilt: -5 }]])
     $(id).onclick = () => guarded(async () => { await api("api/devices", move); });
-  $("camera-photo").onclick = () => guarded(async () => {
-    const r = await api("api/camera", { action: "photo" });
-    await refresh();
+  $("camera-photo").onclick = () => guarded(() => runJob("api/camera", null, (r) => {
     const pm = r.f_std == null ? "" : ` ± ${r.f_std.toFixed(1)}`;
     text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)}${pm} px, ${r.verdict}, ` +
       `${Math.round(100 * r.coverage)} % of the image covered` +
       (r.enough ? " - enough" : " - take another photo, the board turned another way") +
       (r.reasons.length ? ` (${r.reasons.join("; ")})` : ""));
-  });
+  }, { action: "photo" }));
   $("camera-load").onclick = () => guarded(async () => { await api("api/camera", { action: "file", name: $("camera-file").value }); await refresh(); });
   $("camera-none").onclick = () => guarded(async () => { await api("api/camera", { action: "none" }); await refresh(); });
   $("pose-capture").onclick = () => guarded(() => runJob("api/capture", "pose-progress", (r) => {
