@@ -299,6 +299,13 @@ def test_a_cancelled_capture_leaves_no_pose(client):
     while client.get(f"/api/jobs/{job['id']}", headers=H).json()["done"] < 3:
         assert time.monotonic() - t0 < 120
         time.sleep(0.05)
+    for path, body in (("/api/devices", {"pose": 1}), ("/api/board", {"cols": 9, "rows": 6, "square": 24}),
+                       ("/api/capture", {}), ("/api/camera", {"action": "none"})):
+        r = client.post(path, headers=H, json=body)  # answered at once, not after the capture
+        assert r.status_code == 409 and "the capture is running" in r.json()["error"] or \
+            "the capture is still running" in r.json()["error"], (path, r.text)
+    assert client.get("/api/preview", headers=H).json() == {"busy": True}
+    assert client.get("/api/jobs/x", headers=H).status_code == 400
     assert client.post(f"/api/jobs/{job['id']}/cancel", headers=H, json={}).status_code == 200
     j = _wait(client, job)
     assert j["state"] == "cancelled" and j["error"] == "capture cancelled"

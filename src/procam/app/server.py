@@ -126,13 +126,21 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
                              "calibration": work.describe_calibration(calib) if calib is not None else None,
                              "job": running.to_dict() if running else None})
 
+    def idle(what: str) -> None:
+        """Refuse to change ``what`` while a job uses it (the board, the devices, the camera)."""
+        running = st.jobs.running()
+        if running is not None:
+            raise Busy(f"the {running.kind} is running; change the {what} when it is done, or cancel it")
+
     async def set_board(request: Request):
         b = await _body(request)
+        idle("board")
         project.set_board(b.get("cols"), b.get("rows"), b.get("square"))
         return JSONResponse({"board": project.state["board"], **work.board_svg(project)})
 
     async def set_devices(request: Request):
         b = await _body(request)
+        idle("devices")
         if "projector_size" in b:
             size = b["projector_size"]
             if not (isinstance(size, list) and len(size) == 2 and all(isinstance(v, int) for v in size)):
@@ -155,6 +163,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
 
     async def camera(request: Request):
         b = await _body(request)
+        idle("camera")
         action = b.get("action")
         if action == "photo":  # a grab and the camera's calibration from every photo so far: a job
             project.board()
@@ -186,15 +195,17 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
 
     calibrate = start("calibrate", after_calibrate, lambda: work.usable_pose(project))
 
-    async def job(request: Request):
+    def job_of(request: Request):
         try:
-            job_id = int(request.path_params["job_id"])
+            return st.jobs.get(int(request.path_params["job_id"]))
         except ValueError:
-            raise ProcamError("job: give its number") from None
-        return JSONResponse(st.jobs.get(job_id).to_dict())
+            raise ProcamError(f"job {request.path_params['job_id']!r}: give its number") from None
+
+    async def job(request: Request):
+        return JSONResponse(job_of(request).to_dict())
 
     async def cancel(request: Request):
-        j = st.jobs.get(int(request.path_params["job_id"]))
+        j = job_of(request)
         j.cancel()
         return JSONResponse(j.to_dict())
 
