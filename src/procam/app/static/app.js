@@ -94,7 +94,8 @@ function gate() {
   const poseOk = st.pose && (st.pose.verdict === "good" || st.pose.verdict === "weak");
   const latest = st.calibration;  // the latest attempt: an untrusted one is not written, and nothing goes on from it
   const calibOk = !!(s.calibration && s.calibration.trusted && s.files.calibration && (!latest || latest.trusted));
-  for (const id of ["board-save", "devices-projector-size"]) $(id).disabled = busy;
+  for (const id of ["board-save", "devices-projector-size", "virtual-pose", "turn-left", "turn-right", "tilt-up",
+                    "tilt-down"]) $(id).disabled = busy;
   for (const id of ["camera-photo", "camera-load", "camera-none", "pose-capture"]) $(id).disabled = busy || !boardDone;
   $("calibrate-run").disabled = busy || !poseOk;
   $("world-run").disabled = busy || !calibOk;
