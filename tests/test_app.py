@@ -374,6 +374,45 @@ def test_procam_app_checks_its_options(tmp_path):
         assert code == 2 and words in err and err.count("\n") == 1, (args, err)
 
 
+def test_procam_app_serves_its_page_and_stops_on_ctrl_c(tmp_path):
+    """As a user starts it: the printed address (with its token) answers, one without the token is refused, Ctrl+C
+    stops it with exit code 0 and says where the project is."""
+    import signal
+    import subprocess
+    import sys
+    import urllib.error
+    import urllib.request
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"),
+                                                       os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-c", "from procam.cli import main; main()", "app", str(tmp_path / "p"),
+                             "--virtual", "--no-browser"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        line = proc.stdout.readline()
+        url = re.search(r"(http://127\.0\.0\.1:\d+/)\?token=(\S+)", line)
+        assert url, line
+        t0 = time.monotonic()
+        while True:
+            try:
+                with urllib.request.urlopen(url.group(0), timeout=5) as r:
+                    page = r.read().decode()
+                break
+            except urllib.error.URLError:
+                assert time.monotonic() - t0 < 20
+                time.sleep(0.1)
+        assert f'content="{url.group(2)}"' in page and "step-pose" in page
+        with pytest.raises(urllib.error.HTTPError) as e:
+            urllib.request.urlopen(url.group(1) + "api/state", timeout=5)
+        assert e.value.code == 403
+        e.value.close()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert f"stopped; {tmp_path / 'p'} keeps everything" in out
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # in a real browser
 # ---------------------------------------------------------------------------------------------------------------
