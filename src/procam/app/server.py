@@ -182,7 +182,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
             return JSONResponse(job.to_dict(), status_code=202)
         return route
 
-    capture = start("capture", lambda job: work.capture(job, project, devices), project.board)
+    capture = start("capture", lambda job: work.capture(job, project, devices, st.live.advising), project.board)
     world = start("world check", lambda job: work.check_world(job, project, devices),
                   lambda: work.need_calibration(project))
 

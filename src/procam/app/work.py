@@ -252,9 +252,10 @@ class _Hooks:
         self.error = str(error)
 
 
-def capture(job: Job, project: Project, devices) -> dict:
+def capture(job: Job, project: Project, devices, advising: Advising | None = None) -> dict:
     """Capture a pose (``procam capture``: pre-flight, the sequence, post-flight) into the next ``poseN`` and judge
-    it at once; the project takes it as its pose."""
+    it at once; the project takes it as its pose, and ``advising`` learns the projector side from the pose's
+    quick calibration (as ``procam capture --advise`` does between poses)."""
     from ..acquire.orchestrate import capture_session
     from ..acquire.session import CaptureOptions
 
@@ -267,6 +268,8 @@ def capture(job: Job, project: Project, devices) -> dict:
         capture_session(project.root / name, 1, devices.capture_devices(), options, board=board, hooks=hooks)
     check = hooks.check
     verdict = check.verdict if check is not None else "failed"
+    if advising is not None and check is not None and check.calibration is not None and verdict in ("good", "weak"):
+        advising.learn(check.calibration, name)
     project.state["pose"] = {"name": name, "verdict": verdict}
     project.save()
     pre = hooks.preflight or {}
