@@ -344,9 +344,10 @@ def test_the_job_runner_reports_cancels_and_refuses_a_second_job():
     j3 = jobs.start("export", lambda j: 1 / 0)
     jobs.wait(5)
     assert j3.state == "failed" and j3.error.startswith("internal error (ZeroDivisionError")
-    j4 = jobs.start("export", lambda j: {"written": ["a"]})
+    j4 = jobs.start("world check", lambda j: {"rms_px": float("nan"), "per": [1.5, float("inf")], "n": 3})
     jobs.wait(5)
-    assert j4.to_dict()["state"] == "done" and j4.to_dict()["result"] == {"written": ["a"]}
+    assert j4.to_dict()["state"] == "done" and j4.to_dict()["result"] == {"rms_px": None, "per": [1.5, None], "n": 3}
+    json.dumps(j4.to_dict(), allow_nan=False)  # what the page gets is JSON
 
 
 # ---------------------------------------------------------------------------------------------------------------

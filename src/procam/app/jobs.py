@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 import threading
 import time
 import traceback
@@ -27,6 +28,17 @@ def results_carry_warnings():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ProcamWarning)
         yield
+
+
+def finite(obj):
+    """``obj`` (JSON-like: dicts, lists, numbers) with every NaN or infinity as None (JSON has neither)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    return obj
 
 
 class Cancelled(ProcamError):
@@ -78,8 +90,9 @@ class Job:
         self._cancel.set()
 
     def to_dict(self) -> dict:
+        """JSON-ready (a number that is not finite in the result becomes null)."""
         return {"id": self.id, "kind": self.kind, "state": self.state, "done": self.done, "total": self.total,
-                "message": self.message, "result": self.result, "error": self.error,
+                "message": self.message, "result": finite(self.result), "error": self.error,
                 "seconds": round(self.seconds if self.state != "running" else time.monotonic() - self.started, 2)}
 
 

@@ -23,6 +23,7 @@ async function api(path, body) {
   return data;
 }
 
+function num(v, digits) { return v == null ? "?" : v.toFixed(digits); }
 function showError(msg) { const e = $("error"); e.textContent = msg; e.hidden = !msg; }
 function text(id, s) { $(id).textContent = s; }
 function list(id, items) {
@@ -243,8 +244,8 @@ function wire() {
   for (const [id, move] of [["turn-left", { turn: -5 }], ["turn-right", { turn: 5 }], ["tilt-up", { tilt: 5 }], ["tilt-down", { tilt: -5 }]])
     $(id).onclick = () => guarded(async () => { await api("api/devices", move); });
   $("camera-photo").onclick = () => guarded(() => runJob("api/camera", null, (r) => {
-    const pm = r.f_std == null ? "" : ` ± ${r.f_std.toFixed(1)}`;
-    text("camera-status", `${r.photos.length} photo(s): f_c = ${r.f.toFixed(1)}${pm} px, ${r.verdict}, ` +
+    const pm = r.f_std == null ? "" : ` ± ${num(r.f_std, 1)}`;
+    text("camera-status", `${r.photos.length} photo(s): f_c = ${num(r.f, 1)}${pm} px, ${r.verdict}, ` +
       `${Math.round(100 * r.coverage)} % of the image covered` +
       (r.enough ? " - enough" : " - take another photo, the board turned another way") +
       (r.reasons.length ? ` (${r.reasons.join("; ")})` : ""));
@@ -258,7 +259,7 @@ function wire() {
   $("pose-cancel").onclick = () => guarded(async () => { if (JOB) await api(`api/jobs/${JOB.id}/cancel`, {}); });
   $("calibrate-run").onclick = () => guarded(() => runJob("api/calibrate", "calibrate-progress", (r) => showCalibration(r, r.written.length > 0)));
   $("world-run").onclick = () => guarded(() => runJob("api/world", null, (r) => {
-    text("world-verdict", `${r.verdict}: ${r.found} of ${r.targets} spots found, miss ${r.rms_px.toFixed(3)} px RMS (${r.max_px.toFixed(3)} max); ${r.reasons.join("; ")}`);
+    text("world-verdict", `${r.verdict}: ${r.found} of ${r.targets} spots found, miss ${num(r.rms_px, 3)} px RMS (${num(r.max_px, 3)} max); ${r.reasons.join("; ")}` + (r.diagnosis ? `; ${r.diagnosis}` : ""));
     verdictClass($("world-verdict"), r.verdict === "holds" ? "good" : "degenerate"); setImg("world-picture", r.picture);
   }));
   $("export-run").onclick = () => guarded(async () => {
