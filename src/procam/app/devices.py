@@ -26,6 +26,7 @@ class Devices:
         self.lock = threading.RLock()  # the live view and a job never use the camera at once
         self._live = None
         self._camera = None
+        self._listing = None
         self.pose_index = 0
         self.projector_size = tuple(int(v) for v in projector_size)
         self.scene = None
@@ -80,6 +81,8 @@ class Devices:
             return {"virtual": True, "projector": f"virtual projector {w}x{h}", "projector_size": [w, h],
                     "camera": f"the simulator's camera {cw}x{ch}", "poses": [list(p) for p in VIRTUAL_POSES],
                     "pose_index": self.pose_index, "displays": [], "cameras": []}
+        if self._listing is not None:  # probing the cameras takes a while: once per session
+            return self._listing
         from ..acquire import cameras as cams
         from ..acquire.projector import choose_display, list_displays
 
@@ -90,8 +93,9 @@ class Devices:
             projector, size = chosen.label(), list(chosen.size)
         except ProcamError as e:
             shown, projector, size = [], f"none: {e}", None
-        return {"virtual": False, "projector": projector, "projector_size": size, "camera": self.camera_spec,
-                "displays": shown, "cameras": cams.list_opencv_cameras(), "poses": [], "pose_index": None}
+        self._listing = {"virtual": False, "projector": projector, "projector_size": size, "camera": self.camera_spec,
+                         "displays": shown, "cameras": cams.list_opencv_cameras(), "poses": [], "pose_index": None}
+        return self._listing
 
     def grab(self) -> np.ndarray:
         """One grey camera frame, (H, W) uint8/uint16 (the board in the projector's white light, virtual)."""
