@@ -27,6 +27,7 @@ FLOORS = (
     ("method", "verify", "check", "paper"),
     ("rig", "acquire"),
     ("report", "world_check"),
+    ("app",),
     ("cli",),
 )
 FLOOR = {room: k for k, rooms in enumerate(FLOORS) for room in rooms}

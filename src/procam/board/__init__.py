@@ -127,3 +127,32 @@ def board_region(corners, image_size, *, shrink: float = 0.0) -> np.ndarray:
     hull = cv2.convexHull(np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2))
     cv2.fillConvexPoly(mask, hull, 1, lineType=cv2.LINE_8, shift=4)
     return mask.astype(bool)
+
+
+#: Length units a printable board may be drawn in (SVG's absolute units).
+PRINT_UNITS = ("mm", "cm", "in")
+
+
+def printable_svg(board: Board, unit: str = "mm", creator: str = "procam") -> str:
+    """The board as an SVG page to print at true scale: ``(cols + 1) x (rows + 1)`` squares of ``board.square``
+    ``unit`` (top-left square black), a white margin of one square, and its size printed under it in words
+    (what to measure, that it must be printed at 100 %).  ``creator`` is written into the page's metadata.
+
+    Raises :class:`~procam.errors.ProcamError` for a unit not in :data:`PRINT_UNITS`."""
+    if unit not in PRINT_UNITS:
+        raise ProcamError(f"a printable board is drawn in {', '.join(PRINT_UNITS)}, got {unit!r}")
+    s, nx, ny = board.square, board.cols + 1, board.rows + 1
+    lines = (f"procam chessboard: {board.cols}x{board.rows} inner corners ({nx} x {ny} squares), square {s:g} {unit}",
+             "Print at 100 % (no fit to page), then measure a square and give that size.")
+    text_h = min(0.35 * s, nx * s / (0.6 * max(map(len, lines))))  # the lines fit under the squares
+    width, height = (nx + 2) * s, (ny + 2) * s + 3 * text_h
+    rects = "".join(f'<rect x="{(i + 1) * s:g}" y="{(j + 1) * s:g}" width="{s:g}" height="{s:g}"/>'
+                    for j in range(ny) for i in range(nx) if (i + j) % 2 == 0)
+    text = "".join(f'<text x="{s:g}" y="{(ny + 1.5) * s + k * 1.4 * text_h:g}" font-family="sans-serif" '
+                   f'font-size="{text_h:g}">{line}</text>' for k, line in enumerate(lines))
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:g}{unit}" height="{height:g}{unit}" '
+            f'viewBox="0 0 {width:g} {height:g}">\n'
+            f'<metadata>Creator: {creator}</metadata>\n'
+            f'<rect width="{width:g}" height="{height:g}" fill="white"/>\n'
+            f'<g fill="black">{rects}</g>\n{text}\n</svg>\n')

@@ -20,6 +20,7 @@ COMMANDS = {name: name for name in ("advise", "capture", "check", "patterns", "d
                                     "calibrate", "evaluate", "report", "reconstruct", "export", "blend",
                                     "experiment", "study", "demo")}
 COMMANDS["world-check"] = "world_check"
+COMMANDS["app"] = "webapp"  # not cli/app.py: that module would shadow the package's ``app`` (the typer app)
 
 
 def register(names=None) -> None:

@@ -53,6 +53,8 @@ CAPTURE_FORMAT = "procam-capture"
 EVALUATION_FORMAT = "procam-evaluation"
 #: ``procam world-check --json`` (:meth:`procam.world_check.WorldCheck.to_dict`).
 WORLD_CHECK_FORMAT = "procam-world-check"
+#: ``procam-app.json``: what ``procam app`` keeps of a project that its files cannot say (:mod:`procam.app.project`).
+APP_PROJECT_FORMAT = "procam-app-project"
 #: The simulator's ``truth.json`` of one scene, and of a rig.
 SIM_TRUTH_FORMAT = "procam-sim-truth"
 SIM_RIG_TRUTH_FORMAT = "procam-sim-rig-truth"

@@ -1,0 +1,109 @@
+"""The project folder is the app's state: every capture, camera file, calibration, report and export lands in it in
+procam's ordinary formats, under fixed names (:data:`FILES`), so the command line reads the same folder and a
+reopened app resumes where its user left.
+
+What the files cannot say (the board, the camera file chosen, the virtual rig's size) is kept in
+``procam-app.json`` (format ``procam-app-project``).  Every path a request names is confined to the folder
+(:meth:`Project.path`); every write goes through :mod:`procam.io.files` (atomic, and never over a file procam
+did not write).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..errors import ProcamError
+from ..io.formats import APP_PROJECT_FORMAT as STATE_FORMAT
+
+#: What lands where in the project folder.
+FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "camera": "camera.json",
+         "calibration": "calib.json", "yaml": "calib.yml",
+         "residuals": "calib.residuals.png", "report": "calib.html", "world": "world.png",
+         "world_json": "world.json", "export": "export"}
+
+#: The defaults of a new project.
+DEFAULTS = {"board": {"cols": 10, "rows": 6, "square": 24.0}, "unit": "mm", "camera_file": None,
+            "projector_size": [1920, 1080], "pose": None, "calibration": None, "photos": None}
+
+
+class Project:
+    """The project folder ``root`` (created if missing) and its state."""
+
+    def __init__(self, root):
+        root = Path(root).expanduser()
+        if root.exists() and not root.is_dir():
+            raise ProcamError(f"{root}: not a folder; give the project folder (new or one the app made)")
+        root.mkdir(parents=True, exist_ok=True)
+        self.root = root.resolve()
+        self.state = dict(DEFAULTS)
+        self._load()
+
+    def file(self, key: str) -> Path:
+        """The project file of ``key`` (:data:`FILES`)."""
+        return self.root / FILES[key]
+
+    def path(self, relative: str) -> Path:
+        """``relative`` inside the project folder; :class:`ProcamError` for a path that leaves it (``..``, an
+        absolute path, a symbolic link out of it)."""
+        rel = Path(str(relative))
+        if rel.is_absolute() or not str(relative).strip():
+            raise ProcamError(f"{relative}: give a path inside the project folder {self.root}")
+        p = (self.root / rel).resolve()
+        if p != self.root and self.root not in p.parents:
+            raise ProcamError(f"{relative}: outside the project folder {self.root}; give a path inside it")
+        return p
+
+    def _load(self) -> None:
+        f = self.file("state")
+        if not f.exists():
+            return
+        from ..io.jsonfile import load_json
+
+        try:
+            doc = load_json(f)
+        except (OSError, ValueError) as e:
+            raise ProcamError(f"{f}: not readable as the app's project state ({e}); move it away to start over") \
+                from None
+        if not isinstance(doc, dict) or doc.get("format") != STATE_FORMAT:
+            raise ProcamError(f"{f}: not the app's project state (no \"format\": \"{STATE_FORMAT}\"); move it away")
+        for key in DEFAULTS:
+            if key in doc:
+                self.state[key] = doc[key]
+        self.board()  # a state file edited by hand is checked as a request would be
+
+    def save(self) -> None:
+        from ..io.files import write_text
+
+        write_text(self.file("state"), json.dumps({"format": STATE_FORMAT, "version": 1, **self.state}, indent=1))
+
+    def board(self):
+        """The project's :class:`procam.board.Board`."""
+        from ..board import Board
+
+        b = self.state["board"]
+        return Board(b["cols"], b["rows"], b["square"])
+
+    def set_board(self, cols, rows, square) -> None:
+        """Check and keep the board (a one-line :class:`ProcamError` names the wrong field)."""
+        from ..board import Board
+
+        for name, v in (("cols", cols), ("rows", rows)):
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise ProcamError(f"board {name}: give a whole number of inner corners, got {v!r}")
+        if isinstance(square, bool) or not isinstance(square, (int, float)) or not math.isfinite(square):
+            raise ProcamError(f"board square: give the square's side as a number (e.g. 24 for mm), got {square!r}")
+        Board(cols, rows, float(square))
+        self.state["board"] = {"cols": cols, "rows": rows, "square": float(square)}
+        self.save()
+
+    def summary(self) -> dict:
+        """What the folder holds: the files of each step (names relative to the folder) that exist."""
+        have = {k: self.file(k).exists() for k in FILES}
+        exports = sorted(str(p.relative_to(self.root)) for p in self.file("export").glob("*") if p.is_file()) \
+            if have["export"] else []
+        pose = (self.state.get("pose") or {}).get("name")
+        check = f"{pose}.check.png" if pose and (self.root / f"{pose}.check.png").is_file() else None
+        return {"root": str(self.root), "state": self.state, "files": {k: FILES[k] for k in FILES if have[k]},
+                "pose_check": check, "exports": exports}

@@ -1,0 +1,62 @@
+"""``procam app``: the guided calibration in a browser (:mod:`procam.app`, docs/app.md).  (Named ``webapp``: a
+module ``procam.cli.app`` would shadow the package's typer object :data:`procam.cli.app`.)
+
+Importing this module registers the command on :data:`procam.cli._app.app`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import app, fail, say, user_errors, warn
+from ._options import DisplayOpt, SeedOpt
+
+
+@app.command("app")
+@user_errors
+def app_cmd(
+    project: Path = typer.Argument(Path("procam-project"), metavar="PROJECT_DIR", help="The project folder: "
+                                   "captures, camera file, calibration, report and exports land here; reopening it "
+                                   "resumes."),
+    virtual: bool = typer.Option(False, "--virtual", help="The simulator as the projector and camera (the demo)."),
+    camera: str = typer.Option("opencv:0", "--camera", help="opencv:INDEX | genicam:PRODUCER.cti[#DEVICE] | "
+                               "folder:PATH (procam capture --list-devices)."),
+    display: DisplayOpt = None,
+    host: str = typer.Option("127.0.0.1", "--host", help="The address to listen on (this machine only by default)."),
+    port: int = typer.Option(0, "--port", help="The TCP port (0: a free one)."),
+    no_browser: bool = typer.Option(False, "--no-browser", help="Print the address instead of opening the browser."),
+    seed: SeedOpt = 0,
+):
+    """Start the app's local server and open the browser on it: Devices, Board, Camera, Projector pose, Calibrate,
+    Check in the world, Export (docs/app.md). Ctrl+C stops it; the project folder keeps everything."""
+    from .. import app as procam_app
+
+    procam_app.need_extra()
+    if not 0 <= port <= 65535:
+        fail(f"--port must be from 0 to 65535, got {port}")
+    if virtual and camera != "opencv:0":
+        fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
+    if host not in ("127.0.0.1", "localhost"):
+        warn(f"--host {host}: the app is reachable from other machines (the token still guards it)")
+    token = procam_app.new_token()
+    hosts = ("127.0.0.1", "localhost") + (() if host in ("127.0.0.1", "localhost", "0.0.0.0") else (host,))
+    asgi = procam_app.make(project, virtual=virtual, token=token, camera=camera, display=display, seed=seed,
+                           hosts=hosts)
+    port = port or procam_app.free_port(host)
+    url = f"http://{'127.0.0.1' if host == '0.0.0.0' else host}:{port}/?token={token}"
+    say(f"procam app on {project.resolve()}: {url}")
+    say("Ctrl+C stops it")
+    if not no_browser:
+        import threading
+        import webbrowser
+
+        threading.Timer(0.8, webbrowser.open, args=(url,)).start()
+    try:
+        procam_app.uvicorn_server(asgi, host, port).run()
+    except KeyboardInterrupt:  # Ctrl+C is how the app is stopped (uvicorn raises it again after its shutdown)
+        pass
+    finally:
+        procam_app.shutdown(asgi)  # a running capture is cancelled, and removes its partial folder
+    say(f"stopped; {project} keeps everything (procam app {project} resumes)")
