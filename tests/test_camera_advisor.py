@@ -99,3 +99,64 @@ def test_the_predicted_covariance_is_the_scatter_of_real_fits():
     fits = np.array(fits)
     for k, name in enumerate(("f_c", "u0c", "v0c")):
         assert fits[:, k].std(ddof=1) == pytest.approx(b.std[name], rel=0.3), name
+
+
+def test_the_projector_mode_predicts_the_pm_of_the_one_pose_calibration_with_the_camera_known():
+    """The pose mode with the camera known (its file; the projector side from an earlier calibration, here the
+    simulator's) predicts, before the capture, the ± of f_p and v0p the single-pose calibration with that camera
+    then reports -- within a factor of 3: the bound frees f_p, v0p and the pose on the board samples' grid with a
+    nominal noise (0.05 px), the fit also frees u0p under its 3 % prior and the lens terms its evidence picks, and
+    widens by its block jackknife where the residuals are correlated (reported / predicted 0.3-2.5 over six poses
+    of this rig).  The corners-only bound of a free camera's pose overstates it many times."""
+    from sim_small import small_scene
+
+    from procam import patterns, pipeline, single_pose
+    from procam.advisor import Advisor, AdvisorOptions, ProjectorSide
+    from procam.calibration import Device, Distortion
+
+    s = simulate.with_board_pose(small_scene(), (20.0, 15.0, 0.0), frame="projector")
+    board = Board(s.board_cols, s.board_rows, s.square)
+    cam = Device(np.array(s.K_cam), s.cam_size, Distortion("division", tuple(s.cam_center), *s.cam_dist_coeffs))
+    ps = patterns.pattern_set(*s.proj_size)
+    stack, _ = simulate.render(s, ps, seed=2)
+    side = ProjectorSide(np.array(s.K_proj), tuple(s.proj_size), np.array(s.R), np.array(s.T), "earlier")
+    adv = Advisor(board, s.cam_size, AdvisorOptions(), projector=side)
+    before = adv.update(stack[ps.white], 0.0).projector          # the camera's intrinsics guessed, estimated
+    adv.set_camera(cam, "cam.json", known=True)
+    a = adv.update(stack[ps.white], 0.1)
+    assert a.camera.std_f == 0.0 and "known" in a.intrinsics
+    view, _ = pipeline.view_from_stack(stack, ps, board, name="pose")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        calib = single_pose.calibrate(view, known_camera=cam)
+    assert calib.method == "single-pose, camera given" and calib.trusted
+    for pred, name in ((a.projector.std_f, "f_p"), (a.projector.std_v0, "v0p")):
+        assert 1 / 3 <= calib.std[name] / pred <= 3, (name, calib.std[name], pred)
+    assert before.std_f > 3 * calib.std["f_p"]
+
+
+def test_the_pose_mode_with_a_known_camera_on_the_command_line(tmp_path):
+    """procam advise --known-camera cam.json --calibration earlier.json: the camera is held (its std 0, no camera
+    term limits the pose), the projector's ± is the known-camera prediction; a camera file of another size is
+    refused with exit 2."""
+    from procam.calibration import Calibration
+
+    scene = simulate.preset("ideal")
+    truth = simulate.truth_calibration(scene)
+    io.save_calibration(truth, tmp_path / "earlier.json")
+    io.save_calibration(Calibration(truth.camera, None, None, None, "camera-only"), tmp_path / "cam.json")
+    args = ["advise", "--camera", "virtual", *BOARD, "--json", "--max-frames", "1", "--calibration",
+            tmp_path / "earlier.json"]
+    code, out, err = run_cli(args + ["--known-camera", tmp_path / "cam.json"])
+    assert code == 0, err
+    a = json.loads(out.splitlines()[-1])
+    assert a["camera"]["std_f"] == 0.0 and "known" in a["intrinsics"] and not a["limiting"].startswith("f_c")
+    assert "board samples" in a["projector"]["assumes"] and a["projector"]["std_f"] > 0
+    code, out, err = run_cli(args)  # the camera re-estimated from the pose: the corners' bound, larger
+    assert code == 0, err
+    assert json.loads(out.splitlines()[-1])["projector"]["std_f"] > 2 * a["projector"]["std_f"]
+    small = Calibration(truth.camera.__class__(truth.camera.K, (640, 400), truth.camera.distortion), None, None,
+                        None, "camera-only")
+    io.save_calibration(small, tmp_path / "small.json")
+    code, _, err = run_cli(args + ["--known-camera", tmp_path / "small.json"])
+    assert code == 2 and "640x400" in err

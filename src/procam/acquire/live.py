@@ -198,6 +198,9 @@ class LiveAdvice:
     board : :class:`procam.board.Board`.
     options : :class:`procam.advisor.AdvisorOptions`.
     calibration, source : a calibration to start from (intrinsics and, with R, T, the projector side).
+    known_camera, known_source : the camera's intrinsics (a :class:`~procam.calibration.Device`) held known in the
+        calibration to come (``procam calibrate POSE --camera FILE``), and where they come from: the advice
+        predicts the projector's ± for that fit.
     window : show each frame with its advice in the preview window, whose keys end a pose's advice
         (Space/Enter: capture, Esc: quit); else no window.
     on_advice : called with ``(frame image, advice)`` after each frame (e.g. to print JSON lines).
@@ -210,8 +213,10 @@ class LiveAdvice:
 
     def __init__(self, board, options, *, calibration=None, source: str = "", window: bool = True,
                  on_advice: Callable | None = None, poll: Callable | None = None, auto: bool = False,
-                 max_frames: int | None = None, notify: Callable[[str, str], None] | None = None):
+                 max_frames: int | None = None, notify: Callable[[str, str], None] | None = None,
+                 known_camera=None, known_source: str = ""):
         self.board = board
+        self.known_camera, self.known_source = known_camera, known_source
         self.options = options
         self.calibration, self.source = calibration, source
         self.window_wanted, self.on_advice, self.poll = window, on_advice, poll
@@ -235,6 +240,8 @@ class LiveAdvice:
             calib, source = (self.best[1], self.best[2]) if self.best else (self.calibration, self.source)
             if calib is not None:
                 self.advisor.set_calibration(calib, source)
+            if self.known_camera is not None:
+                self.advisor.set_camera(self.known_camera, self.known_source, known=True)
         return self.advisor
 
     def run(self, camera, what: str = "") -> AdviseResult:
@@ -301,4 +308,6 @@ class LiveAdvice:
             self.best = (score, calib, f"{name or Path(folder).name} (captured)")
             if self.advisor is not None:
                 self.advisor.set_calibration(calib, self.best[2])
+                if self.known_camera is not None:
+                    self.advisor.set_camera(self.known_camera, self.known_source, known=True)
         return calib

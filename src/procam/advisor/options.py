@@ -30,6 +30,8 @@ class AdvisorOptions:
     projector_target_pct : the projector's target when it differs (None: ``target_pct``).
     aim : the move search aims at ``aim * target`` (a margin, so that a good pose stays good).
     sigma_camera, sigma_projector : corner noise (px, per coordinate) the bounds assume.
+    sigma_samples : with the camera known, the noise (projector px, per coordinate) of a decoded board sample (a
+        window's mean; 0.035-0.06 px on the simulator's renders) the projector's bound assumes.
     still_s, still_px : the board is still when no corner moved more than ``still_px`` (full-resolution
         px) over the last ``still_s`` seconds.
     detect_width : the frame is downscaled to at most this width for the detection (px); 0 = never.
@@ -67,6 +69,7 @@ class AdvisorOptions:
     aim: float = 0.8
     sigma_camera: float = 0.1
     sigma_projector: float = 0.2
+    sigma_samples: float = 0.05
     still_s: float = 0.5
     still_px: float = 1.0
     detect_width: int = 640
@@ -103,6 +106,7 @@ class AdvisorOptions:
         check("aim", 0, 1, open_lo=True)
         check("sigma_camera", 0, 100, open_lo=True)
         check("sigma_projector", 0, 100, open_lo=True)
+        check("sigma_samples", 0, 100, open_lo=True)
         check("still_s", 0, 60)
         check("still_px", 0, 1000)
         check("detect_width", 0, 100000)

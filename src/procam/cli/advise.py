@@ -79,6 +79,10 @@ def advise_cmd(
                                    "of f_c."),
     pp_target: float = typer.Option(2.0, "--pp-target", help="--mode camera: ... and the principal point to this "
                                     "many pixels."),
+    known_camera: Optional[Path] = typer.Option(None, "--known-camera", help="--mode pose: the camera file (procam "
+                                                "advise --mode camera, calibrate --camera-only) the calibration will "
+                                                "hold (calibrate POSE --camera FILE): the advice predicts the "
+                                                "projector's ± for that fit; its R, T come from --calibration."),
 ):
     """Show the camera's live frames with the detected board, its angles in the camera (and, with a calibration
     that has R, T, in the projector), the predicted std of f_c and f_p for that pose, and which way to turn the
@@ -89,6 +93,8 @@ def advise_cmd(
     if mode not in ("pose", "camera"):
         fail(f"--mode must be pose or camera, got {mode!r}")
     if mode == "camera":
+        if known_camera is not None:
+            fail("--known-camera applies to --mode pose; the camera mode calibrates the camera itself")
         return _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, gain, camera_size,
                             virtual_pose, seed, out, f_target, pp_target, calibration)
     if out is not None:
@@ -121,8 +127,13 @@ def advise_cmd(
         cam = VirtualLiveCamera(scene, seed=seed)
     else:
         cam = cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain)
+    known = None
+    if known_camera is not None:
+        from ..io import load_calibration
+
+        known = load_calibration(known_camera).camera
     session = live_advice(b, options, calibration=calib, source=source, json_lines=json_lines, auto=auto,
-                          max_frames=max_frames)
+                          max_frames=max_frames, known_camera=known, known_source=str(known_camera or ""))
     try:
         with cam, text_on_stderr(json_lines):
             res = session.run(cam)
