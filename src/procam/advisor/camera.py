@@ -15,7 +15,8 @@ Per camera frame (:meth:`CameraAdvisor.update`):
 4. which tilt to take next: among turns and tilts of the board about its centre (about the camera's axes, as
    :func:`procam.advisor.apply_move`; every ``±20``, ``±35`` deg and their combinations, the board staying in the
    image), the one whose photo lowers the predicted score most, as a move from the board's current pose;
-5. the verdict: ``"take"`` when this frame is new (``min_new_deg`` from every photo taken) and gains at least half
+5. the verdict: ``"take"`` when this frame is new (``min_new_deg`` from every photo taken; the next tilt is chosen
+   new too) and gains at least half
    of what the best next tilt would (in the score's logarithm), ``"adjust"`` with the move otherwise, and
    ``"enough"`` when the photos taken determine the camera to the targets (``camera_f_pct`` % of ``f_c`` and
    ``camera_pp_px`` px of the principal point, by the fit's own covariance).
@@ -57,6 +58,11 @@ def _rvec(R) -> np.ndarray:
     import cv2
 
     return cv2.Rodrigues(np.asarray(R, float))[0].ravel()
+
+
+def _angle_deg(R1, R2) -> float:
+    """The angle (deg) of the rotation between two board orientations."""
+    return math.degrees(float(np.linalg.norm(_rvec(np.asarray(R1) @ np.asarray(R2).T))))
 
 
 def _std_dict(b: crlb.ViewsBound, f: float) -> dict | None:
@@ -279,14 +285,16 @@ class CameraAdvisor:
         return cam.project(R, t, self.obj)
 
     def _goals(self, t_cb) -> list:
-        """Where the board's centre may go: where it is, and under the centre of each of :data:`REGIONS` at the
-        same distance."""
+        """Where the board's centre may go: where it is, under the centre of each of :data:`REGIONS` at the same
+        distance, and under the image's centre a quarter farther away (room to turn the board in view)."""
         W, H = self.image_size
         K = np.asarray(self.camera.K, float)
         out = [np.asarray(t_cb, float)]
         for k in range(9):
             ray = np.linalg.solve(K, [(k % 3 + 0.5) * W / 3, (k // 3 + 0.5) * H / 3, 1.0])
             out.append(ray * t_cb[2] / ray[2])
+        ray = np.linalg.solve(K, [(W - 1) / 2.0, (H - 1) / 2.0, 1.0])
+        out.append(ray * 1.25 * t_cb[2] / ray[2])
         return out
 
     def _candidates(self, R_cb, t_cb):
@@ -358,14 +366,15 @@ class CameraAdvisor:
         ranked = []
         for k, (R, t, px) in enumerate(self._candidates(R_cb, t_cb)):
             gained = self._area(px, grid)[0] - area
+            if gained < 0.02 and any(_angle_deg(R, Q) < o.min_new_deg for Q in rotations):
+                continue  # a photo taken already: the next one must be new
             ranked.append((-round(gained, 2) if wants_area else 0.0, score(information(R, t)), k, R, t))
         ranked.sort(key=lambda c: c[:3])
         s_now, s_this = score(0.0), score(this)
         best = ranked[0] if ranked else None
         next_move = None if best is None else move_between(R_cb, best[3])
         shift = None if best is None else best[4] - t_cb
-        newest = min((math.degrees(np.linalg.norm(models.matrix_to_rvec(R_cb @ R.T))) for R in rotations),
-                     default=180.0)
+        newest = min((_angle_deg(R_cb, R) for R in rotations), default=180.0)
         adds = self._area(corners, grid)[0] - area
         gain = math.log(s_now / s_this) if s_this < s_now else 0.0
         best_gain = math.log(s_now / best[1]) if best is not None and best[1] < s_now else 0.0
@@ -384,12 +393,13 @@ class CameraAdvisor:
             return CameraAdvice(state="take", message=msg, actions=(Action("take", msg),), **common)
         actions = []
         if shift is not None and np.linalg.norm(shift) > 0.05 * t_cb[2]:
-            uncovered = uncovered or ("the image's edges",)
+            why = (f"corners not yet seen in the image's {', '.join(uncovered)}" if uncovered else
+                   "the next tilt there covers more of the image")
             x, y = (K[:2, :2] @ shift[:2]) / t_cb[2]
             words = " and ".join(w for w, v in ((("right" if x > 0 else "left"), x), (("down" if y > 0 else "up"), y))
                                  if abs(v) > 0.03 * max(self.image_size))
             actions.append(Action("move", f"move the board {words} (about {abs(x):.0f}, {abs(y):.0f} px in the image): "
-                                          f"corners not yet seen in the image's {', '.join(uncovered)}",
+                                          f"{why}",
                                   direction=words or None))
         if next_move is not None:
             from .advisor import Advisor
@@ -397,5 +407,8 @@ class CameraAdvisor:
             actions += [Advisor._action(n, d) for n, d in sorted((("turn", next_move[0]), ("tilt", next_move[1])),
                                                                  key=lambda v: -abs(v[1])) if abs(d) >= 1.5]
         why = (f"a photo within {newest:.0f} deg of this one was taken" if not new else "this pose adds little")
+        if not actions:  # no new pose fits in view from here
+            actions = [Action("move", "move the board back towards the image's centre and farther from the camera",
+                              direction=None)]
         msg = f"{why}: " + (actions[0].text if actions else "place the board anew")
         return CameraAdvice(state="adjust", message=msg, actions=tuple(actions), **common)
