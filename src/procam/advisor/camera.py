@@ -396,11 +396,14 @@ class CameraAdvisor:
             why = (f"corners not yet seen in the image's {', '.join(uncovered)}" if uncovered else
                    "the next tilt there covers more of the image")
             x, y = (K[:2, :2] @ shift[:2]) / t_cb[2]
-            words = " and ".join(w for w, v in ((("right" if x > 0 else "left"), x), (("down" if y > 0 else "up"), y))
-                                 if abs(v) > 0.03 * max(self.image_size))
-            actions.append(Action("move", f"move the board {words} (about {abs(x):.0f}, {abs(y):.0f} px in the image): "
-                                          f"{why}",
-                                  direction=words or None))
+            sides = [(("right" if x > 0 else "left"), abs(x)), (("down" if y > 0 else "up"), abs(y))]
+            words = [w for w, v in sides if v > 0.03 * max(self.image_size)]
+            if abs(shift[2]) > 0.1 * t_cb[2]:
+                words.append("farther from the camera" if shift[2] > 0 else "closer")
+            main = max(sides, key=lambda v: v[1])
+            actions.append(Action("move", f"move the board {' and '.join(words)} (about {abs(x):.0f}, {abs(y):.0f} px "
+                                          f"in the image): {why}",
+                                  direction=main[0] if main[1] > 0.03 * max(self.image_size) else None))
         if next_move is not None:
             from .advisor import Advisor
 
@@ -410,5 +413,5 @@ class CameraAdvisor:
         if not actions:  # no new pose fits in view from here
             actions = [Action("move", "move the board back towards the image's centre and farther from the camera",
                               direction=None)]
-        msg = f"{why}: " + (actions[0].text if actions else "place the board anew")
+        msg = f"{why}: {actions[0].text}"
         return CameraAdvice(state="adjust", message=msg, actions=tuple(actions), **common)
