@@ -65,3 +65,45 @@ def test_a_pose_folder_without_a_board_is_named(mixed, tmp_path):
                             "--square", "24", "-o", tmp_path / "cam.json"])
     assert code == 2 and str(paths[0]) in err and "not found" in err
     assert not (tmp_path / "cam.json").exists()
+
+
+def test_the_camera_file_says_what_it_was_calibrated_from_and_carries_its_covariance(mixed, tmp_path):
+    """The camera file names its inputs (relative to the file), their count and the date, and holds the intrinsics'
+    covariance with its rows named, whose diagonal is OpenCV's own std (stdDeviationsIntrinsics) of the same fit;
+    it reads back exactly through procam.io, and a file without the two blocks (written before) still loads."""
+    from datetime import datetime, timedelta, timezone
+
+    from procam import io
+    from procam.errors import CalibrationFileError
+
+    paths, _ = mixed
+    out = tmp_path / "cam.json"
+    code, _, err = run_cli(["calibrate", *map(str, paths), "--camera-only", *BOARD, "-o", out])
+    assert code in (0, 3), err
+    doc = json.loads(out.read_text())
+    src = doc["calibrated_from"]
+    assert src["count"] == 3 and [i["name"] for i in src["inputs"]] == [
+        io.files.portable_path(str(p), tmp_path) for p in paths]
+    when = datetime.fromisoformat(src["date"])
+    assert abs(datetime.now(timezone.utc) - when) < timedelta(minutes=10)
+    cov = doc["covariance"]
+    assert cov["params"][:4] == ["f_c", "fy_c", "u0c", "v0c"] and len(cov["matrix"]) == len(cov["params"])
+    m = np.array(cov["matrix"], float)
+    for k, name in enumerate(cov["params"][:4]):  # the diagonal is OpenCV's std of the same fit, squared
+        assert np.sqrt(m[k, k]) == pytest.approx(doc["std"][name], rel=1e-4), name
+    assert np.all(np.linalg.eigvalsh(m) > 0)
+    calib = io.load_calibration(out)
+    back = calib.info["covariance"]
+    assert back["params"] == tuple(cov["params"]) and np.array_equal(back["matrix"], m)
+    assert calib.info["calibrated_from"]["count"] == 3
+    again = tmp_path / "again.json"  # written back through io: the same blocks
+    io.save_calibration(calib, again)
+    doc2 = json.loads(again.read_text())
+    assert doc2["covariance"]["matrix"] == cov["matrix"] and doc2["calibrated_from"]["date"] == src["date"]
+    old = {k: v for k, v in doc.items() if k not in ("covariance", "calibrated_from")}
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert "covariance" not in io.load_calibration(tmp_path / "old.json").info
+    m[0, 1] += 1.0  # not symmetric: refused, naming the field
+    (tmp_path / "bad.json").write_text(json.dumps({**doc, "covariance": {**cov, "matrix": m.tolist()}}))
+    with pytest.raises(CalibrationFileError, match="covariance.matrix"):
+        io.load_calibration(tmp_path / "bad.json")

@@ -34,7 +34,8 @@ import numpy as np
 from . import models
 from . import uncertainty as unc
 
-__all__ = ["Bound", "ExtrinsicsBound", "camera_bound", "projector_bound", "extrinsics_bound", "fisher_bound"]
+__all__ = ["Bound", "ExtrinsicsBound", "ViewsBound", "camera_bound", "projector_bound", "extrinsics_bound",
+           "fisher_bound", "view_information", "views_bound", "VIEW_PARAMS"]
 
 _CAMERA_MODELS = ("full", "known_distortion", "known_alpha", "known_intrinsics")
 
@@ -377,3 +378,85 @@ def extrinsics_bound(cam, proj, R_cb, t_cb, R_pb, t_pb, *, rel_step=1e-7):
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     return ExtrinsicsBound(euler_deg=np.degrees(sd[:3]), T=sd[3:6], sigma_T=float(np.sqrt(np.sum(sd[3:6] ** 2))),
                            T_norm=float(sd[6]), cov=cov[:6, :6])
+
+
+# --------------------------------------------------------------------------------------------
+# a camera calibrated from several photos (Zhang / OpenCV calibrateCamera)
+# --------------------------------------------------------------------------------------------
+
+#: The intrinsics of a camera calibrated from photos, in OpenCV's order (``fx, fy, cx, cy`` and the distortion
+#: coefficients ``k1, k2, p1, p2, k3`` and the rational model's ``k4, k5, k6``), named as in :mod:`procam.parameters` where a name exists.
+VIEW_PARAMS = ("f_c", "fy_c", "u0c", "v0c", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+
+
+@dataclass(frozen=True)
+class ViewsBound:
+    """The covariance of a camera's intrinsics calibrated from several photos (:func:`views_bound`).
+
+    ``cov`` (P, P) in raw units (px for ``f_c, fy_c, u0c, v0c``; OpenCV's normalised coefficients for the
+    distortion), rows named by ``params`` (a subset of :data:`VIEW_PARAMS`: the free ones); ``std`` the square
+    roots of its diagonal by name (``inf`` everywhere when the photos do not determine the parameters);
+    ``sigma`` the corner noise (px per coordinate) it was scaled with.
+    """
+
+    cov: np.ndarray
+    params: tuple
+    std: dict
+    sigma: float
+
+    @property
+    def determined(self) -> bool:
+        return bool(np.all(np.isfinite(self.cov)))
+
+
+def view_information(K, coeffs, rvec, tvec, obj_pts, free_dist=(0, 1, 2, 3, 4)) -> np.ndarray:
+    """The information one photo gives about a camera's intrinsics, its board pose marginalised (the Schur
+    complement ``A - B D^-1 B^T`` of ``J^T J``), per unit corner noise.
+
+    ``K`` (3, 3) and ``coeffs`` (5,) or (8,) OpenCV intrinsics and distortion; ``rvec, tvec`` the board -> camera pose
+    (Rodrigues vector, board units); ``obj_pts`` (N, 3) the board corners the photo shows; ``free_dist`` the
+    indices (0..7 = ``k1, k2, p1, p2, k3, k4, k5, k6``) of the coefficients that are fitted.  Returns (4 + F, 4 + F) in the
+    order ``fx, fy, cx, cy`` and the free coefficients (pixels^2 per parameter unit^2).  The Jacobian is OpenCV's
+    own (``cv2.projectPoints``), the model :func:`procam.multi_pose.calibrate_camera` fits.
+    """
+    import cv2
+
+    c = np.asarray(coeffs, float).ravel()
+    dist = np.zeros(max(5, len(c)))
+    dist[:len(c)] = c
+    _, J = cv2.projectPoints(np.asarray(obj_pts, np.float64).reshape(-1, 1, 3), np.asarray(rvec, float).reshape(3),
+                             np.asarray(tvec, float).reshape(3), np.asarray(K, float), dist)
+    cols = [6, 7, 8, 9] + [10 + k for k in free_dist]
+    Ji, Jp = J[:, cols], J[:, :6]
+    A, B, D = Ji.T @ Ji, Ji.T @ Jp, Jp.T @ Jp
+    return A - B @ np.linalg.solve(D, B.T)
+
+
+def views_bound(K, coeffs, poses, obj_pts, sigma: float, free_dist=(0, 1, 2, 3, 4), *, extra=None,
+                cond_limit=unc.RCOND) -> ViewsBound:
+    """The covariance of a camera's intrinsics from several photos: ``sigma^2 (sum_i I_i)^-1`` with ``I_i`` each
+    photo's :func:`view_information` (the poses marginalised), the Cramér-Rao bound at ``K, coeffs`` for corner
+    noise ``sigma`` -- and, with ``sigma`` the fit's residual noise, the Gauss-Newton covariance of the fit
+    (what OpenCV's ``stdDeviationsIntrinsics`` are the roots of).
+
+    ``poses``: ``(rvec, tvec)`` per photo; ``obj_pts``: the board corners (N, 3), one array for all photos or a
+    sequence of one per photo; ``extra``: information (P, P) to add (e.g. of photos summed before, or of a
+    candidate pose).  Degenerate (``inf``) when the column-normalised information is rank-deficient.
+    """
+    P = 4 + len(free_dist)
+    info = np.zeros((P, P)) if extra is None else np.array(extra, float)
+    per_photo = isinstance(obj_pts, (list, tuple))
+    for k, (rvec, tvec) in enumerate(poses):
+        info = info + view_information(K, coeffs, rvec, tvec, obj_pts[k] if per_photo else obj_pts, free_dist)
+    params = VIEW_PARAMS[:4] + tuple(VIEW_PARAMS[4 + k] for k in free_dist)
+    d = np.sqrt(np.clip(np.diag(info), 0.0, None))
+    cov = np.full((P, P), np.inf)
+    if np.all(d > 0) and np.all(np.isfinite(info)):
+        n = info / np.outer(d, d)
+        w = np.linalg.eigvalsh(n)
+        if w[0] > 0 and np.sqrt(w[0] / w[-1]) >= cond_limit:
+            cov = float(sigma) ** 2 * np.linalg.inv(n) / np.outer(d, d)
+            cov = 0.5 * (cov + cov.T)
+    std = {name: (float(np.sqrt(cov[k, k])) if np.isfinite(cov[k, k]) else float("inf"))
+           for k, name in enumerate(params)}
+    return ViewsBound(cov, params, std, float(sigma))

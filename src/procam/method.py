@@ -109,7 +109,7 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
     if method == "camera-only" and len(views) > 1:
         from . import multi_pose
 
-        return multi_pose.calibrate_camera(views, dist=cam_dist)
+        return with_source(multi_pose.calibrate_camera(views, dist=cam_dist), views)
     from . import single_pose
 
     camera = single_pose.CameraOptions() if camera is None else camera
@@ -120,4 +120,14 @@ def calibrate(views: Sequence, *, method: str | None = None, known_camera=None, 
                                      dense=single_pose.dense.DenseOptions() if dense is None else dense)
     calib = single_pose.calibrate_camera_only(view.obj_pts, view.cam_pts, view.cam_size, name=view.name,
                                               camera=camera)
-    return calib.replace(views=(view,))
+    return with_source(calib.replace(views=(view,)), views)
+
+
+def with_source(calib, views):
+    """``calib`` saying what it was calibrated from (``info["calibrated_from"]``: the views' names -- the photos'
+    and pose folders' paths --, their count and the date, UTC): a camera file is reused long after it is made."""
+    from datetime import datetime, timezone
+
+    source = {"inputs": [{"name": str(v.name)} for v in views], "count": len(views),
+              "date": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    return calib.replace(info={**calib.info, "calibrated_from": source})

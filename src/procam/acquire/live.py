@@ -10,6 +10,8 @@
     (:class:`~procam.acquire.preview.PreviewWindow`) or a callback per frame, and after each captured pose a
     quick single-pose calibration (:meth:`LiveAdvice.learn`) whose ``R, T`` give the projector side of the
     next pose's advice when it is the best so far.
+:func:`advise_camera`
+    The camera mode's loop (:class:`~procam.advisor.CameraAdvisor`): photos for a camera calibrated once.
 :func:`advisor_options`, :func:`load_calibration_for`, :func:`calibration_square`
     The session's options from the command line's numbers and files, checked (one-line errors naming the
     options).
@@ -87,6 +89,70 @@ def advise(camera, advisor, *, on_advice: Callable | None = None, poll: Callable
             return AdviseResult("max-frames", last, n, t0)
 
 
+def advise_camera(camera, advisor, *, on_advice: Callable | None = None, poll: Callable | None = None,
+                  auto: bool = False, max_frames: int | None = None,
+                  on_photo: Callable | None = None) -> AdviseResult:
+    """The camera mode's loop: grab a frame, :meth:`procam.advisor.CameraAdvisor.update`, hand the advice to
+    ``on_advice``; a key (``poll() == "capture"``) or, with ``auto``, the advice ``"take"`` takes the frame as a
+    photo (:meth:`~procam.advisor.CameraAdvisor.take`, refitted by :func:`camera_fit` from two photos on;
+    ``on_photo(advisor, name)`` after it); with ``auto`` and a
+    camera that can follow the advice (the simulator's :meth:`VirtualLiveCamera.follow
+    <procam.acquire.cameras.VirtualLiveCamera.follow>`: the simulated user), it moves the board as advised.  Ends
+    when the advice is ``"enough"`` (reason ``"enough"``), on ``"quit"``, or after ``max_frames`` frames."""
+    if max_frames is not None and max_frames < 1:
+        raise ProcamError(f"--max-frames must be >= 1, got {max_frames}")
+    n, last = 0, None
+    while True:
+        img = to_gray(camera.grab().image)
+        last = advisor.update(img)
+        n += 1
+        if on_advice is not None:
+            on_advice(img, last)
+        if last.state == "enough":
+            return AdviseResult("enough", last, n)
+        what = poll() if poll is not None else None
+        if what == "quit":
+            return AdviseResult("quit", last, n)
+        if (what == "capture" and last.corners is not None) or (auto and last.state == "take"):
+            name = f"photo{len(advisor.views) + 1:02d}"
+            advisor.take(img, name=name)
+            if len(advisor.views) >= 2:
+                advisor.set_fit(camera_fit(advisor.views))
+            if on_photo is not None:
+                on_photo(advisor, name)
+        elif auto and last.state == "adjust" and hasattr(camera, "follow"):
+            camera.follow(last)
+        if max_frames is not None and n >= max_frames:
+            return AdviseResult("max-frames", last, n)
+
+
+def camera_fit(views):
+    """The running camera-only fit of the camera mode's photos (:func:`procam.multi_pose.calibrate_camera`); its
+    caveats are the camera file's to say (:func:`camera_calibration`), not each photo's."""
+    import warnings
+
+    from ..multi_pose import calibrate_camera
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return calibrate_camera(views)
+
+
+def camera_calibration(advisor, path=None):
+    """The camera-only calibration of the camera mode's photos (:func:`procam.method.calibrate`: its verdict and
+    warnings, what it was calibrated from, its covariance), written to ``path`` (the camera file) when given."""
+    from .. import method
+
+    if len(advisor.views) < 2:
+        raise ProcamError(f"advisor: {len(advisor.views)} photo(s) taken; a camera calibration needs at least 2")
+    calib = method.calibrate(advisor.views, method="camera-only")
+    if path is not None:
+        from ..io import save_calibration
+
+        save_calibration(calib, path)
+    return calib
+
+
 def advisor_options(target: float, still_s: float, still_px: float):
     """:class:`procam.advisor.AdvisorOptions` from the command line's numbers (``--target``, ``--still``,
     ``--still-px``); a :class:`ProcamError` naming the option when one is out of range."""
@@ -132,6 +198,9 @@ class LiveAdvice:
     board : :class:`procam.board.Board`.
     options : :class:`procam.advisor.AdvisorOptions`.
     calibration, source : a calibration to start from (intrinsics and, with R, T, the projector side).
+    known_camera, known_source : the camera's intrinsics (a :class:`~procam.calibration.Device`) held known in the
+        calibration to come (``procam calibrate POSE --camera FILE``), and where they come from: the advice
+        predicts the projector's ± for that fit.
     window : show each frame with its advice in the preview window, whose keys end a pose's advice
         (Space/Enter: capture, Esc: quit); else no window.
     on_advice : called with ``(frame image, advice)`` after each frame (e.g. to print JSON lines).
@@ -144,8 +213,10 @@ class LiveAdvice:
 
     def __init__(self, board, options, *, calibration=None, source: str = "", window: bool = True,
                  on_advice: Callable | None = None, poll: Callable | None = None, auto: bool = False,
-                 max_frames: int | None = None, notify: Callable[[str, str], None] | None = None):
+                 max_frames: int | None = None, notify: Callable[[str, str], None] | None = None,
+                 known_camera=None, known_source: str = ""):
         self.board = board
+        self.known_camera, self.known_source = known_camera, known_source
         self.options = options
         self.calibration, self.source = calibration, source
         self.window_wanted, self.on_advice, self.poll = window, on_advice, poll
@@ -169,6 +240,8 @@ class LiveAdvice:
             calib, source = (self.best[1], self.best[2]) if self.best else (self.calibration, self.source)
             if calib is not None:
                 self.advisor.set_calibration(calib, source)
+            if self.known_camera is not None:
+                self.advisor.set_camera(self.known_camera, self.known_source, known=True)
         return self.advisor
 
     def run(self, camera, what: str = "") -> AdviseResult:
@@ -235,4 +308,6 @@ class LiveAdvice:
             self.best = (score, calib, f"{name or Path(folder).name} (captured)")
             if self.advisor is not None:
                 self.advisor.set_calibration(calib, self.best[2])
+                if self.known_camera is not None:
+                    self.advisor.set_camera(self.known_camera, self.known_source, known=True)
         return calib

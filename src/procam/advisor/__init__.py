@@ -45,6 +45,10 @@ top edge going away (:func:`apply_move`).
 Nothing here opens a window or prints: :class:`Advice` is a frozen dataclass per frame with its JSON
 form (:meth:`Advice.to_dict`).
 
+The camera mode (:class:`CameraAdvisor`, :mod:`.camera`) guides the photos of a camera calibrated once: where the
+corners have been seen, which tilt to take next, the predicted ± of ``f_c``, the principal point and the
+distortion after each photo, and "enough" at a stated target; then it writes the camera file.
+
 The package: :mod:`.options` (:class:`AdvisorOptions`, :class:`Advice`, :class:`Action`, :class:`DeviceState`),
 :mod:`.moves` (turns and tilts, PnP, the projector side) and :mod:`.advisor` (:class:`Advisor`).
 """
@@ -52,8 +56,9 @@ The package: :mod:`.options` (:class:`AdvisorOptions`, :class:`Advice`, :class:`
 from __future__ import annotations
 
 from .advisor import Advisor, guessed_camera
+from .camera import CAMERA_STATES, CameraAdvice, CameraAdvisor
 from .moves import ProjectorSide, apply_move, move_between
 from .options import STATES, Action, Advice, AdvisorOptions, DeviceState
 
 __all__ = ["AdvisorOptions", "Action", "DeviceState", "Advice", "ProjectorSide", "Advisor", "apply_move",
-           "move_between", "guessed_camera", "STATES"]
+           "move_between", "guessed_camera", "STATES", "CameraAdvisor", "CameraAdvice", "CAMERA_STATES"]

@@ -82,22 +82,28 @@ class Advisor:
         self._plan: dict | None = None  # the move search's last proposal (see _move_actions)
 
     # -- configuration ----------------------------------------------------------------------
-    def set_camera(self, camera: Device | None, source: str = "") -> None:
-        """Use ``camera``'s intrinsics (None: the guess)."""
+    def set_camera(self, camera: Device | None, source: str = "", known: bool = False) -> None:
+        """Use ``camera``'s intrinsics (None: the guess).  ``known``: the camera calibrated beforehand and held in
+        the calibration to come (``procam calibrate POSE --camera FILE``): its terms leave the score, and the
+        projector's ± is predicted for the fit with the camera known (:meth:`_projector_bound`)."""
         if camera is not None and tuple(int(v) for v in camera.image_size) != self.image_size:
             raise ProcamError(f"advisor: the camera intrinsics{' from ' + source if source else ''} are for "
                               f"{camera.image_size[0]}x{camera.image_size[1]} frames but the camera delivers "
                               f"{self.image_size[0]}x{self.image_size[1]}; use a calibration of this camera "
                               "at this resolution")
         if camera is None:
+            if known:
+                raise ProcamError("advisor: a known camera needs its intrinsics")
             self._camera = guessed_camera(self.image_size)
             self.intrinsics = (f"guessed f = image diagonal ({self._camera.K[0, 0]:.0f} px), principal point at "
                                "the image centre, no distortion")
             self.known_intrinsics = False
         else:
             self._camera = camera
-            self.intrinsics = f"intrinsics from {source}" if source else "intrinsics given"
+            self.intrinsics = (("camera known (held in the calibration): " if known else "intrinsics ")
+                               + (f"from {source}" if source else "given"))
             self.known_intrinsics = True
+        self.camera_known = bool(known)
         self._plan = None
 
     def set_projector(self, projector: ProjectorSide | None) -> None:
@@ -133,9 +139,30 @@ class Advisor:
                               pp_prior_when="needed" if prior is None else "always")
         return b.std["f_c"], b.std, b.prior_used
 
-    def _projector_bound(self, R_pb, t_pb):
-        b = crlb.projector_bound(self.projector.K, R_pb, t_pb, self.obj, self.options.sigma_projector)
+    def _projector_bound(self, R_pb, t_pb, t_cb=None):
+        """``(std f_p, std v0p)`` (px) predicted at the board's pose in the projector: from its corners (noise
+        ``sigma_projector``), or with the camera known from the board samples the fit then uses
+        (:meth:`_board_samples`, noise ``sigma_samples``: the decoded window means, every ``WINDOW`` camera px).
+        ``f_p, v0p`` and the pose free, ``u0p, alpha_p`` held, no lens terms (:func:`procam.crlb.projector_bound`)."""
+        if self.camera_known and t_cb is not None:
+            b = crlb.projector_bound(self.projector.K, R_pb, t_pb, self._board_samples(t_cb),
+                                     self.options.sigma_samples)
+        else:
+            b = crlb.projector_bound(self.projector.K, R_pb, t_pb, self.obj, self.options.sigma_projector)
         return b.std["f_p"], b.std["v0p"]
+
+    def _board_samples(self, t_cb) -> np.ndarray:
+        """(M, 3) board points where the decoded board samples fall: a grid over the corners' rectangle with the
+        window's spacing (:data:`procam.correspond.samples.WINDOW` camera px at the board's distance)."""
+        from ..correspond.samples import WINDOW
+
+        b = self.board
+        step = WINDOW * float(np.linalg.norm(t_cb)) / float(self._camera.K[0, 0])
+        hx, hy = 0.5 * (b.cols - 1) * b.square, 0.5 * (b.rows - 1) * b.square
+        xs = np.arange(-hx, hx + 1e-9, max(step, 1e-9 * b.square))
+        ys = np.arange(-hy, hy + 1e-9, max(step, 1e-9 * b.square))
+        X, Y = np.meshgrid(xs, ys)
+        return np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
 
     def _terms(self, ang_c, rel_c, ang_p, rel_p) -> dict:
         """The score's terms (each <= 1 when satisfied): ``f_c``/``f_p`` = predicted relative std / target,
@@ -148,9 +175,9 @@ class Advisor:
             return num / den if den > 1e-12 else big
 
         terms = {}
-        if self.known_intrinsics:
+        if self.known_intrinsics and not self.camera_known:
             terms["f_c"] = rel_c / (o.target_pct / 100.0) if math.isfinite(rel_c) else big
-        if o.paper_rule or not self.known_intrinsics:
+        if (o.paper_rule or not self.known_intrinsics) and not self.camera_known:
             psi, nu = abs(ang_c[0]), abs(ang_c[1])
             terms["camera rule"] = max(ratio(a.camera_rule_deg, psi + nu), ratio(a.weak_angle_deg, min(psi, nu)))
         if rel_p is not None:
@@ -169,11 +196,11 @@ class Advisor:
         ang_p = rel_p = None
         if self.projector is not None:
             R_pb, t_pb = projector_pose(self.projector, R_cb, t_cb)
-            rel_p = self._projector_bound(R_pb, t_pb)[0] / float(self.projector.K[0, 0])
+            rel_p = self._projector_bound(R_pb, t_pb, t_cb)[0] / float(self.projector.K[0, 0])
             ang_p = models.board_angles_deg(R_pb, t_pb)
         terms = self._terms(ang_c, 0.0, ang_p, rel_p)
         cheap = max(terms.values()) if terms else 0.0
-        if not self.known_intrinsics or (stop_above is not None and cheap > stop_above):
+        if not self.known_intrinsics or self.camera_known or (stop_above is not None and cheap > stop_above):
             return cheap
         std_c, _, _ = self._camera_bound(R_cb, t_cb, prior)
         rel_c = std_c / float(self._camera.K[0, 0])
@@ -382,9 +409,12 @@ class Advisor:
         o = self.options
         W, H = self.image_size
         dev = self._camera
-        std_c, _, prior = self._camera_bound(R_cb, t_cb)
         f_c = float(dev.K[0, 0])
         ang_c = tuple(float(a) for a in models.board_angles_deg(R_cb, t_cb))
+        if self.camera_known:
+            return DeviceState(ang_c, f_c, 0.0, 0.0, float(np.linalg.norm(t_cb)), None,
+                               f"{self.intrinsics}: not estimated from this pose")
+        std_c, _, prior = self._camera_bound(R_cb, t_cb)
         dist_note = distortion_for_bound(dev)[3]
         assumes_c = (f"corner noise {o.sigma_camera:g} px; f, alpha, k1, k2 and the pose fitted; "
                      + ("principal point assumed at the image centre ± "
@@ -402,11 +432,13 @@ class Advisor:
         o = self.options
         p = self.projector
         R_pb, t_pb = projector_pose(p, R_cb, t_cb)
-        std_p, std_v = self._projector_bound(R_pb, t_pb)
+        std_p, std_v = self._projector_bound(R_pb, t_pb, t_cb)
         f_p = float(p.K[0, 0])
         ang_p = tuple(float(a) for a in models.board_angles_deg(R_pb, t_pb))
+        noise = (f"the camera known: board samples every 11 camera px, noise {o.sigma_samples:g} px"
+                 if self.camera_known else f"corner noise {o.sigma_projector:g} px")
         state = DeviceState(ang_p, f_p, std_p, std_p / f_p, float(np.linalg.norm(t_pb)), std_v,
-                            f"corner noise {o.sigma_projector:g} px; f_p, v0p and the pose fitted, "
+                            f"{noise}; f_p, v0p and the pose fitted, "
                             f"u0p and alpha_p held (R, T from {p.source or 'an earlier capture'})")
         footprint = models.project(p.K, R_pb, t_pb, self.outer)
         Wp, Hp = p.size

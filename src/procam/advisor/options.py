@@ -30,6 +30,8 @@ class AdvisorOptions:
     projector_target_pct : the projector's target when it differs (None: ``target_pct``).
     aim : the move search aims at ``aim * target`` (a margin, so that a good pose stays good).
     sigma_camera, sigma_projector : corner noise (px, per coordinate) the bounds assume.
+    sigma_samples : with the camera known, the noise (projector px, per coordinate) of a decoded board sample (a
+        window's mean; 0.035-0.06 px on the simulator's renders) the projector's bound assumes.
     still_s, still_px : the board is still when no corner moved more than ``still_px`` (full-resolution
         px) over the last ``still_s`` seconds.
     detect_width : the frame is downscaled to at most this width for the detection (px); 0 = never.
@@ -50,6 +52,16 @@ class AdvisorOptions:
     rating : :class:`procam.single_pose.RatingOptions` (the rule's thresholds).
     pp_prior_fraction : the solver's prior std of an assumed principal point, as a fraction of the
         larger image side (:class:`procam.single_pose.CameraOptions`).
+    camera_f_pct, camera_pp_px : the camera mode's targets (:class:`procam.advisor.camera.CameraAdvisor`): enough
+        photos when the fit's std of ``f_c`` is at most this % of ``f_c`` and that of the principal point at most
+        this many px.
+    min_new_deg : the camera mode takes a photo only this many degrees from every photo taken (half of it for a
+        photo whose corners reach a region of the image not reached before).
+    camera_min_coverage : the camera mode first asks for photos that cover more of the image until the boards
+        cover this fraction (a margin over :func:`procam.multi_pose.calibrate_camera`'s 30 %, below which its
+        fit is weak).
+    min_photos : the camera mode says "enough" with at least this many photos (the covariance of fewer rests on
+        a handful of residual degrees of freedom and on the lens model being right).
     """
 
     target_pct: float = 1.0
@@ -57,6 +69,7 @@ class AdvisorOptions:
     aim: float = 0.8
     sigma_camera: float = 0.1
     sigma_projector: float = 0.2
+    sigma_samples: float = 0.05
     still_s: float = 0.5
     still_px: float = 1.0
     detect_width: int = 640
@@ -71,6 +84,11 @@ class AdvisorOptions:
     paper_rule: bool = True
     rating: RatingOptions = RatingOptions()
     pp_prior_fraction: float = 0.025
+    camera_f_pct: float = 0.2
+    camera_pp_px: float = 2.0
+    min_new_deg: float = 10.0
+    min_photos: int = 4
+    camera_min_coverage: float = 0.35
 
     def __post_init__(self):
         def check(name, lo, hi, *, open_lo=False, allow_none=False):
@@ -88,6 +106,7 @@ class AdvisorOptions:
         check("aim", 0, 1, open_lo=True)
         check("sigma_camera", 0, 100, open_lo=True)
         check("sigma_projector", 0, 100, open_lo=True)
+        check("sigma_samples", 0, 100, open_lo=True)
         check("still_s", 0, 60)
         check("still_px", 0, 1000)
         check("detect_width", 0, 100000)
@@ -103,6 +122,11 @@ class AdvisorOptions:
         check("search_interval_s", 0, 60)
         check("search_refresh_s", 0, 3600)
         check("pp_prior_fraction", 0, 1, open_lo=True)
+        check("camera_f_pct", 0, 100, open_lo=True)
+        check("camera_pp_px", 0, 1000, open_lo=True)
+        check("min_new_deg", 0, 90)
+        check("min_photos", 2, 100)
+        check("camera_min_coverage", 0, 1)
 
     @property
     def projector_target(self) -> float:

@@ -49,11 +49,12 @@ def tell(level: str, text: str) -> None:
 
 
 def live_advice(board, options, *, calibration=None, source: str = "", json_lines: bool = False, auto: bool = False,
-                max_frames: int | None = None):
+                max_frames: int | None = None, known_camera=None, known_source: str = ""):
     """The advising session: the preview window, or with ``json_lines`` the advice as JSON lines on stdout and
     Enter on the terminal as the capture key; its messages printed."""
     from ..acquire.live import LiveAdvice
 
     return LiveAdvice(board, options, calibration=calibration, source=source, window=not json_lines,
                       on_advice=print_json if json_lines else None, poll=StdinKey().poll if json_lines else None,
-                      auto=auto, max_frames=max_frames, notify=tell)
+                      auto=auto, max_frames=max_frames, notify=tell, known_camera=known_camera,
+                      known_source=known_source)

@@ -25,7 +25,8 @@ from ..view import CORNER_REASONS, View
 from ..verdict import MEANING, VERDICTS
 from .files import portable_names, to_jsonable, write_text
 from .formats import CALIBRATION_FORMAT, CORRESPONDENCES_FORMAT
-from .validate import bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, short
+from .validate import (bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, numbers,
+                       short)
 
 
 def _nan_to_none(a) -> list:
@@ -113,6 +114,12 @@ DENSE_UNCERTAINTY_NOTE = ("std: 1 sigma covering the fit's noise, residuals corr
                           "and a lens decentring of a few pixels")
 
 
+#: What the ``covariance`` block of a camera-only calibration is.
+COVARIANCE_NOTE = ("the covariance of the camera's intrinsics (rows and columns named by params: fx, fy, u0, v0 in px, "
+                   "OpenCV's distortion coefficients), the fit's Gauss-Newton covariance scaled by its residual noise "
+                   "sigma_px per coordinate (procam.crlb.views_bound); null: the photos do not determine them")
+
+
 #: What the ``datasheet`` block of a calibration file is (derived from K; a reader ignores it).
 DATASHEET_NOTE = ("derived from K and its std (procam.datasheet): throw_ratio = fx / W; shift_h_pct = 100 ((W - 1)/2 "
                   "- u0) / W (+ image right of the lens axis); shift_v_pct = 100 (v0 - (H - 1)/2) / H (+ image above "
@@ -122,6 +129,8 @@ DATASHEET_NOTE = ("derived from K and its std (procam.datasheet): throw_ratio = 
 def calibration_to_dict(calib, include_views: bool = True) -> dict:
     """The JSON document of a :class:`~procam.calibration.Calibration` (schema: docs/file-formats.md)."""
     info = {k: v for k, v in calib.info.items() if isinstance(v, (str, int, float, bool, list, dict, type(None)))}
+    cov, source = calib.info.get("covariance"), calib.info.get("calibrated_from")
+    info = {k: v for k, v in info.items() if k not in ("covariance", "calibrated_from")}
     out = {
         "format": CALIBRATION_FORMAT, "version": 1, "method": calib.method,
         "verdict": {"level": calib.verdict, "reasons": list(calib.verdict_reasons),
@@ -136,6 +145,12 @@ def calibration_to_dict(calib, include_views: bool = True) -> dict:
         "stereo_rms_px": calib.stereo_rms,
         "std": calib.std, "poses": list(calib.poses), "warnings": list(calib.warnings), "info": info,
     }
+    if source is not None:
+        out["calibrated_from"] = source
+    if cov is not None:
+        m = np.asarray(cov["matrix"], float)
+        out["covariance"] = {"params": list(cov["params"]), "matrix": m if np.all(np.isfinite(m)) else None,
+                             "sigma_px": cov.get("sigma_px"), "note": COVARIANCE_NOTE}
     if calib.camera is not None and calib.camera.distortion.model == "division":
         d = calib.camera.distortion
         coeffs, err = opencv_from_division(calib.camera.K, d.center, d.k1, d.k2, calib.camera.image_size)
@@ -207,11 +222,59 @@ def calibration_from_json(path, doc: dict) -> Calibration:
         views = tuple(view_from_dict(v) for v in doc.get("views", []))
     except (KeyError, ValueError, TypeError, AttributeError, IndexError) as e:
         raise CalibrationFileError(f"{path}: views are not procam correspondences ({type(e).__name__}: {e})") from None
+    info = doc.get("info", {})
+    if "covariance" in doc:
+        info = {**info, "covariance": _covariance_from_json(path, doc["covariance"])}
+    if "calibrated_from" in doc:
+        info = {**info, "calibrated_from": _source_from_json(path, doc["calibrated_from"])}
     return Calibration(
         camera=camera, projector=projector, R=R, T=T, method=str(doc.get("method", "unknown")),
         cam_rms=check_rms(path, "camera.rms_px", (doc.get("camera") or {}).get("rms_px")),
         proj_rms=check_rms(path, "projector.rms_px", (doc.get("projector") or {}).get("rms_px")),
         stereo_rms=check_rms(path, "stereo_rms_px", doc.get("stereo_rms_px")), std=doc.get("std", {}),
         poses=tuple(doc.get("poses", [])), views=views, warnings=tuple(str(w) for w in doc.get("warnings", [])),
-        info=doc.get("info", {}), verdict=verdict_level(doc.get("verdict")),
+        info=info, verdict=verdict_level(doc.get("verdict")),
         verdict_reasons=_verdict_reasons(path, doc.get("verdict")))
+
+
+_COV_HINT = "write the camera file again with 'procam calibrate PHOTOS... --camera-only' (or delete the covariance block)"
+
+
+def _covariance_from_json(path, c) -> dict:
+    """The ``covariance`` block: ``{"params": [names], "matrix": (P, P) array (all inf for null), "sigma_px"}``,
+    checked (names known, a symmetric matrix with a non-negative diagonal)."""
+    from ..crlb import VIEW_PARAMS
+
+    if not isinstance(c, dict):
+        bad(path, "covariance", f"must be an object with params and matrix, got {short(c)}", fix=_COV_HINT)
+    params = c.get("params")
+    if not isinstance(params, list) or not params or any(p not in VIEW_PARAMS for p in params) \
+            or len(set(params)) != len(params):
+        bad(path, "covariance.params", f"must be distinct names of {', '.join(VIEW_PARAMS)}, got {short(params)}",
+            fix=_COV_HINT)
+    n = len(params)
+    if c.get("matrix") is None:
+        m = np.full((n, n), np.inf)
+    else:
+        m = numbers(path, "covariance.matrix", c.get("matrix"), (n, n), fix=_COV_HINT)
+        if np.abs(m - m.T).max() > 1e-9 * max(1e-300, np.abs(m).max()) or np.any(np.diag(m) < 0):
+            bad(path, "covariance.matrix", "must be symmetric with a non-negative diagonal", fix=_COV_HINT)
+    sigma = c.get("sigma_px")
+    if sigma is not None and not (isinstance(sigma, (int, float)) and not isinstance(sigma, bool)
+                                  and np.isfinite(sigma) and sigma >= 0):
+        bad(path, "covariance.sigma_px", f"must be a non-negative number or null, got {short(sigma)}", fix=_COV_HINT)
+    return {"params": tuple(params), "matrix": m, "sigma_px": None if sigma is None else float(sigma)}
+
+
+def _source_from_json(path, c) -> dict:
+    """The ``calibrated_from`` block: ``{"inputs": [{"name": ...}], "count": n, "date": ISO 8601}``, checked."""
+    if not isinstance(c, dict) or not isinstance(c.get("inputs"), list) \
+            or not all(isinstance(i, dict) and isinstance(i.get("name"), str) for i in c["inputs"]):
+        bad(path, "calibrated_from", f"must be an object with inputs [{{\"name\": ...}}], count and date, got "
+                                     f"{short(c)}")
+    count = c.get("count")
+    if not isinstance(count, int) or isinstance(count, bool) or count != len(c["inputs"]):
+        bad(path, "calibrated_from.count", f"must be the number of inputs ({len(c['inputs'])}), got {short(count)}")
+    if not isinstance(c.get("date", ""), str):
+        bad(path, "calibrated_from.date", f"must be an ISO 8601 date, got {short(c.get('date'))}")
+    return {"inputs": [dict(i) for i in c["inputs"]], "count": count, "date": c.get("date", "")}

@@ -487,6 +487,23 @@ def undetermined_distortion(K, coeffs, std, image_size, model: str, device: str,
             "edges and corners (the calibration is unreliable away from where the corners were)"], names
 
 
+def _covariance(dev, objs, free, fix_aspect_ratio: bool) -> dict | None:
+    """The intrinsics' covariance of a camera-only fit (:func:`procam.crlb.views_bound` at the solution, scaled by
+    the residual noise per coordinate, ``sum r^2 / (2 N - P)`` over every photo and parameter, as OpenCV's
+    ``stdDeviationsIntrinsics``): ``{"params", "matrix", "sigma_px"}``, None with ``fx = fy`` tied."""
+    if fix_aspect_ratio:
+        return None
+    from .. import crlb
+
+    n = sum(len(o) for o in objs)
+    dof = 2 * n - (4 + len(free) + 6 * len(objs))
+    if dof <= 0 or not np.isfinite(dev.rms):
+        return None
+    sigma = float(dev.rms) * np.sqrt(n / dof)
+    b = crlb.views_bound(dev.K, dev.coeffs, list(zip(dev.rvecs, dev.tvecs)), list(objs), sigma, tuple(free))
+    return {"params": list(b.params), "matrix": b.cov, "sigma_px": sigma}
+
+
 def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ratio: bool = False,
                      min_corners: int = 6, max_view_rms_ratio: float = 3.0, min_coverage: float = 0.3) -> Calibration:
     """Camera-only calibration from several photos of the board (Zhang / OpenCV ``calibrateCamera``), with the
@@ -580,7 +597,7 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
     if warnings:
         _warnings.warn("; ".join(warnings), WeakPoseWarning, stacklevel=2)
     info = {"cam_dist_model": model, "auto_dist": steps, "coverage": coverage, "init": dev.init,
-            "photos": len(views)}
+            "photos": len(views), "covariance": _covariance(dev, objs, free, fix_aspect_ratio)}
     return Calibration(camera=Device(dev.K, size, Distortion("opencv", coeffs=tuple(float(c) for c in dev.coeffs))),
                        projector=None, R=None, T=None, method="camera-only", cam_rms=dev.rms, std=std,
                        poses=tuple(poses), views=tuple(given), warnings=tuple(warnings), info=info, verdict=verdict,

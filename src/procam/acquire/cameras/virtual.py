@@ -205,6 +205,12 @@ class VirtualLiveCamera(_Camera):
         R, t = apply_move(self.scene.R_board, self.scene.t_board, turn_deg, tilt_deg)
         self.set_board(R, t + np.asarray(shift, float).reshape(3))
 
+    def follow(self, advice) -> None:
+        """The simulated user: move the board as the camera mode's advice says (its ``next_move`` turn and tilt,
+        then its ``next_shift``; :class:`procam.advisor.CameraAdvice`); nothing without a proposed move."""
+        if getattr(advice, "next_move", None) is not None:
+            self.move(*advice.next_move, shift=advice.next_shift or (0.0, 0.0, 0.0))
+
     def grab(self) -> Frame:
         from ... import simulate
 
