@@ -41,9 +41,10 @@ def test_reconstruct_of_a_phase_capture_lies_on_the_true_board(phase_pose, tmp_p
     z = Xb[on, 2]
     # through the true calibration the cloud is on the board plane without bias (a half-pixel error in the
     # description's pixel-centre convention would move it by about 0.4 mm); its scatter is the 3-step decode's
-    # noise (about 0.35 px, 0.3 mm here)
+    # noise (about 0.35 px, 0.3 mm here) over the white squares, and the black squares' (0.1 albedo: about 8 times
+    # the noise; their fringe orders come from the white squares around them) widen its tail
     assert abs(np.mean(z)) < 0.05
-    assert np.median(np.abs(z)) < 0.4 and np.percentile(np.abs(z), 90) < 1.2
+    assert np.median(np.abs(z)) < 0.4 and np.percentile(np.abs(z), 90) < 2.5
 
 
 def test_projector_view_of_a_phase_capture_shows_the_board_where_the_projector_lights_it(phase_pose, tmp_path):

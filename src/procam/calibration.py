@@ -100,11 +100,15 @@ class Distortion:
 
 @dataclass(frozen=True)
 class Device:
-    """Intrinsics of one device: ``K`` (3, 3), ``image_size`` (width, height), distortion."""
+    """Intrinsics of one device: ``K`` (3, 3), ``image_size`` (width, height), distortion; ``covariance``: None,
+    or its own uncertainty as ``(names, matrix)`` -- the parameters (``f_c, fy_c, u0c, v0c`` and OpenCV's
+    coefficients ``k1, k2, p1, p2, k3 ...``, :data:`procam.crlb.VIEW_PARAMS`) and their (k, k) covariance, as a
+    camera file carries it (a solver that holds the device carries it into its own ``±``)."""
 
     K: np.ndarray
     image_size: tuple[int, int]
     distortion: Distortion = Distortion()
+    covariance: tuple | None = field(default=None, compare=False, repr=False)
 
     def undistort(self, pts):
         return self.distortion.undistort(pts, self.K)

@@ -218,7 +218,7 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
     Reads, by content:
 
     * procam calibration JSON (``procam calibrate``, also camera-only): the ``camera`` block, any
-      distortion model;
+      distortion model, and its ``covariance`` block where it has one (``Device.covariance``);
     * kamino410's camera JSON (``{"camera": {"P": [9 numbers], "distortion": [...], "width", "height"}}``);
     * ``cv2.FileStorage`` YAML/XML/JSON with ``cam_K``/``cam_kc`` (procam, Moreno-Taubin's
       scan3d-capture; size from ``cam_size``), ``camera_matrix``/``distortion_coefficients`` (OpenCV's
@@ -241,12 +241,15 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
     if not path.is_file():
         raise CalibrationFileError(f"{path}: no such file; give a camera calibration file")
     kind = _kind(path)
-    found = None
+    found = covariance = None
     if kind == "json":
         doc = _json(path, "not valid JSON", CAMERA_FORMATS)
         if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:
             cam = procam.device_from_json(path, doc, "camera")
             found = cam.K, cam.distortion, cam.image_size
+            if isinstance(doc.get("covariance"), dict) and cam.distortion.model in ("opencv", "none"):
+                c = procam._covariance_from_json(path, doc["covariance"])   # OpenCV's parameters: its own model's
+                covariance = (c["params"], c["matrix"])
         elif isinstance(doc, dict) and isinstance(doc.get("camera"), dict) and "P" in doc["camera"]:
             found = kamino410.camera_from_config(path, doc)
         elif not _is_storage(doc):
@@ -269,7 +272,7 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
     if size is None:
         raise CalibrationFileError(f"{path}: the file does not say the image size the intrinsics belong to; "
                                    "give it (width x height)")
-    return Device(K, size, dist if dist is not None else Distortion())
+    return Device(K, size, dist if dist is not None else Distortion(), covariance=covariance)
 
 
 def load_projector_intrinsics(path, image_size=None) -> Device:

@@ -63,6 +63,9 @@ class PhaseOptions:
     shadow_threshold : minimum peak-to-peak of the coarsest fringes (and white - black), DN.
     contrast_threshold : minimum ``|pattern - inverse|`` of a Gray bit, DN.
     tolerance, max_sigma : the unwrapping's (:mod:`procam.decode.phase.unwrap`), cycles of the finer period.
+    neighbours : order the pixels whose own coarser fringes are too faint (LOW_MODULATION: a black square, a dim
+        wall) from the decoded pixels around them (:func:`procam.decode.phase.unwrap.neighbour_orders`), with the
+        same two limits; False: each pixel from its own fringes only.
     """
 
     gamma: str | float = "auto"
@@ -71,6 +74,7 @@ class PhaseOptions:
     contrast_threshold: float = 3.0
     tolerance: float = _unwrap.TOLERANCE
     max_sigma: float = _unwrap.MAX_SIGMA
+    neighbours: bool = True
 
     def __post_init__(self):
         g = self.gamma
@@ -293,10 +297,23 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     out["rcol"], out["rrow"] = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
     out["conf"] = np.empty((H, W), np.float32) if extras else None
     hists = {"col": np.zeros(2 * W + 2, np.int64), "row": np.zeros(2 * H + 2, np.int64)}
+    spatial = options.neighbours and ps.family == "phase"
+    if spatial:   # the finest fringes' fraction, the coarsest estimate, their noise: for the neighbours' orders
+        out.update({k: np.empty((H, W), np.float32) for k in ("ucol", "urow", "sucol", "surow", "acol", "arow",
+                                                                "sacol", "sarow")})
     scratch = _wrapped.Scratch(min(band, H), W, plan["steps"], stack.dtype)
     for y0 in range(0, H, band):
         sl = slice(y0, min(H, y0 + band))
         _band(stack[:, sl, :], sl, out, hists, scratch=scratch, **ctx)
+    if spatial:
+        window = 2 * max(15, min(H, W) // 20) + 1
+        for axis in ("col", "row"):
+            finest = min(plan["axes"][axis], key=lambda bl: bl.period)
+            before = out["r" + axis] == _d.OK
+            _unwrap.neighbour_orders(out[axis], out["s" + axis], out["r" + axis], out["u" + axis],
+                                     out["su" + axis], out["a" + axis], out["sa" + axis], finest.period, finest.fringe.x0, ps.size(axis), window=window,
+                                     tolerance=options.tolerance, max_sigma=options.max_sigma)
+            _count(hists[axis], out[axis], (out["r" + axis] == _d.OK) & ~before)
     # the sample's own decode, for the description checks (procam.decode.phase.diagnose)
     sample = {"index": idx}
     view = np.ascontiguousarray(sub.astype(stack.dtype)[:, None, :])
@@ -452,6 +469,11 @@ def _band(blk, sl, out, hists, *, ps: PhaseSet, opts: PhaseOptions, fs, scale, n
             np.copyto(so, np.float32(np.nan), where=bad)
             out[mkey][sl] = B
             out[rkey][sl] = reason
+            if "u" + axis in out:
+                fine = min(range(len(blocks)), key=lambda i: blocks[i].period)
+                out["u" + axis][sl], out["su" + axis][sl] = levels[fine][0], levels[fine][1]
+                u0, su0, span, x00 = levels[0]      # the coarsest: absolute (it spans the panel)
+                out["a" + axis][sl], out["sa" + axis][sl] = x00 + span * u0, span * su0
             if out["conf"] is not None:
                 c = np.clip(B / np.maximum(A, np.float32(1e-6)), 0.0, 1.0)
                 conf = c if conf is None else np.minimum(conf, c)

@@ -289,3 +289,115 @@ def gray_orders(bits: np.ndarray, contrast: np.ndarray, certain: np.ndarray, u: 
     other_unsure = (~certain & ~boundary).any(axis=0)
     reason[(other_unsure | (~near & ~certain.all(axis=0))) & (reason == OK)] = LOW_CONTRAST
     return m
+
+
+def neighbour_orders(x, sx, reason, u, su, coarse, coarse_sd, period: float, x0: float, size: int, *, window: int,
+                     tolerance: float = TOLERANCE, max_sigma: float = MAX_SIGMA, passes: int = 2) -> int:
+    """Order the pixels whose own coarser fringes were too faint (LOW_MODULATION) from their decoded neighbours.
+
+    The projector coordinate is smooth over a surface, so where a pixel's coarse estimate is too noisy to order its
+    finest fringes (a black square of the board, a dim wall), the decoded pixels around it predict it: a plane
+    ``x = a + b dX + c dY`` fitted (least squares) to the decoded (OK) pixels of the ``window`` x ``window`` camera
+    pixels around it gives ``a`` and its standard deviation (the fit's residual scatter through the fit's own
+    covariance). That orders the pixel's finest fraction as a coarser level does (:func:`hierarchical`), where
+
+    * the decoded pixels surround it (each quadrant of the window is 5 % decoded): a prediction, never an
+      extrapolation across a depth edge from one side (the board's pixels do not predict the wall behind it);
+    * the neighbours lie on their plane to half of ``max_sigma`` of the finest period (RMS; a window across a depth
+      edge does not) and the prediction's standard deviation is at most ``max_sigma`` of it;
+    * it agrees with the pixel's own coarse estimate ``coarse`` (absolute, px, standard deviation ``coarse_sd``:
+      too noisy to order the fringes, not to catch a wrong period) within 4 standard deviations; and
+    * the order's residual is at most ``tolerance``.
+
+    ``x, sx``: (H, W) float32 coordinates and their standard deviations (NaN where not decoded), ``reason`` (H, W)
+    uint8, all updated in place; ``u, su``: (H, W) the finest block's fraction and its standard deviation (cycles);
+    ``period, x0``: that block's; ``size``: the panel's size along the axis (the coarse estimate is compared modulo
+    it). ``passes``: pixels ordered in one pass help the next. Returns the number of pixels ordered.
+    """
+    import cv2
+
+    H, W = reason.shape
+    # the sums run over 2 x 2 blocks of pixels (at their centres): a quarter of the work, and a plane whose moments
+    # move by a fraction of a per cent
+    f = 2
+    Hb, Wb = H // f, W // f
+    wb = max(3, (window // f) | 1)
+    h = wb // 2
+    Yb, Xb = (np.mgrid[0:Hb, 0:Wb].astype(np.float64) * f + (f - 1) / 2.0)
+
+    def binned(a):
+        return cv2.resize(np.ascontiguousarray(a[:Hb * f, :Wb * f], np.float64), (Wb, Hb),
+                          interpolation=cv2.INTER_AREA) * float(f * f)
+
+    def box(a):
+        return cv2.boxFilter(a, cv2.CV_64F, (wb, wb), normalize=False, borderType=cv2.BORDER_CONSTANT)
+
+    done = 0
+    for _ in range(passes):
+        cand = (reason == LOW_MODULATION) & np.isfinite(u) & (su <= max_sigma) & np.isfinite(coarse)
+        cand[Hb * f:] = False
+        cand[:, Wb * f:] = False
+        if not cand.any():
+            break
+        ok = reason == OK
+        n_b = binned(ok.astype(np.float64))
+        iy, ix = np.nonzero(cand)
+        by, bx_ = iy // f, ix // f
+        # each quadrant of the window holds decoded pixels
+        least = max(5.0, 0.05 * (h * f) ** 2)
+        around = np.ones(len(iy), bool)
+        for ay, ax in ((h, h), (h, 0), (0, h), (0, 0)):
+            q = cv2.boxFilter(n_b, cv2.CV_64F, (h + 1, h + 1), anchor=(ax, ay), normalize=False,
+                              borderType=cv2.BORDER_CONSTANT)
+            around &= q[by, bx_] >= least
+        iy, ix, by, bx_ = iy[around], ix[around], by[around], bx_[around]
+        if not len(iy):
+            break
+        xv = np.where(ok, x - np.float32(x0), 0.0).astype(np.float64)
+        x_b, xx_b = binned(xv), binned(xv * xv)
+        S = {k: box(v)[by, bx_] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
+                                             ("YY", n_b * Yb * Yb), ("XY", n_b * Xb * Yb), ("x", x_b),
+                                             ("xX", x_b * Xb), ("xY", x_b * Yb), ("xx", xx_b))}
+        n = S["1"]
+        xc, yc = ix.astype(np.float64), iy.astype(np.float64)
+        # moments about the candidate pixel
+        sx_, sy_ = S["X"] - xc * n, S["Y"] - yc * n
+        sxx = S["XX"] - 2 * xc * S["X"] + xc * xc * n
+        syy = S["YY"] - 2 * yc * S["Y"] + yc * yc * n
+        sxy = S["XY"] - xc * S["Y"] - yc * S["X"] + xc * yc * n
+        bx = S["x"]
+        bX, bY = S["xX"] - xc * bx, S["xY"] - yc * bx
+        # the normal equations [[n, sx, sy], [sx, sxx, sxy], [sy, sxy, syy]] beta = [bx, bX, bY], by cofactors
+        c00, c01, c02 = sxx * syy - sxy * sxy, sy_ * sxy - sx_ * syy, sx_ * sxy - sy_ * sxx
+        c11, c12, c22 = n * syy - sy_ * sy_, sx_ * sy_ - n * sxy, n * sxx - sx_ * sx_
+        det = n * c00 + sx_ * c01 + sy_ * c02
+        with np.errstate(divide="ignore", invalid="ignore"):
+            good = det > 1e-8 * n * sxx * syy          # the window's pixels span a plane (not a line)
+            inv00 = np.where(good, c00 / det, np.inf)
+            a0 = (c00 * bx + c01 * bX + c02 * bY) / det
+            a1 = (c01 * bx + c11 * bX + c12 * bY) / det
+            a2 = (c02 * bx + c12 * bX + c22 * bY) / det
+            rss = np.maximum(S["xx"] - (a0 * bx + a1 * bX + a2 * bY), 0.0)
+            scatter = np.sqrt(rss / np.maximum(n - 3, 1.0))                  # the neighbours about their plane
+            sd_pred = np.where(good, scatter * np.sqrt(inv00), np.inf)
+        beta = np.column_stack([np.where(good, a0, 0.0)])
+        pred = beta[:, 0] + x0
+        t = beta[:, 0] / period - u[iy, ix]
+        m = np.rint(t)
+        xn = x0 + period * (m + u[iy, ix])
+        gap = np.abs(xn - coarse[iy, ix])
+        gap = np.minimum(gap, np.abs(size - gap))         # the coarse estimate wraps at the panel's edges
+        # one surface: the neighbours lie on their plane to their own noise (a few pixels of another surface in the
+        # window would not move the plane's standard deviation, they do its scatter)
+        take = (scatter <= 0.5 * max_sigma * period) & (sd_pred <= max_sigma * period) & (np.abs(t - m) <= tolerance)
+        take &= gap <= 4.0 * np.hypot(coarse_sd[iy, ix], sd_pred)
+        take &= np.abs(pred - xn) <= tolerance * period
+        take &= (xn >= -0.5) & (xn <= size - 0.5)
+        iy, ix = iy[take], ix[take]
+        if not len(iy):
+            break
+        x[iy, ix] = xn[take]
+        sx[iy, ix] = period * su[iy, ix]
+        reason[iy, ix] = OK
+        done += len(iy)
+    return done
