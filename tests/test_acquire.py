@@ -611,3 +611,19 @@ def test_capture_through_the_real_window(rig, xvfb, tmp_path):
         assert np.array_equal(grab(display)[:, :, 0], np.zeros((384, 512), np.uint8))  # dark after the capture
     assert np.array_equal(captured(res.folder), stack)
     assert res.record["projector"]["backend"] == "pygame-window"
+
+
+def test_the_capture_command_prints_the_preflights_suggestions(capsys):
+    """procam capture printed the pre-flight's advice from a key its dict does not have: a dim white frame's
+    'raise the exposure' never reached the user."""
+    from types import SimpleNamespace
+
+    from procam.cli import capture as cli_capture
+
+    dim, B = _synthetic(white=60)
+    pre = checks.preflight(dim, B)
+    assert pre.ok and pre.suggestions
+    with cli_capture._Printer() as printer:
+        printer.progress(0, SimpleNamespace(kind="preflight", data=pre.to_dict(), total=3))
+    out = capsys.readouterr()
+    assert "raise the exposure to about 340%" in out.out + out.err

@@ -291,7 +291,7 @@ class _Printer:
                 console.print(f"pre-flight: white {d['white_level']:.0%} of full scale on the {d['region']} "
                               f"({d['white_saturated']:.1%} saturated), black {d['dark_level']:.0%}, "
                               f"contrast {d['contrast']:.0%}", highlight=False)
-                for line in d.get("advice", []):
+                for line in d.get("suggestions", []):
                     console.print(f"[yellow]advice:[/yellow] {escape(str(line))}", highlight=False)
             if i not in self.tasks:
                 self.tasks[i] = self.bar.add_task(f"pose {i + 1}", total=e.total)
