@@ -125,3 +125,26 @@ def test_cli_camera_only_then_one_pose(ideal_capture, tmp_path):
                             "--camera", cam])
     assert code == 0, err
     assert np.linalg.norm(io.load_calibration(out).T - base.T) < 5.0
+
+
+def test_a_camera_files_uncertainty_is_carried_into_the_projectors_pm():
+    """A camera calibrated once from photos is known to its file's covariance, not exactly: a camera 0.2 % off (what
+    its file's ± says it may be) moves the one-pose projector's f_p by about as much, beyond a ± that holds the camera
+    as exact; carried through the fit (the file's covariance), the ± covers it and the estimate is the same."""
+    from sim_dense import dense_view
+
+    scene = simulate.preset("lensshift")
+    view = dense_view(scene, seed=0)
+    K = np.array(scene.K_cam, float)
+    K[0, 0] *= 1.002
+    K[1, 1] *= 1.002
+    dist = Distortion("division", tuple(scene.cam_center), *scene.cam_dist_coeffs)
+    cov = np.diag([(0.002 * K[0, 0]) ** 2, (0.002 * K[1, 1]) ** 2, 1.0, 1.0])
+    cov[0, 1] = cov[1, 0] = 0.99 * cov[0, 0]            # fx and fy move together, as from photos
+    exact, carried = (single_pose.calibrate(view, known_camera=Device(K, scene.cam_size, dist, covariance=c))
+                      for c in (None, (("f_c", "fy_c", "u0c", "v0c"), cov)))
+    e = exact.projector.K[0, 0] - scene.K_proj[0, 0]
+    np.testing.assert_allclose(carried.projector.K, exact.projector.K)     # the same estimate
+    assert abs(e) > 3 * exact.std["f_p"]                                    # held exact: over-confident
+    assert abs(e) < 2 * carried.std["f_p"] and carried.std["f_p"] > 3 * exact.std["f_p"]
+    assert all(c > x for c, x in zip(carried.std["T"], exact.std["T"]))     # R, T carry it too

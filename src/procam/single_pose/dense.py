@@ -363,6 +363,11 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     best = min((fits[n] for n in near), key=lambda m: len(MODELS.get(m.name, ())))      # the simplest of them
     cov = _reported_covariance(best, [fits[n] for n in near])
     cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
+    if known_camera is not None and getattr(known_camera, "covariance", None) is not None:
+        # the camera file's own uncertainty, carried through the fit: the projector follows the camera's f_c
+        names, C = known_camera.covariance
+        extra = J.held_covariance(model, best.p, best.free, "camera", names, C)
+        cov, cov_pose = cov + extra, cov_pose + extra
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
