@@ -107,3 +107,30 @@ def test_the_camera_file_says_what_it_was_calibrated_from_and_carries_its_covari
     (tmp_path / "bad.json").write_text(json.dumps({**doc, "covariance": {**cov, "matrix": m.tolist()}}))
     with pytest.raises(CalibrationFileError, match="covariance.matrix"):
         io.load_calibration(tmp_path / "bad.json")
+
+
+def test_the_camera_files_covariance_travels_with_its_camera(tmp_path):
+    """The camera from photos carries its covariance in memory, in its file and back, and as --camera reads it."""
+    import warnings as _w
+
+    from procam import io, multi_pose, simulate
+    from procam.errors import ProcamWarning
+    from procam.io import load_camera_intrinsics
+
+    scene = simulate.preset("lensshift")
+    views = []
+    for k, (psi, nu) in enumerate(((20, 10), (-15, 20), (10, -25), (-20, -15))):
+        sc = simulate.with_board_pose(scene, (psi, nu, 5 * k))
+        o, c, p = simulate.correspondences(sc, 0.1, 0.2, seed=k)
+        from procam.view import View
+        views.append(View(o, c, np.full_like(p, np.nan), f"photo{k}", sc.cam_size, None))
+    with _w.catch_warnings():
+        _w.simplefilter("ignore", ProcamWarning)
+        cal = multi_pose.calibrate_camera(views)
+    names, C = cal.camera.covariance
+    assert names[:4] == ("f_c", "fy_c", "u0c", "v0c") and C.shape == (len(names), len(names))
+    assert np.sqrt(C[0, 0]) == pytest.approx(cal.std["f_c"], rel=1e-6)
+    io.save_calibration(cal, tmp_path / "cam.json")
+    for dev in (io.load_calibration(tmp_path / "cam.json").camera, load_camera_intrinsics(tmp_path / "cam.json")):
+        assert dev.covariance[0] == names
+        np.testing.assert_allclose(dev.covariance[1], C, rtol=1e-9)

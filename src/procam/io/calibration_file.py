@@ -247,8 +247,8 @@ def load_camera_intrinsics(path, image_size=None) -> Device:
         if isinstance(doc, dict) and doc.get("format") == CALIBRATION_FORMAT:
             cam = procam.device_from_json(path, doc, "camera")
             found = cam.K, cam.distortion, cam.image_size
-            if isinstance(doc.get("covariance"), dict) and cam.distortion.model in ("opencv", "none"):
-                c = procam._covariance_from_json(path, doc["covariance"])   # OpenCV's parameters: its own model's
+            if "covariance" in doc and cam.distortion.model in ("opencv", "none"):  # OpenCV's parameters: its model's
+                c = procam._covariance_from_json(path, doc["covariance"])
                 covariance = (c["params"], c["matrix"])
         elif isinstance(doc, dict) and isinstance(doc.get("camera"), dict) and "P" in doc["camera"]:
             found = kamino410.camera_from_config(path, doc)

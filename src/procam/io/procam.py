@@ -9,6 +9,8 @@ calibration format, :func:`procam.io.load_calibration`, hands a procam JSON docu
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import json
 from pathlib import Path
 
@@ -225,6 +227,9 @@ def calibration_from_json(path, doc: dict) -> Calibration:
     info = doc.get("info", {})
     if "covariance" in doc:
         info = {**info, "covariance": _covariance_from_json(path, doc["covariance"])}
+        if camera is not None and camera.distortion.model in ("opencv", "none"):   # OpenCV's parameters: its model's
+            c = info["covariance"]
+            camera = replace(camera, covariance=(c["params"], c["matrix"]))
     if "calibrated_from" in doc:
         info = {**info, "calibrated_from": _source_from_json(path, doc["calibrated_from"])}
     return Calibration(

@@ -596,9 +596,12 @@ def calibrate_camera(views: Sequence[View], *, dist: str = "auto", fix_aspect_ra
     verdict = "weak" if warnings else "good"
     if warnings:
         _warnings.warn("; ".join(warnings), WeakPoseWarning, stacklevel=2)
+    cov = _covariance(dev, objs, free, fix_aspect_ratio)
     info = {"cam_dist_model": model, "auto_dist": steps, "coverage": coverage, "init": dev.init,
-            "photos": len(views), "covariance": _covariance(dev, objs, free, fix_aspect_ratio)}
-    return Calibration(camera=Device(dev.K, size, Distortion("opencv", coeffs=tuple(float(c) for c in dev.coeffs))),
+            "photos": len(views), "covariance": cov}
+    own = None if cov is None else (tuple(cov["params"]), np.asarray(cov["matrix"], float))
+    return Calibration(camera=Device(dev.K, size, Distortion("opencv", coeffs=tuple(float(c) for c in dev.coeffs)),
+                                     covariance=own),
                        projector=None, R=None, T=None, method="camera-only", cam_rms=dev.rms, std=std,
                        poses=tuple(poses), views=tuple(given), warnings=tuple(warnings), info=info, verdict=verdict,
                        verdict_reasons=tuple(warnings))
