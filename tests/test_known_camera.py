@@ -148,3 +148,28 @@ def test_a_camera_files_uncertainty_is_carried_into_the_projectors_pm():
     assert abs(e) > 3 * exact.std["f_p"]                                    # held exact: over-confident
     assert abs(e) < 2 * carried.std["f_p"] and carried.std["f_p"] > 3 * exact.std["f_p"]
     assert all(c > x for c, x in zip(carried.std["T"], exact.std["T"]))     # R, T carry it too
+
+
+def test_a_given_cameras_residual_pattern_counts_by_what_it_does_to_the_projector():
+    """A camera file whose lens model does not quite fit this pose (its k1 20 % short) leaves a smooth pattern in the
+    corners' residuals. It made the pose weak by itself, whatever it did to the projector, while the projector's ±
+    held the camera exact (u0p 11 px off, ± 5.1). Now what the pattern does to the projector's numbers joins their ±,
+    which covers the errors, and the pose is rated by what it then determines (here u0p, to a few tens of px: weak,
+    for that reason, with the pattern said in a warning)."""
+    from sim_dense import dense_view
+
+    scene = simulate.preset("lensshift")
+    view = dense_view(scene, seed=0)
+    k1, k2 = scene.cam_dist_coeffs
+    dev = Device(np.array(scene.K_cam, float), scene.cam_size, Distortion("division", tuple(scene.cam_center),
+                                                                          0.8 * k1, k2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        cal = single_pose.calibrate(view, known_camera=dev)
+    assert cal.poses[0]["misfit"]["camera"]["model_error"]            # the pattern is there, and said
+    said = [w for w in cal.warnings if "counts by what it does to the projector" in w]
+    assert len(said) == 1
+    reasons = " ".join(cal.verdict_reasons)
+    assert "model error" not in reasons and cal.verdict == "weak" and "u0p to ±" in reasons
+    for name, k in (("f_p", (0, 0)), ("u0p", (0, 2)), ("v0p", (1, 2))):
+        assert abs(cal.projector.K[k] - scene.K_proj[k]) <= 1.5 * cal.std[name], name

@@ -228,6 +228,15 @@ def _model_error(fits: dict, name, verdict: str, reasons: tuple, warnings: list)
     return verdict, reasons
 
 
+def _pattern_words(fit) -> str:
+    """Words for a given camera's residual pattern and what it moves the projector by (``fit.camera_pattern``)."""
+    c = fit.camera_pattern
+    moved = ", ".join(f"{k} {c[k]:+.3g}" for k in ("f_p", "u0p", "v0p"))
+    said = c["message"].replace("; the ± does not cover this", "")
+    return (f"{said}; with the camera given it counts by what it does to the projector: it moves {moved} px "
+            f"(the ± includes that: f_p ± {fit.std('f_p'):.3g} px)")
+
+
 def _misfit_dict(mf) -> dict:
     return {"model_error": mf.model_error, "field_rms_px": mf.field_rms_px, "rms_px": mf.rms_px,
             "explained": mf.explained, "p_value": mf.p_value}
@@ -346,7 +355,14 @@ def calibrate(view, proj_size=None, *, camera: CameraOptions = CameraOptions(),
     fits = {"camera": _misfit(obj_all, cam, 0.1)}
     if fit is None:
         fits["projector"] = _misfit(obj_all, proj, 0.2)
-    verdict, reasons = _model_error(fits, name, verdict, reasons, warnings)
+    counted = dict(fits)
+    if known_camera is not None and fit is not None:
+        # the camera is given: its pattern counts by what it does to the projector and R, T (in their ±, rated by
+        # the projector's rating), not by itself
+        del counted["camera"]
+        if fit.camera_pattern is not None:
+            warnings.append(f"pose {name!r}: {_pattern_words(fit)}")
+    verdict, reasons = _model_error(counted, name, verdict, reasons, warnings)
     cin, pin = cam.mask, proj.mask
     both = cin & pin
     with np.errstate(all="ignore"):

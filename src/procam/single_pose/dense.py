@@ -147,6 +147,10 @@ class DenseFit:
     n_board, n_background : samples used; background_used : False when left out (``background_reason`` says why);
     notes : lines for the user (what was estimated, assumed as a prior, left out).
     conflicts : warnings: a prior the data contradict (more than 3 of its sigmas away), said, never kept silently.
+    camera_pattern : with the camera given and a smooth pattern in its corners' residuals (its lens model not quite
+        this pose's; :mod:`procam.single_pose.misfit`), what the pattern moves the results by -- ``{name: shift}`` for
+        ``f_p, u0p, v0p`` (px) and ``ptx, pty, ptz`` (the projector's board position, board units), its
+        ``field_rms_px`` and ``message`` -- a shift already in ``cov`` (added as a systematic term); None otherwise.
     """
 
     model: str
@@ -163,6 +167,7 @@ class DenseFit:
     priors: tuple = field(default_factory=tuple)
     conflicts: tuple = ()
     cov_pose: np.ndarray | None = None
+    camera_pattern: dict | None = None
 
     def std(self, name: str, *, pose_only: bool = False) -> float:
         """The reported std of ``name``; ``pose_only``: without what holding the decentrings at zero can cost."""
@@ -368,12 +373,61 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         names, C = known_camera.covariance
         extra = J.held_covariance(model, best.p, best.free, "camera", names, C)
         cov, cov_pose = cov + extra, cov_pose + extra
+    pattern = None
+    if known_camera is not None:
+        # the given camera's residual pattern counts by what it does to the results: its shift joins the ±
+        pattern, shift = _camera_pattern(model, best.p, best.free)
+        if shift is not None and np.all(np.isfinite(shift)):
+            extra = np.outer(shift, shift)[:len(J.NAMES), :len(J.NAMES)]
+            cov, cov_pose = cov + extra, cov_pose + extra
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
                     notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
-                    cov_pose=cov_pose)
+                    cov_pose=cov_pose, camera_pattern=pattern)
+
+
+def _camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarray | None]:
+    """A given camera's corner residuals tested for a smooth pattern (:func:`procam.single_pose.misfit.misfit`: its
+    lens model not quite this pose's) and what that pattern moves the fit by: the pattern, a quadratic of the camera
+    pixel fitted to the corners' residuals, taken as an error of the camera pixels on the board (its corners and the
+    board samples), through the fit's own sensitivity (``-(J^T J)^-1 J^T dr``):
+    ``(DenseFit.camera_pattern, the shift (P,) over :attr:`~procam.single_pose.joint.JointModel.names`)``;
+    ``(None, None)`` without a pattern."""
+    from dataclasses import replace
+
+    from .misfit import misfit
+
+    d = model.data
+    cam_res = np.column_stack(model.blocks(p)[0])                 # (N, 2) observed - predicted, px
+    mf = misfit(d.obj[:, :2], cam_res, device="camera", floor_px=0.1) if len(d.obj) >= 15 else None
+    if mf is None or not mf.model_error:
+        return None, None
+    centre, scale = d.cam.mean(axis=0), np.maximum(np.ptp(d.cam, axis=0), 1.0)
+
+    def design(uv):
+        x, y = ((uv - centre) / scale).T
+        return np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
+
+    coef = np.linalg.lstsq(design(d.cam), cam_res, rcond=None)[0]
+    coef[0] = 0.0                                                 # a shift of every pixel is the pose's, not a pattern
+
+    def moved(uv):
+        return uv - design(uv) @ coef if len(uv) else uv
+
+    # the board's pixels only: a quadratic fitted over the board says nothing of the wall beyond it
+    shifted = J.JointModel(replace(d, cam=moved(d.cam), board_cam=moved(d.board_cam)), model.scales)
+    shifted.keep_board, shifted.keep_back, shifted.cauchy = model.keep_board, model.keep_back, model.cauchy
+    r, Jm, cov = J.linearise(model, p, free)
+    dr = shifted.residuals(np.asarray(p, float)) - r
+    idx = np.flatnonzero([nm in free for nm in model.names])
+    shift = np.zeros(len(model.names))
+    with np.errstate(invalid="ignore"):
+        shift[idx] = -cov[np.ix_(idx, idx)] @ (Jm.T @ dr)
+    out = {k: float(shift[J.IDX[k]]) for k in ("f_p", "u0p", "v0p", "ptx", "pty", "ptz")}
+    out.update(field_rms_px=float(mf.field_rms_px), message=mf.message)
+    return out, shift
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:
