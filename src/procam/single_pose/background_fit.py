@@ -150,6 +150,7 @@ class PaperFits:
                            corner_proj=None if board is not None else np.asarray(view.proj_pts, float)[pmask],
                            back_groups=groups)
         self.model = J.JointModel(data, J.Scales(sigma_c, float(sb), float(sigma_n), sigma_p))
+        self.model.pixel_distance = True      # the check's statistic: distances in projector pixels
         self.sigma_n = float(sigma_n)
         self.nfev = 0
         names = self.model.names

@@ -419,6 +419,7 @@ def _camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarr
     # the board's pixels only: a quadratic fitted over the board says nothing of the wall beyond it
     shifted = J.JointModel(replace(d, cam=moved(d.cam), board_cam=moved(d.board_cam)), model.scales)
     shifted.keep_board, shifted.keep_back, shifted.cauchy = model.keep_board, model.keep_back, model.cauchy
+    shifted.pixel_distance = model.pixel_distance
     r, Jm, cov = J.linearise(model, p, free)
     dr = shifted.residuals(np.asarray(p, float)) - r
     idx = np.flatnonzero([nm in free for nm in model.names])

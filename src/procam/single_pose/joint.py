@@ -168,6 +168,11 @@ class JointModel:
     ``keep_board`` / ``keep_back``: (M,) / (B,) bool, the samples in use (outliers out).
     ``cauchy``: None (least squares), or the scale (in noise sigmas) of a Cauchy loss on the background residuals
     (residual ``sign(r) c sqrt(log(1 + (r/c)^2))``: the corners and priors stay quadratic).
+    ``pixel_distance``: the background's epipolar distance measured in projector pixels along both axes (``f_p``
+    across, ``alpha_p f_p`` down: the background check's statistic, :mod:`.background_fit`), instead of the
+    normalised distance times ``f_p`` (the default, the dense fit's: the same where ``alpha_p = 1``; with
+    ``alpha_p`` free the pixel form lets the fit shrink the background's residuals through ``alpha_p``, which sent
+    one dense fit of the ``hard`` rig to ``f_p`` = 9 px).
     """
 
     def __init__(self, data: JointData, scales: Scales):
@@ -176,6 +181,7 @@ class JointModel:
         self.keep_board = np.ones(len(data.board_cam), bool)
         self.keep_back = np.ones(len(data.back_cam), bool)
         self.cauchy: float | None = None
+        self.pixel_distance = False
 
     @property
     def names(self) -> tuple:
@@ -256,8 +262,10 @@ class JointModel:
         else:
             xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
             xn, yn = xn + ex, yn + ey
-        # the distance in (undistorted) projector pixels: the normalised line scaled by fp across, alpha_p fp down
-        back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1] / (ap * ap)) * fp
+        if self.pixel_distance:   # in (undistorted) projector pixels: the normalised line scaled fp across, ap fp down
+            back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1] / (ap * ap)) * fp
+        else:
+            back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1]) * fp
         # 4. priors
         pri = []
         if d.pp_prior is not None and d.camera_fixed is None:
@@ -456,6 +464,7 @@ def held_covariance(model: JointModel, p, free, which: str, names, cov) -> np.nd
             dev = _moved(held.device, names, c)
             m = JointModel(replace(model.data, **{attr: FixedDevice(np.asarray(dev.K, float), dev)}), model.scales)
             m.keep_board, m.keep_back, m.cauchy = model.keep_board, model.keep_back, model.cauchy
+            m.pixel_distance = model.pixel_distance
             rs.append(m.residuals(np.asarray(p, float)))
         Jc[:, k] = (rs[0] - rs[1]) / (2 * h)
     G = -Cp[np.ix_(idx, idx)] @ J.T @ Jc           # d(free) / d(held)
