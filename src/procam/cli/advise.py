@@ -87,7 +87,6 @@ def advise_cmd(
     """Show the camera's live frames with the detected board, its angles in the camera (and, with a calibration
     that has R, T, in the projector), the predicted std of f_c and f_p for that pose, and which way to turn the
     board; Space/Enter or --auto ends it."""
-    from ..acquire import cameras as cams
     from ..acquire.live import advisor_options, calibration_square, load_calibration_for
 
     if mode not in ("pose", "camera"):
@@ -104,29 +103,11 @@ def advise_cmd(
     b = parse_board(board, 1.0 if square is None else square)
     options = advisor_options(target, still, still_px)
     live_limits(max_frames)
-    cam_size = camera_settings(exposure, gain, camera_size, seed)
-    pose = parse_angles(virtual_pose, "--virtual-pose") if virtual_pose else None
-    kind, _ = cams.parse_camera_spec(camera)
-    if kind == "folder":
-        fail(f"--camera {camera}: a folder camera delivers no live frames; advise needs a streaming camera "
-             "(opencv:, genicam:) or virtual")
-    if pose is not None and kind != "virtual":
-        fail("--virtual-pose applies to --camera virtual only")
+    opener = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed)
     calib, source = (None, "")
     if calibration is not None:
         calib, source = load_calibration_for(calibration, b)
-
-    if kind == "virtual":
-        from .. import simulate
-        from ..acquire.cameras import VirtualLiveCamera
-
-        scene = simulate.preset("ideal")
-        if (b.cols, b.rows, b.square) != (scene.board_cols, scene.board_rows, scene.square):
-            scene = scene.replace(board_cols=b.cols, board_rows=b.rows, square=b.square)
-        scene = simulate.with_board_pose(scene, pose or simulate.RECOMMENDED_POSE)
-        cam = VirtualLiveCamera(scene, seed=seed)
-    else:
-        cam = cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain)
+    cam = opener(None)
     known = None
     if known_camera is not None:
         from ..io import load_calibration
@@ -144,6 +125,36 @@ def advise_cmd(
         say(f"stopped ({res.reason}) after {res.frames} frames: {a.state}: {a.message}")
 
 
+def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed):
+    """The live camera's options checked (before any other work); returns ``open(default_pose, **scene_changes)``,
+    which opens it: the simulator's ``ideal`` rig with the board ``b`` at ``--virtual-pose`` (or ``default_pose``,
+    or the recommended pose) for ``virtual``, else the device."""
+    from ..acquire import cameras as cams
+
+    cam_size = camera_settings(exposure, gain, camera_size, seed)
+    pose = parse_angles(virtual_pose, "--virtual-pose") if virtual_pose else None
+    kind, _ = cams.parse_camera_spec(camera)
+    if kind == "folder":
+        fail(f"--camera {camera}: a folder camera delivers no live frames; advise needs a streaming camera "
+             "(opencv:, genicam:) or virtual")
+    if pose is not None and kind != "virtual":
+        fail("--virtual-pose applies to --camera virtual only")
+
+    def open_(default_pose, **changes):
+        if kind != "virtual":
+            return cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain)
+        from .. import simulate
+        from ..acquire.cameras import VirtualLiveCamera
+
+        scene = simulate.preset("ideal")
+        if (b.cols, b.rows, b.square) != (scene.board_cols, scene.board_rows, scene.square):
+            scene = scene.replace(board_cols=b.cols, board_rows=b.rows, square=b.square)
+        scene = simulate.with_board_pose(scene, pose or default_pose or simulate.RECOMMENDED_POSE)
+        return VirtualLiveCamera(scene.replace(**changes) if changes else scene, seed=seed)
+
+    return open_
+
+
 def _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, gain, camera_size, virtual_pose, seed,
                  out, f_target, pp_target, calibration):
     """``procam advise --mode camera``: the camera mode's loop (:func:`procam.acquire.live.advise_camera`), one
@@ -151,7 +162,6 @@ def _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, 
     the targets (exit 0), written and exit 3 when two or more photos do not, nothing written before two."""
     from dataclasses import replace
 
-    from ..acquire import cameras as cams
     from ..acquire.live import advise_camera, camera_calibration
     from ..advisor import AdvisorOptions, CameraAdvisor
     from ._paths import output_path
@@ -166,26 +176,9 @@ def _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, 
             fail(f"{opt} must be a number > 0 and <= 100, got {v}")
     b = parse_board(board, 1.0 if square is None else square)
     live_limits(max_frames)
-    cam_size = camera_settings(exposure, gain, camera_size, seed)
-    pose = parse_angles(virtual_pose, "--virtual-pose") if virtual_pose else None
-    kind, _ = cams.parse_camera_spec(camera)
-    if kind == "folder":
-        fail(f"--camera {camera}: a folder camera delivers no live frames; advise needs a streaming camera "
-             "(opencv:, genicam:) or virtual")
-    if pose is not None and kind != "virtual":
-        fail("--virtual-pose applies to --camera virtual only")
-    if kind == "virtual":
-        from .. import simulate
-        from ..acquire.cameras import VirtualLiveCamera
-
-        scene = simulate.preset("ideal")
-        if (b.cols, b.rows, b.square) != (scene.board_cols, scene.board_rows, scene.square):
-            scene = scene.replace(board_cols=b.cols, board_rows=b.rows, square=b.square)
-        # photos in room light: the board is seen wherever it is put, not only in the projector's light
-        scene = simulate.with_board_pose(scene, pose or (5.0, 3.0, 0.0)).replace(ambient=0.8, gain=0.5)
-        cam = VirtualLiveCamera(scene, seed=seed)
-    else:
-        cam = cams.open_camera(camera, size=cam_size, exposure_ms=exposure, gain=gain)
+    # photos in room light: the board is seen wherever it is put, not only in the projector's light
+    cam = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed)((5.0, 3.0, 0.0),
+                                                                                     ambient=0.8, gain=0.5)
     options = replace(AdvisorOptions(), camera_f_pct=float(f_target), camera_pp_px=float(pp_target))
     state = {"advisor": None, "last": None}
 
