@@ -19,9 +19,9 @@ Kinds (each case a board pose drawn at random, seeded: |psi| + |nu| from 15 to 3
 
 Paths: ``both`` (camera and projector from the pose), ``cam known`` (the true camera given), ``proj known`` (the
 true projector given).  Columns: per parameter the 90th percentile and the largest of |error| / ± (z), the
-count of |z| > 3, the same count and the largest z with the ± as procam reported it before issue 38 (the same
-fit without its rim term: the estimates are the same), the poses whose rim disagreed with the rest of the
-board, the verdicts; the errors are against the simulator's truth.
+count of |z| > 3, the same count and the largest z of procam before issue 38 (``DenseOptions(rim_windows=0)``:
+no rim test), the poses whose rim disagreed with the rest of the board (left out), the verdicts; the errors
+are against the simulator's truth.
 
     python benchmarks/sigma_rigs.py [--n 8] [--seed 0] [--kinds base,harmonic,...]
 """
@@ -43,6 +43,7 @@ from sim_dense import dense_view  # noqa: E402
 
 from procam import models, simulate  # noqa: E402
 from procam import single_pose as sp  # noqa: E402
+from procam.single_pose import dense  # noqa: E402
 
 KINDS = ("wall", "base", "harmonic", "partly", "edge", "wide", "all")
 PATHS = ("both", "cam known", "proj known")
@@ -104,26 +105,12 @@ def case(kind: str, rng) -> tuple:
     return scene, kw
 
 
-def std_without_rim(cal, path: str) -> dict | None:
-    """The ± the dense fit would report without its rim term (procam before issue 38), or None (no rim term)."""
-    import dataclasses
-
-    from procam.single_pose import dense_result
-
-    fit = cal.info.get("dense")
-    if fit is None or fit.fits[fit.model].cov_rim is None:
-        return None
-    old = dataclasses.replace(fit, cov=fit.cov - fit.fits[fit.model].cov_rim)
-    return dense_result.std_dict(old, *((cal.camera, None) if path == "cam known" else
-                                        (None, cal.projector) if path == "proj known" else (None, None)))
-
-
-def errors(cal, scene, path: str, std: dict | None = None) -> dict:
+def errors(cal, scene, path: str) -> dict:
     """|error| / ± of each parameter this path estimates (R: the largest over its three angles, T: over its
-    components); ``std`` instead of ``cal.std`` when given."""
+    components)."""
     z = {}
     Kc, Kp = np.asarray(scene.K_cam), np.asarray(scene.K_proj)
-    s = cal.std if std is None else std
+    s = cal.std
     est = {"f_c": cal.camera.K[0, 0] - Kc[0, 0], "f_p": cal.projector.K[0, 0] - Kp[0, 0],
            "u0p": cal.projector.K[0, 2] - Kp[0, 2], "v0p": cal.projector.K[1, 2] - Kp[1, 2]}
     for name in ESTIMATED[path]:
@@ -143,17 +130,22 @@ def run_case(scene, kw, seed: int, paths=PATHS) -> dict:
     out = {}
     for path in paths:
         opts = {"cam known": {"known_camera": truth.camera}, "proj known": {"known_projector": truth.projector}}
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                cal = sp.calibrate(view, **opts.get(path, {}))
-            except Exception as e:          # noqa: BLE001 -- a failed pose is a row, not the end of the table
-                out[path] = {"failed": str(e)[:80]}
-                continue
-        z = errors(cal, scene, path)
-        old = std_without_rim(cal, path)
-        out[path] = {**z, "before": z if old is None else errors(cal, scene, path, old), "verdict": cal.verdict,
-                     "rim": old is not None, "lit": int(np.isfinite(view.proj_pts).all(1).sum())}
+        cals = []
+        for rim in (0, dense.DenseOptions().rim_windows):       # procam before issue 38 (no rim test), and now
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    cals.append(sp.calibrate(view, dense=dense.DenseOptions(rim_windows=rim), **opts.get(path, {})))
+                except Exception as e:          # noqa: BLE001 -- a failed pose is a row, not the end of the table
+                    cals.append(str(e)[:80])
+        if isinstance(cals[1], str):
+            out[path] = {"failed": cals[1]}
+            continue
+        cal = cals[1]
+        out[path] = {**errors(cal, scene, path), "verdict": cal.verdict,
+                     "before": errors(cals[0], scene, path) if not isinstance(cals[0], str) else {},
+                     "rim": cal.info["dense"].rim_left_out > 0 if cal.info.get("dense") else False,
+                     "lit": int(np.isfinite(view.proj_pts).all(1).sum())}
     return out
 
 
@@ -171,8 +163,8 @@ def _cells(ok, key=None):
 
 
 def table(rows_by_kind: dict, paths=PATHS) -> None:
-    """Per kind and path: z90 / max |z| per parameter with the ± as procam reports it, the share of |z| > 3 then
-    and without the rim term (procam before issue 38), the poses whose rim disagreed, the verdicts."""
+    """Per kind and path: z90 / max |z| per parameter, the count of |z| > 3 now and before issue 38 (no rim test),
+    the poses whose rim disagreed (left out), the verdicts."""
     print("| kind | path | n | " + " | ".join(f"z90 / max {p}" for p in PARAMS)
           + " | |z| > 3 | before: |z| > 3 (max) | rim | verdicts |")
     print("|" + " --- |" * (len(PARAMS) + 7))

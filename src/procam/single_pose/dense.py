@@ -25,7 +25,14 @@ carries everything else into the ``±``:
    lens models, the priors' widths, and what holding each lens's distortion centre at its principal point can cost
    (a decentring of ``decentring_prior_px``, freed under that prior for the covariance only: one pose cannot tell
    the two apart, and OpenCV's model has no place for the difference).
-6. **The background must follow one epipolar geometry**: the background samples' mean epipolar distance per
+6. **What the fit trusts: a board whose rim agrees with the rest of it.** A decoder errs systematically at the
+   board's rim and at the edge of the region the projector lights (a window partly dark, fringes cut by the
+   panel's edge), an error alike on every window there, which no noise scale and no block jackknife sees, and
+   which on a small board (or the lit part of one) is a large share of the samples. The fit without the rim
+   (linearised) against the fit tells it, by a chi-square on the move's own noise at ``rim_alarm``; a rim that
+   disagrees is left out and the next one in tested, until one agrees: the estimate and its ± are then those of
+   the board that agrees with itself (and the notes say how much was left out).
+7. **The background must follow one epipolar geometry**: the background samples' mean epipolar distance per
    quadrant of the camera image, against its uncertainty (noise and the lens models' spread); a background that
    fails is left out, with a warning that says by how much, against which tolerance.
 
@@ -99,6 +106,11 @@ class DenseOptions:
     model_tolerance : models whose held-out chi-square exceeds the best's by less than this fraction are ones the
         data cannot tell apart (their spread enters the ±).
     min_samples : fewer board samples: no dense fit.
+    rim_windows : the board samples within this many windows of the edge of what was decoded on the board (the
+        board's rim, the edge of the region the projector lights) are the rim (0: no rim test).
+    rim_alarm : the rim disagrees with the rest of the board when the fit without it moves the parameters further
+        than its noise allows with this probability (chi-square); it is then left out (module docstring, 6).
+    rim_peels : at most this many rims are left out, one after the other, while the next still disagrees.
     """
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
@@ -112,6 +124,9 @@ class DenseOptions:
     blocks: int = 4
     model_tolerance: float = 0.01
     min_samples: int = 50
+    rim_windows: int = 1
+    rim_alarm: float = 1e-3
+    rim_peels: int = 4
 
     def __post_init__(self):
         bad = [m for m in self.models if m not in MODELS]
@@ -147,6 +162,8 @@ class DenseFit:
     n_board, n_background : samples used; background_used : False when left out (``background_reason`` says why);
     notes : lines for the user (what was estimated, assumed as a prior, left out).
     conflicts : warnings: a prior the data contradict (more than 3 of its sigmas away), said, never kept silently.
+    lit_corners : (corners with projector coordinates, corners of the board): the part of the board that speaks
+        for the projector; rim_left_out : board samples left out at the rim that disagreed with the rest.
     """
 
     model: str
@@ -163,6 +180,8 @@ class DenseFit:
     priors: tuple = field(default_factory=tuple)
     conflicts: tuple = ()
     cov_pose: np.ndarray | None = None
+    lit_corners: tuple = ()
+    rim_left_out: int = 0
 
     def std(self, name: str, *, pose_only: bool = False) -> float:
         """The reported std of ``name``; ``pose_only``: without what holding the decentrings at zero can cost."""
@@ -193,6 +212,61 @@ def _labels(model: J.JointModel, cam_size, blocks: int) -> np.ndarray:
     lg = _cells(d.back_cam[model.keep_back], cam_size, blocks)
     n_pri = (2 if (d.pp_prior is not None and d.camera_fixed is None) else 0) + len(d.priors)
     return np.concatenate([lc, lc, lb, lb, lg, -np.ones(n_pri, int)])
+
+
+def rim(cam_pts, window: float, rings: int, alive=None) -> np.ndarray:
+    """(M,) True for the samples at camera pixels ``cam_pts`` (M, 2) on a grid of ``window`` px within ``rings``
+    windows of the edge of the sampled region (a sample missing one of its eight grid neighbours is on the edge);
+    only the samples ``alive`` (M,) bool count (default all), the others are never on it."""
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(cam_pts, float)
+    alive = np.ones(len(pts), bool) if alive is None else np.asarray(alive, bool)
+    out = np.zeros(len(pts), bool)
+    idx = np.flatnonzero(alive)
+    if rings <= 0 or len(idx) < 9 or window <= 1:
+        return out
+    near = cKDTree(pts[idx]).query_ball_point(pts[idx], 1.5 * float(window))
+    edge = np.array([len(n) < 9 for n in near])           # itself and eight neighbours
+    for _ in range(rings - 1):
+        edge = edge | np.array([edge[n].any() for n in near])
+    out[idx] = edge
+    return out
+
+
+def _rim_shift(fit: J.JointFit, model: J.JointModel, on_rim, alarm: float) -> np.ndarray | None:
+    """The move (free parameters) of the fit when the rim's board samples are left out (linearised), when it is
+    beyond what the noise allows at ``alarm`` (a chi-square on the move's own covariance); None when the rim agrees
+    (or there is too little of it, or too little besides it)."""
+    from scipy.special import chdtri
+
+    d = model.data
+    rb = on_rim[model.keep_board]
+    if rb.sum() < 10 or (~rb).sum() < 50:
+        return None
+    n_cam, n_bg = len(d.cam), int(model.keep_back.sum())
+    n_pri = (2 if (d.pp_prior is not None and d.camera_fixed is None) else 0) + len(d.priors)
+    m = np.concatenate([np.zeros(2 * n_cam, bool), rb, rb, np.zeros(n_bg + n_pri, bool)])
+    Jm, r = fit.jac, fit.residuals
+    if len(m) != len(r):
+        return None
+    s = np.linalg.norm(Jm, axis=0)
+    s = np.where(s > 0, s, 1.0)
+    Jn = Jm / s
+    A = Jn.T @ Jn
+    Jb = Jn[m]
+    try:
+        A_out_inv = np.linalg.inv(A - Jb.T @ Jb)
+        delta = A_out_inv @ (Jb.T @ r[m])                     # the fit without the rim, minus the fit
+        C_delta = A_out_inv - np.linalg.inv(A)                 # its noise (normalised units)
+    except np.linalg.LinAlgError:
+        return None
+    w, V = np.linalg.eigh((C_delta + C_delta.T) / 2)
+    keep = w > w.max() * 1e-9
+    stat = float(np.sum((V[:, keep].T @ delta) ** 2 / w[keep]))
+    if not keep.any() or stat <= float(chdtri(int(keep.sum()), alarm)):
+        return None
+    return delta / s
 
 
 def _held_out(fit: J.JointFit, labels) -> tuple[float, np.ndarray]:
@@ -331,7 +405,18 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         if background_reason:
             model.keep_back[:] = False
             fit0 = J.solve(model, fit0.p, full)
-    # 4. every lens model, its held-out error and jackknife
+    # 4. the board's rim: does it agree with the rest of the board? (module docstring, 6)
+    alive, peeled = np.ones(len(b), bool), 0
+    while peeled < options.rim_peels:
+        ring = rim(b.cam_pts, b.window, options.rim_windows, alive)
+        if _rim_shift(fit0, model, ring[ib], options.rim_alarm) is None:
+            break
+        alive &= ~ring
+        model.keep_board &= ~ring[ib]
+        model.scales = _measured_scales(model, fit0.p)
+        fit0 = J.solve(model, fit0.p, full)
+        peeled += 1
+    # 5. every lens model, its held-out error and jackknife
     names = [m for m in options.models] if known_projector is None else ["given"]
     fits = {}
     labels = None
@@ -364,11 +449,16 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     cov = _reported_covariance(best, [fits[n] for n in near])
     cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
+    if peeled:
+        notes = notes + (f"the board's rim disagrees with the rest of it (a decoder's error along the board's edge or "
+                         f"the lit region's edge): the samples within {peeled * options.rim_windows} windows of that "
+                         f"edge are left out, {int(len(b) - alive.sum())} of {len(b)}",)
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
                     notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
-                    cov_pose=cov_pose)
+                    cov_pose=cov_pose, lit_corners=(int(np.sum(view.valid)), len(view.obj_pts)),
+                    rim_left_out=int(len(b) - alive.sum()))
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:
@@ -420,7 +510,7 @@ def _trim(model: J.JointModel, p, k: float) -> None:
 
 
 def _background_disagrees(model: J.JointModel, fit0: J.JointFit, cam_size) -> str:
-    """Why the background does not follow one epipolar geometry, or '' when it does (module docstring, 6)."""
+    """Why the background does not follow one epipolar geometry, or '' when it does (module docstring, 7)."""
     from scipy.special import chdtri
 
     d = model.data
