@@ -23,7 +23,12 @@ count of |z| > 3, the same count and the largest z of procam before issue 38 (``
 no rim test), the poses whose rim disagreed with the rest of the board (left out), the verdicts; the errors
 are against the simulator's truth.
 
+``--study N``: the calibration study instead (:func:`study`): N cases spanning the far narrow rig (75 mm squares
+near 3 m, the wall behind the board decoded) and the close scanner (10 mm squares, nothing behind), Gray and
+3-step phase decoders, the board whole or partly lit, a decoder's error of 0-0.6 px at the lit board's rim.
+
     python benchmarks/sigma_rigs.py [--n 8] [--seed 0] [--kinds base,harmonic,...]
+    python benchmarks/sigma_rigs.py --study 104
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(ROOT / "tests"))
 from _common import header  # noqa: E402
 from sim_dense import dense_view  # noqa: E402
+from sim_scanner import far_rig, scanner  # noqa: E402
 
 from procam import models, simulate  # noqa: E402
 from procam import single_pose as sp  # noqa: E402
@@ -50,39 +56,6 @@ PATHS = ("both", "cam known", "proj known")
 PARAMS = ("f_c", "f_p", "u0p", "v0p", "R", "T")
 #: The intrinsics each path estimates.
 ESTIMATED = {"both": ("f_c", "f_p", "u0p", "v0p"), "cam known": ("f_p", "u0p", "v0p"), "proj known": ("f_c",)}
-
-
-def _look_at(C, target, K, size):
-    """Camera -> device rotation of a device at ``C`` (camera frame, mm) whose panel centre lights ``target``."""
-    from scipy.spatial.transform import Rotation
-
-    d = np.asarray(target, float) - C
-    d /= np.linalg.norm(d)
-    r = np.linalg.solve(K, [(size[0] - 1) / 2, (size[1] - 1) / 2, 1.0])
-    r /= np.linalg.norm(r)
-    down = np.array([0.0, 1.0, 0.0])          # the devices share the camera's down (image y)
-    z = d
-    x = np.cross(down, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    R0 = np.array([x, y, z])                  # camera frame -> a frame whose z is d
-    ax = np.cross([0.0, 0.0, 1.0], r)
-    ang = np.arcsin(np.linalg.norm(ax))
-    Ra = Rotation.from_rotvec(ax / np.linalg.norm(ax) * ang).as_matrix() if ang > 0 else np.eye(3)
-    return Ra @ R0
-
-
-def scanner(baseline: float = 110.0, distance: float = 365.0, name: str = "scanner") -> simulate.Scene:
-    """The scanner rig (module docstring), the board not yet placed."""
-    Wp, Hp = 1824, 1140
-    Kp = np.array([[2300.0, 0, Wp / 2 - 0.5 + 14], [0, 2300.0, float(Hp)], [0, 0, 1]])
-    C = np.array([baseline, 0.0, 0.0])
-    R = _look_at(C, [0.0, 0.0, distance], Kp, (Wp, Hp))
-    Kc = np.array([[2400.0, 0, 1688 / 2 - 0.5 + 9], [0, 2400.0 * 1.0005, 1352 / 2 - 0.5 - 6], [0, 0, 1]])
-    return simulate.Scene(cam_size=(1688, 1352), K_cam=Kc, cam_dist_coeffs=(-2e-8, 0.0), proj_size=(Wp, Hp),
-                          K_proj=Kp, proj_distortion="opencv", proj_dist_coeffs=(-0.05, 0.01, 0.0, 0.0, 0.0),
-                          R=R, T=-R @ C, board_cols=13, board_rows=9, square=10.0, margin=8.0,
-                          wall_offset=250.0, name=name)
 
 
 def case(kind: str, rng) -> tuple:
@@ -183,12 +156,78 @@ def table(rows_by_kind: dict, paths=PATHS) -> None:
                   + f"{', '.join(f'{k} {n}' for k, n in sorted(v.items()))} |")
 
 
+#: The study's decoders on the fast path: the noise of a window mean of the decoded samples (px), of the projector
+#: corners, and the third harmonic a 3-step phase decode leaves after its gamma correction (px).
+DECODERS = {"gray": {"sigma_sample": 0.03, "sigma_proj": 0.05, "harmonic_px": 0.0},
+            "phase": {"sigma_sample": 0.015, "sigma_proj": 0.03, "harmonic_px": 0.1}}
+
+
+def study_case(i: int, rng) -> tuple:
+    """Case ``i`` of the study: (label, scene, dense_view keyword arguments). The rig (the far narrow rig: 75 mm
+    squares near 3 m, the wall behind lit; the close scanner: 10 mm squares at 330-400 mm, nothing behind), the
+    decoder (Gray or 3-step phase) and the lighting (whole or part of the board) cycle with ``i``; the pose, the
+    lit part and the decoder's error at the lit board's rim (0-0.6 px) are drawn."""
+    rig, decoder, partly = ("far", "scanner")[i % 2], ("gray", "phase")[(i // 2) % 2], bool((i // 4) % 2)
+    while True:
+        psi, nu = (float(v) for v in rng.uniform(-38, 38, 2))
+        if 15 <= abs(psi) + abs(nu) <= 45:
+            break
+    if rig == "far":
+        scene = simulate.with_board_pose(far_rig(), (psi, nu, float(rng.uniform(-10, 10))),
+                                         distance=float(rng.uniform(2800, 3300)))
+    else:
+        scene = simulate.with_board_pose(scanner(float(rng.uniform(90, 190))), (psi, nu, float(rng.uniform(-10, 10))),
+                                         distance=float(rng.uniform(330, 400)))
+    kw = {**DECODERS[decoder], "background": rig == "far", "edge_bias_px": float(rng.uniform(0, 0.6))}
+    if partly:
+        c = simulate.corner_truth(scene)["projector"][:, 0]
+        kw["lit"] = (0, float(np.quantile(c, float(rng.uniform(0.45, 0.7)))))
+    return f"{rig} {decoder} {'partly' if partly else 'whole'}", scene, kw
+
+
+def study(n: int, seed: int) -> None:
+    """The calibration study of the ± (issue 38): ``n`` cases of :func:`study_case`, every path; per path and
+    parameter the 90th percentile of |z|, the largest, and how many exceed 3.5."""
+    rng = np.random.default_rng([seed, 38])
+    rows, labels = [], []
+    for i in range(n):
+        label, scene, kw = study_case(i, rng)
+        rows.append(run_case(scene, kw, int(rng.integers(1 << 30))))
+        labels.append(label)
+    print(f"\n## The study: {n} cases (fast path), |error| / ± per path\n")
+    print("| path | cases | " + " | ".join(f"z90 / max {p}" for p in PARAMS) + " | |z| > 3.5 | before: |z| > 3.5 | "
+          "rim left out | verdicts |")
+    print("|" + " --- |" * (len(PARAMS) + 6))
+    for path in PATHS:
+        ok = [r[path] for r in rows if "failed" not in r[path]]
+        cells, _ = _cells(ok)
+        big = sum(v > 3.5 for r in ok for k, v in r.items() if k in PARAMS)
+        big0 = sum(v > 3.5 for r in ok for k, v in r["before"].items() if k in PARAMS)
+        v = {}
+        for r in ok:
+            v[r["verdict"]] = v.get(r["verdict"], 0) + 1
+        print(f"| {path} | {len(ok)}{f' (+{len(rows) - len(ok)} failed)' if len(rows) > len(ok) else ''} | "
+              + " | ".join(cells) + f" | {big} | {big0} | {sum(r['rim'] for r in ok)} | "
+              + f"{', '.join(f'{k} {c}' for k, c in sorted(v.items()))} |")
+    print("\nper kind, the largest |z| over the paths and parameters (now / before):\n")
+    for label in sorted(set(labels)):
+        zs = [(max((v for p in PATHS if "failed" not in r[p] for k, v in r[p].items() if k in PARAMS), default=0),
+               max((v for p in PATHS if "failed" not in r[p] for k, v in r[p]["before"].items() if k in PARAMS),
+                   default=0)) for r, lb in zip(rows, labels) if lb == label]
+        print(f"- {label}: {len(zs)} cases, {max(z for z, _ in zs):.2f} / {max(z for _, z in zs):.2f}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=8, help="cases per kind")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--kinds", default=",".join(KINDS))
+    ap.add_argument("--study", type=int, default=0, help="run the calibration study of this many cases instead")
     a = ap.parse_args()
+    if a.study:
+        print(header("the calibration study of the single-pose ± over two rigs' kinds (issue 38)"))
+        study(a.study, a.seed)
+        return
     print(header("the single-pose ± on a close scanner rig, per suspect kind (issue 38)"))
     results = {}
     for kind in a.kinds.split(","):
