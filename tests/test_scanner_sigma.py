@@ -37,16 +37,14 @@ def _z(cal, scene, path):
 
 
 @functools.lru_cache(maxsize=None)
-def _case(angles, distance, lit_fraction=None, edge_bias_px=0.0, harmonic_px=0.0, baseline=110.0, seed=4):
+def _case(angles, distance, lit_x=None, edge_bias_px=0.0, harmonic_px=0.0, baseline=110.0, seed=4):
     """The scanner with the board at ``angles`` (camera frame, deg) ``distance`` mm away, then at half size (a
-    844x676 camera, the same angles of view), and its view: the projector lighting the board up to the panel column that
-    leaves ``lit_fraction`` of its corners lit, the samples within two windows of the lit board's edge off by
-    ``edge_bias_px`` (pointing out of it), a third harmonic of ``harmonic_px``; nothing decoded behind the board (the
-scanner's captures have nothing there)."""
+    844x676 camera, the same angles of view), and its view: the projector lighting the board up to the panel column
+    ``lit_x``, the samples within two windows of the lit board's edge off by ``edge_bias_px`` (pointing out of it),
+    a third harmonic of ``harmonic_px``; nothing decoded behind the board (the scanner's captures have nothing
+    there)."""
     scene = simulate.with_board_pose(scanner(baseline), angles, distance=distance).scaled(0.5)
-    lit = None
-    if lit_fraction is not None:
-        lit = (0, float(np.quantile(simulate.corner_truth(scene)["projector"][:, 0], lit_fraction)))
+    lit = None if lit_x is None else (0, float(lit_x))
     view = dense_view(scene, seed=seed, step=11, background=False, lit=lit, edge_bias_px=edge_bias_px,
                       harmonic_px=harmonic_px)
     return scene, view, simulate.truth_calibration(scene)
@@ -73,7 +71,7 @@ def test_the_rim_is_what_lies_within_its_windows_of_the_sampled_edge():
     assert not dense.rim(g, 11, 0).any() and not dense.rim(g, 1, 2).any()      # raw pixels: no windows, no rim
 
 
-@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("path", [pytest.param("both", marks=pytest.mark.slow), "cam known", "proj known"])
 def test_a_rim_decoded_off_is_left_out_and_the_pm_holds(path):
     scene, view, truth = _case(**RIM_OFF)
     cal = _calibrate(scene, view, truth, path)
@@ -84,8 +82,8 @@ def test_a_rim_decoded_off_is_left_out_and_the_pm_holds(path):
 
 
 def test_before_the_rim_test_a_good_pose_was_several_of_its_pm_off():
-    """The same pose without the rim test (procam before issue 38): the projector given, the pose rated good, its
-    R, T several of their ± off."""
+    """The same pose without the rim test (procam before issue 38): the projector given, the pose's R, T or f_c
+    several of their ± off."""
     scene, view, truth = _case(**RIM_OFF)
     cal = _calibrate(scene, view, truth, "proj known", rim_windows=0)
     assert max(_z(cal, scene, "proj known").values()) > 4
@@ -105,3 +103,26 @@ def test_a_board_without_a_rim_error_keeps_every_sample():
     cal = _calibrate(scene, view, truth, "cam known")
     assert cal.info["dense"].rim_left_out == 0
     assert max(_z(cal, scene, "cam known").values()) <= 3
+
+
+#: Every kind at once: the board turned 34 deg about its vertical near 400 mm, a wide convergence (the projector
+#: 190 mm beside the camera), the projector lighting half the board, its rim decoded 1 px off, a third harmonic.
+ALL = dict(angles=(0.898, 34.235, -7.117), distance=396.405, lit_x=385.6, edge_bias_px=1.0, harmonic_px=0.12,
+           baseline=190.0, seed=1)
+
+
+@pytest.mark.parametrize("path", [pytest.param("both", marks=pytest.mark.slow), "cam known"])
+def test_every_kind_at_once_keeps_the_pm_and_says_the_board_is_partly_lit(path):
+    scene, view, truth = _case(**ALL)
+    cal = _calibrate(scene, view, truth, path)
+    assert max(_z(cal, scene, path).values()) <= 3
+    n = int(view.valid.sum())
+    assert n < 70
+    assert f"the projector lights {n} of the board's 117 corners" in cal.poses[0]["advice"]["projector"]["message"]
+
+
+@pytest.mark.slow
+def test_every_kind_at_once_was_beyond_its_pm_before_the_rim_test():
+    scene, view, truth = _case(**ALL)
+    cal = _calibrate(scene, view, truth, "both", rim_windows=0)
+    assert max(_z(cal, scene, "both").values()) > 4
