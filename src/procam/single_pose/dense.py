@@ -24,7 +24,11 @@ carries everything else into the ``±``:
    is larger), the camera's own uncertainty (it is a parameter of the fit), the spread of the indistinguishable
    lens models, the priors' widths, and what holding each lens's distortion centre at its principal point can cost
    (a decentring of ``decentring_prior_px``, freed under that prior for the covariance only: one pose cannot tell
-   the two apart, and OpenCV's model has no place for the difference).
+   the two apart, and OpenCV's model has no place for the difference). A decoder's systematic phase error (the
+   harmonic a projector's gamma leaves in a 3-step phase shift) is alike on neighbouring windows and, sampled on
+   their grid, a pattern across the board the lens models absorb in part; the residuals' means over cells of
+   ``batch_windows`` windows tell it (batch means: their spread against the residuals' own, 1 for independent
+   errors), and where it is beyond chance the board samples' noise counts that many times over.
 6. **What the fit trusts: a board whose rim agrees with the rest of it.** A decoder errs systematically at the
    board's rim and at the edge of the region the projector lights (a window partly dark, fringes cut by the
    panel's edge), an error alike on every window there, which no noise scale and no block jackknife sees, and
@@ -111,6 +115,8 @@ class DenseOptions:
     rim_alarm : the rim disagrees with the rest of the board when the fit without it moves the parameters further
         than its noise allows with this probability (chi-square); it is then left out (module docstring, 6).
     rim_peels : at most this many rims are left out, one after the other, while the next still disagrees.
+    batch_windows : the board samples' errors are tested for correlation over cells of this many windows a side
+        (0: not tested; module docstring, 5).
     """
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
@@ -127,6 +133,7 @@ class DenseOptions:
     rim_windows: int = 1
     rim_alarm: float = 1e-3
     rim_peels: int = 4
+    batch_windows: int = 4
 
     def __post_init__(self):
         bad = [m for m in self.models if m not in MODELS]
@@ -267,6 +274,34 @@ def _rim_shift(fit: J.JointFit, model: J.JointModel, on_rim, alarm: float) -> np
     if not keep.any() or stat <= float(chdtri(int(keep.sum()), alarm)):
         return None
     return delta / s
+
+
+def _batch_inflation(model: J.JointModel, p, window: float, cell_windows: int) -> float:
+    """How many times the board samples' noise counts when their errors are correlated over neighbouring windows
+    (batch means): the residuals' means over cells of ``cell_windows`` x ``cell_windows`` windows, squared and
+    times their counts, against the residuals' variance -- 1 for independent errors; the larger of the two axes,
+    when beyond what chance gives (3 sigma of a chi-square over the cells), else 1."""
+    if cell_windows <= 0 or window <= 1 or not model.keep_board.any():
+        return 1.0
+    _, br, _, _ = model.blocks(p)
+    d = model.data
+    res = np.column_stack(br) / d.board_w[model.keep_board][:, None]
+    cell = np.floor(d.board_cam[model.keep_board] / (cell_windows * float(window))).astype(int)
+    _, inv = np.unique(cell, axis=0, return_inverse=True)
+    inv = np.ravel(inv)
+    n = np.bincount(inv)
+    ok = n >= max(2, cell_windows * cell_windows // 2)
+    if ok.sum() < 20:
+        return 1.0
+    phi = 0.0
+    for a in range(2):
+        r = res[:, a] - np.median(res[:, a])
+        sig2 = robust_sigma(r) ** 2
+        if not sig2 > 0:
+            return 1.0
+        m = np.bincount(inv, r) / n
+        phi = max(phi, float(np.mean(n[ok] * m[ok] ** 2) / sig2))
+    return phi if phi > 1 + 3 * np.sqrt(2 / ok.sum()) else 1.0
 
 
 def _held_out(fit: J.JointFit, labels) -> tuple[float, np.ndarray]:
@@ -416,7 +451,12 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         model.scales = _measured_scales(model, fit0.p)
         fit0 = J.solve(model, fit0.p, full)
         peeled += 1
-    # 5. every lens model, its held-out error and jackknife
+    # 5. the board samples' errors: correlated over neighbouring windows? (module docstring, 5)
+    phi = _batch_inflation(model, fit0.p, b.window, options.batch_windows)
+    if phi > 1:
+        model.scales = J.Scales(model.scales.camera, model.scales.board * float(np.sqrt(phi)), model.scales.background)
+        fit0 = J.solve(model, fit0.p, full)
+    # 6. every lens model, its held-out error and jackknife
     names = [m for m in options.models] if known_projector is None else ["given"]
     fits = {}
     labels = None
