@@ -19,8 +19,8 @@ Kinds (each case a board pose drawn at random, seeded: |psi| + |nu| from 15 to 3
 
 Paths: ``both`` (camera and projector from the pose), ``cam known`` (the true camera given), ``proj known`` (the
 true projector given).  Columns: per parameter the 90th percentile and the largest of |error| / ± (z), the
-count of |z| > 3, the same count and the largest z of procam before issue 38 (``DenseOptions(rim_windows=0)``:
-no rim test), the poses whose rim disagreed with the rest of the board (left out), the verdicts; the errors
+count of |z| > 3, the same count and the largest z of procam before issue 38 (:data:`BEFORE`: no rim test, no
+batch means), the poses whose rim disagreed with the rest of the board (left out), the verdicts; the errors
 are against the simulator's truth.
 
 ``--study N``: the calibration study instead (:func:`study`): N cases spanning the far narrow rig (75 mm squares
@@ -54,6 +54,8 @@ from procam.single_pose import dense  # noqa: E402
 KINDS = ("wall", "base", "harmonic", "partly", "edge", "wide", "all")
 PATHS = ("both", "cam known", "proj known")
 PARAMS = ("f_c", "f_p", "u0p", "v0p", "R", "T")
+#: The dense fit as it was before issue 38: no rim test, no batch means.
+BEFORE = dense.DenseOptions(rim_windows=0, batch_windows=0)
 #: The intrinsics each path estimates.
 ESTIMATED = {"both": ("f_c", "f_p", "u0p", "v0p"), "cam known": ("f_p", "u0p", "v0p"), "proj known": ("f_c",)}
 
@@ -105,11 +107,12 @@ def run_case(scene, kw, seed: int, paths=PATHS, before: bool = True) -> dict:
     for path in paths:
         opts = {"cam known": {"known_camera": truth.camera}, "proj known": {"known_projector": truth.projector}}
         cals = []
-        for rim in ((0,) if before else ()) + (dense.DenseOptions().rim_windows,):   # before issue 38 (no rim test)
+        # procam before issue 38 (no rim test, no batch means), and now
+        for o in ((BEFORE,) if before else ()) + (dense.DenseOptions(),):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 try:
-                    cals.append(sp.calibrate(view, dense=dense.DenseOptions(rim_windows=rim), **opts.get(path, {})))
+                    cals.append(sp.calibrate(view, dense=o, **opts.get(path, {})))
                 except Exception as e:          # noqa: BLE001 -- a failed pose is a row, not the end of the table
                     cals.append(str(e)[:80])
         if isinstance(cals[-1], str):
@@ -137,7 +140,7 @@ def _cells(ok, key=None):
 
 
 def table(rows_by_kind: dict, paths=PATHS) -> None:
-    """Per kind and path: z90 / max |z| per parameter, the count of |z| > 3 now and before issue 38 (no rim test),
+    """Per kind and path: z90 / max |z| per parameter, the count of |z| > 3 now and before issue 38 (:data:`BEFORE`),
     the poses whose rim disagreed (left out), the verdicts."""
     print("| kind | path | n | " + " | ".join(f"z90 / max {p}" for p in PARAMS)
           + " | |z| > 3 | before: |z| > 3 (max) | rim | verdicts |")
@@ -167,7 +170,8 @@ def study_case(i: int, rng) -> tuple:
     """Case ``i`` of the study: (label, scene, dense_view keyword arguments). The rig (the far narrow rig: 75 mm
     squares near 3 m, the wall behind lit; the close scanner: 10 mm squares at 330-400 mm, nothing behind), the
     decoder (Gray or 3-step phase) and the lighting (whole or part of the board) cycle with ``i``; the pose, the
-    lit part and the decoder's error at the lit board's rim (0-0.6 px) are drawn."""
+    lit part and the decoder's error at the lit board's rim (0-0.6 px) are drawn. Both rigs at half their pixels
+    (the same angles of view; the decoders' errors in those pixels)."""
     rig, decoder, partly = ("far", "scanner")[i % 2], ("gray", "phase")[(i // 2) % 2], bool((i // 4) % 2)
     while True:
         psi, nu = (float(v) for v in rng.uniform(-38, 38, 2))
@@ -179,6 +183,7 @@ def study_case(i: int, rng) -> tuple:
     else:
         scene = simulate.with_board_pose(scanner(float(rng.uniform(90, 190))), (psi, nu, float(rng.uniform(-10, 10))),
                                          distance=float(rng.uniform(330, 400)))
+    scene = scene.scaled(0.5)        # half the pixels, the same angles of view: a quarter of the time
     kw = {**DECODERS[decoder], "background": rig == "far", "edge_bias_px": float(rng.uniform(0, 0.6))}
     if partly:
         c = simulate.corner_truth(scene)["projector"][:, 0]

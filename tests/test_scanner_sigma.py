@@ -12,12 +12,12 @@ import warnings
 
 import numpy as np
 import pytest
+from sim_dense import dense_view
+from sim_scanner import far_rig, scanner
 
 from procam import models, simulate
 from procam import single_pose as sp
 from procam.single_pose import dense
-from sim_dense import dense_view
-from sim_scanner import scanner
 
 PATHS = ("both", "cam known", "proj known")
 
@@ -36,7 +36,7 @@ def _z(cal, scene, path):
     return {k: float(np.max(v)) for k, v in z.items()}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _case(angles, distance, lit_x=None, edge_bias_px=0.0, harmonic_px=0.0, baseline=110.0, seed=4):
     """The scanner with the board at ``angles`` (camera frame, deg) ``distance`` mm away, then at half size (a
     844x676 camera, the same angles of view), and its view: the projector lighting the board up to the panel column
@@ -58,7 +58,7 @@ def _calibrate(scene, view, truth, path, **dense_options):
 
 
 #: A pose of the scanner (board turned 34 deg about its horizontal, 336 mm away) whose rim is decoded 1 px off.
-RIM_OFF = dict(angles=(33.7, 0.9, 9.5), distance=335.7, edge_bias_px=1.0)
+RIM_OFF = {"angles": (33.7, 0.9, 9.5), "distance": 335.7, "edge_bias_px": 1.0}
 
 
 def test_the_rim_is_what_lies_within_its_windows_of_the_sampled_edge():
@@ -85,7 +85,7 @@ def test_before_the_rim_test_a_good_pose_was_several_of_its_pm_off():
     """The same pose without the rim test (procam before issue 38): the projector given, the pose's R, T or f_c
     several of their ± off."""
     scene, view, truth = _case(**RIM_OFF)
-    cal = _calibrate(scene, view, truth, "proj known", rim_windows=0)
+    cal = _calibrate(scene, view, truth, "proj known", rim_windows=0, batch_windows=0)
     assert max(_z(cal, scene, "proj known").values()) > 4
 
 
@@ -93,7 +93,7 @@ def test_before_the_rim_test_a_good_pose_was_several_of_its_pm_off():
 @pytest.mark.parametrize("path", ("both", "cam known"))
 def test_before_the_rim_test_the_other_paths_were_beyond_their_pm(path):
     scene, view, truth = _case(**RIM_OFF)
-    cal = _calibrate(scene, view, truth, path, rim_windows=0)
+    cal = _calibrate(scene, view, truth, path, rim_windows=0, batch_windows=0)
     assert max(_z(cal, scene, path).values()) > 4
 
 
@@ -107,8 +107,8 @@ def test_a_board_without_a_rim_error_keeps_every_sample():
 
 #: Every kind at once: the board turned 34 deg about its vertical near 400 mm, a wide convergence (the projector
 #: 190 mm beside the camera), the projector lighting half the board, its rim decoded 1 px off, a third harmonic.
-ALL = dict(angles=(0.898, 34.235, -7.117), distance=396.405, lit_x=385.6, edge_bias_px=1.0, harmonic_px=0.12,
-           baseline=190.0, seed=1)
+ALL = {"angles": (0.898, 34.235, -7.117), "distance": 396.405, "lit_x": 385.6, "edge_bias_px": 1.0,
+       "harmonic_px": 0.12, "baseline": 190.0, "seed": 1}
 
 
 @pytest.mark.parametrize("path", [pytest.param("both", marks=pytest.mark.slow), "cam known"])
@@ -124,5 +124,33 @@ def test_every_kind_at_once_keeps_the_pm_and_says_the_board_is_partly_lit(path):
 @pytest.mark.slow
 def test_every_kind_at_once_was_beyond_its_pm_before_the_rim_test():
     scene, view, truth = _case(**ALL)
-    cal = _calibrate(scene, view, truth, "both", rim_windows=0)
+    cal = _calibrate(scene, view, truth, "both", rim_windows=0, batch_windows=0)
     assert max(_z(cal, scene, "both").values()) > 4
+
+
+@functools.cache
+def _far(harmonic_px):
+    """The far narrow rig (75 mm squares 3.2 m away, turned 38 deg about the horizontal, the wall behind it
+    decoded) at half size, a 3-step phase decode: its noise, its rim 0.45 px off, and a third harmonic."""
+    scene = simulate.with_board_pose(far_rig(), (-37.868, -0.505, 4.516), distance=3200.328).scaled(0.5)
+    view = dense_view(scene, seed=337087905, sigma_sample=0.015, sigma_proj=0.03, harmonic_px=harmonic_px,
+                      edge_bias_px=0.4456)
+    return scene, view, simulate.truth_calibration(scene)
+
+
+def test_a_decoders_harmonic_counts_in_the_pm():
+    """The harmonic a 3-step phase decode leaves (0.1 px) is alike on neighbouring windows: the board's residuals'
+    batch means say so, and the ± counts it; procam before issue 38 was 3.7 of its ± off in f_p."""
+    scene, view, truth = _far(0.1)
+    cal = _calibrate(scene, view, truth, "cam known")
+    assert cal.info["dense"].board_correlation > 2
+    assert max(_z(cal, scene, "cam known").values()) <= 3
+    before = _calibrate(scene, view, truth, "cam known", rim_windows=0, batch_windows=0)
+    assert _z(before, scene, "cam known")["f_p"] > 3.5
+
+
+def test_independent_decoding_noise_is_not_counted_twice():
+    scene, view, truth = _far(0.0)
+    cal = _calibrate(scene, view, truth, "cam known")
+    assert cal.info["dense"].board_correlation == 1.0
+    assert max(_z(cal, scene, "cam known").values()) <= 3

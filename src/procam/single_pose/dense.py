@@ -53,6 +53,7 @@ from .. import models
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
+from .trust import batch_inflation, rim, rim_shift
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
 MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
@@ -170,7 +171,8 @@ class DenseFit:
     notes : lines for the user (what was estimated, assumed as a prior, left out).
     conflicts : warnings: a prior the data contradict (more than 3 of its sigmas away), said, never kept silently.
     lit_corners : (corners with projector coordinates, corners of the board): the part of the board that speaks
-        for the projector; rim_left_out : board samples left out at the rim that disagreed with the rest.
+        for the projector; rim_left_out : board samples left out at the rim that disagreed with the rest;
+        board_correlation : how many times the board samples' noise counts for their correlated errors (1: none).
     """
 
     model: str
@@ -189,6 +191,7 @@ class DenseFit:
     cov_pose: np.ndarray | None = None
     lit_corners: tuple = ()
     rim_left_out: int = 0
+    board_correlation: float = 1.0
 
     def std(self, name: str, *, pose_only: bool = False) -> float:
         """The reported std of ``name``; ``pose_only``: without what holding the decentrings at zero can cost."""
@@ -219,89 +222,6 @@ def _labels(model: J.JointModel, cam_size, blocks: int) -> np.ndarray:
     lg = _cells(d.back_cam[model.keep_back], cam_size, blocks)
     n_pri = (2 if (d.pp_prior is not None and d.camera_fixed is None) else 0) + len(d.priors)
     return np.concatenate([lc, lc, lb, lb, lg, -np.ones(n_pri, int)])
-
-
-def rim(cam_pts, window: float, rings: int, alive=None) -> np.ndarray:
-    """(M,) True for the samples at camera pixels ``cam_pts`` (M, 2) on a grid of ``window`` px within ``rings``
-    windows of the edge of the sampled region (a sample missing one of its eight grid neighbours is on the edge);
-    only the samples ``alive`` (M,) bool count (default all), the others are never on it."""
-    from scipy.spatial import cKDTree
-
-    pts = np.asarray(cam_pts, float)
-    alive = np.ones(len(pts), bool) if alive is None else np.asarray(alive, bool)
-    out = np.zeros(len(pts), bool)
-    idx = np.flatnonzero(alive)
-    if rings <= 0 or len(idx) < 9 or window <= 1:
-        return out
-    near = cKDTree(pts[idx]).query_ball_point(pts[idx], 1.5 * float(window))
-    edge = np.array([len(n) < 9 for n in near])           # itself and eight neighbours
-    for _ in range(rings - 1):
-        edge = edge | np.array([edge[n].any() for n in near])
-    out[idx] = edge
-    return out
-
-
-def _rim_shift(fit: J.JointFit, model: J.JointModel, on_rim, alarm: float) -> np.ndarray | None:
-    """The move (free parameters) of the fit when the rim's board samples are left out (linearised), when it is
-    beyond what the noise allows at ``alarm`` (a chi-square on the move's own covariance); None when the rim agrees
-    (or there is too little of it, or too little besides it)."""
-    from scipy.special import chdtri
-
-    d = model.data
-    rb = on_rim[model.keep_board]
-    if rb.sum() < 10 or (~rb).sum() < 50:
-        return None
-    n_cam, n_bg = len(d.cam), int(model.keep_back.sum())
-    n_pri = (2 if (d.pp_prior is not None and d.camera_fixed is None) else 0) + len(d.priors)
-    m = np.concatenate([np.zeros(2 * n_cam, bool), rb, rb, np.zeros(n_bg + n_pri, bool)])
-    Jm, r = fit.jac, fit.residuals
-    if len(m) != len(r):
-        return None
-    s = np.linalg.norm(Jm, axis=0)
-    s = np.where(s > 0, s, 1.0)
-    Jn = Jm / s
-    A = Jn.T @ Jn
-    Jb = Jn[m]
-    try:
-        A_out_inv = np.linalg.inv(A - Jb.T @ Jb)
-        delta = A_out_inv @ (Jb.T @ r[m])                     # the fit without the rim, minus the fit
-        C_delta = A_out_inv - np.linalg.inv(A)                 # its noise (normalised units)
-    except np.linalg.LinAlgError:
-        return None
-    w, V = np.linalg.eigh((C_delta + C_delta.T) / 2)
-    keep = w > w.max() * 1e-9
-    stat = float(np.sum((V[:, keep].T @ delta) ** 2 / w[keep]))
-    if not keep.any() or stat <= float(chdtri(int(keep.sum()), alarm)):
-        return None
-    return delta / s
-
-
-def _batch_inflation(model: J.JointModel, p, window: float, cell_windows: int) -> float:
-    """How many times the board samples' noise counts when their errors are correlated over neighbouring windows
-    (batch means): the residuals' means over cells of ``cell_windows`` x ``cell_windows`` windows, squared and
-    times their counts, against the residuals' variance -- 1 for independent errors; the larger of the two axes,
-    when beyond what chance gives (3 sigma of a chi-square over the cells), else 1."""
-    if cell_windows <= 0 or window <= 1 or not model.keep_board.any():
-        return 1.0
-    _, br, _, _ = model.blocks(p)
-    d = model.data
-    res = np.column_stack(br) / d.board_w[model.keep_board][:, None]
-    cell = np.floor(d.board_cam[model.keep_board] / (cell_windows * float(window))).astype(int)
-    _, inv = np.unique(cell, axis=0, return_inverse=True)
-    inv = np.ravel(inv)
-    n = np.bincount(inv)
-    ok = n >= max(2, cell_windows * cell_windows // 2)
-    if ok.sum() < 20:
-        return 1.0
-    phi = 0.0
-    for a in range(2):
-        r = res[:, a] - np.median(res[:, a])
-        sig2 = robust_sigma(r) ** 2
-        if not sig2 > 0:
-            return 1.0
-        m = np.bincount(inv, r) / n
-        phi = max(phi, float(np.mean(n[ok] * m[ok] ** 2) / sig2))
-    return phi if phi > 1 + 3 * np.sqrt(2 / ok.sum()) else 1.0
 
 
 def _held_out(fit: J.JointFit, labels) -> tuple[float, np.ndarray]:
@@ -444,7 +364,7 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     alive, peeled = np.ones(len(b), bool), 0
     while peeled < options.rim_peels:
         ring = rim(b.cam_pts, b.window, options.rim_windows, alive)
-        if _rim_shift(fit0, model, ring[ib], options.rim_alarm) is None:
+        if rim_shift(fit0, model, ring[ib], options.rim_alarm) is None:
             break
         alive &= ~ring
         model.keep_board &= ~ring[ib]
@@ -452,7 +372,7 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         fit0 = J.solve(model, fit0.p, full)
         peeled += 1
     # 5. the board samples' errors: correlated over neighbouring windows? (module docstring, 5)
-    phi = _batch_inflation(model, fit0.p, b.window, options.batch_windows)
+    phi = batch_inflation(model, fit0.p, b.window, options.batch_windows)
     if phi > 1:
         model.scales = J.Scales(model.scales.camera, model.scales.board * float(np.sqrt(phi)), model.scales.background)
         fit0 = J.solve(model, fit0.p, full)
@@ -489,16 +409,19 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     cov = _reported_covariance(best, [fits[n] for n in near])
     cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
+    if phi > 1:
+        notes = (*notes, (f"the board samples' errors are correlated over neighbouring windows (a decoder's "
+                          f"systematic phase error?): their noise counts {phi:.1f} times over in the ±"))
     if peeled:
-        notes = notes + (f"the board's rim disagrees with the rest of it (a decoder's error along the board's edge or "
-                         f"the lit region's edge): the samples within {peeled * options.rim_windows} windows of that "
-                         f"edge are left out, {int(len(b) - alive.sum())} of {len(b)}",)
+        notes = (*notes, (f"the board's rim disagrees with the rest of it (a decoder's error along the board's edge "
+                          f"or the lit region's edge): the samples within {peeled * options.rim_windows} windows of "
+                          f"that edge are left out, {int(len(b) - alive.sum())} of {len(b)}"))
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
                     notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
                     cov_pose=cov_pose, lit_corners=(int(np.sum(view.valid)), len(view.obj_pts)),
-                    rim_left_out=int(len(b) - alive.sum()))
+                    rim_left_out=int(len(b) - alive.sum()), board_correlation=float(phi))
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:
