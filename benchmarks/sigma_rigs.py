@@ -15,7 +15,8 @@ Kinds (each case a board pose drawn at random, seeded: |psi| + |nu| from 15 to 3
 * ``partly``: the projector lights the board up to a panel column that leaves about half of its corners lit;
 * ``edge``: the samples within two windows of the lit board's edge off by 0.6 px, pointing out of it;
 * ``wide``: a wide camera-projector convergence (190 mm baseline);
-* ``all``: every kind at once.
+* ``all``: every kind at once;
+* ``rim``: the board half lit and its rim 1.5 px off (a window half dark decodes that far off).
 
 Paths: ``both`` (camera and projector from the pose), ``cam known`` (the true camera given), ``proj known`` (the
 true projector given).  Columns: per parameter the 90th percentile and the largest of |error| / ± (z), the
@@ -51,7 +52,7 @@ from procam import models, simulate  # noqa: E402
 from procam import single_pose as sp  # noqa: E402
 from procam.single_pose import dense  # noqa: E402
 
-KINDS = ("wall", "base", "harmonic", "partly", "edge", "wide", "all")
+KINDS = ("wall", "base", "harmonic", "partly", "edge", "wide", "all", "rim")
 PATHS = ("both", "cam known", "proj known")
 PARAMS = ("f_c", "f_p", "u0p", "v0p", "R", "T")
 #: The dense fit as it was before issue 38: no rim test, no batch means.
@@ -74,7 +75,9 @@ def case(kind: str, rng) -> tuple:
         kw["harmonic_px"] = 0.25
     if kind in ("edge", "all"):
         kw["edge_bias_px"] = 0.6
-    if kind in ("partly", "all"):
+    if kind == "rim":
+        kw["edge_bias_px"] = 1.5
+    if kind in ("partly", "all", "rim"):
         c = simulate.corner_truth(scene)["projector"][:, 0]
         kw["lit"] = (0, float(np.quantile(c, float(rng.uniform(0.45, 0.6)))))
     return scene, kw
