@@ -3,11 +3,13 @@
 The second real rig: a structured-light scanner, camera 1688x1352, projector 1824x1140 (lens shift: v0p at the
 panel's last row), 3-step phase shift of 16 fringes, a 13x9 board (inner corners) of 10 mm squares 330-400 mm
 from the devices, turned up to 38 deg, in some poses lit by the projector on part of the board only.  The rig
-here: f_c 2400 px, f_p 2300 px, the projector 110 mm beside the camera converging on the board (``wide``: 190 mm,
-about 28 deg), a wall 250 mm behind the board (decoded in ``wall`` only); OpenCV k1 -0.05 on the projector, division k1 -2e-8 on the
-camera.  The fast path (``tests/sim_dense.py``: exact geometry plus decode-like noise; renders are in the tests).
+here (``tests/sim_scanner.py``): f_c 2400 px, f_p 2300 px, the projector 110 mm beside the camera converging on the
+board (``wide``: 190 mm, about 28 deg), a wall 250 mm behind the board (decoded in ``wall`` only); OpenCV k1 -0.05
+on the projector, division k1 -2e-8 on the camera.  The fast path (``tests/sim_dense.py``: exact geometry plus decode-like noise; two renders of the rig are
+in docs/accuracy.md, section 5).
 
-Kinds (each case a board pose drawn at random, seeded: |psi| + |nu| from 15 to 38 deg, 330-400 mm):
+Kinds (each case a board pose drawn at random, seeded: |psi| + |nu| from 15 to 45 deg, each at most 38 deg, the
+board 330-400 mm away):
 
 * ``wall``: the scanner rig as above with the wall behind the board lit and decoded (as on the first rig);
 * ``base``: the scanner rig as the scanner's captures have it: nothing decoded behind the board (the board alone);
