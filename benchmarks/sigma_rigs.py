@@ -198,34 +198,39 @@ def study_case(i: int, rng) -> tuple:
 
 def study(n: int, seed: int) -> None:
     """The calibration study of the ± (issue 38): ``n`` cases of :func:`study_case`, every path (procam as it is;
-    no before-column: half the time); per path and parameter the 90th percentile of |z|, the largest, and how many
-    exceed 3.5."""
+    no before-column: half the time); per path and parameter, over the poses procam writes (good or weak), the
+    90th percentile of |z|, the largest, and how many exceed 3.5."""
     rng = np.random.default_rng([seed, 38])
     rows, labels = [], []
     for i in range(n):
         label, scene, kw = study_case(i, rng)
         rows.append(run_case(scene, kw, int(rng.integers(1 << 30)), before=False))
         labels.append(label)
-        zs = {p: {k: round(float(v), 2) for k, v in r.items() if k in PARAMS} for p, r in rows[-1].items()
-              if "failed" not in r}
+        zs = {p: {**{k: round(float(v), 2) for k, v in r.items() if k in PARAMS}, "verdict": r["verdict"]}
+              for p, r in rows[-1].items() if "failed" not in r}
         print(f"case {i}: {label}: {zs}", flush=True)      # as it goes: a long study shows its progress
     print(f"\n## The study: {n} cases (fast path), |error| / ± per path\n")
-    print("| path | cases | " + " | ".join(f"z90 / max {p}" for p in PARAMS) + " | |z| > 3.5 | rim left out | "
-          "verdicts |")
-    print("|" + " --- |" * (len(PARAMS) + 5))
+    print("The poses procam writes (rated good or weak); a pose rated degenerate or failed is refused (exit code 3),"
+          " its largest |z| in the last column.\n")
+    print("| path | written | " + " | ".join(f"z90 / max {p}" for p in PARAMS) + " | |z| > 3.5 | rim left out | "
+          "verdicts | refused: largest |z| |")
+    print("|" + " --- |" * (len(PARAMS) + 6))
     for path in PATHS:
-        ok = [r[path] for r in rows if "failed" not in r[path]]
+        done = [r[path] for r in rows if "failed" not in r[path]]
+        ok = [r for r in done if r["verdict"] in ("good", "weak")]
+        refused = [max(v for k, v in r.items() if k in PARAMS) for r in done if r not in ok]
         cells, _ = _cells(ok)
         big = sum(v > 3.5 for r in ok for k, v in r.items() if k in PARAMS)
         v = {}
-        for r in ok:
+        for r in done:
             v[r["verdict"]] = v.get(r["verdict"], 0) + 1
-        print(f"| {path} | {len(ok)}{f' (+{len(rows) - len(ok)} failed)' if len(rows) > len(ok) else ''} | "
-              + " | ".join(cells) + f" | {big} | {sum(r['rim'] for r in ok)} | "
-              + f"{', '.join(f'{k} {c}' for k, c in sorted(v.items()))} |")
-    print("\nper kind, the largest |z| over the paths and parameters:\n")
+        print(f"| {path} | {len(ok)} of {len(rows)} | " + " | ".join(cells) + f" | {big} | "
+              + f"{sum(r['rim'] for r in done)} | {', '.join(f'{k} {c}' for k, c in sorted(v.items()))} | "
+              + f"{max(refused, default=float('nan')):.1f} |")
+    print("\nper kind, the largest |z| of a written pose over the paths and parameters:\n")
     for label in sorted(set(labels)):
-        zs = [max((v for p in PATHS if "failed" not in r[p] for k, v in r[p].items() if k in PARAMS), default=0.0)
+        zs = [max((v for p in PATHS if "failed" not in r[p] and r[p]["verdict"] in ("good", "weak")
+                   for k, v in r[p].items() if k in PARAMS), default=0.0)
               for r, lb in zip(rows, labels) if lb == label]
         print(f"- {label}: {len(zs)} cases, {max(zs):.2f}")
 
