@@ -24,8 +24,19 @@ carries everything else into the ``±``:
    is larger), the camera's own uncertainty (it is a parameter of the fit), the spread of the indistinguishable
    lens models, the priors' widths, and what holding each lens's distortion centre at its principal point can cost
    (a decentring of ``decentring_prior_px``, freed under that prior for the covariance only: one pose cannot tell
-   the two apart, and OpenCV's model has no place for the difference).
-6. **The background must follow one epipolar geometry**: the background samples' mean epipolar distance per
+   the two apart, and OpenCV's model has no place for the difference). A decoder's systematic phase error (the
+   harmonic a projector's gamma leaves in a 3-step phase shift) is alike on neighbouring windows and, sampled on
+   their grid, a pattern across the board the lens models absorb in part; the residuals' means over cells of
+   ``batch_windows`` windows tell it (batch means: their spread against the residuals' own, 1 for independent
+   errors), and where it is beyond chance the board samples' noise counts that many times over.
+6. **What the fit trusts: a board whose rim agrees with the rest of it.** A decoder errs systematically at the
+   board's rim and at the edge of the region the projector lights (a window partly dark, fringes cut by the
+   panel's edge), an error alike on every window there, which no noise scale and no block jackknife sees, and
+   which on a small board (or the lit part of one) is a large share of the samples. The fit without the rim
+   (linearised) against the fit tells it, by a chi-square on the move's own noise at ``rim_alarm``; a rim that
+   disagrees is left out and the next one in tested, until one agrees: the estimate and its ± are then those of
+   the board that agrees with itself (and the notes say how much was left out).
+7. **The background must follow one epipolar geometry**: the background samples' mean epipolar distance per
    quadrant of the camera image, against its uncertainty (noise and the lens models' spread); a background that
    fails is left out, with a warning that says by how much, against which tolerance.
 
@@ -42,6 +53,7 @@ from .. import models
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
+from .trust import batch_inflation, camera_pattern, rim, rim_shift
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
 MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
@@ -99,6 +111,13 @@ class DenseOptions:
     model_tolerance : models whose held-out chi-square exceeds the best's by less than this fraction are ones the
         data cannot tell apart (their spread enters the ±).
     min_samples : fewer board samples: no dense fit.
+    rim_windows : the board samples within this many windows of the edge of what was decoded on the board (the
+        board's rim, the edge of the region the projector lights) are the rim (0: no rim test).
+    rim_alarm : the rim disagrees with the rest of the board when the fit without it moves the parameters further
+        than its noise allows with this probability (chi-square); it is then left out (module docstring, 6).
+    rim_peels : at most this many rims are left out, one after the other, while the next still disagrees.
+    batch_windows : the board samples' errors are tested for correlation over cells of this many windows a side
+        (0: not tested; module docstring, 5).
     """
 
     models: tuple = ("none", "k1", "k1k2", "k1k2k3")
@@ -112,6 +131,10 @@ class DenseOptions:
     blocks: int = 4
     model_tolerance: float = 0.01
     min_samples: int = 50
+    rim_windows: int = 1
+    rim_alarm: float = 1e-3
+    rim_peels: int = 4
+    batch_windows: int = 4
 
     def __post_init__(self):
         bad = [m for m in self.models if m not in MODELS]
@@ -147,6 +170,9 @@ class DenseFit:
     n_board, n_background : samples used; background_used : False when left out (``background_reason`` says why);
     notes : lines for the user (what was estimated, assumed as a prior, left out).
     conflicts : warnings: a prior the data contradict (more than 3 of its sigmas away), said, never kept silently.
+    lit_corners : (corners with projector coordinates, corners of the board): the part of the board that speaks
+        for the projector; rim_left_out : board samples left out at the rim that disagreed with the rest;
+        board_correlation : how many times the board samples' noise counts for their correlated errors (1: none).
     camera_pattern : with the camera given and a smooth pattern in its corners' residuals (its lens model not quite
         this pose's; :mod:`procam.single_pose.misfit`), what the pattern moves the results by -- ``{name: shift}`` for
         ``f_p, u0p, v0p`` (px) and ``ptx, pty, ptz`` (the projector's board position, board units), its
@@ -167,6 +193,9 @@ class DenseFit:
     priors: tuple = field(default_factory=tuple)
     conflicts: tuple = ()
     cov_pose: np.ndarray | None = None
+    lit_corners: tuple = ()
+    rim_left_out: int = 0
+    board_correlation: float = 1.0
     camera_pattern: dict | None = None
 
     def std(self, name: str, *, pose_only: bool = False) -> float:
@@ -336,7 +365,23 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         if background_reason:
             model.keep_back[:] = False
             fit0 = J.solve(model, fit0.p, full)
-    # 4. every lens model, its held-out error and jackknife
+    # 4. the board's rim: does it agree with the rest of the board? (module docstring, 6)
+    alive, peeled = np.ones(len(b), bool), 0
+    while peeled < options.rim_peels:
+        ring = rim(b.cam_pts, b.window, options.rim_windows, alive)
+        if rim_shift(fit0, model, ring[ib], options.rim_alarm) is None:
+            break
+        alive &= ~ring
+        model.keep_board &= ~ring[ib]
+        model.scales = _measured_scales(model, fit0.p)
+        fit0 = J.solve(model, fit0.p, full)
+        peeled += 1
+    # 5. the board samples' errors: correlated over neighbouring windows? (module docstring, 5)
+    phi = batch_inflation(model, fit0.p, b.window, options.batch_windows)
+    if phi > 1:
+        model.scales = J.Scales(model.scales.camera, model.scales.board * float(np.sqrt(phi)), model.scales.background)
+        fit0 = J.solve(model, fit0.p, full)
+    # 6. every lens model, its held-out error and jackknife
     names = [m for m in options.models] if known_projector is None else ["given"]
     fits = {}
     labels = None
@@ -376,59 +421,24 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     pattern = None
     if known_camera is not None:
         # the given camera's residual pattern counts by what it does to the results: its shift joins the ±
-        pattern, shift = _camera_pattern(model, best.p, best.free)
+        pattern, shift = camera_pattern(model, best.p, best.free)
         if shift is not None and np.all(np.isfinite(shift)):
             extra = np.outer(shift, shift)[:len(J.NAMES), :len(J.NAMES)]
             cov, cov_pose = cov + extra, cov_pose + extra
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
+    if phi > 1:
+        notes = (*notes, (f"the board samples' errors are correlated over neighbouring windows (a decoder's "
+                          f"systematic phase error?): their noise counts {phi:.1f} times over in the ±"))
+    if peeled:
+        notes = (*notes, (f"the board's rim disagrees with the rest of it (a decoder's error along the board's edge "
+                          f"or the lit region's edge): the samples within {peeled * options.rim_windows} windows of "
+                          f"that edge are left out, {int(len(b) - alive.sum())} of {len(b)}"))
     return DenseFit(model=best.name, p=best.p, cov=cov, fits=fits, indistinguishable=near, scales=model.scales,
                     n_board=int(model.keep_board.sum()), n_background=int(model.keep_back.sum()),
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
                     notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
-                    cov_pose=cov_pose, camera_pattern=pattern)
-
-
-def _camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarray | None]:
-    """A given camera's corner residuals tested for a smooth pattern (:func:`procam.single_pose.misfit.misfit`: its
-    lens model not quite this pose's) and what that pattern moves the fit by: the pattern, a quadratic of the camera
-    pixel fitted to the corners' residuals, taken as an error of the camera pixels on the board (its corners and the
-    board samples), through the fit's own sensitivity (``-(J^T J)^-1 J^T dr``):
-    ``(DenseFit.camera_pattern, the shift (P,) over :attr:`~procam.single_pose.joint.JointModel.names`)``;
-    ``(None, None)`` without a pattern."""
-    from dataclasses import replace
-
-    from .misfit import misfit
-
-    d = model.data
-    cam_res = np.column_stack(model.blocks(p)[0])                 # (N, 2) observed - predicted, px
-    mf = misfit(d.obj[:, :2], cam_res, device="camera", floor_px=0.1) if len(d.obj) >= 15 else None
-    if mf is None or not mf.model_error:
-        return None, None
-    centre, scale = d.cam.mean(axis=0), np.maximum(np.ptp(d.cam, axis=0), 1.0)
-
-    def design(uv):
-        x, y = ((uv - centre) / scale).T
-        return np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
-
-    coef = np.linalg.lstsq(design(d.cam), cam_res, rcond=None)[0]
-    coef[0] = 0.0                                                 # a shift of every pixel is the pose's, not a pattern
-
-    def moved(uv):
-        return uv - design(uv) @ coef if len(uv) else uv
-
-    # the board's pixels only: a quadratic fitted over the board says nothing of the wall beyond it
-    shifted = J.JointModel(replace(d, cam=moved(d.cam), board_cam=moved(d.board_cam)), model.scales)
-    shifted.keep_board, shifted.keep_back, shifted.cauchy = model.keep_board, model.keep_back, model.cauchy
-    shifted.pixel_distance = model.pixel_distance
-    r, Jm, cov = J.linearise(model, p, free)
-    dr = shifted.residuals(np.asarray(p, float)) - r
-    idx = np.flatnonzero([nm in free for nm in model.names])
-    shift = np.zeros(len(model.names))
-    with np.errstate(invalid="ignore"):
-        shift[idx] = -cov[np.ix_(idx, idx)] @ (Jm.T @ dr)
-    out = {k: float(shift[J.IDX[k]]) for k in ("f_p", "u0p", "v0p", "ptx", "pty", "ptz")}
-    out.update(field_rms_px=float(mf.field_rms_px), message=mf.message)
-    return out, shift
+                    cov_pose=cov_pose, lit_corners=(int(np.sum(view.valid)), len(view.obj_pts)),
+                    rim_left_out=int(len(b) - alive.sum()), board_correlation=float(phi), camera_pattern=pattern)
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:
@@ -480,7 +490,7 @@ def _trim(model: J.JointModel, p, k: float) -> None:
 
 
 def _background_disagrees(model: J.JointModel, fit0: J.JointFit, cam_size) -> str:
-    """Why the background does not follow one epipolar geometry, or '' when it does (module docstring, 6)."""
+    """Why the background does not follow one epipolar geometry, or '' when it does (module docstring, 7)."""
     from scipy.special import chdtri
 
     d = model.data

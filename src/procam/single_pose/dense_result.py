@@ -27,6 +27,9 @@ GOOD_PP_PX = 7.5
 #: Beyond these the pose does not determine the projector (degenerate).
 DEGENERATE_F_REL = 0.05
 DEGENERATE_PP_PX = 150.0
+#: A projector that gives coordinates to fewer than this fraction of the board's corners lights part of the board:
+#: its rating says that its numbers rest on that part.
+PARTLY_LIT = 0.9
 
 
 def _derived(p):
@@ -133,8 +136,12 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
     elif rel > GOOD_F_REL or pp > GOOD_PP_PX:
         level = "weak"
     what = (f"this pose determines f_p {f:.1f} to ± {sf:.1f} px ({100 * rel:.2f} %), u0p to ± {su:.1f}, v0p to ± "
-            f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors; the "
+            f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors"
+            f"{'; the rim of the board that disagreed with the rest left out' if fit.rim_left_out else ''}; the "
             f"reported ± adds a lens decentring no pose can see)")
+    if fit.lit_corners and fit.lit_corners[0] < PARTLY_LIT * fit.lit_corners[1]:
+        what += (f"; the projector lights {fit.lit_corners[0]} of the board's {fit.lit_corners[1]} corners: these "
+                 "numbers rest on that part of the board")
     conflict = prior_conflict(fit, proj_size)
     if conflict:      # the estimate is the datasheet's, bent to fit it: not a result, whatever its ±
         level, msg = "failed", f"projector: FAILED estimate: {conflict}"

@@ -1,0 +1,149 @@
+"""What the dense single-pose fit (:mod:`.dense`) trusts: errors a decoder makes alike on many windows at once.
+
+A decoder's errors are not all independent noise. Two kinds, which no measured noise scale and no block jackknife
+sees (issue 38, ``benchmarks/sigma_rigs.py``):
+
+* at the **rim** of what was decoded on the board (the board's edge, the edge of the region the projector lights)
+  a window is partly dark or its fringes cut by the panel's edge: an error alike on every window there, a large
+  share of the samples on a small or partly lit board. :func:`rim` finds it, :func:`rim_shift` tests whether the
+  fit without it moves beyond its own noise;
+* a **systematic phase error** (the harmonic a projector's gamma leaves in a 3-step phase shift) is alike on
+  neighbouring windows: :func:`batch_inflation` measures how many times over their noise then counts.
+
+And one the user's own file can carry: a given camera whose lens model does not quite fit this pose leaves a smooth
+pattern in its corners' residuals; :func:`camera_pattern` measures what it moves the projector by, which then joins
+the ± (the pattern counts by what it does to the results, not by itself).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..stats import robust_sigma
+from . import joint as J
+
+
+def rim(cam_pts, window: float, rings: int, alive=None) -> np.ndarray:
+    """(M,) True for the samples at camera pixels ``cam_pts`` (M, 2) on a grid of ``window`` px within ``rings``
+    windows of the edge of the sampled region (a sample missing one of its eight grid neighbours is on the edge);
+    only the samples ``alive`` (M,) bool count (default all), the others are never on it."""
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(cam_pts, float)
+    alive = np.ones(len(pts), bool) if alive is None else np.asarray(alive, bool)
+    out = np.zeros(len(pts), bool)
+    idx = np.flatnonzero(alive)
+    if rings <= 0 or len(idx) < 9 or window <= 1:
+        return out
+    near = cKDTree(pts[idx]).query_ball_point(pts[idx], 1.5 * float(window))
+    edge = np.array([len(n) < 9 for n in near])           # itself and eight neighbours
+    for _ in range(rings - 1):
+        edge = edge | np.array([edge[n].any() for n in near])
+    out[idx] = edge
+    return out
+
+
+def rim_shift(fit: J.JointFit, model: J.JointModel, on_rim, alarm: float) -> np.ndarray | None:
+    """The move (free parameters) of the fit when the rim's board samples are left out (linearised), when it is
+    beyond what the noise allows at ``alarm`` (a chi-square on the move's own covariance); None when the rim agrees
+    (or there is too little of it, or too little besides it)."""
+    from scipy.special import chdtri
+
+    d = model.data
+    rb = on_rim[model.keep_board]
+    if rb.sum() < 10 or (~rb).sum() < 50:
+        return None
+    n_cam, n_bg = len(d.cam), int(model.keep_back.sum())
+    n_pri = (2 if (d.pp_prior is not None and d.camera_fixed is None) else 0) + len(d.priors)
+    m = np.concatenate([np.zeros(2 * n_cam, bool), rb, rb, np.zeros(n_bg + n_pri, bool)])
+    Jm, r = fit.jac, fit.residuals
+    if len(m) != len(r):
+        return None
+    s = np.linalg.norm(Jm, axis=0)
+    s = np.where(s > 0, s, 1.0)
+    Jn = Jm / s
+    A = Jn.T @ Jn
+    Jb = Jn[m]
+    try:
+        A_out_inv = np.linalg.inv(A - Jb.T @ Jb)
+        delta = A_out_inv @ (Jb.T @ r[m])                     # the fit without the rim, minus the fit
+        C_delta = A_out_inv - np.linalg.inv(A)                 # its noise (normalised units)
+    except np.linalg.LinAlgError:
+        return None
+    w, V = np.linalg.eigh((C_delta + C_delta.T) / 2)
+    keep = w > w.max() * 1e-9
+    stat = float(np.sum((V[:, keep].T @ delta) ** 2 / w[keep]))
+    if not keep.any() or stat <= float(chdtri(int(keep.sum()), alarm)):
+        return None
+    return delta / s
+
+
+def batch_inflation(model: J.JointModel, p, window: float, cell_windows: int) -> float:
+    """How many times the board samples' noise counts when their errors are correlated over neighbouring windows
+    (batch means): the residuals' means over cells of ``cell_windows`` x ``cell_windows`` windows, squared and
+    times their counts, against the residuals' variance -- 1 for independent errors; the larger of the two axes,
+    when beyond what chance gives (3 sigma of a chi-square over the cells), else 1."""
+    if cell_windows <= 0 or window <= 1 or not model.keep_board.any():
+        return 1.0
+    _, br, _, _ = model.blocks(p)
+    d = model.data
+    res = np.column_stack(br) / d.board_w[model.keep_board][:, None]
+    cell = np.floor(d.board_cam[model.keep_board] / (cell_windows * float(window))).astype(int)
+    _, inv = np.unique(cell, axis=0, return_inverse=True)
+    inv = np.ravel(inv)
+    n = np.bincount(inv)
+    ok = n >= max(2, cell_windows * cell_windows // 2)
+    if ok.sum() < 20:
+        return 1.0
+    phi = 0.0
+    for a in range(2):
+        r = res[:, a] - np.median(res[:, a])
+        sig2 = robust_sigma(r) ** 2
+        if not sig2 > 0:
+            return 1.0
+        m = np.bincount(inv, r) / n
+        phi = max(phi, float(np.mean(n[ok] * m[ok] ** 2) / sig2))
+    return phi if phi > 1 + 3 * np.sqrt(2 / ok.sum()) else 1.0
+
+
+def camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarray | None]:
+    """A given camera's corner residuals tested for a smooth pattern (:func:`procam.single_pose.misfit.misfit`: its
+    lens model not quite this pose's) and what that pattern moves the fit by: the pattern, a quadratic of the camera
+    pixel fitted to the corners' residuals, taken as an error of the camera pixels on the board (its corners and the
+    board samples), through the fit's own sensitivity (``-(J^T J)^-1 J^T dr``):
+    ``(DenseFit.camera_pattern, the shift (P,) over :attr:`~procam.single_pose.joint.JointModel.names`)``;
+    ``(None, None)`` without a pattern."""
+    from dataclasses import replace
+
+    from .misfit import misfit
+
+    d = model.data
+    cam_res = np.column_stack(model.blocks(p)[0])                 # (N, 2) observed - predicted, px
+    mf = misfit(d.obj[:, :2], cam_res, device="camera", floor_px=0.1) if len(d.obj) >= 15 else None
+    if mf is None or not mf.model_error:
+        return None, None
+    centre, scale = d.cam.mean(axis=0), np.maximum(np.ptp(d.cam, axis=0), 1.0)
+
+    def design(uv):
+        x, y = ((uv - centre) / scale).T
+        return np.column_stack([np.ones_like(x), x, y, x * x, x * y, y * y])
+
+    coef = np.linalg.lstsq(design(d.cam), cam_res, rcond=None)[0]
+    coef[0] = 0.0                                                 # a shift of every pixel is the pose's, not a pattern
+
+    def moved(uv):
+        return uv - design(uv) @ coef if len(uv) else uv
+
+    # the board's pixels only: a quadratic fitted over the board says nothing of the wall beyond it
+    shifted = J.JointModel(replace(d, cam=moved(d.cam), board_cam=moved(d.board_cam)), model.scales)
+    shifted.keep_board, shifted.keep_back, shifted.cauchy = model.keep_board, model.keep_back, model.cauchy
+    shifted.pixel_distance = model.pixel_distance
+    r, Jm, cov = J.linearise(model, p, free)
+    dr = shifted.residuals(np.asarray(p, float)) - r
+    idx = np.flatnonzero([nm in free for nm in model.names])
+    shift = np.zeros(len(model.names))
+    with np.errstate(invalid="ignore"):
+        shift[idx] = -cov[np.ix_(idx, idx)] @ (Jm.T @ dr)
+    out = {k: float(shift[J.IDX[k]]) for k in ("f_p", "u0p", "v0p", "ptx", "pty", "ptz")}
+    out.update(field_rms_px=float(mf.field_rms_px), message=mf.message)
+    return out, shift
