@@ -53,7 +53,7 @@ from .. import models
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
-from .trust import batch_inflation, camera_pattern, rim, rim_shift
+from .trust import batch_inflation, camera_pattern, contradicted, rim, rim_shift
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
 MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
@@ -367,6 +367,7 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
             fit0 = J.solve(model, fit0.p, full)
     # 4. the board's rim: does it agree with the rest of the board? (module docstring, 6)
     alive, peeled = np.ones(len(b), bool), 0
+    before = (fit0, model.keep_board.copy(), model.scales)
     while peeled < options.rim_peels:
         ring = rim(b.cam_pts, b.window, options.rim_windows, alive)
         if rim_shift(fit0, model, ring[ib], options.rim_alarm) is None:
@@ -376,6 +377,11 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
         model.scales = _measured_scales(model, fit0.p)
         fit0 = J.solve(model, fit0.p, full)
         peeled += 1
+    if peeled and contradicted(fit0.p, priors):
+        # a prior the data contradict forces the model wrong everywhere, the rim too: leaving rims out explained
+        # nothing and would only blur the conflict, which the rating names (the prior, not the pose)
+        fit0, model.keep_board, model.scales = before
+        alive, peeled = np.ones(len(b), bool), 0
     # 5. the board samples' errors: correlated over neighbouring windows? (module docstring, 5)
     phi = batch_inflation(model, fit0.p, b.window, options.batch_windows)
     if phi > 1:

@@ -147,3 +147,10 @@ def camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarra
     out = {k: float(shift[J.IDX[k]]) for k in ("f_p", "u0p", "v0p", "ptx", "pty", "ptz")}
     out.update(field_rms_px=float(mf.field_rms_px), message=mf.message)
     return out, shift
+
+
+def contradicted(p, priors) -> bool:
+    """Does the estimate ``p`` sit more than 3 of a prior's sigmas from its mean (any prior ``(name, mean, std)`` but
+    the decentrings')? Then the prior forces the model wrong everywhere, the rim included: a rim that disagrees
+    says nothing of the decoder."""
+    return any(abs(p[J.IDX[n]] - mu) > 3 * sd for n, mu, sd in priors if n not in J.DECENTRING)
