@@ -9,12 +9,12 @@ import warnings
 
 import numpy as np
 import pytest
+from sim_scanner import scanner
 
 from procam import models, patterns, pipeline, simulate
 from procam import single_pose as sp
 from procam.board import Board
 from procam.calibration import Device, Distortion
-from sim_scanner import scanner
 
 
 def _zs(pose, gamma, known, seed):
