@@ -154,3 +154,15 @@ def test_independent_decoding_noise_is_not_counted_twice():
     cal = _calibrate(scene, view, truth, "cam known")
     assert cal.info["dense"].board_correlation == 1.0
     assert max(_z(cal, scene, "cam known").values()) <= 3
+
+
+def test_a_lens_model_the_likelihood_ratio_demands_stays_in_the_pm():
+    """The held-out test chooses the lens model; a richer one whose extra terms lower the chi-square beyond chance
+    (1e-3) is not excluded from the ± by it: the rendered scanner pose where k1 alone won held out by 4.7 % while k2
+    lowered the chi-square by 29 (tests/test_scanner_render.py) had T 4.5 of its ± off."""
+    from procam.single_pose.trust import demanded
+
+    assert demanded(1, 1614.6, 1585.6)                  # 29 > 10.8 (chi-square, 1 dof, 1e-3)
+    assert not demanded(1, 1600.0, 1590.0)              # 10 < 10.8: chance
+    assert demanded(2, 1600.0, 1586.0) and not demanded(2, 1600.0, 1587.0)   # 13.8 for 2 dof
+    assert not demanded(0, 1700.0, 1600.0) and not demanded(1, 1700.0, float("nan"))

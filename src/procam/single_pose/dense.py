@@ -22,7 +22,8 @@ carries everything else into the ``±``:
 5. **The ± covers** the fit's noise (the Jacobian), noise that is correlated across neighbouring samples or
    structured by a lens no model describes exactly (the same leave-one-block-out: a block jackknife, used where it
    is larger), the camera's own uncertainty (it is a parameter of the fit), the spread of the indistinguishable
-   lens models, the priors' widths, and what holding each lens's distortion centre at its principal point can cost
+   lens models (and of a richer one whose terms the likelihood ratio demands where the held-out test did not keep
+   it, :func:`.trust.demanded`), the priors' widths, and what holding each lens's distortion centre at its principal point can cost
    (a decentring of ``decentring_prior_px``, freed under that prior for the covariance only: one pose cannot tell
    the two apart, and OpenCV's model has no place for the difference). A decoder's systematic phase error (the
    harmonic a projector's gamma leaves in a 3-step phase shift) is alike on neighbouring windows and, sampled on
@@ -53,7 +54,7 @@ from .. import models
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
-from .trust import batch_inflation, camera_pattern, contradicted, rim, rim_shift
+from .trust import batch_inflation, camera_pattern, contradicted, demanded, rim, rim_shift
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
 MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
@@ -417,8 +418,10 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
                  if np.isfinite(m.held_out) and m.held_out - lowest <= options.model_tolerance * lowest)
     near = near or (next(iter(fits)),)
     best = min((fits[n] for n in near), key=lambda m: len(MODELS.get(m.name, ())))      # the simplest of them
-    cov = _reported_covariance(best, [fits[n] for n in near])
-    cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), [fits[n] for n in near])
+    # a richer model the likelihood ratio demands joins the ± (trust.demanded); the estimate stays the held-out choice
+    spread = [fits[n] for n in near] + [m for m in fits.values() if m.name not in near and demanded(len(MODELS.get(m.name, ())) - len(MODELS.get(best.name, ())), best.cost, m.cost)]
+    cov = _reported_covariance(best, spread)
+    cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), spread)
     if known_camera is not None and getattr(known_camera, "covariance", None) is not None:
         # the camera file's own uncertainty, carried through the fit: the projector follows the camera's f_c
         names, C = known_camera.covariance
