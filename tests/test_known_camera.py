@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from procam import crlb, io, simulate, single_pose
+from procam import crlb, io, multi_pose, simulate, single_pose
 from procam.calibration import Calibration, Device, Distortion
 from procam.errors import CalibrationError, ProcamWarning
 from procam.view import View
@@ -173,3 +173,38 @@ def test_a_given_cameras_residual_pattern_counts_by_what_it_does_to_the_projecto
     assert "model error" not in reasons and cal.verdict == "weak" and "u0p to ±" in reasons
     for name, k in (("f_p", (0, 0)), ("u0p", (0, 2)), ("v0p", (1, 2))):
         assert abs(cal.projector.K[k] - scene.K_proj[k]) <= 1.5 * cal.std[name], name
+
+
+def test_the_background_is_judged_against_what_a_given_camera_is_known_to():
+    """A camera calibrated once from five photos is least sure in the image's corners, where the wall behind a
+    board is seen: its error there moved one quadrant of the background 0.3 px off the others' epipolar lines,
+    and the background check (noise and lens tolerance only) refused a plain wall, leaving the projector to the
+    board (f_p 0.7 %, u0p 17 px off). The camera file's covariance, carried through the fit to each quadrant, is
+    part of the check's tolerance now: the wall is used, and the projector's numbers are within their ±."""
+    from dataclasses import replace
+
+    from sim_dense import dense_view
+
+    base = simulate.preset("lensshift")
+    photos = []
+    for i, ang in enumerate([(20, 10, 0), (-20, 15, 5), (15, -20, -5), (-15, -15, 0), (5, 25, 10)]):
+        sc = simulate.with_board_pose(base, ang)
+        o, c, p = simulate.correspondences(sc, 0.1, 0.2, 100 + i)
+        photos.append(View(o, c, p, f"photo{i}", sc.cam_size, sc.proj_size))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        cam = multi_pose.calibrate_camera(photos).camera
+    assert cam.covariance is not None and cam.distortion.model == "opencv"
+    scene = simulate.with_board_pose(base, (-24, 6, 0))
+    view = dense_view(scene, seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        carried, exact = (single_pose.calibrate(view, known_camera=d) for d in (cam, replace(cam, covariance=None)))
+    assert carried.poses[0]["projector_model"]["background_used"]
+    assert not exact.poses[0]["projector_model"]["background_used"]      # held exact, the camera's error is the wall's
+    assert "does not follow one epipolar geometry" in exact.poses[0]["projector_model"]["background_reason"]
+    for name, k in (("f_p", (0, 0)), ("u0p", (0, 2)), ("v0p", (1, 2))):
+        e = carried.projector.K[k] - scene.K_proj[k]
+        assert abs(e) <= 3 * carried.std[name], (name, e, carried.std[name])
+    for k in ((0, 0), (0, 2)):      # the wall measures f_p and u0p (0.2 % and 7 px off, against 0.7 % and 17 px)
+        assert abs(carried.projector.K[k] - scene.K_proj[k]) < 0.6 * abs(exact.projector.K[k] - scene.K_proj[k])

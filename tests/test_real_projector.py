@@ -189,3 +189,49 @@ def test_a_rendered_lens_shifted_capture_through_the_cli(tmp_path):
     for i in range(3):
         assert abs(again.T[i] - Tt[i]) <= 3 * again.std["T"][i] + 0.005 * np.linalg.norm(Tt)
         assert abs(eul[i]) <= 3 * again.std["R_euler_deg"][i] + 0.05
+
+
+def test_a_decentred_projector_lens_is_measured_where_the_wall_spans_the_panel():
+    """A projector lens whose distortion is centred (+6, -4) px from its principal point (as manufacturing leaves
+    one): held at the principal point, the fit dragged the principal point onto the distortion's centre (5-7 px
+    off on the ``hard`` rig with the camera known, rated good). The wall behind the board spans the panel and sees
+    the decentring: it is estimated (under its prior) and written as OpenCV's tangential terms, which describe it to
+    first order (``p2 = -k1 e_x``, ``p1 = -k1 e_y``); the board alone cannot see it and holds it at zero (its ±
+    includes it), as it does with the camera estimated too (its decentring would trade against the projector's)."""
+    from procam.calibration import Device, Distortion
+
+    base = simulate.preset("lensshift")
+    K = np.asarray(base.K_proj)
+    scene = base.replace(proj_dist_center=(K[0, 2] + 6.0, K[1, 2] - 4.0))
+    camera = Device(np.array(base.K_cam), base.cam_size, Distortion("division", tuple(base.cam_center),
+                                                                    *base.cam_dist_coeffs))
+    view = dense_view(scene, seed=3)
+    cal = _calibrate(view, known_camera=camera)
+    e = _errors(cal, scene)
+    assert abs(e["u0p"]) < 2.0 and abs(e["v0p"]) < 2.0 and abs(e["f_p"]) < 0.001 * K[0, 0]
+    for name in ("f_p", "u0p", "v0p"):
+        assert abs(e[name]) <= 3 * cal.std[name], name
+    k1, _, p1, p2, _ = cal.projector.distortion.coeffs
+    f = cal.projector.K[0, 0]
+    assert p2 == pytest.approx(-k1 * 6.0 / f, rel=0.35) and p1 == pytest.approx(-k1 * -4.0 / f, rel=0.35)
+    board = _calibrate(dense_view(scene, seed=3, background=False), known_camera=camera)
+    assert board.projector.distortion.coeffs[2:4] == (0.0, 0.0)
+    for name in ("f_p", "u0p", "v0p"):
+        assert abs(_errors(board, scene)[name]) <= 3 * board.std[name], name
+    _within(_calibrate(view), scene)
+
+
+def test_opencvs_tangential_terms_are_a_decentred_radial_lens_to_first_order():
+    from procam import models
+
+    c = (-0.12, 0.0, 0.0, 0.0, 0.0)
+    extent = (-0.4, 0.4, -0.05, 0.55)
+    same, miss0 = models.brown_recentred(c, (0.0, 0.0), extent)
+    np.testing.assert_allclose(same, c, atol=1e-12)
+    assert miss0 < 1e-12
+    e = np.array([6.0, -4.0]) / 2421.0
+    out, miss = models.brown_recentred(c, e, extent, free=(0, 2, 3))
+    assert out[3] == pytest.approx(0.12 * e[0], rel=0.02) and out[2] == pytest.approx(0.12 * e[1], rel=0.02)
+    assert miss * 2421.0 < 0.01        # px: second order in the decentring
+    radial, miss_r = models.brown_recentred(c, e, extent, free=(0, 1, 4))
+    assert miss_r > 20 * miss          # radial terms alone cannot describe it

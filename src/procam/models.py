@@ -263,6 +263,41 @@ def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
     return x - (d * ex - b * ey) / det, y - (a * ey - b * ex) / det
 
 
+def brown_recentred(coeffs, offset, extent, free=(0, 1, 2, 3, 4), n: int = 25) -> tuple[np.ndarray, float]:
+    """OpenCV's coefficients about the principal point that best describe a lens whose distortion is centred
+    ``offset`` away from it (decentred), and how far they miss.
+
+    A decentred radial lens maps ``x -> e + brown(x - e)``; to first order in ``e`` that is radial about the
+    principal point plus OpenCV's tangential terms (``p2 = -k1 e_x``, ``p1 = -k1 e_y``: the decentring distortion
+    the tangential terms were made for). The coefficients are the linear least-squares fit of that map over the
+    image (``brown`` is linear in them).
+
+    Parameters
+    ----------
+    coeffs : (5,) OpenCV ``k1, k2, p1, p2, k3`` of the decentred lens (about its own centre).
+    offset : (2,) the distortion centre minus the principal point, normalised (px / f).
+    extent : (x0, x1, y0, y1) the image's undistorted normalised extent the fit covers.
+    free : indices of the coefficients the fit may use (the others stay zero).
+
+    Returns ``(coefficients (5,), largest miss over the grid, normalised)``.
+    """
+    c = np.asarray(coeffs, float)
+    ex, ey = (float(v) for v in offset)
+    x, y = np.meshgrid(np.linspace(extent[0], extent[1], n), np.linspace(extent[2], extent[3], n))
+    x, y = x.ravel(), y.ravel()
+    bx, by = brown(x - ex, y - ey, *c)
+    tx, ty = bx + ex - x, by + ey - y              # what the decentred lens adds to the pinhole's point
+    r2 = x * x + y * y
+    cols = [np.r_[x * r2, y * r2], np.r_[x * r2 ** 2, y * r2 ** 2], np.r_[2 * x * y, r2 + 2 * y * y],
+            np.r_[r2 + 2 * x * x, 2 * x * y], np.r_[x * r2 ** 3, y * r2 ** 3]]
+    A = np.column_stack([cols[i] for i in free])
+    sol = np.linalg.lstsq(A, np.r_[tx, ty], rcond=None)[0]
+    out = np.zeros(5)
+    out[list(free)] = sol
+    miss = np.r_[tx, ty] - A @ sol
+    return out, float(np.max(np.hypot(miss[:len(x)], miss[len(x):])))
+
+
 def camera_predict(p, obj) -> np.ndarray:
     """Distorted pixels (N, 2) of board points ``obj`` (N, 3) for the single-pose camera parameters ``p``.
 

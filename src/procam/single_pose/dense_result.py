@@ -19,8 +19,8 @@ from ..stats import rms
 from . import joint as J
 from .dense import MODELS, DenseFit, to_devices
 
-#: A projector rated good: what this pose determines (the dense fit's ``±`` without the lens decentring no pose can
-#: see, which the reported ``±`` adds) at most these, so that the values are within 1 % and 15 px with about 95 %
+#: A projector rated good: what this pose determines (the dense fit's ``±`` with each lens's decentring held at its
+#: estimate, or at zero where the board alone cannot see it; the reported ``±`` adds its prior) at most these, so that the values are within 1 % and 15 px with about 95 %
 #: probability.
 GOOD_F_REL = 0.005
 GOOD_PP_PX = 7.5
@@ -138,7 +138,7 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
     what = (f"this pose determines f_p {f:.1f} to ± {sf:.1f} px ({100 * rel:.2f} %), u0p to ± {su:.1f}, v0p to ± "
             f"{sv:.1f} px (noise, correlated residuals, the lens models the data cannot tell apart, the priors"
             f"{'; the rim of the board that disagreed with the rest left out' if fit.rim_left_out else ''}; the "
-            f"reported ± adds a lens decentring no pose can see)")
+            f"reported ± adds where the lens's distortion is centred, within a few pixels of its principal point)")
     if fit.lit_corners and fit.lit_corners[0] < PARTLY_LIT * fit.lit_corners[1]:
         what += (f"; the projector lights {fit.lit_corners[0]} of the board's {fit.lit_corners[1]} corners: these "
                  "numbers rest on that part of the board")

@@ -430,31 +430,18 @@ def _value(device, name) -> float:
     return float(c[_COEFF[name]])
 
 
-def held_covariance(model: JointModel, p, free, which: str, names, cov) -> np.ndarray:
-    """What a held device's own uncertainty adds to the covariance of the free parameters (the delta method
-    through the fit: the estimate moves by ``-(J^T J)^-1 J^T dr/dc`` per unit change of the held parameters ``c``).
-
-    ``model`` has ``which`` (``"camera"`` or ``"projector"``) held (:class:`FixedDevice`); ``p`` the solution;
-    ``free`` the names estimated; ``names`` (k,) and ``cov`` (k, k) the held device's parameters (K entries ``f_c,
-    fy_c, u0c, v0c`` or ``f_p, ...``, OpenCV's coefficients ``k1 ... k6, p1, p2``) and their covariance (a camera
-    file's). Returns (P, P) over :attr:`JointModel.names`, zero outside ``free``; infinite where ``cov`` is.
-    ``dr/dc`` by central differences (the held device undistorts through any of its models).
-    """
+def held_jacobian(model: JointModel, p, which: str, names) -> np.ndarray:
+    """``(n, k)``: the derivative of :meth:`JointModel.residuals` at ``p`` by the held device's parameters ``names``
+    (K entries ``f_c, fy_c, u0c, v0c`` or ``f_p, ...``, OpenCV's coefficients ``k1 ... k6, p1, p2``), by central
+    differences (the held device undistorts through any of its models); ``which``: ``"camera"`` or ``"projector"``."""
     from dataclasses import replace
 
     attr = "camera_fixed" if which == "camera" else "projector_fixed"
     held = getattr(model.data, attr)
     if held is None:
         raise ValueError(f"the model's {which} is not held")
-    cov = np.asarray(cov, float)
-    out = np.zeros((len(model.names), len(model.names)))
-    idx = np.flatnonzero([n in free for n in model.names])
-    if not np.all(np.isfinite(cov)):
-        out[np.ix_(idx, idx)] = np.inf
-        return out
-    r0, J, Cp = linearise(model, p, free)
     c0 = np.array([_value(held.device, n) for n in names])
-    Jc = np.zeros((len(r0), len(names)))
+    cols = []
     for k, n in enumerate(names):
         h = 1e-6 * max(abs(c0[k]), 1.0) if n in _K_ENTRY else 1e-6
         rs = []
@@ -466,7 +453,29 @@ def held_covariance(model: JointModel, p, free, which: str, names, cov) -> np.nd
             m.keep_board, m.keep_back, m.cauchy = model.keep_board, model.keep_back, model.cauchy
             m.pixel_distance = model.pixel_distance
             rs.append(m.residuals(np.asarray(p, float)))
-        Jc[:, k] = (rs[0] - rs[1]) / (2 * h)
+        cols.append((rs[0] - rs[1]) / (2 * h))
+    return np.column_stack(cols) if cols else np.zeros((0, 0))
+
+
+def held_covariance(model: JointModel, p, free, which: str, names, cov) -> np.ndarray:
+    """What a held device's own uncertainty adds to the covariance of the free parameters (the delta method
+    through the fit: the estimate moves by ``-(J^T J)^-1 J^T dr/dc`` per unit change of the held parameters ``c``).
+
+    ``model`` has ``which`` (``"camera"`` or ``"projector"``) held (:class:`FixedDevice`); ``p`` the solution;
+    ``free`` the names estimated; ``names`` (k,) and ``cov`` (k, k) the held device's parameters
+    (:func:`held_jacobian`) and their covariance (a camera file's). Returns (P, P) over :attr:`JointModel.names`,
+    zero outside ``free``; infinite where ``cov`` is.
+    """
+    if getattr(model.data, "camera_fixed" if which == "camera" else "projector_fixed") is None:
+        raise ValueError(f"the model's {which} is not held")
+    cov = np.asarray(cov, float)
+    out = np.zeros((len(model.names), len(model.names)))
+    idx = np.flatnonzero([n in free for n in model.names])
+    if not np.all(np.isfinite(cov)):
+        out[np.ix_(idx, idx)] = np.inf
+        return out
+    r0, J, Cp = linearise(model, p, free)
+    Jc = held_jacobian(model, p, which, names)
     G = -Cp[np.ix_(idx, idx)] @ J.T @ Jc           # d(free) / d(held)
     out[np.ix_(idx, idx)] = G @ cov @ G.T
     return out

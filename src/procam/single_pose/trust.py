@@ -164,3 +164,85 @@ def demanded(extra: int, cost: float, richer_cost: float, alarm: float = 1e-3) -
     from scipy.special import chdtri
 
     return extra > 0 and bool(np.isfinite(richer_cost)) and cost - richer_cost > float(chdtri(extra, alarm))
+
+
+def background_disagrees(model: J.JointModel, fit: J.JointFit, camera_cov=None) -> str:
+    """Why the background does not follow one epipolar geometry, or '' when it does (:mod:`.dense`'s docstring, 7).
+
+    The background samples' mean epipolar distance per quadrant of the camera image (``fit`` the solution of
+    ``model`` as it stands) must agree within its noise, a tolerance for a lens no model describes exactly and, for a
+    given camera with its covariance ``camera_cov = (names, (k, k))`` (a camera file's), what that camera's own
+    uncertainty moves each quadrant by after the fit has adjusted to it (the quadrants far from the board are where
+    a camera calibrated from a few photos is least sure); a chi-square at 1e-4 on the quadrants' generalised
+    least-squares mean.
+    """
+    from scipy.special import chdtri
+
+    d = model.data
+    _, _, gr, _ = model.blocks(fit.p)
+    gr = np.asarray(gr)
+    pts = d.back_cam[model.keep_back]
+    if len(gr) < 40:
+        return ""
+    c = np.median(pts, axis=0)
+    q = (pts[:, 0] > c[0]).astype(int) + 2 * (pts[:, 1] > c[1])
+    sig = model.scales.background
+    means, errs, names, masks = [], [], [], []
+    for k, name in enumerate(("upper left", "upper right", "lower left", "lower right")):
+        m = q == k
+        if m.sum() < 10:
+            continue
+        means.append(float(np.mean(gr[m])))
+        # the noise of a quadrant's mean, and a tolerance for a lens no model describes exactly (a tenth of the
+        # noise scale, at least 0.02 px)
+        errs.append(float(np.hypot(sig / np.sqrt(m.sum()), max(0.1 * sig, 0.02))))
+        names.append(name)
+        masks.append(m)
+    if len(means) < 2:
+        return ""
+    means, errs = np.array(means), np.array(errs)
+    V = np.diag(errs ** 2)
+    camera = _camera_share(model, fit, masks, camera_cov)
+    if camera is not None:
+        if not np.all(np.isfinite(camera)):
+            return ""           # a camera known to nothing: the background cannot be judged against it
+        V = V + camera
+    W = np.linalg.inv(V)
+    one = np.ones(len(means))
+    mu = float(one @ W @ means / (one @ W @ one))
+    res = means - mu
+    stat = float(res @ W @ res)
+    thr = float(chdtri(len(means) - 1, 1e-4))
+    if stat <= thr:
+        return ""
+    tol = np.sqrt(np.diag(V))
+    given = " and the given camera's own uncertainty" if camera is not None else ""
+    worst = int(np.argmax(np.abs(res) / tol))
+    return (f"the background does not follow one epipolar geometry: its {names[worst]} quadrant sits "
+            f"{res[worst]:+.2f} px from the others' epipolar lines (tolerance +-{tol[worst]:.2f} px: the "
+            f"decoding noise {sig:.2f} px over {int(masks[worst].sum())} samples, a lens no model describes exactly"
+            f"{given}; "
+            f"chi-square {stat:.0f} > {thr:.0f}) -- interreflections, "
+            "a reflective or moving surface?; the background is left out and the board alone calibrates the "
+            "projector")
+
+
+def _camera_share(model: J.JointModel, fit: J.JointFit, masks, camera_cov) -> np.ndarray | None:
+    """(Q, Q) px^2: the covariance of the quadrants' mean epipolar distances (``masks`` over the kept background
+    samples) from a given camera's own uncertainty, after the fit's free parameters have adjusted to it; None
+    without a given camera and its covariance."""
+    if camera_cov is None or model.data.camera_fixed is None or model.cauchy is not None:
+        return None
+    names, C = camera_cov
+    C = np.asarray(C, float)
+    if not np.all(np.isfinite(C)):
+        return np.full((len(masks), len(masks)), np.inf)
+    d = model.data
+    Jc = J.held_jacobian(model, fit.p, "camera", names)
+    Jm = fit.jac
+    left = Jc - Jm @ np.linalg.lstsq(Jm, Jc, rcond=None)[0]        # what the fit's adjustment leaves
+    start = 2 * len(d.cam) + 2 * int(model.keep_board.sum())
+    wg = d.back_w[model.keep_back] * model.scales.background
+    rows = left[start:start + len(wg)] * wg[:, None]               # px per unit of each camera parameter
+    G = np.array([rows[m].mean(axis=0) for m in masks])
+    return G @ C @ G.T
