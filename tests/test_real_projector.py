@@ -233,5 +233,5 @@ def test_opencvs_tangential_terms_are_a_decentred_radial_lens_to_first_order():
     out, miss = models.brown_recentred(c, e, extent, free=(0, 2, 3))
     assert out[3] == pytest.approx(0.12 * e[0], rel=0.02) and out[2] == pytest.approx(0.12 * e[1], rel=0.02)
     assert miss * 2421.0 < 0.01        # px: second order in the decentring
-    radial, miss_r = models.brown_recentred(c, e, extent, free=(0, 1, 4))
+    _, miss_r = models.brown_recentred(c, e, extent, free=(0, 1, 4))
     assert miss_r > 20 * miss          # radial terms alone cannot describe it
