@@ -214,6 +214,8 @@ def test_a_decentred_projector_lens_is_measured_where_the_wall_spans_the_panel()
     k1, _, p1, p2, _ = cal.projector.distortion.coeffs
     f = cal.projector.K[0, 0]
     assert p2 == pytest.approx(-k1 * 6.0 / f, rel=0.35) and p1 == pytest.approx(-k1 * -4.0 / f, rel=0.35)
+    sp1, sp2 = cal.std["proj_dist"][2:4]             # estimated, so not exact: their ± from the decentring's
+    assert 0 < sp1 < abs(p1) and 0 < sp2 < abs(p2)
     board = _calibrate(dense_view(scene, seed=3, background=False), known_camera=camera)
     assert board.projector.distortion.coeffs[2:4] == (0.0, 0.0)
     for name in ("f_p", "u0p", "v0p"):

@@ -438,8 +438,8 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     best = min((fits[n] for n in near), key=lambda m: len(MODELS.get(m.name, ())))      # the simplest of them
     # a richer model the likelihood ratio demands joins the ± (trust.demanded); the estimate stays the held-out choice
     spread = [fits[n] for n in near] + [m for m in fits.values() if m.name not in near and demanded(len(MODELS.get(m.name, ())) - len(MODELS.get(best.name, ())), best.cost, m.cost)]
-    cov = _reported_covariance(best, spread)
-    cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), spread)
+    cov = _reported_covariance(best, spread, seen)
+    cov_pose = _reported_covariance(replace(best, cov_fit=best.cov_held), spread, seen)
     if known_camera is not None and getattr(known_camera, "covariance", None) is not None:
         # the camera file's own uncertainty, carried through the fit: the projector follows the camera's f_c
         names, C = known_camera.covariance
@@ -516,12 +516,14 @@ def _trim(model: J.JointModel, p, k: float) -> None:
         model.keep_board[:] = keep_b
 
 
-def _reported_covariance(best: ModelFit, near) -> np.ndarray:
+def _reported_covariance(best: ModelFit, near, estimated=()) -> np.ndarray:
     """The fit's covariance, widened to the block jackknife's where that is larger (per parameter, keeping the
-    correlations), plus the spread of the indistinguishable models."""
+    correlations), plus the spread of the indistinguishable models; the rows of the decentrings held at zero go
+    (those ``estimated`` stay: the tangential terms they are written as carry them)."""
     C = best.cov_fit.copy()
-    C[J.NC + len(J.PROJECTOR):, :] = 0.0        # the decentrings are held at zero: their own rows go
-    C[:, J.NC + len(J.PROJECTOR):] = 0.0
+    gone = [J.IDX[n] for n in J.DECENTRING if n not in estimated]
+    C[gone, :] = 0.0
+    C[:, gone] = 0.0
     s_fit = np.sqrt(np.clip(np.diag(C), 0, None))
     s_jk = np.sqrt(np.clip(np.diag(best.cov_jackknife), 0, None))
     with np.errstate(all="ignore"):

@@ -60,7 +60,19 @@ def std_dict(fit: DenseFit, known_camera=None, known_projector=None) -> dict:
         i = J.IDX
         out.update({"f_p": float(s[i["f_p"]]), "fy_p": float(sd[1]), "alpha_p": float(s[i["alpha_p"]]),
                     "u0p": float(s[i["u0p"]]), "v0p": float(s[i["v0p"]]),
-                    "proj_dist": [float(s[i[t]]) for t in J.DIST_TERMS]})
+                    "proj_dist": _dist_std(fit, s)})
+    return out
+
+
+def _dist_std(fit: DenseFit, s) -> list:
+    """The std of the projector's written OpenCV coefficients: the fit's, and for ``p1, p2`` what an estimated
+    decentring ``e`` puts there (``p2 = -k1 e_x``, ``p1 = -k1 e_y`` to first order; :func:`.dense.to_devices`)."""
+    i = J.IDX
+    out = [float(s[i[t]]) for t in J.DIST_TERMS]
+    k1, f, a = fit.p[i["k1p"]], fit.p[i["f_p"]], fit.p[i["alpha_p"]]
+    if f > 0 and a > 0:
+        out[2] = float(np.hypot(out[2], abs(k1) * s[i["dpy"]] / (a * f)))
+        out[3] = float(np.hypot(out[3], abs(k1) * s[i["dpx"]] / f))
     return out
 
 
