@@ -273,14 +273,39 @@ def capture(job: Job, project: Project, devices, advising: Advising | None = Non
     project.state["pose"] = {"name": name, "verdict": verdict}
     project.save()
     pre = hooks.preflight or {}
-    preflight = []
-    if pre.get("ok"):
-        preflight = [(f"pre-flight: white {pre['white_level']:.0%} of full scale on the {pre['region']} "
-                      f"({pre['white_saturated']:.1%} saturated), black {pre['dark_level']:.0%}, contrast "
-                      f"{pre['contrast']:.0%}"), *pre.get("suggestions", [])]
+    preflight = preflight_lines(pre) if pre.get("ok") else []
     return {"pose": name, "verdict": verdict, "lines": preflight + (list(check.lines) if check else [hooks.error]),
             "reasons": list(check.reasons) if check else [hooks.error],
             "check": _rel(project, hooks.png) if hooks.png else None, "preflight": hooks.preflight}
+
+
+def preflight_lines(pre: dict) -> list[str]:
+    """The pre-flight's levels and suggestions in words (as ``procam capture`` prints them); a refused one's reason."""
+    if not pre.get("ok"):
+        return [f"pre-flight: {pre.get('reason')}"]
+    return [(f"pre-flight: white {pre['white_level']:.0%} of full scale on the {pre['region']} "
+             f"({pre['white_saturated']:.1%} saturated), black {pre['dark_level']:.0%}, contrast "
+             f"{pre['contrast']:.0%}"), *pre.get("suggestions", [])]
+
+
+def exposure_check(job: Job, project: Project, devices) -> dict:
+    """The capture's pre-flight alone (:func:`procam.acquire.session.preflight_check`), before a capture: the
+    projector shows white, black and white again, the camera's levels on the board are judged, and the
+    suggestions say what to change (exposure, gain, the room's light); ``ok`` False: the capture would refuse."""
+    from ..acquire.session import CaptureOptions, preflight_check
+
+    board = project.board()
+    size = devices.projector_size if devices.virtual else devices.describe()["projector_size"]
+    if size is None:
+        raise ProcamError(f"no projector to light the board: {devices.describe()['projector']}")
+    job.step(0, 1, "white, black and white again on the projector")
+    devices.release()
+    with ExitStack() as stack, devices.lock:
+        show_and_grab = devices.show_and_grab(stack, size)
+        pre, record = preflight_check(lambda image: (show_and_grab(image), 1), size,
+                                      CaptureOptions(board=board.pattern_size))
+    job.step(1, 1, "judged")
+    return {"ok": bool(pre.ok), "reason": pre.reason, "lines": preflight_lines(record), "levels": record}
 
 
 # ---------------------------------------------------------------------------------------------------------------
