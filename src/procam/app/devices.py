@@ -125,6 +125,15 @@ class Devices:
             return CaptureDevices(virtual=True, proj_size=self.projector_size, seed=self.seed, scene=self.scene)
         return CaptureDevices(camera=self.camera_spec, display=self.display)
 
+    def lit_grab(self, stack, size):
+        """``show_and_grab`` of the exposure check: virtual, the live camera under the projector image (its
+        renderer and noise, :meth:`~procam.acquire.cameras.VirtualLiveCamera.grab`); else :meth:`show_and_grab`."""
+        if not self.virtual:
+            return self.show_and_grab(stack, size)
+        from ..acquire.cameras.base import to_gray
+
+        return lambda image: to_gray(self._live.grab(image).image)
+
     def show_and_grab(self, stack, size):
         """``show_and_grab`` of the world check (:func:`procam.world_check.virtual_device` or
         :func:`~procam.world_check.capture_device`), entered on ``stack`` (an ExitStack)."""

@@ -301,7 +301,7 @@ def exposure_check(job: Job, project: Project, devices) -> dict:
     job.step(0, 1, "white, black and white again on the projector")
     devices.release()
     with ExitStack() as stack, devices.lock:
-        show_and_grab = devices.show_and_grab(stack, size)
+        show_and_grab = devices.lit_grab(stack, size)
         pre, record = preflight_check(lambda image: (show_and_grab(image), 1), size,
                                       CaptureOptions(board=board.pattern_size))
     job.step(1, 1, "judged")
