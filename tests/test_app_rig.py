@@ -172,7 +172,7 @@ def test_the_rig_captured_and_calibrated_in_the_app_meets_the_simulator_s_truth(
     one projector after another, calibrated (each projector's f_p within 3 sigma of the truth, or 2 %), the rig's
     files written as procam calibrate writes them, and its blend masks."""
     from procam.io.files import procam_wrote
-    from procam.io.rig import load_rig_calibration
+    from procam.io import load_rig_calibration
 
     project = Path(client.app.state.procam.project.root)
     assert client.post("/api/devices", headers=H, json={"projector_size": [640, 360]}).status_code == 200

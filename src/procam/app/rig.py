@@ -148,6 +148,22 @@ class _RigHooks:
         self.lines.append(f"{self.name}: {error}")
 
 
+def summary(project: Project) -> dict | None:
+    """The page's view of the project's rig pose: its name, projectors and their verdicts, whether it was captured
+    whole, each projector's check picture, the blend's alpha files; None before the first rig capture."""
+    from ..capture import RIG_MANIFEST
+
+    rig = project.state.get("rig")
+    if not rig or not rig.get("name"):
+        return None
+    folder = project.root / rig["name"]
+    names = rig.get("projectors") or []
+    blend = project.file("blend")
+    return {**rig, "complete": (folder / RIG_MANIFEST).is_file(),
+            "checks": [f"{rig['name']}/{n}.check.png" for n in names if (folder / f"{n}.check.png").is_file()],
+            "alpha": [f"{FILES['blend']}/alpha_{n}.png" for n in names if (blend / f"alpha_{n}.png").is_file()]}
+
+
 def usable_rig(project: Project, *, judged: bool = True):
     """The project's rig pose (:class:`procam.capture.RigPose`) when the next step may use it: captured whole
     (``rig.json``) and, ``judged``, every projector's instant verdict good or weak."""

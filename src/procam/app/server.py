@@ -124,7 +124,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         running = st.jobs.running()
         return JSONResponse({**s, "devices": devices.describe(), "photos": [str(p.name) for p in work.photos(project)],
                              "calibration": work.describe_calibration(calib) if calib is not None else None,
-                             "job": running.to_dict() if running else None})
+                             "job": running.to_dict() if running else None, "rig": rig.summary(project)})
 
     def idle(what: str) -> None:
         """Refuse to change ``what`` while a job uses it (the board, the devices, the camera)."""

@@ -86,7 +86,48 @@ function render() {
   // calibration
   if (s.calibration && !(st.calibration && !st.calibration.trusted)) showCalibration(s.calibration, !!s.files.calibration);
   renderExports(s.exports);
+  renderRig(s);
   gate();
+}
+
+function rigOk(s) {  // a rig pose captured whole, every projector's verdict good or weak
+  const r = s.rig;
+  return !!(r && r.complete && r.projectors.every((n) => ["good", "weak"].includes((r.verdicts || {})[n])));
+}
+
+function thumbs(id, names, alt) {
+  $(id).replaceChildren(...(names || []).map((n) => { const im = document.createElement("img"); im.src = fileUrl(n); im.alt = alt + " " + n; return im; }));
+}
+
+function renderRig(s) {
+  const r = s.rig, st = s.state;
+  if (!$("rig-projectors").value && s.devices.virtual) $("rig-projectors").placeholder = "left,right";
+  if (r) {
+    const words = r.projectors.map((n) => `${n} ${(r.verdicts || {})[n] || "?"}`).join(", ");
+    text("rig-verdict", `${r.name}: ${words}` + (r.complete ? "" : " (not captured whole: capture the rig again)"));
+    verdictClass($("rig-verdict"), rigOk(s) ? "good" : "degenerate");
+    thumbs("rig-checks", r.checks, "the check picture of");
+    thumbs("rig-blend-alpha", r.alpha, "the blend mask");
+  }
+  const latest = st.rig_calibration, written = !!s.files.rig_calibration && !(latest && !latest.trusted);
+  if (latest && !$("rig-calibrate-verdict").textContent) text("rig-calibrate-verdict", `rig calibration: ${latest.verdict}` + (latest.trusted ? "" : " (not written)"));
+  setImg("rig-figure", written && s.files.rig_figure ? s.files.rig_figure : null);
+  const rep = $("rig-report"); rep.hidden = !(written && s.files.rig_report);
+  if (!rep.hidden) rep.href = fileUrl(s.files.rig_report);
+}
+
+function fillTable(id, t) {
+  const el = $(id); el.replaceChildren();
+  const head = el.insertRow(); for (const h of t.header) { const th = document.createElement("th"); th.textContent = h; head.appendChild(th); }
+  for (const r of t.rows) { const tr = el.insertRow(); for (const cell of r) tr.insertCell().textContent = cell; }
+}
+
+function showRigCalibration(c) {
+  text("rig-calibrate-verdict", `rig calibration: ${c.verdict} - ${c.meaning}` + (c.written.length ? "" : " (not written: procam does not write a calibration it cannot trust)"));
+  verdictClass($("rig-calibrate-verdict"), c.verdict);
+  list("rig-calibrate-reasons", c.reasons);
+  fillTable("rig-devices", c.device_table); fillTable("rig-relative", c.relative_table); fillTable("rig-agreement", c.agreement_table);
+  $("rig-devices").createCaption().textContent = c.uncertainty;
 }
 
 function gate() {
@@ -102,6 +143,12 @@ function gate() {
   $("world-run").disabled = busy || !calibOk;
   $("export-run").disabled = busy || !calibOk;
   $("pose-cancel").disabled = !busy;
+  $("rig-cancel").disabled = !busy;
+  $("devices-exposure").disabled = busy || !boardDone;
+  $("rig-capture").disabled = busy || !boardDone;
+  $("rig-calibrate").disabled = busy || !rigOk(s);
+  $("rig-blend").disabled = busy || !(s.rig && s.rig.complete);
+  $("step-rig").classList.toggle("locked", !boardDone);
   for (const [id, ok] of [["step-camera", boardDone], ["step-pose", boardDone], ["step-calibrate", poseOk],
                           ["step-world", calibOk], ["step-export", calibOk]]) $(id).classList.toggle("locked", !ok);
 }
@@ -257,6 +304,19 @@ function wire() {
     list("pose-lines", r.lines); setImg("pose-check", r.check);
   }));
   $("pose-cancel").onclick = () => guarded(async () => { if (JOB) await api(`api/jobs/${JOB.id}/cancel`, {}); });
+  $("rig-cancel").onclick = $("pose-cancel").onclick;
+  $("devices-exposure").onclick = () => guarded(() => runJob("api/exposure", null, (r) => {
+    text("devices-exposure-verdict", r.ok ? "the exposure is fine for a capture" + (r.lines.length > 1 ? ", with advice:" : "") : "a capture would refuse: " + r.reason);
+    verdictClass($("devices-exposure-verdict"), r.ok ? (r.lines.length > 1 ? "weak" : "good") : "failed");
+    list("devices-exposure-lines", r.lines);
+  }));
+  $("rig-capture").onclick = () => guarded(() => runJob("api/rig/capture", "rig-progress", (r) => {
+    list("rig-lines", r.lines);
+  }, { projectors: $("rig-projectors").value.trim() || null }));
+  $("rig-calibrate").onclick = () => guarded(() => runJob("api/rig/calibrate", "rig-progress", showRigCalibration));
+  $("rig-blend").onclick = () => guarded(() => runJob("api/rig/blend", "rig-progress", (r) => {
+    text("rig-blend-status", "blend masks in blend/: " + Object.entries(r.overlap).map(([n, f]) => `${n} overlaps on ${Math.round(100 * f)} % of its pixels`).join(", "));
+  }));
   $("calibrate-run").onclick = () => guarded(() => runJob("api/calibrate", "calibrate-progress", (r) => showCalibration(r, r.written.length > 0)));
   $("world-run").onclick = () => guarded(() => runJob("api/world", null, (r) => {
     text("world-verdict", `${r.verdict}: ${r.found} of ${r.targets} spots found, miss ${num(r.rms_px, 3)} px RMS (${num(r.max_px, 3)} max); ${r.reasons.join("; ")}` + (r.diagnosis ? `; ${r.diagnosis}` : ""));
