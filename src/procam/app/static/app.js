@@ -6,6 +6,7 @@ let STATE = null;
 let JOB = null;          // the running job (its dict) or null
 let PREVIEW_BUSY = false;
 let frames = [];
+const DRAWN = { frames: 0, advice: 0, lastAdvice: null };
 
 function url(path) { return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN); }
 function fileUrl(name, download) { return url("files/" + name.split("/").map(encodeURIComponent).join("/")) + (download ? "&download=1" : "") + "&t=" + Date.now(); }
@@ -243,6 +244,9 @@ function drawPreview(p) {
       $("camera-view").dataset.state = a.state;
       const now = performance.now(); frames.push(now); frames = frames.filter((t) => now - t < 2000);
       text("preview-fps", `${(frames.length / 2).toFixed(1)} frames/s`);
+      DRAWN.frames += 1;  // counted for scripts and benchmarks: frames drawn, and the advice of distinct frames
+      if (a.of_frame != null && a.of_frame !== DRAWN.lastAdvice) { DRAWN.advice += 1; DRAWN.lastAdvice = a.of_frame; }
+      $("preview-fps").dataset.frames = DRAWN.frames; $("preview-fps").dataset.advice = DRAWN.advice;
       resolve();
     };
     img.onerror = () => resolve();
