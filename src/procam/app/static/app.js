@@ -198,13 +198,16 @@ async function runJob(path, progressId, onDone, body) {
 
 // ---- the live view ---------------------------------------------------------------------
 async function previewLoop() {
+  let next = null;  // the next frame's request, in flight while this one is decoded and drawn
+  const ask = () => { const r = api("api/preview"); r.catch(() => {}); return r; };
   for (;;) {
-    if (!$("preview-live").checked || JOB || !STATE) { await new Promise((r) => setTimeout(r, 300)); continue; }
+    if (!$("preview-live").checked || JOB || !STATE) { next = null; await new Promise((r) => setTimeout(r, 300)); continue; }
     try {
-      const p = await api("api/preview");
+      const p = await (next || ask());
+      next = p.busy ? null : ask();
       if (!p.busy) await drawPreview(p);
-    } catch (e) { text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
-    await new Promise((r) => requestAnimationFrame(r));  // the next frame as soon as the page has drawn this one
+    } catch (e) { next = null; text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
+    await new Promise((r) => requestAnimationFrame(r));  // the page shows each frame before the next is drawn
   }
 }
 
