@@ -74,14 +74,26 @@ class Advising:
 
 class LiveView:
     """The camera's live view: each request gets the newest frame at once, and the advice of the newest frame the
-    advisor has finished; the advisor works on the latest frame in a thread of its own, so neither waits for the
-    other (the frame rate is the camera's, the advice's rate the advisor's)."""
+    advisor has finished; the advisor works in a thread of its own, and as soon as it is done with a frame it takes
+    the newest frame served since, so neither waits for the other (the frame rate is the camera's, the advice's rate
+    the advisor's)."""
 
     def __init__(self):
         self.advising = Advising()
         self.frame = 0
         self.latest: dict | None = None
         self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._pending = None  # (project, image, frame) the advisor takes next
+
+    def _advisor(self) -> None:
+        while True:
+            with self._lock:
+                job, self._pending = self._pending, None
+                if job is None:
+                    self._thread = None
+                    return
+            self._advise(*job)
 
     def _advise(self, project: Project, image, frame: int) -> None:
         from ..acquire.preview import advice_lines  # the preview window's text panel, word for word
@@ -103,21 +115,24 @@ class LiveView:
         import numpy as np
 
         image = devices.grab()
-        self.frame += 1
-        if self._thread is None or not self._thread.is_alive():
-            self._thread = threading.Thread(target=self._advise, args=(project, image, self.frame),
-                                            name="procam-app-advice")  # short: the interpreter waits for it
-            self._thread.start()
+        with self._lock:
+            self.frame += 1
+            frame = self.frame
+            self._pending = (project, image, frame)
+            if self._thread is None:  # ends when no frame waits: the interpreter may wait for it
+                self._thread = threading.Thread(target=self._advisor, name="procam-app-advice")
+                self._thread.start()
         shown = image if image.dtype == np.uint8 else (image >> 8).astype(np.uint8)
         ok, buf = cv2.imencode(".jpg", shown, [cv2.IMWRITE_JPEG_QUALITY, 80])
         if not ok:
             raise ProcamError("the camera frame could not be encoded as JPEG")
-        return buf.tobytes(), self.frame, self.latest
+        return buf.tobytes(), frame, self.latest
 
     def wait(self, timeout: float | None = None) -> dict | None:
-        """The advice once the advisor's running frame is done (tests, scripts)."""
-        if self._thread is not None:
-            self._thread.join(timeout)
+        """The advice once the advisor is done with every frame served (tests, scripts)."""
+        thread = self._thread
+        if thread is not None:
+            thread.join(timeout)
         return self.latest
 
 
