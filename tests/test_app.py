@@ -69,7 +69,8 @@ def test_every_request_without_the_token_is_refused(client):
     (project / "mine.txt").write_text("secret")
     gets = ["/", "/api/state", "/api/preview", "/static/app.js", "/files/mine.txt", "/api/jobs/1"]
     posts = ["/api/board", "/api/devices", "/api/camera", "/api/capture", "/api/calibrate", "/api/world",
-             "/api/export", "/api/jobs/1/cancel"]
+             "/api/export", "/api/jobs/1/cancel", "/api/exposure", "/api/rig/capture", "/api/rig/calibrate",
+             "/api/rig/blend"]
     for bad in ({}, {"X-Procam-Token": "wrong"}, {"X-Procam-Token": TOKEN[:-1]}):
         for path in gets:
             r = client.get(path, headers=bad)

@@ -201,3 +201,17 @@ def test_the_rig_captured_and_calibrated_in_the_app_meets_the_simulator_s_truth(
     assert s["files"]["rig_calibration"] == "rig-calib.json" and s["files"]["rig_report"] == "rig-calib.html"
     j = _run(client, "/api/rig/blend")
     assert j["state"] == "done" and "blend/blend.npz" in j["result"]["written"], j
+
+
+def test_a_cancelled_rig_capture_is_no_rig_pose(client):
+    """Cancel stops the rig capture at its next step: no rig.json, the project has no rig pose, nothing goes on."""
+    project = Path(client.app.state.procam.project.root)
+    r = client.post("/api/rig/capture", headers=H, json={})
+    assert r.status_code == 202, r.text
+    assert client.post(f"/api/jobs/{r.json()['id']}/cancel", headers=H, json={}).status_code == 200
+    j = _wait(client, r.json())
+    assert j["state"] == "cancelled" and j["error"] == "rig capture cancelled"
+    assert not list(project.rglob("rig.json")) and not list(project.rglob("*.png"))
+    assert client.get("/api/state", headers=H).json()["rig"] is None
+    r = client.post("/api/rig/calibrate", headers=H, json={})
+    assert r.status_code == 400 and "no rig pose yet" in r.json()["error"]
