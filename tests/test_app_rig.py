@@ -181,6 +181,7 @@ def test_the_rig_captured_and_calibrated_in_the_app_meets_the_simulator_s_truth(
     assert j["result"]["rig"] == "rig1" and set(j["result"]["verdicts"]) == {"left", "right"}
     assert all(v in ("good", "weak") for v in j["result"]["verdicts"].values()), j["result"]["lines"]
     assert j["result"]["checks"] == ["rig1/left.check.png", "rig1/right.check.png"]
+    assert [line.split(":")[0] for line in j["result"]["lines"] if ": pre-flight: white" in line] == ["left", "right"]
     assert json.loads((project / "rig1" / "rig.json").read_text())["projectors"] == ["left", "right"]
     j = _run(client, "/api/rig/calibrate")
     assert j["state"] == "done", j

@@ -105,9 +105,6 @@ class _RigHooks:
     projector's instant verdict with its check picture (``rigN/<projector>.check.png``)."""
 
     def __init__(self, job: Job, project: Project, n: int):
-        from .work import _Hooks
-
-        self.one = _Hooks(job, project)
         self.job, self.project, self.n = job, project, n
         self.i, self.name = 0, ""
         self.verdicts, self.lines, self.pictures = [], [], []
@@ -121,7 +118,10 @@ class _RigHooks:
     def camera(self, camera): ...
 
     def busy(self, text):
-        return self.one.busy(f"{self.name}: {text}")
+        import contextlib
+
+        self.job.step(message=f"{self.name}: {text}")
+        return contextlib.nullcontext()
 
     def pose(self, i, poses, kind): ...
 
@@ -131,6 +131,10 @@ class _RigHooks:
         self.job.step(message=f"{self.name}: decoding and judging the pose")
 
     def progress(self, i, event):
+        if event.kind == "preflight" and event.data.get("ok"):  # its levels and advice head the projector's lines
+            from .work import preflight_lines
+
+            self.lines += [f"{self.name}: {line}" for line in preflight_lines(event.data)]
         done = self.i * event.total + event.index + 1 if event.kind == "frame" else None
         self.job.step(done, self.n * event.total, f"{self.name}: " + (event.message or
                       f"{event.kind} {max(event.index, 0) + 1}/{event.total}"))
