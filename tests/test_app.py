@@ -69,7 +69,8 @@ def test_every_request_without_the_token_is_refused(client):
     (project / "mine.txt").write_text("secret")
     gets = ["/", "/api/state", "/api/preview", "/static/app.js", "/files/mine.txt", "/api/jobs/1"]
     posts = ["/api/board", "/api/devices", "/api/camera", "/api/capture", "/api/calibrate", "/api/world",
-             "/api/export", "/api/jobs/1/cancel"]
+             "/api/export", "/api/jobs/1/cancel", "/api/exposure", "/api/rig/capture", "/api/rig/calibrate",
+             "/api/rig/blend"]
     for bad in ({}, {"X-Procam-Token": "wrong"}, {"X-Procam-Token": TOKEN[:-1]}):
         for path in gets:
             r = client.get(path, headers=bad)
@@ -504,10 +505,10 @@ def test_the_page_in_a_browser(served, page, tmp_path):
 
 @pytest.mark.slow
 def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
-    """Devices -> Board -> Camera (4 photos) -> Projector pose -> Calibrate -> Check in the world -> Export, clicked
-    through in Chromium on the virtual devices: the calibration's f_p and f_c within the simulator's truth, the
-    world check holds, the exported Blender file is the calibration's; a screenshot of every step; no console
-    errors."""
+    """Devices (with the exposure check) -> Board -> Camera (4 photos) -> Projector pose -> Calibrate -> Check in the
+    world -> Export -> More projectors, clicked through in Chromium on the virtual devices: the calibration's f_p and
+    f_c within the simulator's truth, the world check holds, the exported Blender file is the calibration's, the
+    rig's projectors within the truth and its blend masks written; a screenshot of every step; no console errors."""
     from playwright.sync_api import expect
 
     from procam import export, io
@@ -525,6 +526,9 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     page.fill("#board-square", "24")
     page.click("#board-save")
     page.wait_for_selector("#board-svg:not([hidden])")
+    page.click("#devices-exposure")  # the capture's pre-flight before the capture: levels and advice
+    _expect(page, "#devices-exposure-verdict", "the exposure is fine for a capture", 60)
+    _expect(page, "#devices-exposure-lines", "of full scale on the board", 5)
     _shot(page, shots, "2-board")
     for i in range(4):
         page.select_option("#virtual-pose", str(i))
@@ -549,6 +553,17 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     page.wait_for_selector("#export-files a[download='blender.json']", timeout=60000)
     _shot(page, shots, "7-export")
     seconds = time.monotonic() - t0
+    # More projectors: the simulator's two-projector rig, one after the other; its calibration; the blend masks
+    page.click("#rig-capture")
+    _expect(page, "#rig-verdict", re.compile(r"^rig1: left (good|weak), right (good|weak)$"), 240)
+    page.click("#rig-calibrate")
+    _expect(page, "#rig-calibrate-verdict", re.compile(r"^rig calibration: (good|weak) - "), 120)
+    assert "left" in page.text_content("#rig-devices") and "left->right" in page.text_content("#rig-relative")
+    page.wait_for_selector("#rig-figure:not([hidden])")
+    page.click("#rig-blend")
+    _expect(page, "#rig-blend-status", "blend masks in blend/: left overlaps on", 120)
+    page.wait_for_selector("#rig-blend-alpha img >> nth=1")
+    _shot(page, shots, "8-rig")
     with page.expect_download() as dl:
         page.click("#export-files a[download='blender.json']")
     downloaded = tmp_path / "blender.json"
@@ -566,6 +581,13 @@ def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     assert doc["format"] == "procam-blender" and doc["devices"] == json.loads(json.dumps(fresh["devices"]))
     assert (folder / "export" / "blender.py").is_file() and (folder / "calib.html").is_file()
     assert sorted(p.name for p in shots.iterdir()) == ["1-devices.png", "2-board.png", "3-camera.png", "4-pose.png",
-                                                       "5-calibrate.png", "6-world.png", "7-export.png"]
+                                                       "5-calibrate.png", "6-world.png", "7-export.png", "8-rig.png"]
+    # the rig's calibration against the simulator's truth, and its blend masks in the project folder
+    rc = io.load_rig_calibration(folder / "rig-calib.json")
+    rig_truth = json.loads((folder / "rig1" / "truth.json").read_text())["devices"]
+    for name in ("left", "right"):
+        f, sf, f_true = rc.device(name).device.K[0, 0], rc.device(name).std["f"], rig_truth[name]["f"]
+        assert abs(f - f_true) < max(3 * sf, 0.02 * f_true), (name, f, sf, f_true)
+    assert {p.name for p in (folder / "blend").iterdir()} >= {"alpha_left.png", "alpha_right.png", "blend.npz"}
     assert page.problems == [], page.problems
     print(f"the whole virtual flow in the browser: {seconds:.1f} s")

@@ -20,6 +20,8 @@ role ``"captured"``): into a hidden sibling folder ``.NAME.partial-PID``, rename
 everything is written, so an interrupted or failed capture leaves no folder that looks complete (the
 partial one is removed unless ``keep_failed``).  Nothing is printed: progress is reported through a
 callback of :class:`Event`.
+
+:func:`preflight_check` runs step 1 alone, once (the app's exposure help before a capture).
 """
 
 from __future__ import annotations
@@ -294,37 +296,59 @@ def _preflight(run: _Run, white_img, black_img, ps):
     o = run.opts
     exposure = getattr(run.camera, "exposure_ms", None)
     for attempt in range(o.retries + 1):
-        w1, g1 = _steady(run, white_img)
-        b, g2 = _steady(run, black_img)
-        w2, g3 = _steady(run, white_img)
-        if not (w1.shape == b.shape == w2.shape):
-            raise CaptureFailed(f"camera {getattr(run.camera, 'name', '')}: the frame size changed between frames "
-                                f"({w1.shape[1]}x{w1.shape[0]}, {b.shape[1]}x{b.shape[0]})")
-        corners = None
-        if o.board is not None:
-            from ..board.corners import detect_corners
-
-            corners = detect_corners(w1, tuple(o.board))
-            if corners is None:
-                cols, rows = o.board
-                raise CaptureFailed(f"chessboard with {cols}x{rows} inner corners not found in the pre-flight white "
-                                    f"frame: check --board (inner corners: {cols + 1}x{rows + 1} squares), that the "
-                                    "whole board is in view, lit by the projector and in focus")
-        pre = checks.preflight(w1, b, w2, board_corners=corners, exposure_ms=exposure,
-                               max_saturated=o.max_saturated, min_span=o.min_span)
-        d = pre.to_dict()
+        pre, d, extra = _preflight_once(lambda image: _steady(run, image), white_img, black_img, o, exposure,
+                                        getattr(run.camera, "name", ""))
         run.emit("preflight", -1, ps.count, pre.reason or "; ".join(pre.suggestions), d)
         if pre.ok:
             d["attempts"] = attempt + 1
-            d["grabs"] = [g1, g2, g3]
-            d["camera_size"] = [int(w1.shape[1]), int(w1.shape[0])]
-            d["board_found"] = None if o.board is None else True
+            d.update(extra)
             return pre, d
         unstable = pre.repeat is not None and pre.repeat > 0.1 and pre.white_saturated <= o.max_saturated
         if not unstable or attempt == o.retries:
             raise CaptureFailed(f"pre-flight: {pre.reason}")
         run.retries += 1
     raise AssertionError("unreachable")
+
+
+def _preflight_once(shoot, white_img, black_img, o: CaptureOptions, exposure, camera_name: str):
+    """One pre-flight: (Preflight, its dict, the grabs / camera size / board found of the capture's record)."""
+    w1, g1 = shoot(white_img)
+    b, g2 = shoot(black_img)
+    w2, g3 = shoot(white_img)
+    if not (w1.shape == b.shape == w2.shape):
+        raise CaptureFailed(f"camera {camera_name}: the frame size changed between frames "
+                            f"({w1.shape[1]}x{w1.shape[0]}, {b.shape[1]}x{b.shape[0]})")
+    corners = None
+    if o.board is not None:
+        from ..board.corners import detect_corners
+
+        corners = detect_corners(w1, tuple(o.board))
+        if corners is None:
+            cols, rows = o.board
+            raise CaptureFailed(f"chessboard with {cols}x{rows} inner corners not found in the pre-flight white "
+                                f"frame: check --board (inner corners: {cols + 1}x{rows + 1} squares), that the "
+                                "whole board is in view, lit by the projector and in focus")
+    pre = checks.preflight(w1, b, w2, board_corners=corners, exposure_ms=exposure,
+                           max_saturated=o.max_saturated, min_span=o.min_span)
+    extra = {"grabs": [g1, g2, g3], "camera_size": [int(w1.shape[1]), int(w1.shape[0])],
+             "board_found": None if o.board is None else True}
+    return pre, pre.to_dict(), extra
+
+
+def preflight_check(shoot, size, options: CaptureOptions = CaptureOptions(), *, exposure_ms: float | None = None,
+                    camera_name: str = "") -> tuple[checks.Preflight, dict]:
+    """The capture's pre-flight on its own, once (what :func:`capture_pose` does before the sequence): the projector
+    shows white, black and white again, each grabbed by ``shoot(image) -> (frame, grabs)`` (``image`` (H, W) uint8 of
+    the projector's ``size`` (width, height)); the board (``options.board``, inner corners) is found in the first
+    white; :func:`procam.acquire.checks.preflight` judges the levels.
+
+    Returns (:class:`~procam.acquire.checks.Preflight`, its dict with ``grabs``, ``camera_size`` and ``board_found``):
+    a refused pre-flight is returned (``ok`` False, ``reason`` saying what to do); :class:`CaptureFailed` (one line)
+    when the frame size changed between the frames or the board is not found."""
+    W, H = (int(v) for v in size)
+    pre, d, extra = _preflight_once(shoot, np.full((H, W), 255, np.uint8), np.zeros((H, W), np.uint8), options,
+                                    exposure_ms, camera_name)
+    return pre, {**d, **extra}
 
 
 def _steady(run: _Run, image) -> tuple[np.ndarray, int]:

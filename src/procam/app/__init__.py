@@ -1,10 +1,11 @@
 """``procam app``: the guided calibration in a browser (docs/app.md).
 
 A local web server (starlette on uvicorn, the ``app`` extra: ``pip install "procam[app]"``) serves one page whose
-sections are the steps -- Devices, Board, Camera, Projector pose, Calibrate, Check in the world, Export -- over the
-same library calls the command line makes.  The project folder is the state (:mod:`procam.app.project`); long work
-runs in a thread with progress and cancel (:mod:`procam.app.jobs`); the devices are the simulator's with
-``virtual`` (:mod:`procam.app.devices`); the routes and their guards are :mod:`procam.app.server`.
+sections are the steps -- Devices, Board, Camera, Projector pose, Calibrate, Check in the world, Export, More
+projectors -- over the same library calls the command line makes (:mod:`procam.app.work`; the rig's in
+:mod:`procam.app.rig`).  The project folder is the state (:mod:`procam.app.project`); long work runs in a thread
+with progress and cancel (:mod:`procam.app.jobs`); the devices are the simulator's with ``virtual``
+(:mod:`procam.app.devices`); the routes and their guards are :mod:`procam.app.server`.
 
 Nothing here is imported by the rest of procam; starlette and uvicorn are imported only here.
 """

@@ -24,7 +24,9 @@ class Devices:
                  projector_size=(1920, 1080)):
         self.virtual, self.camera_spec, self.display, self.seed = virtual, camera, display, int(seed)
         self.lock = threading.RLock()  # the live view and a job never use the camera at once
+        self._pose_lock = threading.Lock()  # the virtual board's pose (short: a click waits for no frame)
         self._live = None
+        self._shown = None  # the scene the live camera shows
         self._camera = None
         self._listing = None
         self.pose_index = 0
@@ -50,21 +52,32 @@ class Devices:
         self._virtual_only("set the board's pose")
         if not (isinstance(index, int) and 0 <= index < len(VIRTUAL_POSES)):
             raise ProcamError(f"board pose: give 0 to {len(VIRTUAL_POSES) - 1}, got {index!r}")
-        with self.lock:
-            self.pose_index = index
-            self.scene = demo_scene(self.projector_size, VIRTUAL_POSES[index])
-            self._live = VirtualLiveCamera(self.scene, seed=self.seed)
+        scene = demo_scene(self.projector_size, VIRTUAL_POSES[index])
+        with self._pose_lock:  # the live camera takes the new scene at its next frame: a click never waits for one
+            self.pose_index, self.scene = index, scene
+            if self._live is None:
+                self._live = VirtualLiveCamera(scene, seed=self.seed)
 
     def move(self, turn_deg: float = 0.0, tilt_deg: float = 0.0) -> None:
         """Virtual: turn / tilt the board about its centre (:func:`procam.advisor.apply_move`), degrees."""
+        from ..advisor import apply_move
+
         self._virtual_only("move the board")
         for name, v in (("turn", turn_deg), ("tilt", tilt_deg)):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not -45 <= v <= 45:
                 raise ProcamError(f"board {name}: give degrees from -45 to 45, got {v!r}")
-        with self.lock:
-            self._live.move(float(turn_deg), float(tilt_deg))
-            s = self._live.scene
-            self.scene = self.scene.replace(R_board=s.R_board, t_board=s.t_board)
+        with self._pose_lock:
+            R, t = apply_move(self.scene.R_board, self.scene.t_board, float(turn_deg), float(tilt_deg))
+            self.scene = self.scene.replace(R_board=R, t_board=t)
+
+    def _live_camera(self):
+        """The virtual live camera, showing the board where it is now (call with :attr:`lock` held)."""
+        with self._pose_lock:
+            scene = self.scene
+        if scene is not self._shown:
+            self._live.set_scene(scene)
+            self._shown = scene
+        return self._live
 
     def _virtual_only(self, what: str) -> None:
         if not self.virtual:
@@ -103,7 +116,7 @@ class Devices:
 
         with self.lock:
             if self.virtual:
-                return to_gray(self._live.grab().image)
+                return to_gray(self._live_camera().grab().image)
             if self._camera is None:
                 from ..acquire.cameras import open_camera
 
@@ -124,6 +137,15 @@ class Devices:
         if self.virtual:
             return CaptureDevices(virtual=True, proj_size=self.projector_size, seed=self.seed, scene=self.scene)
         return CaptureDevices(camera=self.camera_spec, display=self.display)
+
+    def lit_grab(self, stack, size):
+        """``show_and_grab`` of the exposure check: virtual, the live camera under the projector image (its
+        renderer and noise, :meth:`~procam.acquire.cameras.VirtualLiveCamera.grab`); else :meth:`show_and_grab`."""
+        if not self.virtual:
+            return self.show_and_grab(stack, size)
+        from ..acquire.cameras.base import to_gray
+
+        return lambda image: to_gray(self._live_camera().grab(image).image)
 
     def show_and_grab(self, stack, size):
         """``show_and_grab`` of the world check (:func:`procam.world_check.virtual_device` or

@@ -21,11 +21,14 @@ from ..io.formats import APP_PROJECT_FORMAT as STATE_FORMAT
 FILES = {"state": "procam-app.json", "board": "board.svg", "photos": "camera", "camera": "camera.json",
          "calibration": "calib.json", "yaml": "calib.yml",
          "residuals": "calib.residuals.png", "report": "calib.html", "world": "world.png",
-         "world_json": "world.json", "export": "export"}
+         "world_json": "world.json", "export": "export",
+         "rig_calibration": "rig-calib.json", "rig_yaml": "rig-calib.yml", "rig_figure": "rig-calib.png",
+         "rig_report": "rig-calib.html", "blend": "blend"}
 
 #: The defaults of a new project.
 DEFAULTS = {"board": {"cols": 10, "rows": 6, "square": 24.0}, "unit": "mm", "camera_file": None,
-            "projector_size": [1920, 1080], "pose": None, "calibration": None, "photos": None}
+            "projector_size": [1920, 1080], "pose": None, "calibration": None, "photos": None,
+            "rig": None, "rig_calibration": None}
 
 
 class Project:

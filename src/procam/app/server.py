@@ -22,7 +22,7 @@ from starlette.responses import FileResponse, HTMLResponse, JSONResponse, PlainT
 from starlette.routing import Route
 
 from ..errors import ProcamError
-from . import work
+from . import rig, work
 from .devices import Devices
 from .jobs import Busy, Jobs, error_line, results_carry_warnings
 from .project import Project
@@ -124,7 +124,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         running = st.jobs.running()
         return JSONResponse({**s, "devices": devices.describe(), "photos": [str(p.name) for p in work.photos(project)],
                              "calibration": work.describe_calibration(calib) if calib is not None else None,
-                             "job": running.to_dict() if running else None})
+                             "job": running.to_dict() if running else None, "rig": rig.summary(project)})
 
     def idle(what: str) -> None:
         """Refuse to change ``what`` while a job uses it (the board, the devices, the camera)."""
@@ -194,6 +194,17 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
         return result
 
     calibrate = start("calibrate", after_calibrate, lambda: work.usable_pose(project))
+    exposure = start("exposure check", lambda job: work.exposure_check(job, project, devices), project.board)
+    rig_calibrate = start("rig calibration", lambda job: rig.calibrate(job, project), lambda: rig.usable_rig(project))
+    rig_blend = start("blend", lambda job: rig.blend(job, project), lambda: rig.usable_rig(project, judged=False))
+
+    async def rig_capture(request: Request):
+        b = await _body(request)
+        project.board()
+        spec = b.get("projectors") or None
+        rig.projectors(devices, spec)  # a wrong list is answered now, not by a failed job
+        job = st.jobs.start("rig capture", lambda job: rig.capture(job, project, devices, spec))
+        return JSONResponse(job.to_dict(), status_code=202)
 
     def job_of(request: Request):
         try:
@@ -237,6 +248,10 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
               Route("/api/calibrate", guarded(calibrate), methods=["POST"]),
               Route("/api/world", guarded(world), methods=["POST"]),
               Route("/api/export", guarded(export), methods=["POST"]),
+              Route("/api/exposure", guarded(exposure), methods=["POST"]),
+              Route("/api/rig/capture", guarded(rig_capture), methods=["POST"]),
+              Route("/api/rig/calibrate", guarded(rig_calibrate), methods=["POST"]),
+              Route("/api/rig/blend", guarded(rig_blend), methods=["POST"]),
               Route("/api/jobs/{job_id}", guarded(job)),
               Route("/api/jobs/{job_id}/cancel", guarded(cancel), methods=["POST"]),
               Route("/files/{path:path}", guarded(files))]

@@ -74,14 +74,26 @@ class Advising:
 
 class LiveView:
     """The camera's live view: each request gets the newest frame at once, and the advice of the newest frame the
-    advisor has finished; the advisor works on the latest frame in a thread of its own, so neither waits for the
-    other (the frame rate is the camera's, the advice's rate the advisor's)."""
+    advisor has finished; the advisor works in a thread of its own, and as soon as it is done with a frame it takes
+    the newest frame served since, so neither waits for the other (the frame rate is the camera's, the advice's rate
+    the advisor's)."""
 
     def __init__(self):
         self.advising = Advising()
         self.frame = 0
         self.latest: dict | None = None
         self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._pending = None  # (project, image, frame) the advisor takes next
+
+    def _advisor(self) -> None:
+        while True:
+            with self._lock:
+                job, self._pending = self._pending, None
+                if job is None:
+                    self._thread = None
+                    return
+            self._advise(*job)
 
     def _advise(self, project: Project, image, frame: int) -> None:
         from ..acquire.preview import advice_lines  # the preview window's text panel, word for word
@@ -103,21 +115,24 @@ class LiveView:
         import numpy as np
 
         image = devices.grab()
-        self.frame += 1
-        if self._thread is None or not self._thread.is_alive():
-            self._thread = threading.Thread(target=self._advise, args=(project, image, self.frame),
-                                            name="procam-app-advice")  # short: the interpreter waits for it
-            self._thread.start()
+        with self._lock:
+            self.frame += 1
+            frame = self.frame
+            self._pending = (project, image, frame)
+            if self._thread is None:  # ends when no frame waits: the interpreter may wait for it
+                self._thread = threading.Thread(target=self._advisor, name="procam-app-advice")
+                self._thread.start()
         shown = image if image.dtype == np.uint8 else (image >> 8).astype(np.uint8)
         ok, buf = cv2.imencode(".jpg", shown, [cv2.IMWRITE_JPEG_QUALITY, 80])
         if not ok:
             raise ProcamError("the camera frame could not be encoded as JPEG")
-        return buf.tobytes(), self.frame, self.latest
+        return buf.tobytes(), frame, self.latest
 
     def wait(self, timeout: float | None = None) -> dict | None:
-        """The advice once the advisor's running frame is done (tests, scripts)."""
-        if self._thread is not None:
-            self._thread.join(timeout)
+        """The advice once the advisor is done with every frame served (tests, scripts)."""
+        thread = self._thread
+        if thread is not None:
+            thread.join(timeout)
         return self.latest
 
 
@@ -273,14 +288,39 @@ def capture(job: Job, project: Project, devices, advising: Advising | None = Non
     project.state["pose"] = {"name": name, "verdict": verdict}
     project.save()
     pre = hooks.preflight or {}
-    preflight = []
-    if pre.get("ok"):
-        preflight = [(f"pre-flight: white {pre['white_level']:.0%} of full scale on the {pre['region']} "
-                      f"({pre['white_saturated']:.1%} saturated), black {pre['dark_level']:.0%}, contrast "
-                      f"{pre['contrast']:.0%}"), *pre.get("suggestions", [])]
+    preflight = preflight_lines(pre) if pre.get("ok") else []
     return {"pose": name, "verdict": verdict, "lines": preflight + (list(check.lines) if check else [hooks.error]),
             "reasons": list(check.reasons) if check else [hooks.error],
             "check": _rel(project, hooks.png) if hooks.png else None, "preflight": hooks.preflight}
+
+
+def preflight_lines(pre: dict) -> list[str]:
+    """The pre-flight's levels and suggestions in words (as ``procam capture`` prints them); a refused one's reason."""
+    if not pre.get("ok"):
+        return [f"pre-flight: {pre.get('reason')}"]
+    return [(f"pre-flight: white {pre['white_level']:.0%} of full scale on the {pre['region']} "
+             f"({pre['white_saturated']:.1%} saturated), black {pre['dark_level']:.0%}, contrast "
+             f"{pre['contrast']:.0%}"), *pre.get("suggestions", [])]
+
+
+def exposure_check(job: Job, project: Project, devices) -> dict:
+    """The capture's pre-flight alone (:func:`procam.acquire.session.preflight_check`), before a capture: the
+    projector shows white, black and white again, the camera's levels on the board are judged, and the
+    suggestions say what to change (exposure, gain, the room's light); ``ok`` False: the capture would refuse."""
+    from ..acquire.session import CaptureOptions, preflight_check
+
+    board = project.board()
+    size = devices.projector_size if devices.virtual else devices.describe()["projector_size"]
+    if size is None:
+        raise ProcamError(f"no projector to light the board: {devices.describe()['projector']}")
+    job.step(0, 1, "white, black and white again on the projector")
+    devices.release()
+    with ExitStack() as stack, devices.lock:
+        show_and_grab = devices.lit_grab(stack, size)
+        pre, record = preflight_check(lambda image: (show_and_grab(image), 1), size,
+                                      CaptureOptions(board=board.pattern_size))
+    job.step(1, 1, "judged")
+    return {"ok": bool(pre.ok), "reason": pre.reason, "lines": preflight_lines(record), "levels": record}
 
 
 # ---------------------------------------------------------------------------------------------------------------

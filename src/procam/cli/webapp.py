@@ -30,7 +30,7 @@ def app_cmd(
     seed: SeedOpt = 0,
 ):
     """Start the app's local server and open the browser on it: Devices, Board, Camera, Projector pose, Calibrate,
-    Check in the world, Export (docs/app.md). Ctrl+C stops it; the project folder keeps everything."""
+    Check in the world, Export, More projectors (docs/app.md). Ctrl+C stops it; the project folder keeps everything."""
     from .. import app as procam_app
 
     procam_app.need_extra()

@@ -211,13 +211,15 @@ class VirtualLiveCamera(_Camera):
         if getattr(advice, "next_move", None) is not None:
             self.move(*advice.next_move, shift=advice.next_shift or (0.0, 0.0, 0.0))
 
-    def grab(self) -> Frame:
+    def grab(self, image: np.ndarray | None = None) -> Frame:
+        """A frame of the board under the projector's white light, or under the projector image ``image`` ((H, W)
+        uint8 of the projector's size: :meth:`procam.simulate.Renderer.linear_image`, the same noise generator)."""
         from ... import simulate
 
         if self._renderer is None:
             self._renderer = simulate.Renderer(self.scene, self.order)
         r = self._renderer
-        img = r.frame(r.pattern_set.white, self._rng)
+        img = r.frame(r.pattern_set.white, self._rng) if image is None else r.finish(r.linear_image(image), self._rng)
         self.grabs += 1
         return Frame(img, time.monotonic(), {"source": self.name})
 

@@ -6,6 +6,7 @@ let STATE = null;
 let JOB = null;          // the running job (its dict) or null
 let PREVIEW_BUSY = false;
 let frames = [];
+const DRAWN = { frames: 0, advice: 0, lastAdvice: null };
 
 function url(path) { return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN); }
 function fileUrl(name, download) { return url("files/" + name.split("/").map(encodeURIComponent).join("/")) + (download ? "&download=1" : "") + "&t=" + Date.now(); }
@@ -86,7 +87,48 @@ function render() {
   // calibration
   if (s.calibration && !(st.calibration && !st.calibration.trusted)) showCalibration(s.calibration, !!s.files.calibration);
   renderExports(s.exports);
+  renderRig(s);
   gate();
+}
+
+function rigOk(s) {  // a rig pose captured whole, every projector's verdict good or weak
+  const r = s.rig;
+  return !!(r && r.complete && r.projectors.every((n) => ["good", "weak"].includes((r.verdicts || {})[n])));
+}
+
+function thumbs(id, names, alt) {
+  $(id).replaceChildren(...(names || []).map((n) => { const im = document.createElement("img"); im.src = fileUrl(n); im.alt = alt + " " + n; return im; }));
+}
+
+function renderRig(s) {
+  const r = s.rig, st = s.state;
+  if (!$("rig-projectors").value && s.devices.virtual) $("rig-projectors").placeholder = "left,right";
+  if (r) {
+    const words = r.projectors.map((n) => `${n} ${(r.verdicts || {})[n] || "?"}`).join(", ");
+    text("rig-verdict", `${r.name}: ${words}` + (r.complete ? "" : " (not captured whole: capture the rig again)"));
+    verdictClass($("rig-verdict"), rigOk(s) ? "good" : "degenerate");
+    thumbs("rig-checks", r.checks, "the check picture of");
+    thumbs("rig-blend-alpha", r.alpha, "the blend mask");
+  }
+  const latest = st.rig_calibration, written = !!s.files.rig_calibration && !(latest && !latest.trusted);
+  if (latest && !$("rig-calibrate-verdict").textContent) text("rig-calibrate-verdict", `rig calibration: ${latest.verdict}` + (latest.trusted ? "" : " (not written)"));
+  setImg("rig-figure", written && s.files.rig_figure ? s.files.rig_figure : null);
+  const rep = $("rig-report"); rep.hidden = !(written && s.files.rig_report);
+  if (!rep.hidden) rep.href = fileUrl(s.files.rig_report);
+}
+
+function fillTable(id, t) {
+  const el = $(id); el.replaceChildren();
+  const head = el.insertRow(); for (const h of t.header) { const th = document.createElement("th"); th.textContent = h; head.appendChild(th); }
+  for (const r of t.rows) { const tr = el.insertRow(); for (const cell of r) tr.insertCell().textContent = cell; }
+}
+
+function showRigCalibration(c) {
+  text("rig-calibrate-verdict", `rig calibration: ${c.verdict} - ${c.meaning}` + (c.written.length ? "" : " (not written: procam does not write a calibration it cannot trust)"));
+  verdictClass($("rig-calibrate-verdict"), c.verdict);
+  list("rig-calibrate-reasons", c.reasons);
+  fillTable("rig-devices", c.device_table); fillTable("rig-relative", c.relative_table); fillTable("rig-agreement", c.agreement_table);
+  $("rig-devices").createCaption().textContent = c.uncertainty;
 }
 
 function gate() {
@@ -102,6 +144,12 @@ function gate() {
   $("world-run").disabled = busy || !calibOk;
   $("export-run").disabled = busy || !calibOk;
   $("pose-cancel").disabled = !busy;
+  $("rig-cancel").disabled = !busy;
+  $("devices-exposure").disabled = busy || !boardDone;
+  $("rig-capture").disabled = busy || !boardDone;
+  $("rig-calibrate").disabled = busy || !rigOk(s);
+  $("rig-blend").disabled = busy || !(s.rig && s.rig.complete);
+  $("step-rig").classList.toggle("locked", !boardDone);
   for (const [id, ok] of [["step-camera", boardDone], ["step-pose", boardDone], ["step-calibrate", poseOk],
                           ["step-world", calibOk], ["step-export", calibOk]]) $(id).classList.toggle("locked", !ok);
 }
@@ -150,13 +198,16 @@ async function runJob(path, progressId, onDone, body) {
 
 // ---- the live view ---------------------------------------------------------------------
 async function previewLoop() {
+  let next = null;  // the next frame's request, in flight while this one is decoded and drawn
+  const ask = () => { const r = api("api/preview"); r.catch(() => {}); return r; };
   for (;;) {
-    if (!$("preview-live").checked || JOB || !STATE) { await new Promise((r) => setTimeout(r, 300)); continue; }
+    if (!$("preview-live").checked || JOB || !STATE) { next = null; await new Promise((r) => setTimeout(r, 300)); continue; }
     try {
-      const p = await api("api/preview");
+      const p = await (next || ask());
+      next = p.busy ? null : ask();
       if (!p.busy) await drawPreview(p);
-    } catch (e) { text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
-    await new Promise((r) => requestAnimationFrame(r));  // the next frame as soon as the page has drawn this one
+    } catch (e) { next = null; text("advice", e.message); await new Promise((r) => setTimeout(r, 1000)); }
+    await new Promise((r) => requestAnimationFrame(r));  // the page shows each frame before the next is drawn
   }
 }
 
@@ -196,6 +247,9 @@ function drawPreview(p) {
       $("camera-view").dataset.state = a.state;
       const now = performance.now(); frames.push(now); frames = frames.filter((t) => now - t < 2000);
       text("preview-fps", `${(frames.length / 2).toFixed(1)} frames/s`);
+      DRAWN.frames += 1;  // counted for scripts and benchmarks: frames drawn, and the advice of distinct frames
+      if (a.of_frame != null && a.of_frame !== DRAWN.lastAdvice) { DRAWN.advice += 1; DRAWN.lastAdvice = a.of_frame; }
+      $("preview-fps").dataset.frames = DRAWN.frames; $("preview-fps").dataset.advice = DRAWN.advice;
       resolve();
     };
     img.onerror = () => resolve();
@@ -257,6 +311,19 @@ function wire() {
     list("pose-lines", r.lines); setImg("pose-check", r.check);
   }));
   $("pose-cancel").onclick = () => guarded(async () => { if (JOB) await api(`api/jobs/${JOB.id}/cancel`, {}); });
+  $("rig-cancel").onclick = $("pose-cancel").onclick;
+  $("devices-exposure").onclick = () => guarded(() => runJob("api/exposure", null, (r) => {
+    text("devices-exposure-verdict", r.ok ? "the exposure is fine for a capture" + (r.lines.length > 1 ? ", with advice:" : "") : "a capture would refuse: " + r.reason);
+    verdictClass($("devices-exposure-verdict"), r.ok ? (r.lines.length > 1 ? "weak" : "good") : "failed");
+    list("devices-exposure-lines", r.lines);
+  }));
+  $("rig-capture").onclick = () => guarded(() => runJob("api/rig/capture", "rig-progress", (r) => {
+    list("rig-lines", r.lines);
+  }, { projectors: $("rig-projectors").value.trim() || null }));
+  $("rig-calibrate").onclick = () => guarded(() => runJob("api/rig/calibrate", "rig-progress", showRigCalibration));
+  $("rig-blend").onclick = () => guarded(() => runJob("api/rig/blend", "rig-progress", (r) => {
+    text("rig-blend-status", "blend masks in blend/: " + Object.entries(r.overlap).map(([n, f]) => `${n} overlaps on ${Math.round(100 * f)} % of its pixels`).join(", "));
+  }));
   $("calibrate-run").onclick = () => guarded(() => runJob("api/calibrate", "calibrate-progress", (r) => showCalibration(r, r.written.length > 0)));
   $("world-run").onclick = () => guarded(() => runJob("api/world", null, (r) => {
     text("world-verdict", `${r.verdict}: ${r.found} of ${r.targets} spots found, miss ${num(r.rms_px, 3)} px RMS (${num(r.max_px, 3)} max); ${r.reasons.join("; ")}` + (r.diagnosis ? `; ${r.diagnosis}` : ""));
