@@ -237,3 +237,38 @@ def test_opencvs_tangential_terms_are_a_decentred_radial_lens_to_first_order():
     assert miss * 2421.0 < 0.01        # px: second order in the decentring
     _, miss_r = models.brown_recentred(c, e, extent, free=(0, 1, 4))
     assert miss_r > 20 * miss          # radial terms alone cannot describe it
+
+
+def test_a_projector_zoomed_since_its_intrinsics_were_given_is_said_not_absorbed():
+    """After a bump the projector's intrinsics are given and one pose gives R, T. Were the zoom or the lens shift
+    changed too, R, T absorbed it: a 1 % longer f_p moved T by 5 mm, every residual stayed small, the verdict was
+    good and the world check at the same pose missed by 0.2 px. The pose determines f_p and v0p (u0p and alpha held,
+    the paper's projector): the fit again with them free says the given ones no longer hold."""
+    from sim_small import small_scene
+
+    from procam.calibration import Device
+    from procam.errors import FailedEstimateWarning
+
+    scene = small_scene()
+    truth = simulate.truth_calibration(scene)
+    view = dense_view(scene, seed=0)
+
+    def given(df=1.0, dv=0.0):
+        K = np.array(truth.projector.K, float)
+        K[0, 0] *= df
+        K[1, 1] *= df
+        K[1, 2] += dv
+        return Device(K, truth.projector.image_size, truth.projector.distortion)
+
+    same = _calibrate(view, known_camera=truth.camera, known_projector=given())
+    assert same.verdict == "good" and not same.poses[0]["advice"]["projector"]["given_projector"]["moved"]
+    for df, dv, moved in ((1.01, 0.0, "f_p"), (1.0, 15.0, "v0p")):
+        with pytest.warns(FailedEstimateWarning, match="the given intrinsics no longer hold"):
+            cal = sp.calibrate(view, known_camera=truth.camera, known_projector=given(df, dv))
+        assert cal.verdict == "failed"
+        check = cal.poses[0]["advice"]["projector"]["given_projector"]
+        assert check["moved"] and check["chi2"] > check["limit"]
+        g, pose, sd = check[moved]
+        truth_value = truth.projector.K[(0, 0) if moved == "f_p" else (1, 2)]
+        assert abs(pose - truth_value) < 3 * sd + 0.5 and abs(g - truth_value) > 10 * sd    # the pose's, not the file's
+        assert "zoom or focus change" in " ".join(cal.verdict_reasons)

@@ -60,7 +60,8 @@ from .. import models
 from ..parameters import ALPHA_PRIOR_STD
 from ..stats import robust_sigma
 from . import joint as J
-from .trust import background_disagrees, batch_inflation, camera_pattern, contradicted, demanded, rim, rim_shift
+from .trust import (background_disagrees, batch_inflation, camera_pattern, contradicted, demanded,
+                    given_projector_moved, rim, rim_shift)
 
 #: The projector's lens models tried, simplest first: the distortion terms each frees.
 MODELS = {"none": (), "k1": ("k1p",), "k1k2": ("k1p", "k2p"), "k1k2k3": ("k1p", "k2p", "k3p"),
@@ -185,6 +186,8 @@ class DenseFit:
         this pose's; :mod:`procam.single_pose.misfit`), what the pattern moves the results by -- ``{name: shift}`` for
         ``f_p, u0p, v0p`` (px) and ``ptx, pty, ptz`` (the projector's board position, board units), its
         ``field_rms_px`` and ``message`` -- a shift already in ``cov`` (added as a systematic term); None otherwise.
+    given_projector : with the projector given, whether this pose still agrees with its intrinsics
+        (:func:`.trust.given_projector_moved`); None otherwise.
     """
 
     model: str
@@ -205,6 +208,7 @@ class DenseFit:
     rim_left_out: int = 0
     board_correlation: float = 1.0
     camera_pattern: dict | None = None
+    given_projector: dict | None = None
 
     def std(self, name: str, *, pose_only: bool = False) -> float:
         """The reported std of ``name``; ``pose_only``: without what holding the decentrings at zero can cost."""
@@ -453,6 +457,8 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
             extra = np.outer(shift, shift)[:len(J.NAMES), :len(J.NAMES)]
             cov, cov_pose = cov + extra, cov_pose + extra
     notes = _notes(best, near, fits, data, model, background_reason, known_projector)
+    # a given projector: do this pose's data still agree with its intrinsics (a zoom or focus change since)?
+    given = given_projector_moved(model, best.p, best.free, known_projector) if known_projector is not None else None
     if phi > 1:
         notes = (*notes, (f"the board samples' errors are correlated over neighbouring windows (a decoder's "
                           f"systematic phase error?): their noise counts {phi:.1f} times over in the ±"))
@@ -465,7 +471,8 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
                     background_used=bool(use_bg and not background_reason), background_reason=background_reason,
                     notes=notes, priors=tuple(priors), conflicts=_conflicts(best, priors, options),
                     cov_pose=cov_pose, lit_corners=(int(np.sum(view.valid)), len(view.obj_pts)),
-                    rim_left_out=int(len(b) - alive.sum()), board_correlation=float(phi), camera_pattern=pattern)
+                    rim_left_out=int(len(b) - alive.sum()), board_correlation=float(phi), camera_pattern=pattern,
+                    given_projector=given)
 
 
 def _conflicts(best: ModelFit, priors, options: DenseOptions) -> tuple:

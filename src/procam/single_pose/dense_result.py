@@ -132,8 +132,21 @@ def projector_rating(fit: DenseFit, proj_size, known_projector=None, options=Non
     base = {"psi_abs_deg": float(abs(a[0])), "nu_abs_deg": float(abs(a[1])),
             "paper_rule_ok": bool(abs(a[1]) > o.projector_rule_deg), "predicted_rel_std_f": None, "source": "fit"}
     if known_projector is not None:
+        moved = fit.given_projector
+        if moved and moved["moved"]:     # R, T would absorb a zoom or focus change: not a result
+            said = ", ".join(f"{n} {v[1]:.1f} ± {v[2]:.2g} (given {v[0]:.1f}, {v[1] - v[0]:+.1f} px)"
+                             for n, v in ((n, moved[n]) for n in ("f_p", "v0p")))
+            pct = 100 * (moved["f_p"][1] / moved["f_p"][0] - 1)
+            return {**base, "level": "failed", "degenerate": True, "weak": False, "failed": True, "given": True,
+                    "rel_std_f": 0.0, "given_projector": moved,
+                    "message": (f"projector: FAILED: the given intrinsics no longer hold: this pose puts {said} "
+                                f"(f_p {pct:+.2f} %; chi-square {moved['chi2']:.0f} > {moved['limit']:.0f}) -- a zoom "
+                                "or focus change, or another projector? R, T would absorb it: calibrate the projector "
+                                "again from this pose (without the projector's intrinsics)")}
         return {**base, "level": "good", "degenerate": False, "weak": False, "failed": False, "given": True,
-                "rel_std_f": 0.0, "message": "projector: intrinsics given, not estimated from this pose"}
+                "rel_std_f": 0.0, "given_projector": moved,
+                "message": "projector: intrinsics given, not estimated from this pose" + (
+                    f" (this pose agrees with them: chi-square {moved['chi2']:.1f})" if moved else "")}
     f = fit.p[J.IDX["f_p"]]
     sf, su, sv = (fit.std(n, pose_only=True) for n in ("f_p", "u0p", "v0p"))
     rel = sf / f if f > 0 else float("inf")

@@ -246,3 +246,65 @@ def _camera_share(model: J.JointModel, fit: J.JointFit, masks, camera_cov) -> np
     rows = left[start:start + len(wg)] * wg[:, None]               # px per unit of each camera parameter
     G = np.array([rows[m].mean(axis=0) for m in masks])
     return G @ C @ G.T
+
+
+#: A given projector's intrinsics no longer hold when this pose moves them beyond chance (a chi-square on the move's
+#: covariance at this probability, 2 degrees of freedom) AND by more than matters (issue 33's targets for one pose:
+#: f_p 0.3 %, the principal point 5 px): a zoom or focus change, which ``R, T`` would otherwise absorb.
+GIVEN_ALARM = 1e-6
+GIVEN_F_REL = 0.003
+GIVEN_PP_PX = 5.0
+
+
+def given_projector_moved(model: J.JointModel, p, free, device) -> dict | None:
+    """Does this pose still agree with a given projector's intrinsics? The fit again with ``f_p`` and ``v0p`` free
+    (what one plane determines with ``u0p`` and ``alpha_p`` held: the paper's projector; the given lens held): their
+    move from the given values against its covariance (the fit's, plus the projector file's own where it has one).
+    A pose turned about the projector's vertical axis determines ``f_p`` to a small fraction of a percent; holding a
+    wrong one, the fit moves the projector along its axis instead (a 1 % zoom: ``T`` 5-10 mm off, every residual
+    small, the world check at this pose 0.2 px).
+
+    ``model`` the known-projector fit's model, ``p`` its solution, ``free`` its free names, ``device`` the given
+    :class:`procam.calibration.Device`. Returns ``{"f_p"|"v0p": (given, this pose, std), "chi2", "limit",
+    "moved"}``, or None when the given lens is not OpenCV's (or none) or the fit fails.
+    """
+    from dataclasses import replace
+
+    from scipy.special import chdtri
+
+    dist = device.distortion
+    coeffs = list(getattr(dist, "coeffs", ()) or ())
+    if dist.model not in ("opencv", "none") or any(coeffs[5:]):
+        return None
+    q = np.asarray(p, float).copy()
+    K = np.asarray(device.K, float)
+    i = J.IDX
+    q[[i["f_p"], i["alpha_p"], i["u0p"], i["v0p"]]] = K[0, 0], K[1, 1] / K[0, 0], K[0, 2], K[1, 2]
+    q[[i[t] for t in J.DIST_TERMS]] = (coeffs + [0.0] * 5)[:5]
+    m = J.JointModel(replace(model.data, projector_fixed=None), model.scales)
+    m.keep_board, m.keep_back, m.cauchy, m.pixel_distance = (model.keep_board, model.keep_back, model.cauchy,
+                                                             model.pixel_distance)
+    try:
+        fit = J.solve(m, q, tuple(free) + ("f_p", "v0p"), max_nfev=40)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    names = ("f_p", "v0p")
+    idx = [i[n] for n in names]
+    d = fit.p[idx] - q[idx]
+    C = fit.cov[np.ix_(idx, idx)].copy()
+    if getattr(device, "covariance", None) is not None:
+        held, Ch = device.covariance
+        k = [list(held).index(n) if n in held else None for n in names]
+        for a, ka in enumerate(k):
+            for b, kb in enumerate(k):
+                if ka is not None and kb is not None:
+                    C[a, b] += float(np.asarray(Ch, float)[ka, kb])
+    if not np.all(np.isfinite(C)) or not np.all(np.isfinite(d)):
+        return None
+    chi2 = float(d @ np.linalg.pinv(C) @ d)
+    limit = float(chdtri(len(names), GIVEN_ALARM))
+    s = np.sqrt(np.clip(np.diag(C), 0, None))
+    matters = abs(d[0]) > GIVEN_F_REL * q[i["f_p"]] or abs(d[1]) > GIVEN_PP_PX
+    out = {n: (float(q[j]), float(fit.p[j]), float(sd)) for n, j, sd in zip(names, idx, s)}
+    out.update(chi2=chi2, limit=limit, moved=bool(chi2 > limit and matters))
+    return out
