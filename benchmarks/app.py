@@ -39,23 +39,6 @@ TOKEN = "benchmark-token-0123456789"
 CHROMIUM = os.environ.get("PROCAM_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
 
 
-def serve(folder: Path):
-    """The app on the virtual devices, served on a free port in a thread: (asgi, server, thread, port)."""
-    from procam import app
-
-    port = app.free_port("127.0.0.1")
-    asgi = app.make(folder, virtual=True, token=TOKEN)
-    server = app.uvicorn_server(asgi, "127.0.0.1", port)
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    t0 = time.monotonic()
-    while not server.started:
-        if time.monotonic() - t0 > 30:
-            raise SystemExit("the app did not start within 30 s")
-        time.sleep(0.05)
-    return asgi, server, thread, port
-
-
 class Client:
     """One keep-alive HTTP connection to the app, as the page's fetches use one."""
 
@@ -193,7 +176,8 @@ def main():
     folder = Path(tempfile.mkdtemp(prefix="procam-app-bench-")) / "project"
     from procam import app
 
-    asgi, server, thread, port = serve(folder)
+    running = app.Served(folder, TOKEN)
+    port = running.port
     try:
         c = Client(port)
         c.call("/api/board", {"cols": 10, "rows": 6, "square": 24.0})
@@ -204,12 +188,10 @@ def main():
             if not Path(CHROMIUM).exists():
                 print(f"(no Chromium at {CHROMIUM}: the page's figures are not measured)")
             else:
-                browser = in_chromium(f"http://127.0.0.1:{port}/?token={TOKEN}", args.seconds, args.projector,
+                browser = in_chromium(running.url, args.seconds, args.projector,
                                       not args.no_flow)
     finally:
-        server.should_exit = True
-        thread.join(30)
-        app.shutdown(asgi, 120)
+        running.stop()
     load = os.getloadavg()
     rows = [("preview served (1280x800)", f"{served['fps']:.1f} frames/s", ">= 15 frames/s", served["fps"] >= 15),
             ("advice served", f"{served['advice']:.1f} /s", ">= 10 /s", served["advice"] >= 10)]

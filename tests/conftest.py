@@ -200,3 +200,18 @@ def pytest_collection_modifyitems(config, items):
         if base in SLOW_COVERED or (base in SLOW_SIBLINGS and base in seen):
             item.add_marker(pytest.mark.slow)
         seen.add(base)
+
+
+def job_result(client, job: dict, headers: dict, timeout: float = 300.0) -> dict:
+    """The app's job ``job`` (the answer of a POST that started it) once it has ended, polled through ``client``
+    (starlette's TestClient) with ``headers`` (the token); fails after ``timeout`` seconds."""
+    import time
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        j = client.get(f"/api/jobs/{job['id']}", headers=headers).json()
+        if j["state"] != "running":
+            return j
+        time.sleep(0.1)
+    raise AssertionError(f"job {job} did not end within {timeout} s")
+

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import job_result
 
 pytest.importorskip("starlette", reason="the app's extra is not installed (pip install \".[app]\")")
 pytest.importorskip("uvicorn", reason="the app's extra is not installed (pip install \".[app]\")")
@@ -49,16 +50,6 @@ def _advice(c):
     p = c.get("/api/preview", headers=H).json()
     c.app.state.procam.live.wait(30)
     return {**p, "advice": c.app.state.procam.live.latest}
-
-
-def _wait(c, job, timeout=180.0):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        j = c.get(f"/api/jobs/{job['id']}", headers=H).json()
-        if j["state"] != "running":
-            return j
-        time.sleep(0.1)
-    raise AssertionError(f"job {job} did not end within {timeout} s")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -205,7 +196,7 @@ def test_the_camera_from_photos_and_a_reopened_project_continues_with_it(tmp_pat
     assert c.post("/api/board", headers=H, json={"cols": 10, "rows": 6, "square": 24}).status_code == 200
     r = c.post("/api/camera", headers=H, json={"action": "photo"})
     assert r.status_code == 202, r.text
-    j = _wait(c, r.json())
+    j = job_result(c, r.json(), H)
     assert j["state"] == "done", j
     r = j["result"]
     assert r["photos"] == ["camera/photo01.png"]
@@ -275,7 +266,7 @@ def test_export_writes_the_calibration_for_the_next_tools(client):
     assert not (project / "export").exists()
     r = client.post("/api/export", headers=H, json={"formats": ["blender", "yaml"], "near": 100, "far": 10000})
     assert r.status_code == 202
-    j = _wait(client, r.json())
+    j = job_result(client, r.json(), H)
     assert j["state"] == "done", j
     assert {"export/blender.json", "export/blender.py", "export/calib.yml"} <= set(j["result"]["written"])
     doc = json.loads((project / "export" / "blender.json").read_text())
@@ -287,7 +278,7 @@ def test_export_writes_the_calibration_for_the_next_tools(client):
     assert r.headers["content-disposition"].startswith("attachment")
     # a file of the user's in the way: the job fails with its one line and the file keeps every byte
     (project / "export" / "unity.json").write_text('{"mine": true}')
-    j = _wait(client, client.post("/api/export", headers=H, json={"formats": ["unity"]}).json())
+    j = job_result(client, client.post("/api/export", headers=H, json={"formats": ["unity"]}).json(), H)
     assert j["state"] == "failed" and "procam did not write" in j["error"]
     assert (project / "export" / "unity.json").read_text() == '{"mine": true}'
 
@@ -309,7 +300,7 @@ def test_a_cancelled_capture_leaves_no_pose(client):
     assert client.get("/api/preview", headers=H).json() == {"busy": True}
     assert client.get("/api/jobs/x", headers=H).status_code == 400
     assert client.post(f"/api/jobs/{job['id']}/cancel", headers=H, json={}).status_code == 200
-    j = _wait(client, job)
+    j = job_result(client, job, H)
     assert j["state"] == "cancelled" and j["error"] == "capture cancelled"
     assert sorted(p.name for p in project.iterdir()) == ["board.svg", "procam-app.json"]  # no pose, no partial one
     assert client.get("/api/state", headers=H).json()["state"]["pose"] is None
@@ -427,19 +418,9 @@ def served(tmp_path):
     from procam import app
 
     folder = tmp_path / "project"
-    port = app.free_port("127.0.0.1")
-    asgi = app.make(folder, virtual=True, token=TOKEN)
-    server = app.uvicorn_server(asgi, "127.0.0.1", port)
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    t0 = time.monotonic()
-    while not server.started and time.monotonic() - t0 < 20:
-        time.sleep(0.05)
-    assert server.started
-    yield f"http://127.0.0.1:{port}/?token={TOKEN}", folder
-    server.should_exit = True
-    thread.join(20)
-    app.shutdown(asgi, 120)
+    s = app.Served(folder, TOKEN)
+    yield s.url, folder
+    s.stop()
 
 
 @pytest.fixture

@@ -5,11 +5,11 @@ starlette's TestClient on the virtual devices (the simulator's two-projector rig
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import job_result
 
 pytest.importorskip("starlette", reason="the app's extra is not installed (pip install \".[app]\")")
 pytest.importorskip("uvicorn", reason="the app's extra is not installed (pip install \".[app]\")")
@@ -30,20 +30,10 @@ def client(tmp_path):
     app.shutdown(c.app, 120)
 
 
-def _wait(c, job, timeout=300.0):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        j = c.get(f"/api/jobs/{job['id']}", headers=H).json()
-        if j["state"] != "running":
-            return j
-        time.sleep(0.1)
-    raise AssertionError(f"job {job} did not end within {timeout} s")
-
-
 def _run(c, path, body=None):
     r = c.post(path, headers=H, json=body or {})
     assert r.status_code == 202, r.text
-    return _wait(c, r.json())
+    return job_result(c, r.json(), H)
 
 
 def _small_rig_pose(project: Path, name="rig1", seed=3):
@@ -171,8 +161,8 @@ def test_the_rig_captured_and_calibrated_in_the_app_meets_the_simulator_s_truth(
     """More projectors on the virtual rig (projectors 640x360, the app's 1280x800 camera): one rig pose captured
     one projector after another, calibrated (each projector's f_p within 3 sigma of the truth, or 2 %), the rig's
     files written as procam calibrate writes them, and its blend masks."""
-    from procam.io.files import procam_wrote
     from procam.io import load_rig_calibration
+    from procam.io.files import procam_wrote
 
     project = Path(client.app.state.procam.project.root)
     assert client.post("/api/devices", headers=H, json={"projector_size": [640, 360]}).status_code == 200
@@ -210,7 +200,7 @@ def test_a_cancelled_rig_capture_is_no_rig_pose(client):
     r = client.post("/api/rig/capture", headers=H, json={})
     assert r.status_code == 202, r.text
     assert client.post(f"/api/jobs/{r.json()['id']}/cancel", headers=H, json={}).status_code == 200
-    j = _wait(client, r.json())
+    j = job_result(client, r.json(), H)
     assert j["state"] == "cancelled" and j["error"] == "rig capture cancelled"
     assert not list(project.rglob("rig.json")) and not list(project.rglob("*.png"))
     assert client.get("/api/state", headers=H).json()["rig"] is None

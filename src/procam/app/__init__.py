@@ -74,3 +74,31 @@ def shutdown(asgi, timeout: float = 60.0) -> None:
         st.jobs.wait(timeout)
     st.live.wait(timeout)
     st.devices.release()
+
+
+class Served:
+    """The app served by uvicorn on a free port of ``127.0.0.1`` in a background thread, on the virtual devices
+    (tests, benchmarks, a notebook): ``url`` opens the page; :meth:`stop` ends it (then :func:`shutdown`)."""
+
+    def __init__(self, project_dir, token: str, *, virtual: bool = True, timeout: float = 30.0):
+        import threading
+        import time
+
+        self.port = free_port("127.0.0.1")
+        self.asgi = make(project_dir, virtual=virtual, token=token)
+        self.server = uvicorn_server(self.asgi, "127.0.0.1", self.port)
+        self.thread = threading.Thread(target=self.server.run, daemon=True)
+        self.thread.start()
+        t0 = time.monotonic()
+        while not self.server.started:
+            if time.monotonic() - t0 > timeout or not self.thread.is_alive():
+                self.stop()
+                raise ProcamError(f"the app did not start within {timeout:g} s on 127.0.0.1:{self.port}")
+            time.sleep(0.05)
+        self.url = f"http://127.0.0.1:{self.port}/?token={token}"
+
+    def stop(self, timeout: float = 120.0) -> None:
+        self.server.should_exit = True
+        self.thread.join(20)
+        shutdown(self.asgi, timeout)
+
