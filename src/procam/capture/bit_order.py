@@ -15,6 +15,7 @@ densities and the ``bit_order`` to write.  Every Gray block is judged: the Gray 
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -65,8 +66,9 @@ def _edge_densities(stack: np.ndarray, frames, stride: int) -> np.ndarray:
             bit, sure = a > thr, sure_lit & (np.abs(a - thr) > 0.25 * span)
         elif integer:  # the same test on the integers: no float copies, the percentile from their histogram
             a, i = stack[a, ::stride, ::stride], stack[i, ::stride, ::stride]
-            c = np.abs(a.astype(np.int16 if a.dtype.itemsize == 1 else np.int32) - i)
-            bit, sure = a > i, c > 0.25 * _percentile99_of_integers(c)
+            a, i, c, counts = _absdiff_and_histogram(a, i)
+            # an integer exceeds a real t exactly when it exceeds floor(t): no float copy of c
+            bit, sure = a > i, c > math.floor(0.25 * _percentile99_of_counts(counts, c.size))
         else:
             a, i = stack[a, ::stride, ::stride].astype(np.float32), stack[i, ::stride, ::stride].astype(np.float32)
             c = np.abs(a - i)
@@ -84,14 +86,35 @@ def _edge_densities(stack: np.ndarray, frames, stride: int) -> np.ndarray:
     return out
 
 
+def _absdiff_and_histogram(a: np.ndarray, i: np.ndarray):
+    """``(a, i, |a - i|, its histogram)`` of two (H, W) integer images (views of a stack): 8-bit ones copied
+    together once and differenced by OpenCV in 8 bits (no wider copy), others in 32-bit integers; the histogram
+    counts 0, 1, 2, ..."""
+    if a.dtype == np.uint8 and i.dtype == np.uint8:
+        import cv2
+
+        a, i = np.ascontiguousarray(a), np.ascontiguousarray(i)
+        c = cv2.absdiff(a, i)
+        if c.size < 2 ** 24:  # OpenCV's float32 counts are exact
+            return a, i, c, cv2.calcHist([c], [0], None, [256], [0, 256]).ravel().astype(np.int64)
+        return a, i, c, np.bincount(c.ravel(), minlength=256)
+    c = np.abs(a.astype(np.int32) - i)
+    return a, i, c, np.bincount(c.ravel())
+
+
 def _percentile99_of_integers(c: np.ndarray) -> float:
-    """``float(np.percentile(c.astype(np.float32), 99))`` of non-negative integers ``c``, without sorting them:
-    the two order statistics the linear rule interpolates are read off the histogram, and numpy interpolates
-    them with the same weight (the same float32 arithmetic, so the same bits)."""
-    n = c.size
+    """``float(np.percentile(c.astype(np.float32), 99))`` of non-negative integers ``c``, without sorting them
+    (:func:`_percentile99_of_counts` of their histogram)."""
+    return _percentile99_of_counts(np.bincount(c.ravel()), c.size)
+
+
+def _percentile99_of_counts(counts: np.ndarray, n: int) -> float:
+    """``float(np.percentile(c.astype(np.float32), 99))`` of the ``n`` non-negative integers ``c`` whose histogram
+    is ``counts``: the two order statistics the linear rule interpolates are read off the histogram, and numpy
+    interpolates them with the same weight (the same float32 arithmetic, so the same bits)."""
     pos = (n - 1) * 0.99  # numpy's virtual index of the linear rule (q = 99 / 100)
     lo = int(np.floor(pos))
-    cum = np.cumsum(np.bincount(c.ravel()))
+    cum = np.cumsum(counts)
     v_lo, v_hi = np.searchsorted(cum, [lo, min(lo + 1, n - 1)], side="right")
     return float(np.quantile(np.array([v_lo, v_hi], np.float32), pos - lo))
 
