@@ -323,7 +323,9 @@ def neighbour_orders(x, sx, reason, u, su, coarse, coarse_sd, period: float, x0:
     Hb, Wb = H // f, W // f
     wb = max(3, (window // f) | 1)
     h = wb // 2
-    Yb, Xb = (np.mgrid[0:Hb, 0:Wb].astype(np.float64) * f + (f - 1) / 2.0)
+    # the blocks' centres, as a column and a row (broadcast: the same products as full grids, at a fraction of the work)
+    Yb = np.arange(Hb, dtype=np.float64)[:, None] * f + (f - 1) / 2.0
+    Xb = np.arange(Wb, dtype=np.float64)[None, :] * f + (f - 1) / 2.0
 
     def binned(a):
         return cv2.resize(np.ascontiguousarray(a[:Hb * f, :Wb * f], np.float64), (Wb, Hb),
@@ -340,22 +342,25 @@ def neighbour_orders(x, sx, reason, u, su, coarse, coarse_sd, period: float, x0:
         if not cand.any():
             break
         ok = reason == OK
-        n_b = binned(ok.astype(np.float64))
-        iy, ix = np.nonzero(cand)
-        by, bx_ = iy // f, ix // f
-        # each quadrant of the window holds decoded pixels
+        # decoded pixels per block: the block's sum of 0s and 1s (what the area resize of binned() gives, exactly)
+        o = ok.view(np.uint8)[:Hb * f, :Wb * f]
+        n_b = sum(o[i::f, j::f] for i in range(f) for j in range(f)).astype(np.float64)
+        # each quadrant of the window holds decoded pixels (judged per block, then kept at the blocks' pixels)
         least = max(5.0, 0.05 * (h * f) ** 2)
-        around = np.ones(len(iy), bool)
+        around = np.ones(n_b.shape, bool)
         for ay, ax in ((h, h), (h, 0), (0, h), (0, 0)):
             q = cv2.boxFilter(n_b, cv2.CV_64F, (h + 1, h + 1), anchor=(ax, ay), normalize=False,
                               borderType=cv2.BORDER_CONSTANT)
-            around &= q[by, bx_] >= least
-        iy, ix, by, bx_ = iy[around], ix[around], by[around], bx_[around]
+            around &= q >= least
+        cand[:Hb * f, :Wb * f] &= np.repeat(np.repeat(around, f, axis=0), f, axis=1)
+        iy, ix = np.nonzero(cand)
         if not len(iy):
             break
-        xv = np.where(ok, x - np.float32(x0), 0.0).astype(np.float64)
+        at = (iy // f) * Wb + ix // f  # each candidate's block, as a flat index of the binned images
+        xv = np.zeros(x.shape, np.float64)  # x - x0 in float32 where decoded (as the coordinates are), else 0
+        np.subtract(x, np.float32(x0), out=xv, where=ok, dtype=np.float32)
         x_b, xx_b = binned(xv), binned(xv * xv)
-        S = {k: box(v)[by, bx_] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
+        S = {k: box(v).ravel()[at] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
                                              ("YY", n_b * Yb * Yb), ("XY", n_b * Xb * Yb), ("x", x_b),
                                              ("xX", x_b * Xb), ("xY", x_b * Yb), ("xx", xx_b))}
         n = S["1"]
