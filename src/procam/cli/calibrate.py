@@ -194,6 +194,28 @@ def calibrate_cmd(
     **pose_args,
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
+    params = dict(locals())
+    reader = None
+    if not camera_only:
+        # the pose folders' images are read from here on (reader threads; the first pose at once, each next one
+        # while the one before is processed) and scipy's optimizer imported, while the rest of the calibration is
+        # imported and its options are checked; a camera-only calibration reads photos, not pose folders
+        from ..stream import Prefetcher
+
+        reader = Prefetcher(poses)
+        preload(SOLVER_MODULES)
+    try:
+        _calibrate(reader, **params)
+    finally:
+        if reader is not None:
+            reader.close()
+
+
+def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera_file, projector_file, throw_ratio,
+               lens_shift, yaml, png, report, cod, background, cam_dist, proj_dist, no_refine, strict, force,
+               projector, order, step, pose_args):
+    """:func:`calibrate_cmd`'s work, its images read by ``reader`` (a :class:`procam.stream.Prefetcher` of the
+    pose folders, None for a camera-only calibration)."""
     import contextlib
 
     from .. import method as calibration_method
@@ -236,6 +258,7 @@ def calibrate_cmd(
     if rig:
         from . import _rig
 
+        reader.close()  # a rig's pairs are read pair by pair (procam.rig), not by this reader
         distinct_poses(poses)
         rc, agreement = _rig.calibrate(poses, brd=brd, method=_METHODS[value(method)], options=opts, camera=camera,
                                        background=BackgroundOptions(mode=background), cam_dist=cam_dist,
@@ -252,14 +275,10 @@ def calibrate_cmd(
     else:
         calibration_method.check(how, len(poses), unit="pose folder")
         distinct_poses(poses)
-        from ..stream import Prefetcher
-
         dropped = [] if multi and not strict else None
-        with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext(), \
-                Prefetcher(poses) as pf:
-            preload(SOLVER_MODULES)
+        with console.status("decoding poses ...") if console.is_terminal else contextlib.nullcontext(), reader:
             views = pipeline.views_from_folders(poses, brd, optional_size(projector), value(order), options=opts,
-                                                step=step, prefetcher=pf, dropped=dropped)
+                                                step=step, prefetcher=reader, dropped=dropped)
         left_out = _left_out(dropped or (), len(views))
         for v in views:
             say(f"{v.name}: {int(v.valid.sum())} of {len(v.valid)} corners")
