@@ -1,0 +1,58 @@
+"""procam calibrate starts reading the pose folders before anything else (issue 35): the reader threads stop on
+every way out -- a refused option, a failed pose, a written calibration -- and the result is the one read the
+ordinary way."""
+
+from __future__ import annotations
+
+import json
+import threading
+
+import pytest
+from conftest import run_cli
+
+BOARD = ["--board", "10x6", "--square", "24"]
+
+
+def _readers() -> list:
+    return [t.name for t in threading.enumerate() if t.name.startswith("procam-read") and t.is_alive()]
+
+
+@pytest.fixture(scope="module")
+def poses(tmp_path_factory):
+    from test_bad_inputs import render_poses
+
+    return render_poses(tmp_path_factory.mktemp("ahead"))
+
+
+@pytest.mark.parametrize("case", ["refused option", "refused output", "failed pose", "written"])
+def test_the_reader_threads_stop_on_every_way_out(poses, tmp_path, case):
+    args = ["calibrate", *map(str, poses), *BOARD, "-o", tmp_path / "calib.json"]
+    if case == "refused option":
+        args += ["--throw-ratio", "1.2"]  # a single-pose prior: refused for a multi-pose calibration
+    elif case == "refused output":
+        args[-1] = tmp_path / "calib.txt"
+    elif case == "failed pose":
+        args[1 + len(poses):3 + len(poses)] = ["--board", "7x5"]  # no 7x5 board in any pose
+        args += ["--strict"]
+    assert not _readers()
+    code, out, err = run_cli(args)
+    assert code == (0 if case == "written" else 2), err
+    assert not _readers(), f"{case}: reader threads left running"
+    if case == "written":
+        assert json.loads((tmp_path / "calib.json").read_text())["method"] == "multi-pose"
+    else:
+        assert not (tmp_path / "calib.json").exists()
+
+
+def test_the_poses_read_ahead_give_the_views_read_one_by_one(poses):
+    """The Prefetcher started first thing hands over the very stacks read_images reads."""
+    import numpy as np
+
+    from procam import capture
+    from procam.io import files
+    from procam.stream import Prefetcher
+
+    with Prefetcher(poses) as pf:
+        for folder in poses:
+            names, _ = capture.sequence_files(folder, files.list_images(folder))
+            np.testing.assert_array_equal(pf.read(names), files.read_images(names))
