@@ -35,7 +35,7 @@ def test_the_reader_threads_stop_on_every_way_out(poses, tmp_path, case):
         args[1 + len(poses):3 + len(poses)] = ["--board", "7x5"]  # no 7x5 board in any pose
         args += ["--strict"]
     assert not _readers()
-    code, out, err = run_cli(args)
+    code, _, err = run_cli(args)
     assert code == (0 if case == "written" else 2), err
     assert not _readers(), f"{case}: reader threads left running"
     if case == "written":

@@ -1,0 +1,124 @@
+"""The neighbours' ordering pass of a phase decode (procam.decode.phase.unwrap.neighbour_orders) was made cheaper
+for issue 35; it must order the same pixels to the same values as the formulation before (kept here as the
+reference, verbatim from b0fbb34), on a rendered capture whose board's black squares it orders."""
+
+import numpy as np
+from sim_small import small_scene
+
+from procam import patterns, simulate
+from procam.decode.decoded import LOW_MODULATION, OK
+from procam.decode.phase import decode_phase, unwrap
+
+
+def reference(x, sx, reason, u, su, coarse, coarse_sd, period, x0, size, *, window, tolerance=unwrap.TOLERANCE,
+              max_sigma=unwrap.MAX_SIGMA, passes=2):
+    import cv2
+
+    H, W = reason.shape
+    # the sums run over 2 x 2 blocks of pixels (at their centres): a quarter of the work, and a plane whose moments
+    # move by a fraction of a per cent
+    f = 2
+    Hb, Wb = H // f, W // f
+    wb = max(3, (window // f) | 1)
+    h = wb // 2
+    Yb, Xb = (np.mgrid[0:Hb, 0:Wb].astype(np.float64) * f + (f - 1) / 2.0)
+
+    def binned(a):
+        return cv2.resize(np.ascontiguousarray(a[:Hb * f, :Wb * f], np.float64), (Wb, Hb),
+                          interpolation=cv2.INTER_AREA) * float(f * f)
+
+    def box(a):
+        return cv2.boxFilter(a, cv2.CV_64F, (wb, wb), normalize=False, borderType=cv2.BORDER_CONSTANT)
+
+    done = 0
+    for _ in range(passes):
+        cand = (reason == LOW_MODULATION) & np.isfinite(u) & (su <= max_sigma) & np.isfinite(coarse)
+        cand[Hb * f:] = False
+        cand[:, Wb * f:] = False
+        if not cand.any():
+            break
+        ok = reason == OK
+        n_b = binned(ok.astype(np.float64))
+        iy, ix = np.nonzero(cand)
+        by, bx_ = iy // f, ix // f
+        # each quadrant of the window holds decoded pixels
+        least = max(5.0, 0.05 * (h * f) ** 2)
+        around = np.ones(len(iy), bool)
+        for ay, ax in ((h, h), (h, 0), (0, h), (0, 0)):
+            q = cv2.boxFilter(n_b, cv2.CV_64F, (h + 1, h + 1), anchor=(ax, ay), normalize=False,
+                              borderType=cv2.BORDER_CONSTANT)
+            around &= q[by, bx_] >= least
+        iy, ix, by, bx_ = iy[around], ix[around], by[around], bx_[around]
+        if not len(iy):
+            break
+        xv = np.where(ok, x - np.float32(x0), 0.0).astype(np.float64)
+        x_b, xx_b = binned(xv), binned(xv * xv)
+        S = {k: box(v)[by, bx_] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
+                                             ("YY", n_b * Yb * Yb), ("XY", n_b * Xb * Yb), ("x", x_b),
+                                             ("xX", x_b * Xb), ("xY", x_b * Yb), ("xx", xx_b))}
+        n = S["1"]
+        xc, yc = ix.astype(np.float64), iy.astype(np.float64)
+        # moments about the candidate pixel
+        sx_, sy_ = S["X"] - xc * n, S["Y"] - yc * n
+        sxx = S["XX"] - 2 * xc * S["X"] + xc * xc * n
+        syy = S["YY"] - 2 * yc * S["Y"] + yc * yc * n
+        sxy = S["XY"] - xc * S["Y"] - yc * S["X"] + xc * yc * n
+        bx = S["x"]
+        bX, bY = S["xX"] - xc * bx, S["xY"] - yc * bx
+        # the normal equations [[n, sx, sy], [sx, sxx, sxy], [sy, sxy, syy]] beta = [bx, bX, bY], by cofactors
+        c00, c01, c02 = sxx * syy - sxy * sxy, sy_ * sxy - sx_ * syy, sx_ * sxy - sy_ * sxx
+        c11, c12, c22 = n * syy - sy_ * sy_, sx_ * sy_ - n * sxy, n * sxx - sx_ * sx_
+        det = n * c00 + sx_ * c01 + sy_ * c02
+        with np.errstate(divide="ignore", invalid="ignore"):
+            good = det > 1e-8 * n * sxx * syy          # the window's pixels span a plane (not a line)
+            inv00 = np.where(good, c00 / det, np.inf)
+            a0 = (c00 * bx + c01 * bX + c02 * bY) / det
+            a1 = (c01 * bx + c11 * bX + c12 * bY) / det
+            a2 = (c02 * bx + c12 * bX + c22 * bY) / det
+            rss = np.maximum(S["xx"] - (a0 * bx + a1 * bX + a2 * bY), 0.0)
+            scatter = np.sqrt(rss / np.maximum(n - 3, 1.0))                  # the neighbours about their plane
+            sd_pred = np.where(good, scatter * np.sqrt(inv00), np.inf)
+        beta = np.column_stack([np.where(good, a0, 0.0)])
+        pred = beta[:, 0] + x0
+        t = beta[:, 0] / period - u[iy, ix]
+        m = np.rint(t)
+        xn = x0 + period * (m + u[iy, ix])
+        gap = np.abs(xn - coarse[iy, ix])
+        gap = np.minimum(gap, np.abs(size - gap))         # the coarse estimate wraps at the panel's edges
+        # one surface: the neighbours lie on their plane to their own noise (a few pixels of another surface in the
+        # window would not move the plane's standard deviation, they do its scatter)
+        take = (scatter <= 0.5 * max_sigma * period) & (sd_pred <= max_sigma * period) & (np.abs(t - m) <= tolerance)
+        take &= gap <= 4.0 * np.hypot(coarse_sd[iy, ix], sd_pred)
+        take &= np.abs(pred - xn) <= tolerance * period
+        take &= (xn >= -0.5) & (xn <= size - 0.5)
+        iy, ix = iy[take], ix[take]
+        if not len(iy):
+            break
+        x[iy, ix] = xn[take]
+        sx[iy, ix] = period * su[iy, ix]
+        reason[iy, ix] = OK
+        done += len(iy)
+    return done
+
+
+def test_neighbour_orders_as_before(monkeypatch):
+    scene = small_scene().replace(read_noise=1.5)
+    ps = patterns.pattern_set(*scene.proj_size, family="phase", steps=3, period=64, white_black=False)
+    stack, _ = simulate.render(simulate.with_board_pose(scene, (15.0, 10.0, 0.0)), order=ps, seed=3)
+    seen = []
+    real = unwrap.neighbour_orders
+
+    def both(*args, **kw):
+        mine = [a.copy() if isinstance(a, np.ndarray) else a for a in args]
+        want = reference(*mine, **kw)
+        got = real(*args, **kw)
+        seen.append(got)
+        assert got == want
+        for k in (0, 1, 2):  # x, sx, reason: updated in place
+            np.testing.assert_array_equal(args[k], mine[k])
+        return got
+
+    monkeypatch.setattr(unwrap, "neighbour_orders", both)
+    res = decode_phase(stack, ps)
+    assert len(seen) == 2 and min(seen) > 100, seen  # both axes, each with pixels ordered by their neighbours
+    assert (res.reason_col == OK).sum() > 0 and (res.reason_row == OK).sum() > 0
