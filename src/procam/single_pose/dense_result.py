@@ -17,7 +17,7 @@ from ..errors import CalibrationError
 from ..residuals import pnp, stereo_pose
 from ..stats import rms
 from . import joint as J
-from .dense import MODELS, DenseFit, to_devices
+from .dense import MODELS, DenseFit
 
 #: A projector rated good: what this pose determines (the dense fit's ``±`` with each lens's decentring held at its
 #: estimate, or at zero where the board alone cannot see it; the reported ``±`` adds its prior) at most these, so that the values are within 1 % and 15 px with about 95 %
@@ -43,6 +43,49 @@ def _derived(p):
                  models.board_angles_deg(Rc, tc), models.board_angles_deg(Rp, tp)]
 
 
+def _opencv_coefficients(fit: DenseFit, proj_size) -> tuple:
+    """The projector's OpenCV ``k1, k2, p1, p2, k3`` about its principal point: the fit's, with a decentred lens's
+    offset (``dpx, dpy``) turned into the tangential terms OpenCV has for it (:func:`procam.models.brown_recentred`,
+    over the panel; the chosen model's radial terms and ``p1, p2``)."""
+    p = fit.p
+    coeffs = np.array([p[J.IDX[t]] for t in J.DIST_TERMS], float)
+    f, a, u0, v0 = (float(p[J.IDX[n]]) for n in ("f_p", "alpha_p", "u0p", "v0p"))
+    e = np.array([p[J.IDX["dpx"]] / f, p[J.IDX["dpy"]] / (a * f)])
+    if not np.any(e) or not np.any(coeffs):
+        return tuple(float(c) for c in coeffs)
+    W, H = proj_size
+    extent = (-u0 / f, (W - u0) / f, -v0 / (a * f), (H - v0) / (a * f))
+    free = sorted({J.DIST_TERMS.index(t) for t in MODELS.get(fit.model, ())} | {2, 3})
+    out, _ = models.brown_recentred(coeffs, e, extent, free)
+    return tuple(float(c) for c in out)
+
+
+def to_devices(fit: DenseFit, cam_sol, camera_size, proj_size, known_camera=None, known_projector=None):
+    """The camera and projector :class:`procam.calibration.Device` of a dense fit, and ``R, T`` (camera ->
+    projector)."""
+    from ..calibration import Device, Distortion
+
+    p = fit.p
+    if known_camera is not None:
+        camera = known_camera
+    else:
+        Kc = models.intrinsic_matrix(p[0], p[2], p[3], p[1])
+        centre = (float(p[2] + p[J.IDX["dcx"]]), float(p[3] + p[J.IDX["dcy"]]))     # the division model has a centre
+        camera = Device(Kc, tuple(camera_size), Distortion("division", centre, float(p[4] / J.S ** 2),
+                                                            float(p[5] / J.S ** 4)))
+    if known_projector is not None:
+        projector = known_projector
+    else:
+        Kp = models.intrinsic_matrix(p[J.IDX["f_p"]], p[J.IDX["u0p"]], p[J.IDX["v0p"]], p[J.IDX["alpha_p"]])
+        coeffs = _opencv_coefficients(fit, proj_size)
+        dist = Distortion("opencv", coeffs=coeffs) if any(coeffs) else Distortion()
+        projector = Device(Kp, tuple(proj_size), dist)
+    Rc, tc = models.rvec_to_matrix(p[6:9]), p[9:12]
+    Rp, tp = models.rvec_to_matrix(p[21:24]), p[24:27]
+    R = Rp @ Rc.T
+    return camera, projector, R, tp - R @ tc, (Rc, tc), (Rp, tp)
+
+
 def std_dict(fit: DenseFit, known_camera=None, known_projector=None) -> dict:
     """Standard deviations under procam's parameter names (:mod:`procam.parameters`) from the fit's covariance."""
     C, p = fit.cov, fit.p
@@ -66,7 +109,7 @@ def std_dict(fit: DenseFit, known_camera=None, known_projector=None) -> dict:
 
 def _dist_std(fit: DenseFit, s) -> list:
     """The std of the projector's written OpenCV coefficients: the fit's, and for ``p1, p2`` what an estimated
-    decentring ``e`` puts there (``p2 = -k1 e_x``, ``p1 = -k1 e_y`` to first order; :func:`.dense.to_devices`)."""
+    decentring ``e`` puts there (``p2 = -k1 e_x``, ``p1 = -k1 e_y`` to first order; :func:`to_devices`)."""
     i = J.IDX
     out = [float(s[i[t]]) for t in J.DIST_TERMS]
     k1, f, a = fit.p[i["k1p"]], fit.p[i["f_p"]], fit.p[i["alpha_p"]]
