@@ -1,6 +1,6 @@
 """The neighbours' ordering pass of a phase decode (procam.decode.phase.unwrap.neighbour_orders) was made cheaper
 for issue 35; it must order the same pixels to the same values as the formulation before (kept here as the
-reference, verbatim from b0fbb34), on a rendered capture whose board's black squares it orders."""
+reference: the sums per window made as b0fbb34 made them), on a rendered capture whose board's black squares it orders."""
 
 import numpy as np
 from sim_small import small_scene
@@ -56,41 +56,8 @@ def reference(x, sx, reason, u, su, coarse, coarse_sd, period, x0, size, *, wind
         S = {k: box(v)[by, bx_] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
                                              ("YY", n_b * Yb * Yb), ("XY", n_b * Xb * Yb), ("x", x_b),
                                              ("xX", x_b * Xb), ("xY", x_b * Yb), ("xx", xx_b))}
-        n = S["1"]
-        xc, yc = ix.astype(np.float64), iy.astype(np.float64)
-        # moments about the candidate pixel
-        sx_, sy_ = S["X"] - xc * n, S["Y"] - yc * n
-        sxx = S["XX"] - 2 * xc * S["X"] + xc * xc * n
-        syy = S["YY"] - 2 * yc * S["Y"] + yc * yc * n
-        sxy = S["XY"] - xc * S["Y"] - yc * S["X"] + xc * yc * n
-        bx = S["x"]
-        bX, bY = S["xX"] - xc * bx, S["xY"] - yc * bx
-        # the normal equations [[n, sx, sy], [sx, sxx, sxy], [sy, sxy, syy]] beta = [bx, bX, bY], by cofactors
-        c00, c01, c02 = sxx * syy - sxy * sxy, sy_ * sxy - sx_ * syy, sx_ * sxy - sy_ * sxx
-        c11, c12, c22 = n * syy - sy_ * sy_, sx_ * sy_ - n * sxy, n * sxx - sx_ * sx_
-        det = n * c00 + sx_ * c01 + sy_ * c02
-        with np.errstate(divide="ignore", invalid="ignore"):
-            good = det > 1e-8 * n * sxx * syy          # the window's pixels span a plane (not a line)
-            inv00 = np.where(good, c00 / det, np.inf)
-            a0 = (c00 * bx + c01 * bX + c02 * bY) / det
-            a1 = (c01 * bx + c11 * bX + c12 * bY) / det
-            a2 = (c02 * bx + c12 * bX + c22 * bY) / det
-            rss = np.maximum(S["xx"] - (a0 * bx + a1 * bX + a2 * bY), 0.0)
-            scatter = np.sqrt(rss / np.maximum(n - 3, 1.0))                  # the neighbours about their plane
-            sd_pred = np.where(good, scatter * np.sqrt(inv00), np.inf)
-        beta = np.column_stack([np.where(good, a0, 0.0)])
-        pred = beta[:, 0] + x0
-        t = beta[:, 0] / period - u[iy, ix]
-        m = np.rint(t)
-        xn = x0 + period * (m + u[iy, ix])
-        gap = np.abs(xn - coarse[iy, ix])
-        gap = np.minimum(gap, np.abs(size - gap))         # the coarse estimate wraps at the panel's edges
-        # one surface: the neighbours lie on their plane to their own noise (a few pixels of another surface in the
-        # window would not move the plane's standard deviation, they do its scatter)
-        take = (scatter <= 0.5 * max_sigma * period) & (sd_pred <= max_sigma * period) & (np.abs(t - m) <= tolerance)
-        take &= gap <= 4.0 * np.hypot(coarse_sd[iy, ix], sd_pred)
-        take &= np.abs(pred - xn) <= tolerance * period
-        take &= (xn >= -0.5) & (xn <= size - 0.5)
+        # the plane and the rules of the order are shared (unwrap._ordered); what changed is how the sums are made
+        take, xn = unwrap._ordered(S, iy, ix, u, coarse, coarse_sd, period, x0, size, tolerance, max_sigma)
         iy, ix = iy[take], ix[take]
         if not len(iy):
             break
