@@ -183,6 +183,17 @@ class JointModel:
         self.cauchy: float | None = None
         self.pixel_distance = False
 
+    def on(self, **changes) -> "JointModel":
+        """The same model (samples in use, loss, distance measure, noise scales) on data with ``changes`` (fields of
+        :class:`JointData`, e.g. a held device moved or freed, pixels shifted): what a held device's uncertainty, a
+        residual pattern or a given device's check does to this fit."""
+        from dataclasses import replace
+
+        m = JointModel(replace(self.data, **changes), self.scales)
+        m.keep_board, m.keep_back, m.cauchy, m.pixel_distance = (self.keep_board, self.keep_back, self.cauchy,
+                                                                 self.pixel_distance)
+        return m
+
     @property
     def names(self) -> tuple:
         """The parameter vector's names: :data:`NAMES`, then ``u0p_g`` of each background group g >= 1."""
@@ -434,7 +445,6 @@ def held_jacobian(model: JointModel, p, which: str, names) -> np.ndarray:
     """``(n, k)``: the derivative of :meth:`JointModel.residuals` at ``p`` by the held device's parameters ``names``
     (K entries ``f_c, fy_c, u0c, v0c`` or ``f_p, ...``, OpenCV's coefficients ``k1 ... k6, p1, p2``), by central
     differences (the held device undistorts through any of its models); ``which``: ``"camera"`` or ``"projector"``."""
-    from dataclasses import replace
 
     attr = "camera_fixed" if which == "camera" else "projector_fixed"
     held = getattr(model.data, attr)
@@ -449,9 +459,7 @@ def held_jacobian(model: JointModel, p, which: str, names) -> np.ndarray:
             c = c0.copy()
             c[k] += s * h
             dev = _moved(held.device, names, c)
-            m = JointModel(replace(model.data, **{attr: FixedDevice(np.asarray(dev.K, float), dev)}), model.scales)
-            m.keep_board, m.keep_back, m.cauchy = model.keep_board, model.keep_back, model.cauchy
-            m.pixel_distance = model.pixel_distance
+            m = model.on(**{attr: FixedDevice(np.asarray(dev.K, float), dev)})
             rs.append(m.residuals(np.asarray(p, float)))
         cols.append((rs[0] - rs[1]) / (2 * h))
     return np.column_stack(cols) if cols else np.zeros((0, 0))

@@ -113,7 +113,6 @@ def camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarra
     board samples), through the fit's own sensitivity (``-(J^T J)^-1 J^T dr``):
     ``(DenseFit.camera_pattern, the shift (P,) over :attr:`~procam.single_pose.joint.JointModel.names`)``;
     ``(None, None)`` without a pattern."""
-    from dataclasses import replace
 
     from .misfit import misfit
 
@@ -135,9 +134,7 @@ def camera_pattern(model: J.JointModel, p, free) -> tuple[dict | None, np.ndarra
         return uv - design(uv) @ coef if len(uv) else uv
 
     # the board's pixels only: a quadratic fitted over the board says nothing of the wall beyond it
-    shifted = J.JointModel(replace(d, cam=moved(d.cam), board_cam=moved(d.board_cam)), model.scales)
-    shifted.keep_board, shifted.keep_back, shifted.cauchy = model.keep_board, model.keep_back, model.cauchy
-    shifted.pixel_distance = model.pixel_distance
+    shifted = model.on(cam=moved(d.cam), board_cam=moved(d.board_cam))
     r, Jm, cov = J.linearise(model, p, free)
     dr = shifted.residuals(np.asarray(p, float)) - r
     idx = np.flatnonzero([nm in free for nm in model.names])
@@ -268,7 +265,6 @@ def given_projector_moved(model: J.JointModel, p, free, device) -> dict | None:
     :class:`procam.calibration.Device`. Returns ``{"f_p"|"v0p": (given, this pose, std), "chi2", "limit",
     "moved"}``, or None when the given lens is not OpenCV's (or none) or the fit fails.
     """
-    from dataclasses import replace
 
     from scipy.special import chdtri
 
@@ -281,9 +277,7 @@ def given_projector_moved(model: J.JointModel, p, free, device) -> dict | None:
     i = J.IDX
     q[[i["f_p"], i["alpha_p"], i["u0p"], i["v0p"]]] = K[0, 0], K[1, 1] / K[0, 0], K[0, 2], K[1, 2]
     q[[i[t] for t in J.DIST_TERMS]] = (coeffs + [0.0] * 5)[:5]
-    m = J.JointModel(replace(model.data, projector_fixed=None), model.scales)
-    m.keep_board, m.keep_back, m.cauchy, m.pixel_distance = (model.keep_board, model.keep_back, model.cauchy,
-                                                             model.pixel_distance)
+    m = model.on(projector_fixed=None)
     try:
         fit = J.solve(m, q, tuple(free) + ("f_p", "v0p"), max_nfev=40)
     except (ValueError, np.linalg.LinAlgError):
@@ -292,13 +286,11 @@ def given_projector_moved(model: J.JointModel, p, free, device) -> dict | None:
     idx = [i[n] for n in names]
     d = fit.p[idx] - q[idx]
     C = fit.cov[np.ix_(idx, idx)].copy()
-    if getattr(device, "covariance", None) is not None:
+    if getattr(device, "covariance", None) is not None:     # the file's own uncertainty of the same numbers
         held, Ch = device.covariance
-        k = [list(held).index(n) if n in held else None for n in names]
-        for a, ka in enumerate(k):
-            for b, kb in enumerate(k):
-                if ka is not None and kb is not None:
-                    C[a, b] += float(np.asarray(Ch, float)[ka, kb])
+        mine = [a for a, n in enumerate(names) if n in held]
+        theirs = [list(held).index(names[a]) for a in mine]
+        C[np.ix_(mine, mine)] += np.asarray(Ch, float)[np.ix_(theirs, theirs)]
     if not np.all(np.isfinite(C)) or not np.all(np.isfinite(d)):
         return None
     chi2 = float(d @ np.linalg.pinv(C) @ d)
