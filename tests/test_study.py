@@ -16,7 +16,7 @@ def test_parse_grid():
     assert parse_grid("-45:45:5")[[0, -1]].tolist() == [-45.0, 45.0]
     assert parse_grid("0:1:0.25").tolist() == [0, 0.25, 0.5, 0.75, 1.0]
     assert parse_grid("10, -3.5").tolist() == [-3.5, 10.0]
-    for bad in ("", "1:2", "5:-5:1", "0:10:0", "a,b", "-90:0:10"):
+    for bad in ("", "1:2", "5:-5:1", "0:10:0", "a,b", "-90:0:10", "0:1e300:1e300", "1e300,0"):
         with pytest.raises(ProcamError):
             parse_grid(bad)
 

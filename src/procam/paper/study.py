@@ -100,9 +100,9 @@ def parse_grid(text: str) -> np.ndarray:
     except ValueError:
         raise ProcamError(f"grid must be START:STOP:STEP (e.g. -45:45:5) or a comma list of finite angles in "
                           f"degrees, got {text!r}") from None
-    vals = np.unique(np.round(vals, 9))
-    if np.any(np.abs(vals) >= 89.0):
+    if np.any(np.abs(vals) >= 89.0):      # before rounding: an angle of 1e300 would overflow it
         raise ProcamError(f"grid angles must lie within (-89, 89) degrees, got {text!r}")
+    vals = np.unique(np.round(vals, 9))
     return vals
 
 
