@@ -8,7 +8,13 @@ carries everything else into the ``±``:
 1. **Start**: the camera from its corners (:mod:`.camera`), the projector from the paper's principal-axis LM on its
    corners; then the projector's pinhole and pose on the board samples with the camera held, then everything.
 2. **Noise** is measured per block (camera corners, board samples, background samples): the robust scale of the
-   residuals of the richest model; samples beyond ``outlier_k`` scales are left out and the fit repeated.
+   residuals of the richest model; samples beyond ``outlier_k`` scales are left out and the fit repeated. A
+   background sample's distance to its epipolar line is measured from here on in the projector's pixels, to first
+   order (:attr:`.joint.JointModel.pixel_distance`): measured in normalised coordinates times ``f_p``, a pixel of
+   noise moves it by a gain that depends on ``alpha_p`` and the projector's lens, and a fit free to change the gain
+   shrinks the noise by moving them, a bias that does not shrink with the noise (``f_c`` 1 % low on a far, narrow
+   rig: issue 38's study, case 58). The start keeps the normalised form: from far off, the pixel form let one fit
+   of the ``hard`` rig shrink the residuals through ``alpha_p`` to ``f_p`` = 9 px.
 3. **What is assumed becomes a prior** whose width is what the assumption can cost: ``alpha_p = 1 ± 0.003``,
    ``u0p = W / 2 ± 3 % of W`` (the spread of real projectors; a datasheet's lens shift replaces it), a datasheet's
    throw ratio on ``f_p``. A prior the data outweigh costs nothing; one they cannot check shows in the ``±``.
@@ -365,7 +371,9 @@ def fit(view, cam_sol, proj_sol, proj_size, options: DenseOptions = DenseOptions
     p = J.solve(model, p, pin + J.POSE_P).p
     full = cam_free + pin + richest + J.POSE_P
     fit0 = J.solve(model, p, full)
-    # 2. the noise of each block, the outliers out, the fit again (twice: the scales move with the outliers)
+    # 2. the background's distances in projector pixels from here on (module docstring, 2), the noise of each block,
+    # the outliers out, the fit again (twice: the scales move with the outliers)
+    model.pixel_distance = True
     for _ in range(2):
         model.scales = _measured_scales(model, fit0.p)
         _trim(model, fit0.p, options.outlier_k)

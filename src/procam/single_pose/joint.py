@@ -75,6 +75,17 @@ S = models.KAPPA_SCALE
 # ------------------------------------------------------------------------------------------------
 # the model's pieces (plain arrays or Duals; the lens models are procam.models')
 
+def _brown_jacobian(x, y, kp):
+    """``(a, b, d)``: the Jacobian ``[[a, b], [b, d]]`` of :func:`procam.models.brown` at undistorted normalised
+    ``(x, y)`` (plain or Dual)."""
+    k1, k2, p1, p2, k3 = kp
+    r2 = x * x + y * y
+    rad = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
+    dr = k1 + 2 * k2 * r2 + 3 * k3 * r2 * r2
+    return (rad + 2 * x * x * dr + 2 * p1 * y + 6 * p2 * x, 2 * x * y * dr + 2 * p1 * x + 2 * p2 * y,
+            rad + 2 * y * y * dr + 6 * p1 * y + 2 * p2 * x)
+
+
 def _transpose(R):
     return [[R[j][i] for j in range(3)] for i in range(3)]
 
@@ -168,11 +179,12 @@ class JointModel:
     ``keep_board`` / ``keep_back``: (M,) / (B,) bool, the samples in use (outliers out).
     ``cauchy``: None (least squares), or the scale (in noise sigmas) of a Cauchy loss on the background residuals
     (residual ``sign(r) c sqrt(log(1 + (r/c)^2))``: the corners and priors stay quadratic).
-    ``pixel_distance``: the background's epipolar distance measured in projector pixels along both axes (``f_p``
-    across, ``alpha_p f_p`` down: the background check's statistic, :mod:`.background_fit`), instead of the
-    normalised distance times ``f_p`` (the default, the dense fit's: the same where ``alpha_p = 1``; with
-    ``alpha_p`` free the pixel form lets the fit shrink the background's residuals through ``alpha_p``, which sent
-    one dense fit of the ``hard`` rig to ``f_p`` = 9 px).
+    ``pixel_distance``: the background's epipolar distance measured in the projector's pixels, to first order (the
+    normalised distance over its gradient by the sample's pixel, through ``alpha_p`` and the lens: one pixel of
+    noise moves it by one pixel whatever the parameters, so no parameter can shrink the noise: the background
+    check's statistic, :mod:`.background_fit`, and the dense fit's after its start), instead of the normalised
+    distance times ``f_p`` (the default: the same for a pinhole with square pixels; from far off, the pixel form
+    let one dense fit of the ``hard`` rig shrink the residuals through ``alpha_p`` to ``f_p`` = 9 px).
     """
 
     def __init__(self, data: JointData, scales: Scales):
@@ -228,6 +240,26 @@ class JointModel:
             return float(K[0, 0]), float(K[1, 1] / K[0, 0]), float(K[0, 2]), float(K[1, 2]), coeffs[:5], 0.0, 0.0
         return p[12], p[13], p[14], p[15], [p[16], p[17], p[18], p[19], p[20]], p[29] / p[12], p[30] / (p[12] * p[13])
 
+    def _epipolar(self, p, m, Rc, tc, Rp, tp):
+        """The background samples ``m`` (bool mask): their epipolar lines ``ln`` (3 arrays: ``ln . (x, y, 1) = 0`` in
+        the projector's normalised coordinates) and their projector points there, undistorted ``(xn, yn)``; and
+        the distortion's Jacobian at them, ``(a, b, d)`` of ``[[a, b], [b, d]]`` (None for a held projector)."""
+        d = self.data
+        rx, ry = self._rays(p, d.back_cam[m], d._back_cam_und[m] if d.camera_fixed is not None else None)
+        R = _matmul(Rp, _transpose(Rc))
+        T = [tp[i] - (R[i][0] * tc[0] + R[i][1] * tc[1] + R[i][2] * tc[2]) for i in range(3)]
+        Rr = [R[i][0] * rx + R[i][1] * ry + R[i][2] for i in range(3)]
+        ln = [T[1] * Rr[2] - T[2] * Rr[1], T[2] * Rr[0] - T[0] * Rr[2], T[0] * Rr[1] - T[1] * Rr[0]]
+        fp, ap, u0p, v0p, kp, ex, ey = self._projector(p)
+        if d.back_groups is not None:          # u0p per group of the background (group 0: the projector's own)
+            g = d.back_groups[m]
+            u0p = u0p + sum((g == k) * (p[len(NAMES) + k - 1] - u0p) for k in range(1, int(g.max(initial=0)) + 1))
+        if d.projector_fixed is not None:
+            und = d._back_proj_und[m]
+            return ln, (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp), None
+        xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
+        return ln, xn + ex, yn + ey, _brown_jacobian(xn, yn, kp)
+
     # residual blocks, in pixels ---------------------------------------------------------------------
     def blocks(self, p):
         """``(camera (2N,), board (2M,), background (B,), priors (P,))`` residuals: the first three in pixels
@@ -259,22 +291,17 @@ class JointModel:
         board_res = [d.board_proj[m, 0] - (fp * (bx + ex) + u0p), d.board_proj[m, 1] - (ap * fp * (by + ey) + v0p)]
         # 3. background samples: distance to the epipolar line, projector pixels
         m = self.keep_back
-        rx, ry = self._rays(p, d.back_cam[m], d._back_cam_und[m] if d.camera_fixed is not None else None)
-        R = _matmul(Rp, _transpose(Rc))
-        T = [tp[i] - (R[i][0] * tc[0] + R[i][1] * tc[1] + R[i][2] * tc[2]) for i in range(3)]
-        Rr = [R[i][0] * rx + R[i][1] * ry + R[i][2] for i in range(3)]
-        ln = [T[1] * Rr[2] - T[2] * Rr[1], T[2] * Rr[0] - T[0] * Rr[2], T[0] * Rr[1] - T[1] * Rr[0]]
-        if d.back_groups is not None:          # u0p per group of the background (group 0: the projector's own)
-            g = d.back_groups[m]
-            u0p = u0p + sum((g == k) * (p[len(NAMES) + k - 1] - u0p) for k in range(1, int(g.max(initial=0)) + 1))
-        if d.projector_fixed is not None:
-            und = d._back_proj_und[m]
-            xn, yn = (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp)
-        else:
-            xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
-            xn, yn = xn + ex, yn + ey
-        if self.pixel_distance:   # in (undistorted) projector pixels: the normalised line scaled fp across, ap fp down
-            back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1] / (ap * ap)) * fp
+        ln, xn, yn, jac = self._epipolar(p, m, Rc, tc, Rp, tp)
+        if self.pixel_distance:
+            # the distance in the projector's pixels, to first order: the normalised one over its gradient by the
+            # sample's pixel, (l0, l1) A^-1 diag(1/fp, 1/(ap fp)), A the distortion's Jacobian there
+            if jac is None:
+                gx, gy = ln[0], ln[1] / ap
+            else:
+                a, b, dd = jac
+                det = a * dd - b * b
+                gx, gy = (ln[0] * dd - ln[1] * b) / det, (ln[1] * a - ln[0] * b) / (det * ap)
+            back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(gx * gx + gy * gy) * fp
         else:
             back_res = (ln[0] * xn + ln[1] * yn + ln[2]) / D.sqrt(ln[0] * ln[0] + ln[1] * ln[1]) * fp
         # 4. priors
