@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import app, console, fail, preload, say, user_errors, warn
+from ._app import app, console, fail, keep_freed_memory, preload, say, user_errors, warn
 from ._options import (
     BackgroundOpt,
     BoardOpt,
@@ -195,6 +195,7 @@ def calibrate_cmd(
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     params = dict(locals())
+    keep_freed_memory()
     reader = None
     if not camera_only:
         # the pose folders' images are read from here on (reader threads; the first pose at once, each next one
