@@ -224,8 +224,25 @@ STAGES = [
 ]
 
 
+def _thread_group(t=None) -> str:
+    """``main``, or a thread's name without its number (``procam-read``, ``procam-preload``, ``ThreadPoolExecutor``)."""
+    import re
+    import threading
+
+    t = t or threading.current_thread()
+    return "main" if t is threading.main_thread() else re.sub(r"[-_]?\d+(_\d+)?$", "", t.name)
+
+
+#: what each thread group does in a calibrate, for the rows of the CPU not inside a stage
+GROUPS = {"main": "main thread", "procam-read": "reader threads", "procam-preload": "import thread (scipy.optimize, "
+          "procam.verify)", "ThreadPoolExecutor": "worker threads (board corners, leave-one-out refits)"}
+
+
 def profile_once(data: Path, out: Path) -> dict:
-    """Import procam's CLI, wrap the stage functions with timers, run ``calibrate``; stage -> seconds."""
+    """Import procam's CLI, wrap the stage functions with timers, run ``calibrate``; stage -> (wall s, CPU s).
+
+    The CPU outside the stages is given per thread group (every thread's CPU is counted when it ends): the main
+    thread's, the reader threads' beyond decoding the PNGs, the import thread's, the worker threads'."""
     import importlib
     import io as _io
     import threading
@@ -235,6 +252,20 @@ def profile_once(data: Path, out: Path) -> dict:
     from procam.cli import main
     lock = threading.Lock()
     timers: dict = {}
+    inside: dict = {}  # thread group -> CPU inside stages
+    threads: dict = {}  # thread group -> CPU of its threads
+    run = threading.Thread.run
+
+    def counted_run(self):
+        c = time.thread_time()
+        try:
+            run(self)
+        finally:
+            with lock:
+                g = _thread_group(self)
+                threads[g] = threads.get(g, 0.0) + time.thread_time() - c
+
+    threading.Thread.run = counted_run
 
     def wrap(stage, f):
         def timed(*a, **k):
@@ -244,7 +275,10 @@ def profile_once(data: Path, out: Path) -> dict:
             finally:
                 with lock:
                     w0, c0 = timers.get(stage, (0.0, 0.0))
-                    timers[stage] = (w0 + time.perf_counter() - t, c0 + time.thread_time() - c)
+                    dc = time.thread_time() - c
+                    timers[stage] = (w0 + time.perf_counter() - t, c0 + dc)
+                    g = _thread_group()
+                    inside[g] = inside.get(g, 0.0) + dc
         return timed
 
     for stage, mod, attr in STAGES:
@@ -260,18 +294,19 @@ def profile_once(data: Path, out: Path) -> dict:
     # the modules calibrate imports lazily are imported here, to wrap them
     t_import = (time.perf_counter() - t0, time.thread_time() - c0)
     argv = ["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)]
-    t2, c2 = time.perf_counter(), time.process_time()
+    t2, c2, m2 = time.perf_counter(), time.process_time(), time.thread_time()
     with redirect_stdout(_io.StringIO()):
         try:
             main(argv)
         except SystemExit as e:
             if e.code not in (0, None):
                 raise
+    threads["main"] = time.thread_time() - m2
     t_run = (time.perf_counter() - t2, time.process_time() - c2)
+    threading.Thread.run = run
     out = {"imports": t_import, **timers}
-    main_cpu = sum(c for k, (w, c) in timers.items() if not k.startswith("read PNGs"))
-    out["other (main thread)"] = (float("nan"), t_run[1] - timers.get("read PNGs (all reader threads)", (0, 0))[1]
-                                  - main_cpu)
+    for g, cpu in threads.items():  # stages nested in one another are counted twice: none of STAGES are
+        out[f"other: {GROUPS.get(g, g)}, outside the stages"] = (float("nan"), cpu - inside.get(g, 0.0))
     out["run after imports (wall; CPU of all threads)"] = t_run
     return out
 

@@ -56,3 +56,23 @@ def test_the_poses_read_ahead_give_the_views_read_one_by_one(poses):
         for folder in poses:
             names, _ = capture.sequence_files(folder, files.list_images(folder))
             np.testing.assert_array_equal(pf.read(names), files.read_images(names))
+
+
+def test_a_multi_pose_calibrate_does_not_import_the_single_pose_solver(poses, tmp_path):
+    """procam calibrate of several poses imports what a multi-pose calibration uses (issue 35: imports only where
+    used); the single-pose solver (0.08 CPU-s to import) only for one pose, a rig or --camera-only."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import procam
+
+    code = ("import sys; from procam.cli import main; sys.argv[0] = 'procam'\n"
+            "try:\n    main(sys.argv[1:])\nexcept SystemExit as e:\n    assert e.code in (0, None), e.code\n"
+            "print(sorted(m for m in sys.modules if m.startswith('procam.single_pose')))")
+    env = dict(os.environ, PYTHONPATH=str(Path(procam.__file__).parents[1]))
+    res = subprocess.run([sys.executable, "-c", code, "calibrate", *map(str, poses), *BOARD, "-o",
+                          str(tmp_path / "calib.json")], env=env, capture_output=True, text=True, check=True)
+    assert res.stdout.strip().splitlines()[-1] == "[]", res.stdout[-500:]
+    assert json.loads((tmp_path / "calib.json").read_text())["method"] == "multi-pose"

@@ -75,6 +75,25 @@ def test_white_black_not_where_order_says(tmp_path):
     assert capture.load_capture(tmp_path, (W, H), "moreno").pattern_set.white == 0
 
 
+def test_frame_levels_of_some_frames_are_those_of_all_frames():
+    """check_white_black asks for the white and black frames' levels only: each frame's are the same bits as
+    when every frame's are computed, and a capture whose white frame is not lit everywhere still fails."""
+    from procam.capture.sample import _sample, frame_levels
+
+    st = camera_view_of_patterns(W, H, seed=3)
+    ps = patterns.pattern_set(W, H)
+    sub = _sample(st)
+    p5, p95 = frame_levels(st, sub)
+    some = (ps.white, ps.black, 3, 0)
+    q5, q95 = frame_levels(st, sub, frames=some)
+    assert q5.tobytes() == p5[list(some)].tobytes() and q95.tobytes() == p95[list(some)].tobytes()
+    assert p5[ps.white] > 0.5 and p95[ps.black] < 0.5 and not p5[3] > 0.5
+    capture.check_white_black(st, ps, "pose", [f"{k:02d}.png" for k in range(len(st))])
+    st[ps.white] = st[3]  # a pattern where the white frame belongs
+    with pytest.raises(CaptureError, match="white and black frames are not where order 'opencv' puts them"):
+        capture.check_white_black(st, ps, "pose", [f"{k:02d}.png" for k in range(len(st))])
+
+
 def test_shuffled_frames(tmp_path):
     st = camera_view_of_patterns(W, H)
     st[[2, 4]] = st[[4, 2]]  # swap two pattern frames of different bits

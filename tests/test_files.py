@@ -96,3 +96,27 @@ def test_a_hostile_manifest_or_json_output_is_read_as_not_procams_not_crashed(tm
     out = tmp_path / "calib.json"
     out.write_text('{"format": "procam-calibration", "x": ' + deep + "}")
     assert not files.procam_wrote(out)
+
+
+def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
+    """Each thread reads its files into one buffer it keeps: a file after a larger one, a larger after a smaller,
+    8- and 16-bit PNGs and JPEGs come out as OpenCV reads them, and a truncated JPEG or PNG is still refused."""
+    import cv2
+
+    from procam.errors import CaptureError
+
+    rng = np.random.default_rng(5)
+    big = rng.integers(0, 256, (120, 160), np.uint8)
+    files = {"big.png": big, "small.png": big[:9, :7].copy(), "deep.png": (big.astype(np.uint16) * 257)[:50],
+             "photo.jpg": big}
+    for name, img in files.items():
+        assert cv2.imwrite(str(tmp_path / name), img)
+    for name in ["big.png", "small.png", "deep.png", "small.png", "photo.jpg", "big.png"]:
+        got = _files.read_image(tmp_path / name)
+        want = cv2.imread(str(tmp_path / name), cv2.IMREAD_UNCHANGED)
+        assert got.dtype == want.dtype and np.array_equal(got, want), name
+    for name, what in (("photo.jpg", "no JPEG end marker"), ("big.png", "truncated")):
+        data = (tmp_path / name).read_bytes()
+        (tmp_path / f"cut-{name}").write_bytes(data[:len(data) * 2 // 3])
+        with pytest.raises(CaptureError, match=what):
+            _files.read_image(tmp_path / f"cut-{name}")

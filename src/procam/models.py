@@ -396,3 +396,23 @@ def pose_from_homography(K, H_db):
     if np.linalg.det(R) < 0:
         R = U @ np.diag([1, 1, -1]) @ Vt
     return R, M[:, 2].copy()
+
+
+def zhang_camera(H_cb, principal_point):
+    """Closed-form ``(f, alpha)`` from the board -> image homography, known principal point (Zhang).
+
+    Returns None when the pose is (near-)degenerate (no positive solution).
+    """
+    u0, v0 = principal_point
+    Hs = np.array([[1.0, 0, -u0], [0, 1.0, -v0], [0, 0, 1.0]]) @ np.asarray(H_cb, float)
+    Hs = Hs / np.linalg.norm(Hs)
+    p, q = Hs[:, 0], Hs[:, 1]
+    A = np.array([[p[0] * q[0], p[1] * q[1]], [p[0] ** 2 - q[0] ** 2, p[1] ** 2 - q[1] ** 2]])
+    b = -np.array([p[2] * q[2], p[2] ** 2 - q[2] ** 2])
+    try:
+        a, bb = np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        return None
+    if not (np.isfinite(a) and np.isfinite(bb)) or a <= 0 or bb <= 0:
+        return None
+    return float(a ** -0.5), float(np.sqrt(a / bb))

@@ -36,7 +36,7 @@ from typing import Sequence
 
 import numpy as np
 
-from . import multi_pose, single_pose
+from . import multi_pose
 from .multi_pose.evidence import parameter_spread, refit_each  # noqa: F401 -- parameter_spread: here before
 from .errors import CalibrationError, ProcamError, ProcamWarning
 from .stats import rms, tls_plane
@@ -335,6 +335,8 @@ def single_pose_cross(views: Sequence[View], *, min_corners: int = 6, **single_p
     Poses whose calibration fails are recorded in ``failures``.  Needs at least 2 poses
     (:class:`procam.errors.CalibrationError` otherwise).
     """
+    from . import single_pose
+
     views = list(views)
     if len(views) < 2:
         raise CalibrationError(f"single-pose cross-verification needs at least 2 poses (calibrate on one, verify "

@@ -168,10 +168,12 @@ def check_light(stack: np.ndarray, folder, min_span: float = 10.0, sub: np.ndarr
 def check_white_black(stack: np.ndarray, ps: patterns.PatternSet, folder, files,
                       sub: np.ndarray | None = None) -> None:
     """Raise CaptureError when the white/black frames are not where ``ps.order`` puts them."""
-    p5, p95 = frame_levels(stack, sub)
-    if p5[ps.white] > 0.5 and p95[ps.black] < 0.5:
+    sub = _sample(stack) if sub is None else sub
+    p5, p95 = frame_levels(stack, sub, frames=(ps.white, ps.black))  # the other frames' only when they are not
+    if p5[0] > 0.5 and p95[1] < 0.5:
         return
     diagnose(stack, ps, folder, files, sub)
+    p5, p95 = frame_levels(stack, sub)
     brightest, darkest = int(np.argmax(p5)), int(np.argmin(p95))
     if brightest == ps.white and darkest == ps.black:
         # the white and black frames are where they belong, but other frames leave their range

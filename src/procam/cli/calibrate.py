@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import app, console, fail, preload, say, user_errors, warn
+from ._app import app, console, fail, keep_freed_memory, preload, say, user_errors, warn
 from ._options import (
     BackgroundOpt,
     BoardOpt,
@@ -195,6 +195,7 @@ def calibrate_cmd(
 ):
     """Calibrate a projector-camera pair (or, with --camera-only, a camera) and write JSON/YAML."""
     params = dict(locals())
+    keep_freed_memory()
     reader = None
     if not camera_only:
         # the pose folders' images are read from here on (reader threads; the first pose at once, each next one
@@ -221,8 +222,6 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
     from .. import method as calibration_method
     from .. import multi_pose as _mp
     from .. import pipeline
-    from .. import single_pose as _sp
-    from ..single_pose.background import BackgroundOptions
     from . import _show
 
     brd = parse_board(board, square)
@@ -245,8 +244,13 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
                         background=not multi)
-    camera = _sp.CameraOptions(cod=cod)
-    dense_options = _dense_options(throw_ratio, lens_shift, projector_file)
+    camera = background_options = dense_options = None  # the single-pose solver's: a multi-pose one has none
+    if rig or not multi:
+        from .. import single_pose as _sp
+        from ..single_pose.background import BackgroundOptions
+
+        camera, background_options = _sp.CameraOptions(cod=cod), BackgroundOptions(mode=background)
+        dense_options = _dense_options(throw_ratio, lens_shift, projector_file)
     # everything that can be checked is checked before the (slow) decoding
     output_path(out, "-o", (".json", ".yml", ".yaml"), inputs=poses)
     output_path(yaml, "--yaml", (".yml", ".yaml"), inputs=poses)
@@ -261,7 +265,7 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
         reader.close()  # a rig's pairs are read pair by pair (procam.rig), not by this reader
         distinct_poses(poses)
         rc, agreement = _rig.calibrate(poses, brd=brd, method=_METHODS[value(method)], options=opts, camera=camera,
-                                       background=BackgroundOptions(mode=background), cam_dist=cam_dist,
+                                       background=background_options, cam_dist=cam_dist,
                                        proj_dist=proj_dist, refine=not no_refine,
                                        projector=optional_size(projector), order=value(order), step=step)
         return finish(rc, out=out, yaml=yaml, png=png, report=report, force=force, agreement=agreement)
@@ -298,7 +302,7 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
 
     try:
         calib = calibration_method.calibrate(views, method=how, known_camera=known, camera=camera,
-                                             background=BackgroundOptions(mode=background),
+                                             background=background_options,
                                              cam_dist=cam_dist, proj_dist=proj_dist,
                                              refine=not no_refine, known_projector=known_projector,
                                              dense=dense_options)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, fail, say, user_errors, warn
+from ._app import app, fail, keep_freed_memory, say, user_errors, warn
 from ._options import (
     ContrastOpt,
     DecodeMethod,
@@ -49,6 +49,7 @@ def decode_cmd(
     from .. import decode as dec
     from ..io import save_decoded_maps
 
+    keep_freed_memory()
     size = optional_size(projector)
     opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast).decode
     if gamma not in ("auto", "none"):

@@ -308,23 +308,30 @@ def _decode_band(stack, sl, out, *, ps, robust, hf, hf_bit, tshadow, tcontrast, 
         hi = lo + (1 << d32) - 1
         lo -= offset
         hi -= offset
-        r = np.zeros(span.shape, np.uint8)
+        r = out[rkey][sl]
+        r.fill(0)
         r[(hi < 0) | (lo >= size)] = OUT_OF_RANGE
         too_coarse = dropped > max_dropped
         counted = ~too_coarse & ~shadow & (hi >= 0)   # codes known well enough, in range or not
         nbins = (1 << nbits) * ps.step
-        hists.append(np.bincount(np.clip(lo[counted] * ps.step, 0, nbins - 1), minlength=nbins))
+        if ps.step > 1:  # projector pixels from codes (one code per step x step pixels)
+            lo *= ps.step
+            hi *= ps.step
+            hi += ps.step - 1
+        hists.append(np.bincount(np.clip(lo[counted], 0, nbins - 1), minlength=nbins))
         if robust:
             r[too_coarse & amb_break] = AMBIGUOUS
         r[too_coarse & ~amb_break] = LOW_CONTRAST
         r[shadow] = SHADOW
-        out[rkey][sl] = r
-        px_lo = np.maximum(lo * ps.step, 0)
-        px_hi = np.minimum(hi * ps.step + (ps.step - 1), full - 1)
-        val = (px_lo + px_hi).astype(np.float32) * np.float32(0.5)
-        val[r != OK] = np.nan
-        out[key][sl] = val
-        out[dkey][sl] = np.where(r == OK, dropped, np.uint8(0))
+        # the block's projector pixels on the panel; the value is their centre, written where it goes (as the
+        # reasons above): fresh arrays for each would cost a tenth of the decode
+        np.maximum(lo, 0, out=lo)
+        np.minimum(hi, full - 1, out=hi)
+        val = out[key][sl]
+        np.multiply(lo + hi, np.float32(0.5), out=val, dtype=np.float32)
+        ok = r == OK
+        np.copyto(val, np.float32(np.nan), where=~ok)
+        np.multiply(dropped, ok, out=out[dkey][sl])  # the bits left out, where decoded
     if out["conf"] is not None:
         spanf = span.astype(np.float32)
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -102,14 +102,12 @@ class PoseSetCheck:
 
 def _nominal(Hs, size):
     """Nominal K from the homographies: the image centre and the median plausible Zhang focal length."""
-    from ..single_pose._principal_axis import zhang_camera
-
     W, H = size
     c = ((W - 1) / 2.0, (H - 1) / 2.0)
     diag = float(np.hypot(W, H))
     fs = []
     for Hm in Hs:
-        z = zhang_camera(Hm, c)
+        z = models.zhang_camera(Hm, c)
         if z is not None and 0.3 * diag <= z[0] <= 3.0 * diag:
             fs.append(z[0])
     f = float(np.median(fs)) if fs else diag

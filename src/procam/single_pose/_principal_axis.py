@@ -122,26 +122,6 @@ def homography(src, dst) -> np.ndarray:
         raise CalibrationError("homography estimation failed (corners collinear or too few)") from None
 
 
-def zhang_camera(H_cb, principal_point):
-    """Closed-form ``(f, alpha)`` from the board -> image homography, known principal point (Zhang).
-
-    Returns None when the pose is (near-)degenerate (no positive solution).
-    """
-    u0, v0 = principal_point
-    Hs = np.array([[1.0, 0, -u0], [0, 1.0, -v0], [0, 0, 1.0]]) @ np.asarray(H_cb, float)
-    Hs = Hs / np.linalg.norm(Hs)
-    p, q = Hs[:, 0], Hs[:, 1]
-    A = np.array([[p[0] * q[0], p[1] * q[1]], [p[0] ** 2 - q[0] ** 2, p[1] ** 2 - q[1] ** 2]])
-    b = -np.array([p[2] * q[2], p[2] ** 2 - q[2] ** 2])
-    try:
-        a, bb = np.linalg.solve(A, b)
-    except np.linalg.LinAlgError:
-        return None
-    if not (np.isfinite(a) and np.isfinite(bb)) or a <= 0 or bb <= 0:
-        return None
-    return float(a ** -0.5), float(np.sqrt(a / bb))
-
-
 def zhang_projector(H_pb, u0: float):
     """Closed-form ``(f, v0)`` from the board -> projector homography, known ``u0`` and alpha = 1."""
     Hs = np.array([[1.0, 0, -u0], [0, 1.0, 0], [0, 0, 1.0]]) @ np.asarray(H_pb, float)
@@ -220,7 +200,7 @@ def solve_camera_lm(obj, und, principal_point, image_size, *, width=None) -> Cam
     Q = np.append(models.apply_homography(np.linalg.inv(H_cb), np.array([[u0, v0]]))[0], 0.0)
     W, Hh = image_size
     f_paper = float(np.hypot(W, Hh))
-    cf = zhang_camera(H_cb, (u0, v0))
+    cf = models.zhang_camera(H_cb, (u0, v0))
     f0, a0 = cf if cf else (f_paper, 1.0)
     K0 = models.intrinsic_matrix(f0, u0, v0, a0)
     side, R0, t0, O0 = _side_and_pose(K0, H_cb)

@@ -33,7 +33,7 @@ from ..errors import (CalibrationError, DegeneratePoseError, DegeneratePoseWarni
                       WeakPoseWarning)
 from ..verdict.gates import FOCAL_RANGE, focal_failure
 from ..verdict import LEVELS
-from ._principal_axis import homography, zhang_camera, zhang_projector
+from ._principal_axis import homography, zhang_projector
 
 
 @dataclass(frozen=True)
@@ -138,7 +138,7 @@ def predict(device: str, obj, pts, image_size, sigma: float, *, u0: float | None
         return None
     if device == "camera":
         pp = ((W - 1) / 2.0, (Hh - 1) / 2.0)
-        cf = zhang_camera(H, pp)
+        cf = models.zhang_camera(H, pp)
         f0 = _nominal_f(cf[0] if cf else None, image_size)
         K = models.intrinsic_matrix(f0, pp[0], pp[1])
     else:
