@@ -25,7 +25,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import threading
 import zlib
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -177,9 +176,8 @@ def _npz_format(path) -> str | None:
     return str(value) if value.dtype.kind == "U" and value.ndim == 0 else None
 
 
-def check_image_bytes(path, data) -> None:
-    """Raise :class:`CaptureError` naming ``path`` when a PNG or JPEG (``data``: its bytes, or a memoryview of them)
-    is truncated or damaged.
+def check_image_bytes(path, data: bytes) -> None:
+    """Raise :class:`CaptureError` naming ``path`` when a PNG or JPEG is truncated or damaged.
 
     PNG: the signature, every chunk's length and CRC, and the final IEND chunk.  JPEG: the start
     (FFD8) and end (FFD9) markers.  Other formats are left to the decoder.
@@ -208,31 +206,10 @@ def check_image_bytes(path, data) -> None:
                 break
         if what is None and last != b"IEND":
             what = "is truncated (no end marker: the file was not written completely)"
-    elif head[:2] == b"\xff\xd8" and b"\xff\xd9" not in bytes(data[-4096:]):
+    elif head[:2] == b"\xff\xd8" and b"\xff\xd9" not in data[-4096:]:
         what = "is truncated (no JPEG end marker: the file was not written completely)"
     if what is not None:
         raise CaptureError(f"{path}: {what}; re-save or re-capture it, or remove it from the folder")
-
-
-_buffer = threading.local()  # each thread's buffer for the files it reads (:func:`_read_bytes`)
-
-
-def _read_bytes(path: Path) -> memoryview:
-    """The bytes of the file ``path``, read into this thread's buffer (valid until its next read): a new buffer per
-    frame would cost the kernel's zeroing of fresh pages, 0.2 s of a 5-pose calibrate's 210 frames."""
-    with open(path, "rb", buffering=0) as f:
-        size = os.fstat(f.fileno()).st_size
-        buf = getattr(_buffer, "data", None)
-        if buf is None or len(buf) <= size:
-            buf = bytearray(size + 1)
-            if size < 1 << 26:  # kept for the next frame unless huge
-                _buffer.data = buf
-        n, mv = 0, memoryview(buf)
-        while n < len(buf) and (k := f.readinto(mv[n:])):
-            n += k
-        if n == len(buf):  # the file grew while being read: the rest too
-            return memoryview(bytes(buf) + f.read())
-    return mv[:n]
 
 
 def read_image(path, gray: bool = True) -> np.ndarray:
@@ -246,7 +223,7 @@ def read_image(path, gray: bool = True) -> np.ndarray:
     if not path.is_file():
         raise CaptureError(f"{path}: {_not_a_file(path)}")
     try:
-        raw = _read_bytes(path)
+        raw = path.read_bytes()
     except OSError as e:
         raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
     check_image_bytes(path, raw)
