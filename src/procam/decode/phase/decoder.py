@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 import threading
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -118,7 +118,6 @@ class PhaseInfo:
     blur : effective blur of the fringes' harmonics, projector pixels.
     noise : ``(a, b)``, the camera's noise variance ``a + b * level`` (DN^2 at the input scale).
     blocks : :class:`BlockStats` per phase block.
-    sample_reasons : ``{axis: (n,) uint8}`` the reasons on the sample pixels (for :mod:`procam.decode.phase.diagnose`).
     warnings : what the result should be read with.
     """
 
@@ -130,7 +129,6 @@ class PhaseInfo:
     noise: tuple
     blocks: tuple = ()
     warnings: tuple = ()
-    sample: dict = field(default_factory=dict, compare=False, repr=False)
 
 
 def summary_lines(result: _d.DecodeResult) -> list[str]:
@@ -314,16 +312,9 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
                                      out["su" + axis], out["a" + axis], out["sa" + axis], finest.period, finest.fringe.x0, ps.size(axis), window=window,
                                      tolerance=options.tolerance, max_sigma=options.max_sigma)
             _count(hists[axis], out[axis], (out["r" + axis] == _d.OK) & ~before)
-    # the sample's own decode, for the description checks (procam.decode.phase.diagnose)
-    sample = {"index": idx}
-    view = np.ascontiguousarray(sub.astype(stack.dtype)[:, None, :])
-    sout = {k: np.empty((1, len(idx)), np.float32) for k in ("col", "row", "scol", "srow", "mcol", "mrow")}
-    sout["rcol"], sout["rrow"], sout["conf"] = np.empty((1, len(idx)), np.uint8), np.empty((1, len(idx)), np.uint8), None
-    _band(view, slice(0, 1), sout, {"col": np.zeros(2 * W + 2, np.int64), "row": np.zeros(2 * H + 2, np.int64)}, **ctx)
-    sample.update({k: sout[k][0] for k in ("col", "row", "rcol", "rrow")})
     phase_blocks = [b for b in ps.blocks if b.kind == "phase"]
     stats = _block_stats(ps, lit, {b.first: st for b, st in zip(phase_blocks, nsteps)})
-    info = PhaseInfo(measured, resp.gamma_std, used, err_px, resp.blur, noise, stats, tuple(notes), sample)
+    info = PhaseInfo(measured, resp.gamma_std, used, err_px, resp.blur, noise, stats, tuple(notes))
     for w in notes:
         warnings.warn(w, ProcamWarning, stacklevel=2)
     rcol, rrow = out["rcol"], out["rrow"]
