@@ -32,15 +32,16 @@ from __future__ import annotations
 import math
 import threading
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from .. import decoded as _d
 from ...errors import ProcamWarning
 from ...io import files as _files
 from ...patterns.phase import PhaseSet
+from .. import decoded as _d
 from . import response as _resp
 from . import unwrap as _unwrap
 from . import wrapped as _wrapped
@@ -262,7 +263,7 @@ def _fit_pass1(sub, ps: PhaseSet, opts: PhaseOptions, fs: float, scale: float):
 
 def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseOptions(), *,
                  full_scale: float | None = None, band: int = 32, extras: bool = True,
-                 method: str = "simple") -> _d.DecodeResult:
+                 method: str = "simple", threads: int = 2) -> _d.DecodeResult:
     """Decode a phase-family stack (see the module docstring).
 
     Parameters
@@ -272,6 +273,8 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     options : :class:`PhaseOptions`.
     full_scale : the input's full scale (default: from the stack, as :func:`procam.decode.decode`).
     band : camera rows processed at a time (speed only).
+    threads : worker threads (speed only): the camera's bands and then the two axes' neighbour orders side by side
+        (the same bits as one thread).
     extras : compute ``confidence`` (min over the axes of ``B / A`` of the finest fringes).
     method : the Gray bits' classifier; only the comparison of a pattern with its inverse (or a threshold) is
         implemented for the hybrid's Gray code, which its phase checks.
@@ -299,19 +302,42 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     if spatial:   # the finest fringes' fraction, the coarsest estimate, their noise: for the neighbours' orders
         out.update({k: np.empty((H, W), np.float32) for k in ("ucol", "urow", "sucol", "surow", "acol", "arow",
                                                                 "sacol", "sarow")})
-    scratch = _wrapped.Scratch(min(band, H), W, plan["steps"], stack.dtype)
-    for y0 in range(0, H, band):
-        sl = slice(y0, min(H, y0 + band))
-        _band(stack[:, sl, :], sl, out, hists, scratch=scratch, **ctx)
+    bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
+    workers = max(1, min(int(threads), len(bands)))
+
+    def run(share):               # every workers-th band, with its own scratch and histograms (summed after)
+        scratch = _wrapped.Scratch(min(band, H), W, plan["steps"], stack.dtype)
+        mine = {k: np.zeros_like(v) for k, v in hists.items()}
+        for sl in bands[share::workers]:
+            _band(stack[:, sl, :], sl, out, mine, scratch=scratch, **ctx)
+        return mine
+
+    if workers > 1:
+        with ThreadPoolExecutor(workers) as ex:
+            parts = list(ex.map(run, range(workers)))
+    else:
+        parts = [run(0)]
+    for part in parts:
+        for k in hists:
+            hists[k] += part[k]
     if spatial:
         window = 2 * max(15, min(H, W) // 20) + 1
-        for axis in ("col", "row"):
+
+        def order(axis):          # each axis its own arrays: the two run side by side
             finest = min(plan["axes"][axis], key=lambda bl: bl.period)
             before = out["r" + axis] == _d.OK
             _unwrap.neighbour_orders(out[axis], out["s" + axis], out["r" + axis], out["u" + axis],
-                                     out["su" + axis], out["a" + axis], out["sa" + axis], finest.period, finest.fringe.x0, ps.size(axis), window=window,
-                                     tolerance=options.tolerance, max_sigma=options.max_sigma)
+                                     out["su" + axis], out["a" + axis], out["sa" + axis], finest.period,
+                                     finest.fringe.x0, ps.size(axis), window=window, tolerance=options.tolerance,
+                                     max_sigma=options.max_sigma)
             _count(hists[axis], out[axis], (out["r" + axis] == _d.OK) & ~before)
+
+        if workers > 1:
+            with ThreadPoolExecutor(2) as ex:
+                list(ex.map(order, ("col", "row")))
+        else:
+            for axis in ("col", "row"):
+                order(axis)
     phase_blocks = [b for b in ps.blocks if b.kind == "phase"]
     stats = _block_stats(ps, lit, {b.first: st for b, st in zip(phase_blocks, nsteps)})
     info = PhaseInfo(measured, resp.gamma_std, used, err_px, resp.blur, noise, stats, tuple(notes))
