@@ -236,6 +236,16 @@ def brown(x, y, k1, k2, p1, p2, k3):
     return x * rad + 2.0 * p1 * xy + p2 * (r2 + 2.0 * x * x), y * rad + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * xy
 
 
+def brown_jacobian(x, y, k1, k2, p1, p2, k3):
+    """``(a, b, d)``: the Jacobian ``[[a, b], [b, d]]`` of :func:`brown` at undistorted normalised ``(x, y)`` (plain
+    or Dual)."""
+    r2 = x * x + y * y
+    rad = 1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3
+    dr = k1 + 2 * k2 * r2 + 3 * k3 * r2 ** 2
+    return (rad + 2 * x * x * dr + 2 * p1 * y + 6 * p2 * x, 2 * x * y * dr + 2 * p1 * x + 2 * p2 * y,
+            rad + 2 * y * y * dr + 6 * p1 * y + 2 * p2 * x)
+
+
 def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
     """Undistorted normalised coordinates of distorted ones (inverse of :func:`brown`): fixed-point iteration on
     the values, then, for Duals, one Newton step that carries the derivatives (the implicit function's, exactly)."""
@@ -251,12 +261,7 @@ def brown_inverse(xd, yd, k1, k2, p1, p2, k3, iterations: int = 20):
             x, y = x - (bx - xdv), y - (by - ydv)
     if not any(isinstance(a, D.Dual) for a in (xd, yd, k1, k2, p1, p2, k3)):
         return x, y
-    r2 = x * x + y * y
-    rad = 1 + kv[0] * r2 + kv[1] * r2 ** 2 + kv[4] * r2 ** 3
-    dr = kv[0] + 2 * kv[1] * r2 + 3 * kv[4] * r2 ** 2
-    a = rad + 2 * x * x * dr + 2 * kv[2] * y + 6 * kv[3] * x
-    b = 2 * x * y * dr + 2 * kv[2] * x + 2 * kv[3] * y
-    d = rad + 2 * y * y * dr + 6 * kv[2] * y + 2 * kv[3] * x
+    a, b, d = brown_jacobian(x, y, *kv)
     det = a * d - b * b
     bx, by = brown(x, y, k1, k2, p1, p2, k3)
     ex, ey = bx - xd, by - yd

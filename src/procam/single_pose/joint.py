@@ -49,7 +49,7 @@ import numpy as np
 from .. import _dual as D
 from .. import models
 from .. import uncertainty as unc
-from ..models import brown, brown_inverse, distort_division_xy, undistort_division_xy
+from ..models import brown, brown_inverse, brown_jacobian, distort_division_xy, undistort_division_xy
 from ..parameters import CAMERA_VECTOR
 
 #: The projector's part of the joint parameter vector.
@@ -74,17 +74,6 @@ S = models.KAPPA_SCALE
 
 # ------------------------------------------------------------------------------------------------
 # the model's pieces (plain arrays or Duals; the lens models are procam.models')
-
-def _brown_jacobian(x, y, kp):
-    """``(a, b, d)``: the Jacobian ``[[a, b], [b, d]]`` of :func:`procam.models.brown` at undistorted normalised
-    ``(x, y)`` (plain or Dual)."""
-    k1, k2, p1, p2, k3 = kp
-    r2 = x * x + y * y
-    rad = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2
-    dr = k1 + 2 * k2 * r2 + 3 * k3 * r2 * r2
-    return (rad + 2 * x * x * dr + 2 * p1 * y + 6 * p2 * x, 2 * x * y * dr + 2 * p1 * x + 2 * p2 * y,
-            rad + 2 * y * y * dr + 6 * p1 * y + 2 * p2 * x)
-
 
 def _transpose(R):
     return [[R[j][i] for j in range(3)] for i in range(3)]
@@ -258,7 +247,7 @@ class JointModel:
             und = d._back_proj_und[m]
             return ln, (und[:, 0] - u0p) / fp, (und[:, 1] - v0p) / (ap * fp), None
         xn, yn = brown_inverse((d.back_proj[m, 0] - u0p) / fp - ex, (d.back_proj[m, 1] - v0p) / (ap * fp) - ey, *kp)
-        return ln, xn + ex, yn + ey, _brown_jacobian(xn, yn, kp)
+        return ln, xn + ex, yn + ey, brown_jacobian(xn, yn, *kp)
 
     # residual blocks, in pixels ---------------------------------------------------------------------
     def blocks(self, p):
