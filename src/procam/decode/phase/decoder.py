@@ -33,6 +33,7 @@ import math
 import threading
 import warnings
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -303,7 +304,8 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
         out.update({k: np.empty((H, W), np.float32) for k in ("ucol", "urow", "sucol", "surow", "acol", "arow",
                                                                 "sacol", "sarow")})
     bands = [slice(y0, min(H, y0 + band)) for y0 in range(0, H, band)]
-    workers = max(1, min(int(threads), len(bands)))
+    n = max(1, int(threads))
+    workers = min(n, len(bands))
 
     def run(share):               # every workers-th band, with its own scratch and histograms (summed after)
         scratch = _wrapped.Scratch(min(band, H), W, plan["steps"], stack.dtype)
@@ -312,32 +314,23 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
             _band(stack[:, sl, :], sl, out, mine, scratch=scratch, **ctx)
         return mine
 
-    if workers > 1:
-        with ThreadPoolExecutor(workers) as ex:
-            parts = list(ex.map(run, range(workers)))
-    else:
-        parts = [run(0)]
-    for part in parts:
-        for k in hists:
-            hists[k] += part[k]
-    if spatial:
-        window = 2 * max(15, min(H, W) // 20) + 1
+    window = 2 * max(15, min(H, W) // 20) + 1
 
-        def order(axis):          # each axis its own arrays: the two run side by side
-            finest = min(plan["axes"][axis], key=lambda bl: bl.period)
-            before = out["r" + axis] == _d.OK
-            _unwrap.neighbour_orders(out[axis], out["s" + axis], out["r" + axis], out["u" + axis],
-                                     out["su" + axis], out["a" + axis], out["sa" + axis], finest.period,
-                                     finest.fringe.x0, ps.size(axis), window=window, tolerance=options.tolerance,
-                                     max_sigma=options.max_sigma)
-            _count(hists[axis], out[axis], (out["r" + axis] == _d.OK) & ~before)
+    def order(axis):              # each axis its own arrays: the two run side by side
+        finest = min(plan["axes"][axis], key=lambda bl: bl.period)
+        before = out["r" + axis] == _d.OK
+        _unwrap.neighbour_orders(out[axis], out["s" + axis], out["r" + axis], out["u" + axis], out["su" + axis],
+                                 out["a" + axis], out["sa" + axis], finest.period, finest.fringe.x0, ps.size(axis),
+                                 window=window, tolerance=options.tolerance, max_sigma=options.max_sigma)
+        _count(hists[axis], out[axis], (out["r" + axis] == _d.OK) & ~before)
 
-        if workers > 1:
-            with ThreadPoolExecutor(2) as ex:
-                list(ex.map(order, ("col", "row")))
-        else:
-            for axis in ("col", "row"):
-                order(axis)
+    with ThreadPoolExecutor(n) if n > 1 else nullcontext() as ex:
+        each = map if ex is None else ex.map
+        for part in each(run, range(workers)):
+            for k in hists:
+                hists[k] += part[k]
+        if spatial:
+            list(each(order, ("col", "row")))
     phase_blocks = [b for b in ps.blocks if b.kind == "phase"]
     stats = _block_stats(ps, lit, {b.first: st for b, st in zip(phase_blocks, nsteps)})
     info = PhaseInfo(measured, resp.gamma_std, used, err_px, resp.blur, noise, stats, tuple(notes))
