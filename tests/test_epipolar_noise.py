@@ -90,7 +90,8 @@ def _scene():
     return simulate.with_board_pose(far_rig(), CASE_58["angles"], distance=CASE_58["distance"]).scaled(0.5)
 
 
-def _f_c_error(view) -> tuple:
+def _fit(view) -> tuple:
+    """``(f_c - truth (px), the calibration)`` of ``view``, from its pose alone."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")          # a weak pose warns
         cal = sp.calibrate(view)
@@ -101,7 +102,7 @@ def test_noise_on_the_background_alone_does_not_move_f_c_on_average():
     """The same noise added and subtracted: what the two fits share is the bias (11.7 px of f_c 2250 before)."""
     scene = _scene()
     exact = dense_view(scene, seed=7, sigma_cam=1e-4, sigma_proj=1e-4, sigma_sample=1e-4)
-    clean, _ = _f_c_error(exact)
+    clean, _ = _fit(exact)
     g = exact.background
     noise = 0.03 * np.random.default_rng(5).standard_normal(g.proj_pts.shape)
     moved = []
@@ -109,7 +110,7 @@ def test_noise_on_the_background_alone_does_not_move_f_c_on_average():
         back = Samples(g.cam_pts, g.proj_pts + sign * noise, g.sigma, g.window)
         view = exact.__class__(exact.obj_pts, exact.cam_pts, exact.proj_pts, exact.name, exact.cam_size,
                                exact.proj_size, background=back, board_samples=exact.board_samples)
-        moved.append(_f_c_error(view)[0])
+        moved.append(_fit(view)[0])
     assert abs(np.mean(moved) - clean) < 3.0, (clean, moved)
 
 
@@ -119,7 +120,7 @@ def test_the_case_of_the_study_keeps_its_pm():
     scene = _scene()
     view = dense_view(scene, seed=716582875, sigma_sample=0.015, sigma_proj=0.03, harmonic_px=0.1,
                       edge_bias_px=0.289)
-    err, cal = _f_c_error(view)
+    err, cal = _fit(view)
     assert abs(err) < 2.5 * cal.std["f_c"]
     for name, i, j in (("f_p", 0, 0), ("u0p", 0, 2), ("v0p", 1, 2)):
         assert abs(cal.projector.K[i, j] - scene.K_proj[i, j]) < 2.5 * cal.std[name], name
