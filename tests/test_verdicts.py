@@ -16,6 +16,7 @@ from procam import multi_pose, simulate
 from procam.verdict import gates
 from procam.board import Board
 from procam.errors import DegeneratePoseError, DegeneratePoseWarning, FailedEstimateWarning, ProcamWarning
+from procam.multi_pose import evidence
 from procam.multi_pose.poseset import check_pose_set
 from procam.view import View
 
@@ -105,6 +106,14 @@ def test_square_on_set_is_not_determined_and_names_the_parameter_and_the_pose():
     value, fit_std, spread = calib.info["leave_one_out"]["spread"]["f_c"]
     assert spread > 20 * fit_std and spread > 0.5 * value
     assert calib.info["leave_one_out"]["moved_most_by"]["f_c"] == "p4"
+    # the refits are calibrations from scratch: without the tilted board, where a refinement started from the
+    # solution stops along what the square-on boards leave free says little, and its own ± says so (issue 35)
+    refits = calib.info["leave_one_out_refits"]
+    assert not any(r.info.get("warm_start") for r in refits)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        warm = multi_pose.refit_without(multi_pose.calibrate(_five(), leave_one_out=False), 4)
+    assert not evidence.determined(warm) and not warm.std["f_c"] < 0.1 * value
 
 
 @pytest.fixture()

@@ -36,7 +36,7 @@ from ..view import View
 from .device import DIST_MODELS, DeviceCalibration, _as_cv, _check_dist, _criteria, calibrate_device, zhang_intrinsics
 from .refine import StereoRefinement, refine_stereo
 
-__all__ = ["calibrate", "calibrate_camera", "calibrate_models", "check_distinct", "undetermined_distortion", "calibrate_device",
+__all__ = ["calibrate", "calibrate_camera", "calibrate_models", "refit_without", "check_distinct", "undetermined_distortion", "calibrate_device",
            "AUTO_MODELS", "DIST_CHOICES", "refine_stereo", "zhang_intrinsics", "DIST_MODELS", "DeviceCalibration",
            "StereoRefinement", "MIN_CORNERS_PER_POSE", "check_counts"]
 
@@ -176,7 +176,8 @@ def calibrate(views: Sequence[View], *, cam_dist: str = "auto", proj_dist: str =
         if degenerate_set:
             level, reasons = "degenerate", list(pre.reasons) + reasons
     if leave_one_out and len(views) >= evidence.MIN_POSES:
-        refits = evidence.refit_each(views, calibrate, cam_dist=info["cam_dist_model"],
+        warm = (lambda i: refit_without(calib, i)) if refine else None  # from the solution: a few steps each
+        refits = evidence.refit_each(views, calibrate, warm, cam_dist=info["cam_dist_model"],
                                      proj_dist=info["proj_dist_model"], refine=refine, leave_one_out=False,
                                      judge_pose_set=False, **options)
         lvl, why, details = evidence.judge_spread(calib, refits, info["pose_names"])
@@ -299,20 +300,10 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
     if cam_size is None or proj_size is None:
         raise CalibrationError("multi-pose calibration needs the camera and projector image sizes "
                                "(set View.cam_size/proj_size or pass cam_size=, proj_size=)")
-    cam_size = (int(cam_size[0]), int(cam_size[1]))
-    proj_size = (int(proj_size[0]), int(proj_size[1]))
-    objs, cams, projs, names = [], [], [], []
-    for k, v in enumerate(views):
-        m = v.valid
-        if m.sum() < max(min_corners, MIN_CORNERS_PER_POSE):
-            raise CalibrationError(f"pose {v.name!r}: only {int(m.sum())} corners have both camera and "
-                                   f"projector points (need {max(min_corners, MIN_CORNERS_PER_POSE)}); re-capture or "
-                                   "drop this pose")
-        objs.append(v.obj_pts[m])
-        cams.append(v.cam_pts[m])
-        projs.append(v.proj_pts[m])
-        names.append(v.name if v.name else f"pose{k + 1}")
-
+    sizes = ((int(cam_size[0]), int(cam_size[1])), (int(proj_size[0]), int(proj_size[1])))
+    cam_size, proj_size = sizes
+    data = _pose_data(views, min_corners)
+    objs, cams, projs, names = data
     check_counts(objs, cam_dist, proj_dist, names)
     cal_c = calibrate_device(objs, cams, cam_size, cam_dist, init=init, fix_aspect_ratio=fix_aspect_ratio,
                              iterations=iterations)
@@ -333,42 +324,80 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
               "cam_init": cal_c.init, "proj_init": cal_p.init}
     info = {"frozen": frozen, "cam_dist_model": cam_dist, "proj_dist_model": proj_dist, "refined": bool(refine),
             "pose_names": names}
-    warnings = []
-    std = {}
     if refine:
         floor = 1e-3  # px: noise-free data have RMS ~ 0; keep the weight finite
         w_proj = max(rms_c, floor) / max(rms_p, floor) if balance else 1.0
-        ref = refine_stereo(objs, cams, projs, Kc, dc, Kp, dp, R0, T0, rvc, tvc, cam_dist=cam_dist,
-                            proj_dist=proj_dist, loss=loss, loss_scale=loss_scale, proj_weight=w_proj)
-        Kc, dc, Kp, dp, R, T = ref.Kc, ref.dc, ref.Kp, ref.dp, ref.R, ref.T
-        rv_board, tv_board = ref.rvecs, ref.tvecs
-        res = ref.residuals
-        cam_res = [r[0] for r in res]
-        proj_res = [r[1] for r in res]
-        cam_rms, proj_rms = rms(cam_res), rms(proj_res)
-        stereo_rms = rms(cam_res + proj_res)
-        std = _std_dict(ref, len(dc), len(dp))
-        info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref.status,
-                              "nfev": ref.nfev, "cost": ref.cost}
-        if ref.status <= 0:
-            warnings.append("joint refinement stopped at its evaluation limit; the result may not be converged")
-        if not (Kc[0, 0] > 0 and Kc[1, 1] > 0 and Kp[0, 0] > 0 and Kp[1, 1] > 0):
-            raise CalibrationError("joint refinement diverged (non-positive focal length); "
-                                   + _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init,
-                                                         fix_aspect_ratio, iterations, stereo_iterations,
-                                                         min_corners))
-    else:
-        R, T = R0, T0
-        rv_board, tv_board = rvc, tvc
-        cam_res, proj_res = [], []
-        for j in range(len(objs)):
-            pc = models.project(Kc, models.rvec_to_matrix(rvc[j]), tvc[j], objs[j])
-            cam_res.append(cams[j] - Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc))
-            R_pb, t_pb = models.compose(R, T, models.rvec_to_matrix(rvc[j]), tvc[j])
-            pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, R_pb, t_pb, objs[j]), Kp)
-            proj_res.append(projs[j] - pp)
-        cam_rms, proj_rms, stereo_rms = rms_c, rms_p, rms_s
 
+        def diverged():
+            return _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init, fix_aspect_ratio,
+                                       iterations, stereo_iterations, min_corners)
+
+        return _refined(views, data, sizes, (Kc, dc, Kp, dp, R0, T0, rvc, tvc), cam_dist, proj_dist, loss,
+                        loss_scale, w_proj, info, diverged)
+    cam_res, proj_res = [], []
+    for j in range(len(objs)):
+        pc = models.project(Kc, models.rvec_to_matrix(rvc[j]), tvc[j], objs[j])
+        cam_res.append(cams[j] - Distortion("opencv", coeffs=tuple(dc)).distort(pc, Kc))
+        R_pb, t_pb = models.compose(R0, T0, models.rvec_to_matrix(rvc[j]), tvc[j])
+        pp = Distortion("opencv", coeffs=tuple(dp)).distort(models.project(Kp, R_pb, t_pb, objs[j]), Kp)
+        proj_res.append(projs[j] - pp)
+    return _assemble(views, data, sizes, (Kc, dc, Kp, dp, R0, T0, rvc, tvc), (cam_res, proj_res),
+                     (rms_c, rms_p, rms_s), {}, info, [], (cam_dist, proj_dist))
+
+
+def _pose_data(views, min_corners: int) -> tuple:
+    """``(objs, cams, projs, names)``: per view its board points (N, 3) and camera and projector pixels (N, 2) where
+    both devices have the corner, and its name; a view with too few such corners is a :class:`CalibrationError`."""
+    objs, cams, projs, names = [], [], [], []
+    for k, v in enumerate(views):
+        m = v.valid
+        if m.sum() < max(min_corners, MIN_CORNERS_PER_POSE):
+            raise CalibrationError(f"pose {v.name!r}: only {int(m.sum())} corners have both camera and "
+                                   f"projector points (need {max(min_corners, MIN_CORNERS_PER_POSE)}); re-capture or "
+                                   "drop this pose")
+        objs.append(v.obj_pts[m])
+        cams.append(v.cam_pts[m])
+        projs.append(v.proj_pts[m])
+        names.append(v.name if v.name else f"pose{k + 1}")
+    return objs, cams, projs, names
+
+
+def _refined(views, data, sizes, start, cam_dist, proj_dist, loss, loss_scale, w_proj, info, diverged) -> Calibration:
+    """The calibration of ``views`` by the joint refinement (:func:`refine_stereo`) from ``start`` = ``(Kc, dc, Kp,
+    dp, R, T, board rvecs, board tvecs)``, the projector's residuals weighted by ``w_proj``; ``data`` and ``sizes`` as
+    :func:`calibrate_models` makes them, ``info`` its info so far, ``diverged()`` the advice when the refinement
+    diverges."""
+    objs, cams, projs, _ = data
+    ref = refine_stereo(objs, cams, projs, *start, cam_dist=cam_dist, proj_dist=proj_dist, loss=loss,
+                        loss_scale=loss_scale, proj_weight=w_proj)
+    res = ref.residuals
+    cam_res = [r[0] for r in res]
+    proj_res = [r[1] for r in res]
+    rmss = (rms(cam_res), rms(proj_res), rms(cam_res + proj_res))
+    info["refinement"] = {"loss": loss, "loss_scale": loss_scale, "proj_weight": w_proj, "status": ref.status,
+                          "nfev": ref.nfev, "cost": ref.cost}
+    warnings = []
+    if ref.status <= 0:
+        warnings.append("joint refinement stopped at its evaluation limit; the result may not be converged")
+    if not (ref.Kc[0, 0] > 0 and ref.Kc[1, 1] > 0 and ref.Kp[0, 0] > 0 and ref.Kp[1, 1] > 0):
+        raise CalibrationError("joint refinement diverged (non-positive focal length); " + diverged())
+    return _assemble(views, data, sizes, (ref.Kc, ref.dc, ref.Kp, ref.dp, ref.R, ref.T, ref.rvecs, ref.tvecs),
+                     (cam_res, proj_res), rmss, _std_dict(ref, len(ref.dc), len(ref.dp)), info, warnings,
+                     (cam_dist, proj_dist))
+
+
+def _assemble(views, data, sizes, solution, residuals, rmss, std, info, warnings, dist_models) -> Calibration:
+    """The :class:`Calibration` of a solution ``(Kc, dc, Kp, dp, R, T, board rvecs, board tvecs)``: per-pose angles
+    and RMS from ``residuals`` (per pose camera and projector, observed - predicted px), ``rmss`` (camera,
+    projector, both), the distortion terms the poses do not determine (from ``std``), its verdict from
+    ``warnings``."""
+    objs, cams, projs, names = data
+    cam_size, proj_size = sizes
+    Kc, dc, Kp, dp, R, T, rv_board, tv_board = solution
+    cam_res, proj_res = residuals
+    cam_rms, proj_rms, stereo_rms = rmss
+    cam_dist, proj_dist = dist_models
+    warnings = list(warnings)
     poses = []
     for j in range(len(objs)):
         R_cb = models.rvec_to_matrix(rv_board[j])
@@ -386,9 +415,9 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
         for device, K, d, sd, size, model, option, pts in (
                 ("camera", Kc, dc, std.get("cam_dist"), cam_size, cam_dist, "--cam-dist", cams),
                 ("projector", Kp, dp, std.get("proj_dist"), proj_size, proj_dist, "--proj-dist", projs)):
-            msg, names = undetermined_distortion(K, d, sd, size, model, device, option, pts)
+            msg, terms = undetermined_distortion(K, d, sd, size, model, device, option, pts)
             warnings += msg
-            info["undetermined"][device] = names
+            info["undetermined"][device] = terms
     camera = Device(Kc, cam_size, Distortion("opencv", coeffs=tuple(float(c) for c in dc)))
     projector = Device(Kp, proj_size, Distortion("opencv", coeffs=tuple(float(c) for c in dp)))
     verdict = "weak" if warnings else "good"
@@ -396,6 +425,33 @@ def calibrate_models(views: Sequence[View], *, cam_size=None, proj_size=None, ca
                        method="multi-pose", cam_rms=cam_rms, proj_rms=proj_rms, stereo_rms=stereo_rms, std=std,
                        poses=tuple(poses), views=tuple(views), warnings=tuple(warnings), info=info, verdict=verdict,
                        verdict_reasons=tuple(warnings))
+
+
+def refit_without(calib: Calibration, i: int) -> Calibration:
+    """``calib`` (a jointly refined multi-pose calibration) refitted without its pose ``i``, from its own solution.
+
+    The leave-one-pose-out refit of :mod:`procam.multi_pose.evidence`, warm-started: the joint refinement alone
+    (no per-device calibrations, no stereo step), from ``calib``'s intrinsics, distortion, ``(R, T)`` and the other
+    poses' boards, with ``calib``'s robust loss and projector weight (the weight a refit from scratch estimates
+    again from its own poses: the refits differ from those by a small fraction of their spread). It converges in a
+    few steps to the minimum a refit from scratch finds wherever the other poses determine the parameters; where
+    they do not, where it stops along what they leave free says little (the cost is almost flat there, and the
+    gradient at the start has no component along it), and its own ``±`` says so
+    (:func:`procam.multi_pose.evidence.refit_each` then refits from scratch).
+    Raises :class:`CalibrationError` when the refinement diverges.
+    """
+    views = [v for j, v in enumerate(calib.views) if j != i]
+    keep = [j for j in range(len(calib.views)) if j != i]
+    data = _pose_data(views, MIN_CORNERS_PER_POSE)
+    cd, pd = calib.info["cam_dist_model"], calib.info["proj_dist_model"]
+    r = calib.info["refinement"]
+    start = (calib.camera.K, np.asarray(calib.camera.distortion.coeffs, float), calib.projector.K,
+             np.asarray(calib.projector.distortion.coeffs, float), calib.R, calib.T,
+             [models.matrix_to_rvec(np.asarray(calib.poses[j]["R_cam"], float)) for j in keep],
+             [np.asarray(calib.poses[j]["t_cam"], float) for j in keep])
+    info = {"cam_dist_model": cd, "proj_dist_model": pd, "refined": True, "pose_names": data[3], "warm_start": True}
+    return _refined(views, data, (calib.camera.image_size, calib.projector.image_size), start, cd, pd, r["loss"],
+                    r["loss_scale"], r["proj_weight"], info, lambda: "refit from scratch")
 
 
 def _without_refinement(views, cam_size, proj_size, cam_dist, proj_dist, init, fix_aspect_ratio, iterations,

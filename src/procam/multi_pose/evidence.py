@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import ProcamError
 
-__all__ = ["SpreadOptions", "parameter_spread", "judge_spread", "MIN_POSES"]
+__all__ = ["SpreadOptions", "parameter_spread", "judge_spread", "refit_each", "determined", "MIN_POSES"]
 
 #: Fewest poses for a leave-one-pose-out spread (every refit keeps 3).
 MIN_POSES = 4
@@ -49,6 +49,9 @@ class SpreadOptions:
     weak_ratio: float = 4.0
     weak_rel_floor: float = 0.005
     weak_rel_without_std: float = 0.02
+    #: a warm-started leave-one-out refit stands in for one from scratch where its own ``±`` is within this
+    #: fraction of every judged parameter's scale (:func:`determined`)
+    warm_rel: float = 0.02
 
 
 def _params(c) -> dict:
@@ -179,9 +182,16 @@ def _spreads(items) -> str:
     return ", ".join(parts) + (" (no ± from the fit without the joint refinement)" if no_std else "")
 
 
-def refit_each(views, calibrate, **options) -> list:
+def refit_each(views, calibrate, warm=None, **options) -> list:
     """``calibrate(views without pose i, **options)`` for every pose ``i`` (two at a time: mostly OpenCV, which
-    releases the GIL); an entry is the refit's :class:`ProcamError` where it raised."""
+    releases the GIL); an entry is the refit's :class:`ProcamError` where it raised.
+
+    ``warm(i)``, when given, is the refit without pose ``i`` started from the calibration of all the poses
+    (:func:`procam.multi_pose.refit_without`: a few steps of the joint refinement instead of a calibration from
+    scratch). It stands in for the refit where its own ``±`` says the other poses determine every judged parameter
+    (:func:`determined`); elsewhere, or where it diverges, the refit starts from scratch: where a warm start stops
+    along what the other poses leave free says little, and it would hide the very spread the verdict looks for.
+    """
     from concurrent.futures import ThreadPoolExecutor
     import warnings
 
@@ -190,6 +200,13 @@ def refit_each(views, calibrate, **options) -> list:
     views = list(views)
 
     def one(i):
+        if warm is not None:
+            try:
+                refit = warm(i)
+            except ProcamError:
+                refit = None
+            if refit is not None and determined(refit):
+                return refit
         try:
             return calibrate(views[:i] + views[i + 1:], **options)
         except ProcamError as e:
@@ -199,3 +216,19 @@ def refit_each(views, calibrate, **options) -> list:
         warnings.simplefilter("ignore", ProcamWarning)
         with ThreadPoolExecutor(2) as ex:
             return list(ex.map(one, range(len(views))))
+
+
+def determined(calib, options: SpreadOptions = SpreadOptions()) -> bool:
+    """Whether ``calib``'s own ``±`` (its fit's Jacobian) puts every judged parameter (:data:`PARAMS`) within
+    ``options.warm_rel`` of its scale (as :func:`judge_spread` measures spreads; a fifth of the level it calls
+    not determined): its poses fix them, so a refinement from a nearby start converges to the minimum a
+    calibration from scratch finds, and a warm-started refit with such ``±`` stands in for one from scratch."""
+    for k in PARAMS:
+        js = calib.std.get(k)
+        if k.startswith("T["):
+            t = calib.std.get("T")
+            js = t[int(k[2])] if t is not None else None
+        scale = _scale(calib, k)
+        if js is None or not (np.isfinite(js) and scale > 0) or js > options.warm_rel * scale:
+            return False
+    return True
