@@ -530,3 +530,54 @@ def test_calibrate_and_decode_keep_freed_memory(tmp_path, monkeypatch):
                             "64x48", "-o", tmp_path / "c.json"])
     assert code == 2 and "not found" in err  # no board in these frames: read and refused all the same
     assert calls == ["procam.cli.decode", "procam.cli.calibrate"]
+
+
+def test_calibrate_reads_its_pose_folders_before_its_command_line_is_parsed(ideal_capture, tmp_path):
+    """`procam calibrate POSE ...` starts reading the pose folders before typer (and pydantic) are imported, and the
+    command takes that reader instead of making its own; a command line that is not what it looked like (an unknown
+    option, --help) leaves no reader behind (fresh interpreters, the console-script entry point)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import json, sys, threading
+import procam.stream as stream
+made = []
+init, close = stream.Prefetcher.__init__, stream.Prefetcher.close
+def tracked_init(self, *a, **k):
+    made.append({"typer": "typer" in sys.modules, "closed": False})
+    self._k = len(made) - 1
+    init(self, *a, **k)
+def tracked_close(self):
+    made[self._k]["closed"] = True
+    close(self)
+stream.Prefetcher.__init__, stream.Prefetcher.close = tracked_init, tracked_close
+from procam.cli import main
+code = 0
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+readers = [t.name for t in threading.enumerate() if t.name.startswith("procam-read")]
+print(json.dumps({"code": code, "made": made, "readers": readers}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    folder = str(ideal_capture[0])
+
+    def run(*args):
+        res = subprocess.run([sys.executable, "-c", script, "calibrate", folder, *args], env=env, capture_output=True,
+                             text=True, timeout=300)
+        return json.loads(res.stderr.strip().splitlines()[-1])
+
+    rep = run("--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json"))
+    assert rep["code"] in (0, None) and (tmp_path / "c.json").is_file()
+    assert rep["made"] == [{"typer": False, "closed": True}] and rep["readers"] == []
+    rep = run("--board", "10x6", "--square", "24", "-o", str(tmp_path / "d.json"), "--no-such-option")
+    assert rep["code"] == 2 and rep["made"] == [{"typer": False, "closed": True}] and rep["readers"] == []
+    assert not (tmp_path / "d.json").exists()
+    rep = run("--help")
+    assert rep["code"] in (0, None) and rep["made"] == [] and rep["readers"] == []

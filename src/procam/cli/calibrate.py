@@ -202,8 +202,9 @@ def calibrate_cmd(
         # while the one before is processed) and scipy's optimizer imported, while the rest of the calibration is
         # imported and its options are checked; a camera-only calibration reads photos, not pose folders
         from ..stream import Prefetcher
+        from . import take_reader
 
-        reader = Prefetcher(poses)
+        reader = take_reader(poses) or Prefetcher(poses)  # started before the parsing by procam.cli.main, or now
         preload(SOLVER_MODULES)
     try:
         _calibrate(reader, **params)
