@@ -109,43 +109,46 @@ def model(x, lay: Layout, obs, dist0, scale, want_jac: bool, sparse: bool = True
     import cv2
 
     res, rows, cols, vals = [], [], [], []
+    J = None
+    if want_jac and not sparse:  # blocks written where they go (the same values as the sparse triplets)
+        J = np.zeros((sum(2 * len(o.obj) for o in obs), lay.size))
     row = 0
     for o in obs:
         K, d = lay.intrinsics(x, o.device, dist0)
         rb, tb = x[lay.board[o.pose][:3]], x[lay.board[o.pose][3:]]
         obj = o.obj.reshape(-1, 1, 3)
         if lay.pose[o.device] is None:
-            pp, J = cv2.projectPoints(obj, rb, tb, K, d)
-            blocks = [(lay.board[o.pose], J[:, 0:6])]
+            pp, Jp = cv2.projectPoints(obj, rb, tb, K, d)
+            blocks = [(lay.board[o.pose], Jp[:, 0:6])]
         else:
             rd, td = x[lay.pose[o.device][:3]], x[lay.pose[o.device][3:]]
             r3, t3, dr3dr1, dr3dt1, dr3dr2, dr3dt2, dt3dr1, dt3dt1, dt3dr2, dt3dt2 = cv2.composeRT(rb, tb, rd, td)
-            pp, J = cv2.projectPoints(obj, r3, t3, K, d)
-            Jr, Jt = J[:, 0:3], J[:, 3:6]
+            pp, Jp = cv2.projectPoints(obj, r3, t3, K, d)
+            Jr, Jt = Jp[:, 0:3], Jp[:, 3:6]
             blocks = [(lay.board[o.pose], np.hstack([Jr @ dr3dr1 + Jt @ dt3dr1, Jr @ dr3dt1 + Jt @ dt3dt1])),
                       (lay.pose[o.device], np.hstack([Jr @ dr3dr2 + Jt @ dt3dr2, Jr @ dr3dt2 + Jt @ dt3dt2]))]
         w = scale[o.device]
         res.append(w * (pp.reshape(-1) - o.pts.reshape(-1)))
         n2 = 2 * len(o.obj)
         if want_jac:
-            blocks.append((lay.intr[o.device], np.hstack([J[:, 6:10], J[:, [10 + k for k in lay.free[o.device]]]])))
+            blocks.append((lay.intr[o.device], np.hstack([Jp[:, 6:10], Jp[:, [10 + k for k in lay.free[o.device]]]])))
             for idx, B in blocks:
-                rr, cc = np.meshgrid(np.arange(row, row + n2), idx, indexing="ij")
-                rows.append(rr.ravel())
-                cols.append(cc.ravel())
-                vals.append(w * B.ravel())
+                if J is not None:
+                    J[row:row + n2, idx] = w * B
+                else:
+                    rows.append(np.repeat(np.arange(row, row + n2), len(idx)))
+                    cols.append(np.tile(idx, n2))
+                    vals.append(w * B.ravel())
         row += n2
     r = np.concatenate(res)
     if not want_jac:
         return r
-    rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
-    if sparse:
-        from scipy import sparse as sp
+    if J is not None:
+        return r, J
+    from scipy import sparse as sp
 
-        return r, sp.csr_matrix((vals, (rows, cols)), shape=(row, lay.size))
-    J = np.zeros((row, lay.size))
-    J[rows, cols] = vals
-    return r, J
+    rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+    return r, sp.csr_matrix((vals, (rows, cols)), shape=(row, lay.size))
 
 
 def solve(x0, lay: Layout, obs, dist0, scale, *, sparse: bool, loss: str, f_scale: float, tol: float,
