@@ -47,8 +47,8 @@ def main(argv: list[str] | None = None) -> None:
         sys.stdout.write(f"procam {__version__}\n")
         return
     first = next((a for a in args if not a.startswith("-")), None)
-    if first == "calibrate":
-        _start_reading(args[args.index(first) + 1:])
+    if first in ("calibrate", "decode"):
+        _start_reading(first, args[args.index(first) + 1:])
     try:
         register([first] if first in COMMANDS else None)
         from ._app import app
@@ -60,16 +60,17 @@ def main(argv: list[str] | None = None) -> None:
             reader.close()
 
 
-#: The pose folders' reader :func:`main` started before parsing a ``procam calibrate`` command line.
+#: The pose folders' reader :func:`main` started before parsing a ``procam calibrate`` or ``decode`` command line.
 _EARLY: dict = {}
 
 
-def _start_reading(args: list[str]) -> None:
-    """Start reading the folders among ``procam calibrate``'s arguments ``args`` now, before the command line is
-    parsed: typer, and through it pydantic, take a tenth of a second to start, while the second core would wait.
-    The folders are taken in their order (a :class:`procam.stream.Prefetcher`: the first pose at once); the command
-    adopts the reader when they are its pose folders exactly (:func:`take_reader`), else :func:`main` closes it
-    unused. Not for help or a camera-only calibration (photos, not pose folders)."""
+def _start_reading(command: str, args: list[str]) -> None:
+    """Start reading the pose folders among the arguments ``args`` of ``procam calibrate`` (every folder) or
+    ``procam decode`` (the first) now, before the command line is parsed: typer, and through it pydantic, take a
+    tenth of a second to start, while the second core would wait. The folders are taken in their order (a
+    :class:`procam.stream.Prefetcher`: the first pose at once); the command adopts the reader when they are its pose
+    folders exactly (:func:`take_reader`), else :func:`main` closes it unused, as after a usage error: reading has
+    no effect but the time it takes. Not for help or a camera-only calibration (photos, not pose folders)."""
     import os
 
     if any(a in ("--help", "-h", "--camera-only") for a in args):
@@ -78,7 +79,7 @@ def _start_reading(args: list[str]) -> None:
     if folders:
         from ..stream import Prefetcher
 
-        _EARLY["reader"] = Prefetcher(folders)
+        _EARLY["reader"] = Prefetcher(folders if command == "calibrate" else folders[:1])
 
 
 def take_reader(poses):

@@ -64,7 +64,15 @@ def decode_cmd(
         out = out.with_suffix(".npz")
     output_path(out, "-o", (".npz",), inputs=(pose_dir,))
     output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
-    cap = capture.load_capture(pose_dir, size, value(order), step=step)
+    from . import take_reader
+
+    reader = take_reader([pose_dir])  # the folder's images, read from before the command line was parsed
+    try:
+        cap = capture.load_capture(pose_dir, size, value(order), step=step,
+                                   reader=None if reader is None else reader.read)
+    finally:
+        if reader is not None:
+            reader.close()
     for w in cap.warnings:
         warn(w)
     res = dec.decode_with(cap.stack, cap.pattern_set, opts)
