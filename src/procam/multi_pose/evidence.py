@@ -3,7 +3,8 @@
 The fit's ``±`` (its Jacobian at the solution) assumes the model is right, the corner noise independent and the
 problem well posed. A set that does not determine a parameter violates the last: the Jacobian still gives a
 small ``±`` at whatever point the optimiser stopped. The poses themselves tell: refit without each pose in
-turn (same options) and look at how far each parameter moves. The jackknife standard error over the ``n``
+turn (same options; from the calibration's own solution where the other poses determine the parameters, else from
+scratch: :func:`refit_each`) and look at how far each parameter moves. The jackknife standard error over the ``n``
 refits, ``sqrt((n - 1) / n * sum (x_i - mean)^2)``, estimates the parameter's uncertainty with no model of the
 noise; for a sound set it is close to the fit's ``±`` (within about 3x on the simulator's sets of 4-7 poses),
 for a set that rests on one pose it is hundreds of times larger.
