@@ -209,6 +209,38 @@ def test_the_leave_one_out_refits_start_from_the_solution_and_land_where_calibra
                 assert abs(warm[k] - value) < 5 * fit_std, k          # and a refit moves, by about its ±
 
 
+def test_a_warm_refit_that_diverges_or_leaves_a_parameter_free_gives_way_to_one_from_scratch():
+    """refit_each takes the warm-started refit only where it converged and its own ± fixes every judged parameter
+    within 2 % of its scale; a refit that raised, or one whose ± is wider, is replaced by the calibration of the other
+    poses from scratch (the same bits as calling it)."""
+    import warnings
+
+    from procam import multi_pose
+    from procam.errors import ProcamWarning
+    from procam.multi_pose import evidence
+
+    views = _views(sigma=0.1, seed=2)
+    options = dict(cam_dist="k1k2p1p2k3", proj_dist="k1k2p1p2k3", leave_one_out=False, judge_pose_set=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ProcamWarning)
+        full = multi_pose.calibrate(views, leave_one_out=False)
+        cold = [multi_pose.calibrate(views[:i] + views[i + 1:], **options) for i in range(len(views))]
+
+        def warm(i):
+            if i == 0:
+                raise CalibrationError("diverged")
+            refit = multi_pose.refit_without(full, i)
+            if i == 1:  # as a refit whose ± leaves f_c free would say
+                refit = refit.replace(std={**refit.std, "f_c": 0.05 * refit.camera.K[0, 0]})
+            return refit
+
+        refits = evidence.refit_each(views, multi_pose.calibrate, warm, **options)
+    assert [bool(r.info.get("warm_start")) for r in refits] == [False, False, True, True, True]
+    for i in (0, 1):
+        assert np.array_equal(refits[i].camera.K, cold[i].camera.K) and np.array_equal(refits[i].T, cold[i].T)
+    assert evidence.determined(refits[2]) and not evidence.determined(warm(1))
+
+
 def test_leave_one_out_needs_four_poses():
     with pytest.raises(CalibrationError, match="at least 4 poses"):
         leave_one_out(_views(n=3))
