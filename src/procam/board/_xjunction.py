@@ -52,11 +52,9 @@ def model(P, X, Y, jac):
     f1 = k * np.exp(-d1 * d1 / (2 * s * s)) * E2  # dQ/dd1
     f2 = k * np.exp(-d2 * d2 / (2 * s * s)) * E1  # dQ/dd2
     sb = sh * b
-    J = np.empty(X.shape + (9,))  # each column written where it goes (np.stack of the nine was a tenth of a fit)
-    for k, col in enumerate((-sb * (f1 * c1 + f2 * c2) - base * gx, -sb * (f1 * s1 + f2 * s2) - base * gy,
-                             sb * f1 * (c1 * y - s1 * x), sb * f2 * (c2 * y - s2 * x), -sb * (f1 * d1 + f2 * d2) / s,
-                             sh, sh * Q, x * base, y * base)):
-        J[..., k] = col
+    J = np.stack([-sb * (f1 * c1 + f2 * c2) - base * gx, -sb * (f1 * s1 + f2 * s2) - base * gy,
+                  sb * f1 * (c1 * y - s1 * x), sb * f2 * (c2 * y - s2 * x), -sb * (f1 * d1 + f2 * d2) / s,
+                  sh, sh * Q, x * base, y * base], axis=-1)
     return sh * base, Q, J
 
 
