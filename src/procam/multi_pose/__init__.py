@@ -440,8 +440,8 @@ def refit_without(calib: Calibration, i: int) -> Calibration:
     (:func:`procam.multi_pose.evidence.refit_each` then refits from scratch).
     Raises :class:`CalibrationError` when the refinement diverges.
     """
-    views = [v for j, v in enumerate(calib.views) if j != i]
     keep = [j for j in range(len(calib.views)) if j != i]
+    views = [calib.views[j] for j in keep]
     data = _pose_data(views, MIN_CORNERS_PER_POSE)
     cd, pd = calib.info["cam_dist_model"], calib.info["proj_dist_model"]
     r = calib.info["refinement"]

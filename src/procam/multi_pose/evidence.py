@@ -83,12 +83,17 @@ def parameter_spread(calib, refits) -> dict:
     for k, v in base.items():
         xs = np.array([p[k] for p in sets], float)
         jack = float(np.sqrt((n - 1) / n * np.sum((xs - xs.mean()) ** 2)))
-        js = calib.std.get(k)
-        if k.startswith("T["):
-            t = calib.std.get("T")
-            js = t[int(k[2])] if t is not None else None
+        js = _fit_std(calib, k)
         out[k] = (float(v), None if js is None else float(js), jack)
     return out
+
+
+def _fit_std(calib, k):
+    """The ``±`` the fit gives parameter ``k`` of :data:`PARAMS` (``T[i]`` from ``std["T"]``), or None."""
+    if k.startswith("T["):
+        t = calib.std.get("T")
+        return t[int(k[2])] if t is not None else None
+    return calib.std.get(k)
 
 
 def _scale(calib, k) -> float:
@@ -184,8 +189,8 @@ def _spreads(items) -> str:
 
 
 def refit_each(views, calibrate, warm=None, **options) -> list:
-    """``calibrate(views without pose i, **options)`` for every pose ``i`` (two at a time: mostly OpenCV, which
-    releases the GIL); an entry is the refit's :class:`ProcamError` where it raised.
+    """``calibrate(views without pose i, **options)`` for every pose ``i`` (two at a time); an entry is the refit's
+    :class:`ProcamError` where it raised.
 
     ``warm(i)``, when given, is the refit without pose ``i`` started from the calibration of all the poses
     (:func:`procam.multi_pose.refit_without`: a few steps of the joint refinement instead of a calibration from
@@ -225,10 +230,7 @@ def determined(calib, options: SpreadOptions = SpreadOptions()) -> bool:
     not determined): its poses fix them, so a refinement from a nearby start converges to the minimum a
     calibration from scratch finds, and a warm-started refit with such ``±`` stands in for one from scratch."""
     for k in PARAMS:
-        js = calib.std.get(k)
-        if k.startswith("T["):
-            t = calib.std.get("T")
-            js = t[int(k[2])] if t is not None else None
+        js = _fit_std(calib, k)
         scale = _scale(calib, k)
         if js is None or not (np.isfinite(js) and scale > 0) or js > options.warm_rel * scale:
             return False
