@@ -534,8 +534,9 @@ def test_calibrate_and_decode_keep_freed_memory(tmp_path, monkeypatch):
 
 def test_calibrate_reads_its_pose_folders_before_its_command_line_is_parsed(ideal_capture, tmp_path):
     """`procam calibrate POSE ...` (and `procam decode POSE`) starts reading the pose folders before typer (and
-    pydantic) are imported, and the command takes that reader instead of making its own; a command line that is not what it looked like (an unknown
-    option, --help) leaves no reader behind (fresh interpreters, the console-script entry point)."""
+    pydantic) are imported, and the command takes that reader instead of making its own; a command line that is not
+    what it looked like (an unknown option, --help) leaves no reader behind (fresh interpreters, the console-script
+    entry point)."""
     import json
     import os
     import subprocess
@@ -570,23 +571,21 @@ print(json.dumps({"code": code, "made": made, "readers": readers}), file=sys.std
     env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
     folder = str(ideal_capture[0])
 
-    def run(*args):
-        res = subprocess.run([sys.executable, "-c", script, "calibrate", folder, *args], env=env, capture_output=True,
+    def run(command, *args):
+        res = subprocess.run([sys.executable, "-c", script, command, folder, *args], env=env, capture_output=True,
                              text=True, timeout=300)
         return json.loads(res.stderr.strip().splitlines()[-1])
 
-    rep = run("--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json"))
+    rep = run("calibrate", "--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json"))
     assert rep["code"] in (0, None) and (tmp_path / "c.json").is_file()
     assert rep["made"] == [{"typer": False, "closed": True}] and rep["readers"] == []
-    rep = run("--board", "10x6", "--square", "24", "-o", str(tmp_path / "d.json"), "--no-such-option")
+    rep = run("calibrate", "--board", "10x6", "--square", "24", "-o", str(tmp_path / "d.json"), "--no-such-option")
     assert rep["code"] == 2 and rep["made"] == [{"typer": False, "closed": True}] and rep["readers"] == []
     assert not (tmp_path / "d.json").exists()
-    rep = run("--help")
+    rep = run("calibrate", "--help")
     assert rep["code"] in (0, None) and rep["made"] == [] and rep["readers"] == []
     # procam decode FOLDER likewise, the maps the same bytes as those of the folder read after the parsing
-    res = subprocess.run([sys.executable, "-c", script, "decode", folder, "-o", str(tmp_path / "early.npz")], env=env,
-                         capture_output=True, text=True, timeout=300)
-    rep = json.loads(res.stderr.strip().splitlines()[-1])
+    rep = run("decode", "-o", str(tmp_path / "early.npz"))
     assert rep["code"] in (0, None) and rep["made"] == [{"typer": False, "closed": True}] and rep["readers"] == []
     assert run_cli(["decode", folder, "-o", tmp_path / "late.npz"])[0] == 0
     assert (tmp_path / "early.npz").read_bytes() == (tmp_path / "late.npz").read_bytes()

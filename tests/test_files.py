@@ -99,8 +99,8 @@ def test_a_hostile_manifest_or_json_output_is_read_as_not_procams_not_crashed(tm
 
 
 def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
-    """Each thread reads its files into one buffer it keeps: a file after a larger one, a larger after a smaller,
-    8- and 16-bit PNGs and JPEGs come out as OpenCV reads them, and a truncated JPEG or PNG is still refused."""
+    """Files read one after another: a file after a larger one, a larger after a smaller, 8- and 16-bit PNGs and
+    JPEGs come out as OpenCV reads them, and a truncated JPEG or PNG is refused."""
     import cv2
 
     from procam.errors import CaptureError
