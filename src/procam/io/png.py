@@ -1,0 +1,166 @@
+"""PNG files read faster than OpenCV reads them: the common kind decoded here, everything else left to OpenCV.
+
+A PNG's pixels are one zlib stream of rows, each row filtered (stored as its difference from a prediction; the
+first byte of a row names the filter).  OpenCV's ``imdecode`` hands that to libpng, which inflates the stream
+with the zlib OpenCV was built with and undoes the filters byte by byte: about 8 ms for a 1280x1024 grey frame,
+so that reading a capture's PNGs is most of a calibration's time.  :func:`decode` does the same work in two
+steps that each run several times faster:
+
+* the stream is inflated by ISA-L (the ``isal`` package: about twice zlib's speed) where it is installed, else
+  by Python's zlib;
+* the filter is undone for the whole image at once.  ``Sub`` (each byte plus the byte one pixel to its left,
+  modulo 256) is a running sum along each row, ``Up`` (plus the byte above) a running sum down each column,
+  and the low byte of a running sum is the running sum modulo 256: both are the low bytes of differences of
+  one ``cv2.integral`` image.
+
+It takes what cameras' capture scripts write (OpenCV's ``imwrite`` filters every row with ``Sub``): 8- or 16-bit
+grey or colour, not interlaced, every row under one filter of ``None``, ``Sub`` or ``Up``, and no chunks but
+those OpenCV's reader ignores (:data:`IGNORED`).  For anything else (palette, alpha, a transparency chunk, rows
+under ``Average`` or ``Paeth`` as Pillow's and most image editors' adaptive filters write, a stream that does
+not inflate to the image's size) :func:`decode` returns None and the caller decodes with OpenCV, so the result
+is always OpenCV's: the same array, bit for bit (``tests/test_png.py`` compares every filter, depth and
+channel count with ``cv2.imdecode``).
+"""
+
+from __future__ import annotations
+
+import sys
+import zlib
+
+import numpy as np
+
+try:  # ISA-L's inflate: the same bytes as zlib's, in about half the time
+    from isal import isal_zlib as _inflater
+except ImportError:  # pragma: no cover - isal is a dependency where it has wheels
+    _inflater = zlib
+
+SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+#: Ancillary chunks OpenCV's PNG reader does not apply to the pixels (``IMREAD_UNCHANGED``): text, time,
+#: physical size, colour-space notes.  A chunk not listed here (``tRNS`` adds an alpha channel, ``PLTE``...)
+#: leaves the file to OpenCV.
+IGNORED = frozenset({b"tEXt", b"zTXt", b"iTXt", b"tIME", b"pHYs", b"gAMA", b"cHRM", b"sRGB", b"iCCP", b"sBIT",
+                     b"bKGD"})
+
+#: The largest image (bytes of its filtered rows) decoded here: a header asking for more goes to OpenCV, which
+#: has its own limit (a damaged or hostile file must not make this allocate gigabytes).
+MAX_BYTES = 1 << 30
+
+_LOW = 0 if sys.byteorder == "little" else 3  # the low byte of an int32 in memory
+_CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
+_CRC = getattr(_inflater, "crc32", zlib.crc32)
+
+
+def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
+    """Walk the chunks of the PNG ``data`` (its signature already checked) and check each one's CRC.
+
+    Returns ``(chunks, problem)``: ``chunks`` a list of ``(kind, start, end)`` with ``data[start:end]`` the
+    chunk's contents, up to IEND; ``problem`` None, or what is wrong in words (a chunk past the end of the data, a
+    chunk failing its checksum, no IEND chunk: the file was not written completely).
+    """
+    pos, n = 8, len(data)
+    mv = memoryview(data)
+    out = []
+    while pos + 12 <= n:
+        length = int.from_bytes(data[pos:pos + 4], "big")
+        kind = bytes(data[pos + 4:pos + 8])
+        name = kind.decode("latin-1") + " chunk" if kind.isalpha() else "a chunk"
+        end = pos + 12 + length
+        if end > n:
+            return out, f"is truncated ({name} ends after the end of the file)"
+        if _CRC(mv[pos + 4:end - 4]) & 0xFFFFFFFF != int.from_bytes(data[end - 4:end], "big"):
+            return out, f"is damaged ({name} fails its checksum)"
+        out.append((kind, pos + 8, end - 4))
+        pos = end
+        if kind == b"IEND":
+            return out, None
+    return out, "is truncated (no end marker: the file was not written completely)"
+
+
+def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | None:
+    """The image of the PNG ``data`` as ``cv2.imdecode(data, cv2.IMREAD_UNCHANGED)`` gives it, or None when it is
+    not of the kind decoded here (the module docstring).
+
+    ``parts``: its :func:`chunks`, checked.  Returns (H, W) for grey, (H, W, 3) BGR for colour; ``uint8`` or
+    ``uint16`` (native byte order).
+    """
+    if not parts or parts[0][0] != b"IHDR" or parts[0][2] - parts[0][1] != 13:
+        return None
+    s = parts[0][1]
+    w, h = int.from_bytes(data[s:s + 4], "big"), int.from_bytes(data[s + 4:s + 8], "big")
+    depth, ctype, method, filtering, interlace = data[s + 8:s + 13]
+    ch = _CHANNELS.get(ctype)
+    if ch is None or depth not in (8, 16) or method or filtering or interlace or not w or not h:
+        return None
+    if any(kind not in IGNORED for kind, _, _ in parts[1:] if kind not in (b"IDAT", b"IEND")):
+        return None
+    bpp = ch * depth // 8
+    stride = w * bpp
+    size = h * (stride + 1)
+    if size > MAX_BYTES:
+        return None
+    mv = memoryview(data)
+    idat = [mv[a:b] for kind, a, b in parts if kind == b"IDAT"]
+    if not idat or not _uniform_start(idat[0], stride):
+        return None
+    try:
+        raw = _inflater.decompress(idat[0] if len(idat) == 1 else b"".join(idat), 15, size)
+    except Exception:  # a stream that does not inflate: OpenCV says so
+        return None
+    if len(raw) != size:
+        return None
+    rows = np.frombuffer(raw, np.uint8).reshape(h, stride + 1)
+    kinds = rows[:, 0]
+    kind = int(kinds[-1])
+    if kind == 2:  # Up: the first row's prediction is a row of zeros, so it may say None
+        uniform = bool((kinds[1:] == 2).all()) and int(kinds[0]) in (0, 2)
+    else:
+        uniform = kind in (0, 1) and bool((kinds == kind).all())
+    if not uniform:
+        return None
+    rows = rows[:, 1:]
+    if kind == 0:
+        out = rows.copy()
+    elif kind == 1:
+        out = _running_sum(rows.reshape(h, w, bpp) if bpp > 1 else rows, along_rows=True).reshape(h, stride)
+    else:
+        out = _running_sum(rows, along_rows=False)
+    if depth == 16:
+        out = out.view(">u2").astype(np.uint16)
+    if ch == 1:
+        return out.reshape(h, w)
+    return np.ascontiguousarray(out.reshape(h, w, 3)[:, :, ::-1])  # RGB -> OpenCV's BGR
+
+
+def _uniform_start(first, stride: int, rows: int = 8) -> bool:
+    """Whether the first ``rows`` rows (inflated from the start of the first IDAT chunk) are under None, Sub or Up:
+    an adaptive writer's Paeth or Average rows show there, before the whole image is inflated for nothing."""
+    d = zlib.decompressobj()
+    try:
+        head = d.decompress(first[:4 * rows * (stride + 1) + 64], rows * (stride + 1))
+    except zlib.error:
+        return False
+    return all(b in (0, 1, 2) for b in head[::stride + 1])
+
+
+def _running_sum(a: np.ndarray, along_rows: bool) -> np.ndarray:
+    """The running sum of the bytes ``a`` (H, W) or (H, W, C), modulo 256: along each row (per channel) or down
+    each column.  From ``cv2.integral`` in blocks of rows small enough that its int32 sums cannot overflow (a
+    column's running sum carries over to the next block)."""
+    import cv2
+
+    h = a.shape[0]
+    per_row = a[0].size
+    step = max(1, ((1 << 31) - 1) // (255 * per_row + 255))
+    out = np.empty(a.shape, np.uint8)
+    for r0 in range(0, h, step):
+        block = a[r0:r0 + step]
+        if not along_rows and r0:
+            block = block.copy()
+            block[0] += out[r0 - 1]
+        lo = cv2.integral(block).view(np.uint8)[..., _LOW::4]
+        if along_rows:
+            np.subtract(lo[1:, 1:], lo[:-1, 1:], out=out[r0:r0 + step])
+        else:
+            np.subtract(lo[1:, 1:], lo[1:, :-1], out=out[r0:r0 + step])
+    return out

@@ -1,0 +1,172 @@
+"""procam.io.png: the PNGs it decodes come out as OpenCV decodes them, bit for bit; the rest is left to OpenCV."""
+
+import io
+import itertools
+import zlib
+
+import cv2
+import numpy as np
+import pytest
+
+from procam.errors import CaptureError
+from procam.io import files as _files
+from procam.io import png
+
+FAST = {"none": cv2.IMWRITE_PNG_FILTER_NONE, "sub": cv2.IMWRITE_PNG_FILTER_SUB, "up": cv2.IMWRITE_PNG_FILTER_UP}
+SLOW = {"average": cv2.IMWRITE_PNG_FILTER_AVG, "paeth": cv2.IMWRITE_PNG_FILTER_PAETH}
+
+
+def _image(shape, dtype, seed):
+    """Noise over a smooth ramp (the filters see both), full range of ``dtype``."""
+    rng = np.random.default_rng(seed)
+    top = np.iinfo(dtype).max
+    ramp = np.linspace(0, 1, shape[1])[None, :] * np.linspace(0.2, 1, shape[0])[:, None]
+    if len(shape) == 3:
+        ramp = ramp[:, :, None]
+    img = (ramp + rng.normal(0, 0.15, shape)).clip(0, 1) * top
+    return np.round(img).astype(dtype)
+
+
+def _encode(img, filt):
+    ok, buf = cv2.imencode(".png", img, [cv2.IMWRITE_PNG_FILTER, filt])
+    assert ok
+    return buf.tobytes()
+
+
+def _decoded(data):
+    parts, problem = png.chunks(data)
+    assert problem is None
+    return png.decode(data, parts)
+
+
+def _opencv(data):
+    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+
+
+def _with_chunk(data, kind: bytes, body: bytes, after: bytes = b"IHDR"):
+    """``data`` with a chunk ``kind`` (correct CRC) inserted after its first chunk ``after``."""
+    parts, _ = png.chunks(data)
+    end = next(e for k, s, e in parts if k == after) + 4
+    chunk = len(body).to_bytes(4, "big") + kind + body + (zlib.crc32(kind + body) & 0xFFFFFFFF).to_bytes(4, "big")
+    return data[:end] + chunk + data[end:]
+
+
+SHAPES = [(1, 1), (1, 9), (7, 1), (13, 17), (48, 101)]
+
+
+@pytest.mark.parametrize("filt", FAST)
+def test_opencv_written_pngs_decode_here_to_opencvs_array(filt):
+    """Every size, depth and channel count under None, Sub and Up: decoded here (not handed back), the same
+    array as cv2.imdecode, and the image that was written."""
+    for k, (shape, dtype, ch) in enumerate(itertools.product(SHAPES, (np.uint8, np.uint16), (1, 3))):
+        img = _image(shape if ch == 1 else (*shape, ch), dtype, seed=k)
+        data = _encode(img, FAST[filt])
+        got = _decoded(data)
+        assert got is not None, (shape, dtype, ch)
+        ref = _opencv(data)
+        assert got.dtype == ref.dtype and got.shape == ref.shape and got.flags.c_contiguous and got.flags.writeable
+        assert np.array_equal(got, ref) and np.array_equal(got, img), (shape, dtype, ch)
+
+
+@pytest.mark.parametrize("filt", SLOW)
+def test_average_and_paeth_rows_and_alpha_are_left_to_opencv(filt, tmp_path):
+    img = _image((20, 30), np.uint8, seed=1)
+    data = _encode(img, SLOW[filt])
+    assert _decoded(data) is None
+    bgra = _image((20, 30, 4), np.uint8, seed=2)
+    assert _decoded(_encode(bgra, FAST["sub"])) is None
+    (tmp_path / "a.png").write_bytes(data)
+    assert np.array_equal(_files.read_image(tmp_path / "a.png"), img)
+
+
+def test_pillows_adaptive_filters_are_left_to_opencv(tmp_path):
+    """Pillow picks a filter per row (Paeth among them): OpenCV decodes those, read_image gives its array."""
+    from PIL import Image
+
+    for k, img in enumerate((_image((40, 50), np.uint8, 3), _image((40, 50, 3), np.uint8, 4))):
+        buf = io.BytesIO()
+        Image.fromarray(img).save(buf, "PNG")
+        data = buf.getvalue()
+        assert _decoded(data) is None
+        path = tmp_path / f"{k}.png"
+        path.write_bytes(data)
+        ref = _opencv(data)
+        want = ref if ref.ndim == 2 else cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY)
+        assert np.array_equal(_files.read_image(path), want)
+
+
+@pytest.mark.parametrize("kind", sorted(png.IGNORED))
+def test_chunks_opencv_ignores_leave_the_pixels_as_opencv_reads_them(kind):
+    img = _image((16, 24), np.uint8, seed=5)
+    body = {b"gAMA": (45455).to_bytes(4, "big"), b"sRGB": b"\x00", b"pHYs": bytes(9), b"tIME": bytes(7),
+            b"cHRM": bytes(32), b"sBIT": b"\x04", b"bKGD": b"\x00\x10"}.get(kind, b"key\x00value")
+    if kind == b"iCCP":
+        body = b"icc\x00\x00" + zlib.compress(b"not a profile")
+    data = _with_chunk(_encode(img, FAST["sub"]), kind, body)
+    got = _decoded(data)
+    assert got is not None and np.array_equal(got, _opencv(data)) and np.array_equal(got, img)
+
+
+def test_a_transparency_chunk_is_left_to_opencv():
+    data = _with_chunk(_encode(_image((8, 8), np.uint8, 6), FAST["sub"]), b"tRNS", b"\x00\x05")
+    assert _decoded(data) is None
+
+
+def test_several_idat_chunks_and_a_tall_image_in_blocks():
+    """Rows spread over many IDAT chunks; an image tall enough that the running sums are taken in blocks of rows
+    (the column sums of Up carried from one block to the next)."""
+    img = _image((64, 80), np.uint8, seed=7)
+    data = _encode(img, FAST["sub"])
+    parts, _ = png.chunks(data)
+    stream = b"".join(data[s:e] for k, s, e in parts if k == b"IDAT")
+    head = data[:parts[1][1] - 8] if parts[1][0] == b"IDAT" else None
+    assert head is not None
+    pieces = [stream[i:i + 97] for i in range(0, len(stream), 97)]
+    split = head + b"".join(len(p).to_bytes(4, "big") + b"IDAT" + p + (zlib.crc32(b"IDAT" + p) & 0xFFFFFFFF)
+                            .to_bytes(4, "big") for p in pieces) + data[-12:]
+    assert np.array_equal(_decoded(split), img)
+    tall = _image((15000, 600), np.uint8, seed=8)
+    assert 15000 > (2**31 - 1) // (255 * 600 + 255)  # more than one block
+    for filt in ("sub", "up"):
+        assert np.array_equal(_decoded(_encode(tall, FAST[filt])), tall)
+
+
+def test_pythons_zlib_decodes_the_same(monkeypatch):
+    img = _image((30, 40, 3), np.uint16, seed=9)
+    data = _encode(img, FAST["sub"])
+    fast = _decoded(data)
+    monkeypatch.setattr(png, "_inflater", zlib)
+    assert np.array_equal(_decoded(data), fast) and np.array_equal(fast, img)
+
+
+def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
+    """A stream with valid checksums that does not inflate (or to the wrong size), an interlaced or huge header:
+    decode hands it back, and read_image says what OpenCV says."""
+    data = _encode(_image((32, 32), np.uint8, seed=10), FAST["sub"])
+    parts, _ = png.chunks(data)
+    k, s, e = next(p for p in parts if p[0] == b"IDAT")
+    bad = bytearray(data)
+    bad[s + 10:e] = bytes(e - s - 10)  # zeros after the stream's start: it no longer inflates to the image
+    bad[e:e + 4] = (zlib.crc32(bytes(bad[s - 4:e])) & 0xFFFFFFFF).to_bytes(4, "big")
+    bad = bytes(bad)
+    assert png.chunks(bad)[1] is None and _decoded(bad) is None
+    (tmp_path / "bad.png").write_bytes(bad)
+    with pytest.raises(CaptureError, match="cannot be read as an image"):
+        _files.read_image(tmp_path / "bad.png")
+
+    def header(w, h, interlace=0):
+        body = b"IHDR" + w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
+        return data[:8] + (13).to_bytes(4, "big") + body + (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big") + data[33:]
+
+    assert _decoded(header(32, 32)) is not None
+    assert _decoded(header(32, 32, interlace=1)) is None
+    assert _decoded(header(1 << 16, 1 << 16)) is None  # 4 GiB of rows: not allocated here
+
+
+def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
+    for k, dtype in enumerate((np.uint8, np.uint16)):
+        img = _image((21, 33, 3), dtype, seed=11 + k)
+        path = tmp_path / f"c{k}.png"
+        path.write_bytes(_encode(img, FAST["sub"]))
+        assert np.array_equal(_files.read_image(path), cv2.cvtColor(_opencv(path.read_bytes()), cv2.COLOR_BGR2GRAY))
+        assert np.array_equal(_files.read_image(path, gray=False), img)
