@@ -6,7 +6,9 @@ commands round by round (the machine may be shared, so every command sees the sa
 
 1. ``procam calibrate pose1 .. pose5`` as a cold process (interpreter start and imports included);
 2. a cold process that only reads the 210 PNGs with two threads (``cv2.imread`` grey, the function
-   :func:`read_all` below) -- the floor any tool that reads PNGs must pay;
+   :func:`read_all` below) -- the floor any tool that reads PNGs with OpenCV must pay; and the same with procam's
+   own reader (:func:`procam.io.files.read_image`, which decodes these PNGs itself, :mod:`procam.io.png`): the
+   floor procam itself cannot go below;
 3. ``procam --version`` and ``procam calibrate --help`` as cold processes (start-up; issue 35's targets 0.2 s
    and 0.3 s);
 4. ``procam decode`` of a 12-frame phase capture (3 steps + the unit-frequency cue per axis, no white or black
@@ -142,14 +144,21 @@ def kamino_layout(data: Path) -> Path:
 # the reader (the floor) and the cold processes
 # --------------------------------------------------------------------------------------------
 
-def read_all(files, threads: int = 2):
-    """Read ``files`` as grey images with ``threads`` threads (cv2.imread); returns the list of arrays."""
+def read_all(files, threads: int = 2, reader: str = "opencv"):
+    """Read ``files`` as grey images with ``threads`` threads (``reader``: ``opencv``, cv2.imread; ``procam``,
+    procam.io.files.read_image); returns the list of arrays."""
     from concurrent.futures import ThreadPoolExecutor
 
-    import cv2
+    if reader == "procam":
+        from procam.io.files import read_image as read
+    else:
+        import cv2
+
+        def read(f):
+            return cv2.imread(str(f), cv2.IMREAD_GRAYSCALE)
 
     with ThreadPoolExecutor(threads) as ex:
-        return list(ex.map(lambda f: cv2.imread(str(f), cv2.IMREAD_GRAYSCALE), files))
+        return list(ex.map(read, files))
 
 
 def _env():
@@ -164,7 +173,9 @@ def commands(args, data: Path, out: Path) -> dict:
     cmds = {
         "procam": ([*procam, "calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1],
                     "-o", str(out)], None),
-        "read": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "--data", str(data)], None),
+        "read": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "opencv", "--data", str(data)], None),
+        "read-procam": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "procam", "--data", str(data)],
+                        None),
         "version": ([*procam, "--version"], None),
         "calibrate-help": ([*procam, "calibrate", "--help"], None),
     }
@@ -419,7 +430,7 @@ def main():
     ap.add_argument("--stages", type=int, default=3, help="runs of the in-process per-stage profile (0: none)")
     ap.add_argument("--kamino410", help="path of kamino410's calibrate.py (procam-calibration), to run it too")
     ap.add_argument("--kamino410-python", default=None, help="the Python that runs it (with opencv-contrib)")
-    ap.add_argument("--read-only", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--read-only", choices=("opencv", "procam"), default=None, help=argparse.SUPPRESS)
     ap.add_argument("--profile", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -428,7 +439,7 @@ def main():
 
     if args.read_only:  # the cold reader process
         t0 = time.perf_counter()
-        imgs = read_all(png_files(data))
+        imgs = read_all(png_files(data), reader=args.read_only)
         assert len(imgs) == 42 * N_POSES and all(i is not None for i in imgs)
         print(json.dumps({"read": time.perf_counter() - t0}))
         return
@@ -483,7 +494,9 @@ def main():
     print("| command | wall median (s) | wall min | CPU median (s) | peak memory (MB) |")
     print("| --- | --- | --- | --- | --- |")
     pair = ensure_decode_pair(data)
-    label = {"procam": "procam calibrate, 5 poses (cold process)", "read": "read the 210 PNGs, 2 threads (cold process)",
+    label = {"procam": "procam calibrate, 5 poses (cold process)",
+             "read": "read the 210 PNGs, 2 threads, cv2.imread (cold process)",
+             "read-procam": "read the 210 PNGs, 2 threads, procam's reader (cold process)",
              "kamino410": "kamino410 calibrate.py, 5 poses (cold process)", "version": "procam --version",
              "calibrate-help": "procam calibrate --help",
              **{f"decode-{n}": f"procam decode, {n} capture ({k} frames)" for n, (_, k) in pair.items()}}
@@ -493,7 +506,7 @@ def main():
               f"{max(x['rss'] for x in runs[n]):.0f} |")
     print("\n| ratio | median of the per-round ratios | ratio of the medians | ratio of the minima |")
     print("| --- | --- | --- | --- |")
-    pairs = [("procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else []) + \
+    pairs = [("procam", "read"), ("procam", "read-procam"), ("read-procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else []) + \
         [("decode-phase", "decode-gray")]
     for a, b in pairs:
         wa, wb = [x["wall"] for x in runs[a]], [x["wall"] for x in runs[b]]
