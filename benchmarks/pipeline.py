@@ -506,8 +506,8 @@ def main():
               f"{max(x['rss'] for x in runs[n]):.0f} |")
     print("\n| ratio | median of the per-round ratios | ratio of the medians | ratio of the minima |")
     print("| --- | --- | --- | --- |")
-    pairs = [("procam", "read"), ("procam", "read-procam"), ("read-procam", "read")] + ([("procam", "kamino410")] if "kamino410" in runs else []) + \
-        [("decode-phase", "decode-gray")]
+    pairs = [("procam", "read"), ("procam", "read-procam"), ("read-procam", "read")] + \
+        ([("procam", "kamino410")] if "kamino410" in runs else []) + [("decode-phase", "decode-gray")]
     for a, b in pairs:
         wa, wb = [x["wall"] for x in runs[a]], [x["wall"] for x in runs[b]]
         per_round = [x / y for x, y in zip(wa, wb)]

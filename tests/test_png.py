@@ -144,7 +144,7 @@ def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
     decode hands it back, and read_image says what OpenCV says."""
     data = _encode(_image((32, 32), np.uint8, seed=10), FAST["sub"])
     parts, _ = png.chunks(data)
-    k, s, e = next(p for p in parts if p[0] == b"IDAT")
+    _, s, e = next(p for p in parts if p[0] == b"IDAT")
     bad = bytearray(data)
     bad[s + 10:e] = bytes(e - s - 10)  # zeros after the stream's start: it no longer inflates to the image
     bad[e:e + 4] = (zlib.crc32(bytes(bad[s - 4:e])) & 0xFFFFFFFF).to_bytes(4, "big")
@@ -156,7 +156,8 @@ def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
 
     def header(w, h, interlace=0):
         body = b"IHDR" + w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
-        return data[:8] + (13).to_bytes(4, "big") + body + (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big") + data[33:]
+        crc = (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big")
+        return data[:8] + (13).to_bytes(4, "big") + body + crc + data[33:]
 
     assert _decoded(header(32, 32)) is not None
     assert _decoded(header(32, 32, interlace=1)) is None

@@ -3,6 +3,8 @@
     formats           which files are procam's: the marks its writers leave, defined once
     files             plumbing: natural sort, image reads, atomic writes, JSON helpers, the manifest of procam's
                       files, whether an existing file is procam's
+    png               the PNGs capture scripts write, decoded faster than OpenCV and to its pixels (the rest:
+                      OpenCV's)
     folders           output folders: what procam may overwrite or delete; a folder made ready for a writer
     validate          the one validator set every reader checks what it loads with
     procam            procam's JSON: calibrations and correspondences (views)
@@ -25,7 +27,7 @@ from __future__ import annotations
 
 import importlib
 
-_SUBMODULES = ("formats", "files", "folders", "validate", "procam", "opencv", "kamino410", "layouts",
+_SUBMODULES = ("formats", "files", "png", "folders", "validate", "procam", "opencv", "kamino410", "layouts",
                "calibration_file", "rig", "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.

@@ -49,6 +49,7 @@ MAX_BYTES = 1 << 30
 _LOW = 0 if sys.byteorder == "little" else 3  # the low byte of an int32 in memory
 _CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
 _CRC = getattr(_inflater, "crc32", zlib.crc32)
+_BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError)
 
 
 def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
@@ -105,7 +106,7 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | Non
         return None
     try:
         raw = _inflater.decompress(idat[0] if len(idat) == 1 else b"".join(idat), 15, size)
-    except Exception:  # a stream that does not inflate: OpenCV says so
+    except _BAD_STREAM:  # a stream that does not inflate: OpenCV says so
         return None
     if len(raw) != size:
         return None
