@@ -34,7 +34,6 @@ try:  # ISA-L's inflate: the same bytes as zlib's, in about half the time
 except ImportError:  # pragma: no cover - isal is a dependency where it has wheels
     _inflater = zlib
 
-SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 #: Ancillary chunks OpenCV's PNG reader does not apply to the pixels (``IMREAD_UNCHANGED``): text, time,
 #: physical size, colour-space notes.  A chunk not listed here (``tRNS`` adds an alpha channel, ``PLTE``...)
