@@ -171,3 +171,44 @@ def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
         path.write_bytes(_encode(img, FAST["sub"]))
         assert np.array_equal(_files.read_image(path), cv2.cvtColor(_opencv(path.read_bytes()), cv2.COLOR_BGR2GRAY))
         assert np.array_equal(_files.read_image(path, gray=False), img)
+
+
+def _chunk(kind: bytes, body: bytes) -> bytes:
+    return len(body).to_bytes(4, "big") + kind + body + (zlib.crc32(kind + body) & 0xFFFFFFFF).to_bytes(4, "big")
+
+
+def test_a_file_opencv_refuses_is_never_decoded_here():
+    """Chunks out of place (text between the image data, a second header, image data dropped, repeated or empty)
+    and random bytes changed with every checksum made right again: whatever decodes here, OpenCV decodes to the
+    same array; what OpenCV refuses is handed back."""
+    rng = np.random.default_rng(12)
+    img = _image((40, 50), np.uint8, seed=12)
+    small = [cv2.IMWRITE_PNG_FILTER, FAST["sub"], cv2.IMWRITE_PNG_ZLIBBUFFER_SIZE, 64]  # many small IDAT chunks
+    data = cv2.imencode(".png", img, small)[1].tobytes()
+    parts, _ = png.chunks(data)
+    ch = [(k, data[s:e]) for k, s, e in parts]
+    at = [i for i, (k, _) in enumerate(ch) if k == b"IDAT"]
+    assert len(at) > 4
+    text = (b"tEXt", b"key\x00value")
+    variants = [ch[:at[2]] + [text] + ch[at[2]:], ch[:1] + ch, ch[:at[1]] + ch[at[1] + 1:],
+                ch[:at[1]] + [ch[at[1]]] + ch[at[1]:], ch[:at[-1]] + ch[at[-1] + 1:],
+                ch[:at[1]] + [(b"IDAT", b"")] + ch[at[1]:], ch[:-1] + [text] + ch[-1:]]
+    files = [data[:8] + b"".join(_chunk(k, b) for k, b in v) for v in variants]
+    for _ in range(3000):  # a few bytes changed anywhere, every checksum made right again
+        b = bytearray(data)
+        for _ in range(int(rng.integers(1, 4))):
+            b[int(rng.integers(8, len(b)))] = int(rng.integers(0, 256))
+        pos = 8
+        while pos + 12 <= len(b) and (end := pos + 12 + int.from_bytes(b[pos:pos + 4], "big")) <= len(b):
+            b[end - 4:end] = (zlib.crc32(bytes(b[pos + 4:end - 4])) & 0xFFFFFFFF).to_bytes(4, "big")
+            pos = end
+        files.append(bytes(b))
+    fast = 0
+    for f in files:
+        parts, problem = png.chunks(f)
+        got = png.decode(f, parts) if problem is None else None
+        if got is not None:
+            fast += 1
+            ref = _opencv(f)
+            assert ref is not None and ref.dtype == got.dtype and np.array_equal(ref, got)
+    assert fast > 50  # the unchanged kinds of file did decode here

@@ -48,7 +48,7 @@ MAX_BYTES = 1 << 30
 _LOW = 0 if sys.byteorder == "little" else 3  # the low byte of an int32 in memory
 _CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
 _CRC = getattr(_inflater, "crc32", zlib.crc32)
-_BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError)
+_BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError, MemoryError)
 
 
 def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
@@ -99,9 +99,12 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | Non
     size = h * (stride + 1)
     if size > MAX_BYTES:
         return None
+    at = [k for k, (kind, _, _) in enumerate(parts) if kind == b"IDAT"]
+    if not at or at[-1] - at[0] != len(at) - 1:  # image data split by another chunk: libpng refuses it
+        return None
     mv = memoryview(data)
-    idat = [mv[a:b] for kind, a, b in parts if kind == b"IDAT"]
-    if not idat or not _uniform_start(idat[0], stride):
+    idat = [mv[parts[k][1]:parts[k][2]] for k in at]
+    if not _uniform_start(idat[0], stride):
         return None
     try:
         raw = _inflater.decompress(idat[0] if len(idat) == 1 else b"".join(idat), 15, size)
