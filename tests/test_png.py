@@ -212,3 +212,19 @@ def test_a_file_opencv_refuses_is_never_decoded_here():
             ref = _opencv(f)
             assert ref is not None and ref.dtype == got.dtype and np.array_equal(ref, got)
     assert fast > 50  # the unchanged kinds of file did decode here
+
+
+def test_sizes_opencv_refuses_are_left_to_it(monkeypatch):
+    """libpng refuses a side over 1 000 000 pixels; OpenCV's size limits set in its environment variables hold."""
+    def one_row(w):
+        raw = b"\x01" + bytes(w)
+        head = w.to_bytes(4, "big") + (1).to_bytes(4, "big") + bytes([8, 0, 0, 0, 0])
+        return (b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", head) + _chunk(b"IDAT", zlib.compress(raw))
+                + _chunk(b"IEND", b""))
+
+    assert _decoded(one_row(1_000_000)) is not None
+    assert _decoded(one_row(1_000_001)) is None and _opencv(one_row(1_000_001)) is None
+    data = _encode(_image((20, 30), np.uint8, seed=13), FAST["sub"])
+    assert _decoded(data) is not None
+    monkeypatch.setenv("OPENCV_IO_MAX_IMAGE_PIXELS", "100")
+    assert _decoded(data) is None

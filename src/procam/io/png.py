@@ -17,7 +17,7 @@ It takes what cameras' capture scripts write (OpenCV's ``imwrite`` filters every
 grey or colour, not interlaced, every row under one filter of ``None``, ``Sub`` or ``Up``, and no chunks but
 those OpenCV's reader ignores (:data:`IGNORED`).  For anything else (palette, alpha, a transparency chunk, rows
 under ``Average`` or ``Paeth`` as Pillow's and most image editors' adaptive filters write, a stream that does
-not inflate to the image's size) :func:`decode` returns None and the caller decodes with OpenCV, so the result
+not inflate to the image's size, image data split by another chunk, a size over libpng's or OpenCV's limits) :func:`decode` returns None and the caller decodes with OpenCV, so the result
 is always OpenCV's: the same array, bit for bit (``tests/test_png.py`` compares every filter, depth and
 channel count with ``cv2.imdecode``).
 """
@@ -90,7 +90,7 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | Non
     w, h = int.from_bytes(data[s:s + 4], "big"), int.from_bytes(data[s + 4:s + 8], "big")
     depth, ctype, method, filtering, interlace = data[s + 8:s + 13]
     ch = _CHANNELS.get(ctype)
-    if ch is None or depth not in (8, 16) or method or filtering or interlace or not w or not h:
+    if ch is None or depth not in (8, 16) or method or filtering or interlace or not _within_limits(w, h):
         return None
     if any(kind not in IGNORED for kind, _, _ in parts[1:] if kind not in (b"IDAT", b"IEND")):
         return None
@@ -133,6 +133,22 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | Non
     if ch == 1:
         return out.reshape(h, w)
     return np.ascontiguousarray(out.reshape(h, w, 3)[:, :, ::-1])  # RGB -> OpenCV's BGR
+
+
+def _within_limits(w: int, h: int) -> bool:
+    """Whether OpenCV would decode a ``w`` x ``h`` PNG at all: libpng's limit of 1 000 000 pixels a side and
+    OpenCV's of 2^30 pixels (each lowered by OpenCV's ``OPENCV_IO_MAX_IMAGE_WIDTH``, ``..._HEIGHT``,
+    ``..._PIXELS`` when set)."""
+    import os
+
+    def limit(name: str, default: int) -> int:
+        try:
+            return min(default, int(os.environ.get(f"OPENCV_IO_MAX_IMAGE_{name}", default)))
+        except ValueError:
+            return default
+
+    return (0 < w <= limit("WIDTH", 1_000_000) and 0 < h <= limit("HEIGHT", 1_000_000)
+            and w * h <= limit("PIXELS", 1 << 30))
 
 
 def _uniform_start(first, stride: int, rows: int = 8) -> bool:
