@@ -17,9 +17,10 @@ It takes what cameras' capture scripts write (OpenCV's ``imwrite`` filters every
 grey or colour, not interlaced, every row under one filter of ``None``, ``Sub`` or ``Up``, and no chunks but
 those OpenCV's reader ignores (:data:`IGNORED`).  For anything else (palette, alpha, a transparency chunk, rows
 under ``Average`` or ``Paeth`` as Pillow's and most image editors' adaptive filters write, a stream that does
-not inflate to the image's size, image data split by another chunk, a size over libpng's or OpenCV's limits) :func:`decode` returns None and the caller decodes with OpenCV, so the result
-is always OpenCV's: the same array, bit for bit (``tests/test_png.py`` compares every filter, depth and
-channel count with ``cv2.imdecode``).
+not inflate to the image's size, image data split by another chunk, a size over libpng's or OpenCV's limits)
+:func:`decode` returns None and the caller decodes with OpenCV, so the result is always OpenCV's: the same
+array, bit for bit (``tests/test_png.py`` compares every filter, depth and channel count with ``cv2.imdecode``,
+and files with bytes changed and chunks moved: whatever decodes here, OpenCV decodes to the same array).
 """
 
 from __future__ import annotations
