@@ -76,3 +76,29 @@ def test_a_multi_pose_calibrate_does_not_import_the_single_pose_solver(poses, tm
                           str(tmp_path / "calib.json")], env=env, capture_output=True, text=True, check=True)
     assert res.stdout.strip().splitlines()[-1] == "[]", res.stdout[-500:]
     assert json.loads((tmp_path / "calib.json").read_text())["method"] == "multi-pose"
+
+
+def test_a_stack_is_filled_again_only_when_nothing_refers_to_it(poses):
+    """A pose's stack that the caller has let go of is filled with a later pose (no fresh memory to map); one the
+    caller still refers to (through a view of one frame) is never written again."""
+    from procam import capture
+    from procam.io import files
+    from procam.stream import Prefetcher
+
+    folders = [*poses, *poses]  # six poses: the same three twice
+    names = [capture.sequence_files(f, files.list_images(f))[0] for f in folders]
+    ids = []
+    with Prefetcher(folders) as pf:
+        for n in names:
+            ids.append(id(pf.read(n)))  # dropped at once
+    assert len(set(ids)) < len(folders)
+    kept, copies = [], []
+    with Prefetcher(folders) as pf:
+        for n in names:
+            stack = pf.read(n)
+            kept.append(stack[0])  # a view keeps its stack
+            copies.append(stack.copy())
+            del stack
+        assert len({id(v.base) for v in kept}) == len(folders)
+        for k, (view, copy) in enumerate(zip(kept, copies)):
+            assert (view == copy[0]).all(), f"pose {k}: its stack was filled again while a view of it was kept"

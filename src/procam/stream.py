@@ -3,7 +3,8 @@ processed, so decoding, corner detection and the checks of a multi-pose run over
 (which is most of a run's time).
 
 :class:`Prefetcher` reads the folders' images in order, at most ``ahead`` poses ahead of the one being
-processed (memory stays bounded: the pose in use plus ``ahead`` being read), and hands them over through
+processed (memory stays bounded: the pose in use plus ``ahead`` being read; a stack the caller no longer refers
+to is filled again with a later pose instead of a new one), and hands them over through
 :meth:`Prefetcher.read`, a drop-in for :func:`procam.io.files.read_images` that
 :func:`procam.capture.load_capture` takes as its ``reader``. Anything unusual (a file list other than the
 folder's, images of different sizes or bit depths, a file that cannot be read) is read again by
@@ -17,6 +18,7 @@ folder's, images of different sizes or bit depths, a file that cannot be read) i
 from __future__ import annotations
 
 import os
+import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -30,9 +32,10 @@ from .io import files as _files
 class _Pose:
     """One folder being read: its files, the stack filled in by the reader threads, the first failure."""
 
-    def __init__(self, files):
+    def __init__(self, files, spare=None):
         self.files = tuple(files)
         self.stack = None
+        self.spare = spare  # (shape, dtype) -> a stack handed out before that no one refers to any more, or None
         self.failed = False
         self.left = len(self.files)
         self.done = threading.Event()
@@ -46,7 +49,10 @@ class _Pose:
                 self.failed = True
             elif not self.failed:
                 if self.stack is None:
-                    self.stack = np.empty((len(self.files),) + img.shape, img.dtype)
+                    shape = (len(self.files),) + img.shape
+                    self.stack = self.spare(shape, img.dtype) if self.spare else None
+                    if self.stack is None:
+                        self.stack = np.empty(shape, img.dtype)
                 if img.shape != self.stack.shape[1:] or img.dtype != self.stack.dtype:
                     self.failed = True  # read_images names the file that differs
                 else:
@@ -82,6 +88,7 @@ class Prefetcher:
         self._handed = 0        # poses handed out by read()
         self._closed = False
         self._lock = threading.Lock()
+        self._handed_stacks = []
         self._fill()
 
     # -- scheduling ----------------------------------------------------------------------------
@@ -95,10 +102,26 @@ class Prefetcher:
                     files, _ = capture.sequence_files(folder, _files.list_images(folder))
                 except Exception:  # load_capture reports it
                     continue
-                pose = _Pose(files)
+                pose = _Pose(files, self._spare)
                 self._poses[tuple(str(f) for f in files)] = pose
                 for i, f in enumerate(pose.files):
                     self._pool.submit(self._load, pose, i, f)
+
+    def _spare(self, shape, dtype):
+        """A stack handed out before that nothing refers to any more, to fill with the next pose: its pages are
+        mapped already, where a new one costs the kernel a fresh zeroed page at every first write (about a tenth
+        of a 5-pose calibrate's system time).  Told by CPython's reference count: only this list's and the call's
+        (a Capture, a view of the stack, a caller's name each add one, and any of them keeps it from being
+        reused); None elsewhere."""
+        count = getattr(sys, "getrefcount", None)
+        if count is None:
+            return None
+        with self._lock:
+            kept = self._handed_stacks
+            for k in range(len(kept)):
+                if kept[k].shape == shape and kept[k].dtype == dtype and count(kept[k]) == 2:
+                    return kept.pop(k)
+        return None
 
     def _load(self, pose: _Pose, i: int, path):
         if self._closed or pose.failed:
@@ -124,6 +147,8 @@ class Prefetcher:
         if pose is not None:
             pose.done.wait()
             if not pose.failed and pose.stack is not None:
+                with self._lock:  # kept for reuse: the last few only (others are the caller's to free)
+                    self._handed_stacks = [*self._handed_stacks[-self.ahead:], pose.stack]
                 return pose.stack
         return _files.read_images(files, self.gray)
 
@@ -132,6 +157,7 @@ class Prefetcher:
         with self._lock:
             self._closed = True
             self._poses.clear()
+            self._handed_stacks = []
         self._pool.shutdown(wait=True, cancel_futures=True)
 
     def __enter__(self):
