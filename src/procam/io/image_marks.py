@@ -18,17 +18,15 @@ def png_with_text(data: bytes, key: str, text: str) -> bytes:
 
 
 def png_texts(data: bytes) -> dict:
-    """The ``tEXt`` chunks of a PNG's first 64 KiB: ``{key: text}``."""
-    out, pos = {}, 8
-    while pos + 12 <= len(data):
-        n = int.from_bytes(data[pos:pos + 4], "big")
-        kind = data[pos + 4:pos + 8]
+    """The ``tEXt`` chunks of a PNG's first bytes ``data`` (a whole file or its head; the chunks up to the first
+    one cut off or failing its checksum, walked by :func:`procam.io.png.chunks`): ``{key: text}``."""
+    from .png import chunks
+
+    out = {}
+    for kind, start, end in chunks(data)[0]:
         if kind == b"tEXt":
-            key, _, val = data[pos + 8:pos + 8 + n].partition(b"\x00")
+            key, _, val = data[start:end].partition(b"\x00")
             out[key.decode("latin-1")] = val.decode("latin-1")
-        if kind in (b"IDAT", b"IEND"):
-            break
-        pos += 12 + n
     return out
 
 
