@@ -43,12 +43,16 @@ def _opencv(data):
     return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
 
 
+def _chunk(kind: bytes, body: bytes) -> bytes:
+    """A PNG chunk ``kind`` holding ``body``, with its length and CRC."""
+    return len(body).to_bytes(4, "big") + kind + body + (zlib.crc32(kind + body) & 0xFFFFFFFF).to_bytes(4, "big")
+
+
 def _with_chunk(data, kind: bytes, body: bytes, after: bytes = b"IHDR"):
     """``data`` with a chunk ``kind`` (correct CRC) inserted after its first chunk ``after``."""
     parts, _ = png.chunks(data)
     end = next(e for k, s, e in parts if k == after) + 4
-    chunk = len(body).to_bytes(4, "big") + kind + body + (zlib.crc32(kind + body) & 0xFFFFFFFF).to_bytes(4, "big")
-    return data[:end] + chunk + data[end:]
+    return data[:end] + _chunk(kind, body) + data[end:]
 
 
 SHAPES = [(1, 1), (1, 9), (7, 1), (13, 17), (48, 101)]
@@ -122,8 +126,7 @@ def test_several_idat_chunks_and_a_tall_image_in_blocks():
     head = data[:parts[1][1] - 8] if parts[1][0] == b"IDAT" else None
     assert head is not None
     pieces = [stream[i:i + 97] for i in range(0, len(stream), 97)]
-    split = head + b"".join(len(p).to_bytes(4, "big") + b"IDAT" + p + (zlib.crc32(b"IDAT" + p) & 0xFFFFFFFF)
-                            .to_bytes(4, "big") for p in pieces) + data[-12:]
+    split = head + b"".join(_chunk(b"IDAT", p) for p in pieces) + data[-12:]
     assert np.array_equal(_decoded(split), img)
     tall = _image((15000, 600), np.uint8, seed=8)
     assert 15000 > (2**31 - 1) // (255 * 600 + 255)  # more than one block
@@ -155,9 +158,8 @@ def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
         _files.read_image(tmp_path / "bad.png")
 
     def header(w, h, interlace=0):
-        body = b"IHDR" + w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
-        crc = (zlib.crc32(body) & 0xFFFFFFFF).to_bytes(4, "big")
-        return data[:8] + (13).to_bytes(4, "big") + body + crc + data[33:]
+        ihdr = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
+        return data[:8] + _chunk(b"IHDR", ihdr) + data[33:]
 
     assert _decoded(header(32, 32)) is not None
     assert _decoded(header(32, 32, interlace=1)) is None
@@ -171,10 +173,6 @@ def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
         path.write_bytes(_encode(img, FAST["sub"]))
         assert np.array_equal(_files.read_image(path), cv2.cvtColor(_opencv(path.read_bytes()), cv2.COLOR_BGR2GRAY))
         assert np.array_equal(_files.read_image(path, gray=False), img)
-
-
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return len(body).to_bytes(4, "big") + kind + body + (zlib.crc32(kind + body) & 0xFFFFFFFF).to_bytes(4, "big")
 
 
 def test_a_file_opencv_refuses_is_never_decoded_here():
