@@ -25,7 +25,6 @@ and files with bytes changed and chunks moved: whatever decodes here, OpenCV dec
 
 from __future__ import annotations
 
-import sys
 import zlib
 
 import numpy as np
@@ -46,7 +45,6 @@ IGNORED = frozenset({b"tEXt", b"zTXt", b"iTXt", b"tIME", b"pHYs", b"gAMA", b"cHR
 #: has its own limit (a damaged or hostile file must not make this allocate gigabytes).
 MAX_BYTES = 1 << 30
 
-_LOW = 0 if sys.byteorder == "little" else 3  # the low byte of an int32 in memory
 _CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
 _CRC = getattr(_inflater, "crc32", zlib.crc32)
 _BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError, MemoryError)
@@ -178,7 +176,10 @@ def _running_sum(a: np.ndarray, along_rows: bool) -> np.ndarray:
         if not along_rows and r0:
             block = block.copy()
             block[0] += out[r0 - 1]
-        lo = cv2.integral(block).view(np.uint8)[..., _LOW::4]
+        # the low bytes, contiguous: numpy's cast of (non-negative) int32 to uint8 keeps the low byte, in one
+        # vectorised pass; reading them in place (a view with a stride of 4) made the differences below a byte
+        # gather, twice the time of the integral itself
+        lo = cv2.integral(block).astype(np.uint8)
         if along_rows:
             np.subtract(lo[1:, 1:], lo[:-1, 1:], out=out[r0:r0 + step])
         else:
