@@ -72,6 +72,36 @@ def test_opencv_written_pngs_decode_here_to_opencvs_array(filt):
         assert np.array_equal(got, ref) and np.array_equal(got, img), (shape, dtype, ch)
 
 
+@pytest.mark.parametrize("filt", FAST)
+def test_an_8bit_grey_image_is_decoded_into_the_frame_given(filt, tmp_path):
+    """``into`` (a frame of a stack) receives an 8-bit grey image of its size and is returned itself, also with
+    the image's rows in several blocks; any other image (16-bit, colour, another size) leaves it untouched and
+    comes back as a new array. read_images fills its stack the same way: the stack equals the images."""
+    stack = np.full((3, 48, 101), 7, np.uint8)
+    img = _image((48, 101), np.uint8, seed=11)
+    data = _encode(img, FAST[filt])
+    parts, _ = png.chunks(data)
+    got = png.decode(data, parts, into=stack[1])
+    assert got.base is stack and np.array_equal(stack[1], img) and np.array_equal(got, _opencv(data))
+    assert (stack[0] == 7).all() and (stack[2] == 7).all()
+    tall = _image((15000, 600), np.uint8, seed=12)
+    frame = np.zeros_like(tall)
+    d = _encode(tall, FAST[filt])
+    assert png.decode(d, png.chunks(d)[0], into=frame) is frame
+    assert np.array_equal(frame, tall)
+    for other in (_image((48, 101), np.uint16, seed=13), _image((48, 101, 3), np.uint8, seed=14),
+                  _image((47, 101), np.uint8, seed=15)):
+        d = _encode(other, FAST[filt])
+        out = png.decode(d, png.chunks(d)[0], into=stack[2])
+        assert out.base is not stack and np.array_equal(out, _opencv(d)) and (stack[2] == 7).all()
+    paths = []
+    for k in range(3):
+        paths.append(tmp_path / f"{k}.png")
+        cv2.imwrite(str(paths[-1]), _image((48, 101), np.uint8, seed=20 + k), [cv2.IMWRITE_PNG_FILTER, FAST[filt]])
+    ref = np.stack([cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in paths])
+    assert np.array_equal(_files.read_images(paths), ref)
+
+
 @pytest.mark.parametrize("filt", SLOW)
 def test_average_and_paeth_rows_and_alpha_are_left_to_opencv(filt, tmp_path):
     img = _image((20, 30), np.uint8, seed=1)

@@ -43,16 +43,33 @@ class _Pose:
         if not self.files:
             self.done.set()
 
-    def put(self, i: int, img: np.ndarray | None):
+    def _new_stack(self, frame_shape, dtype):
+        """The stack for frames of ``frame_shape`` and ``dtype``: a spare one, else a new one (the lock held)."""
+        shape, dtype = (len(self.files),) + tuple(frame_shape), np.dtype(dtype)
+        self.stack = self.spare(shape, dtype) if self.spare else None
+        if self.stack is None:
+            self.stack = np.empty(shape, dtype)
+
+    def slot(self, i: int, path) -> np.ndarray | None:
+        """Frame ``i`` of the stack, for the reader to decode the image into (no copy), or None: the stack is made
+        (or taken from the spares) from the first image's PNG header; None before it is made from any other
+        image, or after a failure."""
+        with self.lock:
+            if self.stack is None and not self.failed:
+                head = _files.png_header(path)  # (height, width, bytes per sample)
+                if head is not None:
+                    self._new_stack(head[:2], np.uint8 if head[2] == 1 else np.uint16)
+            return None if self.stack is None or self.failed else self.stack[i]
+
+    def put(self, i: int, img: np.ndarray | None, slot: np.ndarray | None = None):
         with self.lock:
             if img is None:
                 self.failed = True
+            elif img is slot:  # decoded into the stack
+                pass
             elif not self.failed:
                 if self.stack is None:
-                    shape = (len(self.files),) + img.shape
-                    self.stack = self.spare(shape, img.dtype) if self.spare else None
-                    if self.stack is None:
-                        self.stack = np.empty(shape, img.dtype)
+                    self._new_stack(img.shape, img.dtype)
                 if img.shape != self.stack.shape[1:] or img.dtype != self.stack.dtype:
                     self.failed = True  # read_images names the file that differs
                 else:
@@ -127,11 +144,12 @@ class Prefetcher:
         if self._closed or pose.failed:
             pose.put(i, None)
             return
+        slot = pose.slot(i, path) if self.gray else None
         try:
-            img = _files.read_image(path, self.gray)
+            img = _files.read_image(path, self.gray, slot)
         except Exception:
             img = None
-        pose.put(i, img)
+        pose.put(i, img, slot)
 
     # -- the reader ----------------------------------------------------------------------------
     def read(self, files) -> np.ndarray:

@@ -197,8 +197,11 @@ def check_image_bytes(path, data: bytes) -> list | None:
     return parts
 
 
-def read_image(path, gray: bool = True) -> np.ndarray:
+def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.ndarray:
     """Read one image as ``uint8`` or ``uint16``, (H, W) when ``gray`` else as stored.
+
+    ``into``: an (H, W) ``uint8`` array (a frame of a stack) that an 8-bit grey PNG of that size is decoded into
+    and returned (``into`` itself), saving a copy; any other image comes back as a new array.
 
     Raises :class:`CaptureError` naming the file when it cannot be read or has an unsupported type.
     """
@@ -216,7 +219,7 @@ def read_image(path, gray: bool = True) -> np.ndarray:
     if parts:  # the common PNG, decoded faster than OpenCV does and to the same array (procam.io.png)
         from . import png
 
-        img = png.decode(raw, parts)
+        img = png.decode(raw, parts, into)
     if img is None and raw:
         img = cv2.imdecode(np.frombuffer(raw, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
@@ -265,7 +268,10 @@ def read_images(files, gray: bool = True, threads: int | None = None) -> np.ndar
     stack[0] = first
 
     def load(i):
-        img = read_image(files[i], gray)
+        slot = stack[i]
+        img = read_image(files[i], gray, slot)
+        if img is slot:  # decoded in place
+            return
         if img.shape != first.shape:
             raise CaptureError(f"{files[i]}: size {img.shape[1]}x{img.shape[0]} differs from {files[0].name} "
                                f"({first.shape[1]}x{first.shape[0]}); all images of a pose must come from one "

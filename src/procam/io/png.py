@@ -76,12 +76,14 @@ def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
     return out, "is truncated (no end marker: the file was not written completely)"
 
 
-def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | None:
+def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | None = None
+           ) -> np.ndarray | None:
     """The image of the PNG ``data`` as ``cv2.imdecode(data, cv2.IMREAD_UNCHANGED)`` gives it, or None when it is
     not of the kind decoded here (the module docstring).
 
     ``parts``: its :func:`chunks`, checked.  Returns (H, W) for grey, (H, W, 3) BGR for colour; ``uint8`` or
-    ``uint16`` (native byte order).
+    ``uint16`` (native byte order).  ``into``: an 8-bit (H, W) array (a frame of a stack) that an 8-bit grey image
+    of its size is decoded into and returned (``into`` itself), instead of a new array (any other image ignores it).
     """
     if not parts or parts[0][0] != b"IHDR" or parts[0][2] - parts[0][1] != 13:
         return None
@@ -121,12 +123,17 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]]) -> np.ndarray | Non
     if not uniform:
         return None
     rows = rows[:, 1:]
+    if not (bpp == 1 and into is not None and into.shape == (h, w) and into.dtype == np.uint8):
+        into = None
     if kind == 0:
-        out = rows.copy()
+        out = np.empty((h, stride), np.uint8) if into is None else into
+        out[...] = rows
     elif kind == 1:
-        out = _running_sum(rows.reshape(h, w, bpp) if bpp > 1 else rows, along_rows=True).reshape(h, stride)
+        out = _running_sum(rows.reshape(h, w, bpp) if bpp > 1 else rows, True, into).reshape(h, stride)
     else:
-        out = _running_sum(rows, along_rows=False)
+        out = _running_sum(rows, False, into)
+    if into is not None:
+        return into
     if depth == 16:
         out = out.view(">u2").astype(np.uint16)
     if ch == 1:
@@ -161,16 +168,17 @@ def _uniform_start(first, stride: int, rows: int = 8) -> bool:
     return all(b in (0, 1, 2) for b in head[::stride + 1])
 
 
-def _running_sum(a: np.ndarray, along_rows: bool) -> np.ndarray:
+def _running_sum(a: np.ndarray, along_rows: bool, into: np.ndarray | None = None) -> np.ndarray:
     """The running sum of the bytes ``a`` (H, W) or (H, W, C), modulo 256: along each row (per channel) or down
-    each column.  From ``cv2.integral`` in blocks of rows small enough that its int32 sums cannot overflow (a
-    column's running sum carries over to the next block)."""
+    each column, written into ``into`` (``a``'s shape, ``uint8``) when given.  From ``cv2.integral`` in blocks of
+    rows small enough that its int32 sums cannot overflow (a column's running sum carries over to the next
+    block)."""
     import cv2
 
     h = a.shape[0]
     per_row = a[0].size
     step = max(1, ((1 << 31) - 1) // (255 * per_row + 255))
-    out = np.empty(a.shape, np.uint8)
+    out = np.empty(a.shape, np.uint8) if into is None else into
     for r0 in range(0, h, step):
         block = a[r0:r0 + step]
         if not along_rows and r0:
