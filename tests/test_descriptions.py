@@ -191,7 +191,8 @@ def test_a_gray_block_described_in_the_wrong_bit_order_is_refused_naming_the_ord
 
 def test_the_bit_order_check_on_integers_is_the_float_check_bit_for_bit():
     """The check reads an 8- or 16-bit capture's pattern/inverse pairs as integers and their 99th percentile off a
-    histogram (issue 35: a third of its time): the same densities as the float copies and np.percentile gave."""
+    histogram (issue 35: a third of its time), and samples 8-bit frames by a cast: the same densities as the float
+    copies and np.percentile gave, and the same samples as numpy's slicing."""
     import sys
     from pathlib import Path
 
@@ -211,9 +212,15 @@ def test_the_bit_order_check_on_integers_is_the_float_check_bit_for_bit():
     for axis in ("col", "row"):
         frames = bit_order._bits_in_described_order(ps, axis)[0]
         for st in (stack, stack.astype(np.uint16) * 257):
-            got = bit_order._edge_densities(st, frames, 1)
-            want = bit_order._edge_densities(st.astype(np.float32), frames, 1)  # the float path
-            assert np.isfinite(got).sum() >= 5 and np.array_equal(got, want, equal_nan=True)
+            for stride in (1, 2, 3, 4):  # 8-bit frames at 2 and 4 sampled by a cast, the others by numpy's slicing
+                got = bit_order._edge_densities(st, frames, stride)
+                want = bit_order._edge_densities(st.astype(np.float32), frames, stride)  # the float path
+                assert np.isfinite(got).sum() >= 5 and np.array_equal(got, want, equal_nan=True)
+    for shape in [(9, 16), (9, 17), (8, 24), (1, 8)]:
+        img = rng.integers(0, 256, (2, *shape)).astype(np.uint8)[1]
+        for stride in range(1, 10):
+            got = bit_order._every(img, stride)
+            assert got.flags.c_contiguous and np.array_equal(got, img[::stride, ::stride]), (shape, stride)
 
 
 # ------------------------------------------------------------------------------------------------------------------
