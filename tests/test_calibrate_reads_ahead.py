@@ -102,3 +102,30 @@ def test_a_stack_is_filled_again_only_when_nothing_refers_to_it(poses):
         assert len({id(v.base) for v in kept}) == len(folders)
         for k, (view, copy) in enumerate(zip(kept, copies)):
             assert (view == copy[0]).all(), f"pose {k}: its stack was filled again while a view of it was kept"
+
+
+@pytest.mark.parametrize("case", ["written", "failed pose"])
+def test_the_collector_runs_less_often_during_a_calibrate_and_as_before_after_it(poses, tmp_path, monkeypatch, case):
+    """procam calibrate raises the cyclic collector's thresholds while it runs (its start-up's objects are not
+    scanned hundreds of times) and puts the caller's back on every way out."""
+    import gc
+
+    import procam.cli as cli
+
+    seen = []
+    register = cli.register
+    monkeypatch.setattr(cli, "register", lambda names=None: seen.append(gc.get_threshold()) or register(names))
+    before = gc.get_threshold()
+    gc.set_threshold(1000, 11, 12)
+    try:
+        args = ["calibrate", *map(str, poses), *BOARD, "-o", str(tmp_path / "calib.json")]
+        if case == "failed pose":
+            args[1 + len(poses):3 + len(poses)] = ["--board", "7x5"]
+            args += ["--strict"]
+        with pytest.raises(SystemExit) as e:
+            cli.main(args)
+        assert e.value.code == (0 if case == "written" else 2)
+        assert gc.get_threshold() == (1000, 11, 12)
+    finally:
+        gc.set_threshold(*before)
+    assert seen == [cli.COLLECT_AFTER]

@@ -12,6 +12,7 @@ does not pay for building the other fifteen commands' parameters.  ``procam --he
 
 from __future__ import annotations
 
+import gc
 import importlib
 import sys
 
@@ -47,17 +48,29 @@ def main(argv: list[str] | None = None) -> None:
         sys.stdout.write(f"procam {__version__}\n")
         return
     first = next((a for a in args if not a.startswith("-")), None)
-    if first in ("calibrate", "decode"):
-        _start_reading(first, args[args.index(first) + 1:])
+    thresholds = gc.get_threshold()
     try:
+        if first in ("calibrate", "decode"):
+            # Python's cyclic collector, at its default thresholds, runs hundreds of times over the start-up's
+            # new module objects (scipy's, typer's), holding the interpreter lock while the reader threads wait;
+            # these batch commands leave almost no cycles behind, so they collect far less often (as mypy's command
+            # line does); the thresholds are restored after
+            gc.set_threshold(*COLLECT_AFTER)
+            _start_reading(first, args[args.index(first) + 1:])
         register([first] if first in COMMANDS else None)
         from ._app import app
 
         app(args=argv, standalone_mode=True)
     finally:
+        gc.set_threshold(*thresholds)
         reader = _EARLY.pop("reader", None)
         if reader is not None:  # not taken: the command line was not what it looked like
             reader.close()
+
+
+#: ``gc.set_threshold`` while ``procam calibrate`` or ``decode`` runs: allocations before a young collection, then
+#: young and middle collections before an older one (Python's defaults: 700, 10, 10)
+COLLECT_AFTER = (200_000, 30, 30)
 
 
 #: The pose folders' reader :func:`main` started before parsing a ``procam calibrate`` or ``decode`` command line.
