@@ -208,12 +208,7 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
     import cv2
 
     path = Path(path)
-    if not path.is_file():
-        raise CaptureError(f"{path}: {_not_a_file(path)}")
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    raw = _file_bytes(path)
     parts = check_image_bytes(path, raw)
     img = None
     if parts:  # the common PNG, decoded faster than OpenCV does and to the same array (procam.io.png)
@@ -238,6 +233,36 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
         else:
             raise CaptureError(f"{path}: {ch} channels are not supported; save as grey or colour (BGR) images")
     return img
+
+
+def _file_bytes(path: Path) -> bytes:
+    """The contents of the image file ``path``, read in four system calls (open, size, read, close).  Each lets the
+    interpreter lock go, and a reader thread then waits up to Python's switch interval to get it back while another
+    thread runs Python: ``Path.read_bytes`` (with the check that it is a file) made eight.  Raises
+    :class:`CaptureError` naming the file when it is not a readable regular file."""
+    import stat
+
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+    except OSError as e:
+        if not path.is_file():
+            raise CaptureError(f"{path}: {_not_a_file(path)}") from None
+        raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise CaptureError(f"{path}: {_not_a_file(path)}")
+        data = os.read(fd, st.st_size)  # a file still being written is read as it was: a truncated PNG says so
+        while len(data) < st.st_size:  # a short read (over 2 GB, or a file that shrank)
+            more = os.read(fd, st.st_size - len(data))
+            if not more:
+                break
+            data += more
+        return data
+    except OSError as e:
+        raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    finally:
+        os.close(fd)
 
 
 def png_header(path) -> tuple[int, int, int] | None:

@@ -46,7 +46,12 @@ IGNORED = frozenset({b"tEXt", b"zTXt", b"iTXt", b"tIME", b"pHYs", b"gAMA", b"cHR
 MAX_BYTES = 1 << 30
 
 _CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
-_CRC = getattr(_inflater, "crc32", zlib.crc32)
+#: Bytes per call of the chunk checksum: zlib's ``crc32`` keeps the interpreter lock up to 5 KB (ISA-L's and
+#: binascii's let it go at every call).  A PNG writer's image data comes in 8 KB chunks, ~70 a camera frame, and a
+#: reader thread that lets the lock go ~70 times a frame waits up to Python's switch interval (5 ms) to get it
+#: back each time another thread runs Python (an import, a fit): reading slowed 25-fold beside one busy thread.
+#: Held, the checksums of a frame take 0.2 ms.
+_CRC_PIECE = 4096
 _BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError, MemoryError)
 
 
@@ -67,13 +72,21 @@ def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
         end = pos + 12 + length
         if end > n:
             return out, f"is truncated ({name} ends after the end of the file)"
-        if _CRC(mv[pos + 4:end - 4]) & 0xFFFFFFFF != int.from_bytes(data[end - 4:end], "big"):
+        if _crc(mv[pos + 4:end - 4]) != int.from_bytes(data[end - 4:end], "big"):
             return out, f"is damaged ({name} fails its checksum)"
         out.append((kind, pos + 8, end - 4))
         pos = end
         if kind == b"IEND":
             return out, None
     return out, "is truncated (no end marker: the file was not written completely)"
+
+
+def _crc(mv: memoryview) -> int:
+    """CRC-32 of ``mv``, holding the interpreter lock (:data:`_CRC_PIECE`)."""
+    crc = 0
+    for i in range(0, len(mv), _CRC_PIECE):
+        crc = zlib.crc32(mv[i:i + _CRC_PIECE], crc)
+    return crc
 
 
 def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | None = None
@@ -113,16 +126,15 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | 
         return None
     if len(raw) != size:
         return None
-    rows = np.frombuffer(raw, np.uint8).reshape(h, stride + 1)
-    kinds = rows[:, 0]
-    kind = int(kinds[-1])
+    kinds = raw[::stride + 1]  # each row's filter (bytes, not numpy: no call here lets the interpreter lock go)
+    kind = kinds[-1]
     if kind == 2:  # Up: the first row's prediction is a row of zeros, so it may say None
-        uniform = bool((kinds[1:] == 2).all()) and int(kinds[0]) in (0, 2)
+        uniform = kinds.count(2, 1) == h - 1 and kinds[0] in (0, 2)
     else:
-        uniform = kind in (0, 1) and bool((kinds == kind).all())
+        uniform = kind in (0, 1) and kinds.count(kind) == h
     if not uniform:
         return None
-    rows = rows[:, 1:]
+    rows = np.frombuffer(raw, np.uint8).reshape(h, stride + 1)[:, 1:]
     if not (bpp == 1 and into is not None and into.shape == (h, w) and into.dtype == np.uint8):
         into = None
     if kind == 0:
