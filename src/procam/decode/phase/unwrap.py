@@ -323,27 +323,37 @@ def neighbour_orders(x, sx, reason, u, su, coarse, coarse_sd, period: float, x0:
     Hb, Wb = H // f, W // f
     wb = max(3, (window // f) | 1)
     h = wb // 2
-    # the blocks' centres, as a column and a row (broadcast: the same products as full grids, at a fraction of the work)
-    Yb = np.arange(Hb, dtype=np.float64)[:, None] * f + (f - 1) / 2.0
-    Xb = np.arange(Wb, dtype=np.float64)[None, :] * f + (f - 1) / 2.0
-
-    def binned(a):
-        return cv2.resize(np.ascontiguousarray(a[:Hb * f, :Wb * f], np.float64), (Wb, Hb),
-                          interpolation=cv2.INTER_AREA) * float(f * f)
 
     def box(a):
         return cv2.boxFilter(a, cv2.CV_64F, (wb, wb), normalize=False, borderType=cv2.BORDER_CONSTANT)
 
+    first = (reason == LOW_MODULATION) & np.isfinite(u) & (su <= max_sigma) & np.isfinite(coarse)
+    first[Hb * f:] = False
+    first[:, Wb * f:] = False
+    rows, cols = np.flatnonzero(first.any(axis=1)), np.flatnonzero(first.any(axis=0))
+    if not len(rows):
+        return 0
+    # the sums are taken over the blocks the candidates' windows reach, not the whole image: the candidates (a board's
+    # black squares, a dim wall) are a part of it.  A window inside that part sums the same blocks, and where it
+    # reaches the image's edge the part does too.  A later pass's candidates are among the first's.
+    by0, by1 = max(0, rows[0] // f - h), min(Hb, rows[-1] // f + h + 1)
+    bx0, bx1 = max(0, cols[0] // f - h), min(Wb, cols[-1] // f + h + 1)
+    part = (slice(by0 * f, by1 * f), slice(bx0 * f, bx1 * f))
+    first = first[part]
+    # the blocks' centres, as a column and a row (broadcast: the same products as full grids, at a fraction of the work)
+    Yb = np.arange(by0, by1, dtype=np.float64)[:, None] * f + (f - 1) / 2.0
+    Xb = np.arange(bx0, bx1, dtype=np.float64)[None, :] * f + (f - 1) / 2.0
+
+    def binned(a):
+        return cv2.resize(np.ascontiguousarray(a, np.float64), (bx1 - bx0, by1 - by0),
+                          interpolation=cv2.INTER_AREA) * float(f * f)
+
     done = 0
-    for _ in range(passes):
-        cand = (reason == LOW_MODULATION) & np.isfinite(u) & (su <= max_sigma) & np.isfinite(coarse)
-        cand[Hb * f:] = False
-        cand[:, Wb * f:] = False
-        if not cand.any():
-            break
-        ok = reason == OK
+    for one in range(passes):
+        cand = first if one == 0 else first & (reason[part] == LOW_MODULATION)
+        ok = reason[part] == OK
         # decoded pixels per block: the block's sum of 0s and 1s (what the area resize of binned() gives, exactly)
-        o = ok.view(np.uint8)[:Hb * f, :Wb * f]
+        o = ok.view(np.uint8)
         n_b = sum(o[i::f, j::f] for i in range(f) for j in range(f)).astype(np.float64)
         # each quadrant of the window holds decoded pixels (judged per block, then kept at the blocks' pixels)
         least = max(5.0, 0.05 * (h * f) ** 2)
@@ -352,13 +362,14 @@ def neighbour_orders(x, sx, reason, u, su, coarse, coarse_sd, period: float, x0:
             q = cv2.boxFilter(n_b, cv2.CV_64F, (h + 1, h + 1), anchor=(ax, ay), normalize=False,
                               borderType=cv2.BORDER_CONSTANT)
             around &= q >= least
-        cand[:Hb * f, :Wb * f] &= np.repeat(np.repeat(around, f, axis=0), f, axis=1)
-        iy, ix = np.nonzero(cand)
-        if not len(iy):
+        cand = cand & np.repeat(np.repeat(around, f, axis=0), f, axis=1)
+        py, px = np.nonzero(cand)
+        if not len(py):
             break
-        at = (iy // f) * Wb + ix // f  # each candidate's block, as a flat index of the binned images
-        xv = np.zeros(x.shape, np.float64)  # x - x0 in float32 where decoded (as the coordinates are), else 0
-        np.subtract(x, np.float32(x0), out=xv, where=ok, dtype=np.float32)
+        at = (py // f) * (bx1 - bx0) + px // f  # each candidate's block, a flat index of the part's
+        iy, ix = py + by0 * f, px + bx0 * f
+        xv = np.zeros(ok.shape, np.float64)  # x - x0 in float32 where decoded (as the coordinates are), else 0
+        np.subtract(x[part], np.float32(x0), out=xv, where=ok, dtype=np.float32)
         x_b, xx_b = binned(xv), binned(xv * xv)
         S = {k: box(v).ravel()[at] for k, v in (("1", n_b), ("X", n_b * Xb), ("Y", n_b * Yb), ("XX", n_b * Xb * Xb),
                                              ("YY", n_b * Yb * Yb), ("XY", n_b * Xb * Yb), ("x", x_b),
