@@ -236,7 +236,7 @@ STAGES = [
 
 
 def _thread_group(t=None) -> str:
-    """``main``, or a thread's name without its number (``procam-read``, ``procam-preload``, ``ThreadPoolExecutor``)."""
+    """``main``, or a thread's name without its number (``procam-read``, ``ThreadPoolExecutor``)."""
     import re
     import threading
 
@@ -244,9 +244,8 @@ def _thread_group(t=None) -> str:
     return "main" if t is threading.main_thread() else re.sub(r"[-_]?\d+(_\d+)?$", "", t.name)
 
 
-#: what each thread group does in a calibrate, for the rows of the CPU not inside a stage (the import thread's
-#: modules are named from procam.cli.calibrate.SOLVER_MODULES)
-GROUPS = {"main": "main thread", "procam-read": "reader threads", "procam-preload": "import thread ({})",
+#: what each thread group does in a calibrate, for the rows of the CPU not inside a stage
+GROUPS = {"main": "main thread", "procam-read": "reader threads",
           "ThreadPoolExecutor": "worker threads (board corners, leave-one-out refits)"}
 
 
@@ -262,7 +261,6 @@ def profile_once(data: Path, out: Path) -> dict:
 
     t0, c0 = time.perf_counter(), time.thread_time()
     from procam.cli import main
-    from procam.cli.calibrate import SOLVER_MODULES
     lock = threading.Lock()
     timers: dict = {}
     inside: dict = {}  # thread group -> CPU inside stages
@@ -319,7 +317,7 @@ def profile_once(data: Path, out: Path) -> dict:
     threading.Thread.run = run
     out = {"imports": t_import, **timers}
     for g, cpu in threads.items():  # stages nested in one another are counted twice: none of STAGES are
-        out[f"other: {GROUPS.get(g, g).format(', '.join(SOLVER_MODULES))}, outside the stages"] = (float("nan"), cpu - inside.get(g, 0.0))
+        out[f"other: {GROUPS.get(g, g)}, outside the stages"] = (float("nan"), cpu - inside.get(g, 0.0))
     out["run after imports (wall; CPU of all threads)"] = t_run
     return out
 

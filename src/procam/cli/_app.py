@@ -202,23 +202,6 @@ def _root(version: bool = typer.Option(False, "--version", help="Print the versi
     """Projector-camera calibration from Gray-code captures of a chessboard."""
 
 
-def preload(modules) -> None:
-    """Import ``modules`` (dotted names) in a daemon thread: a command that will need a heavy module later (scipy's
-    optimizer for a calibration) starts its import while it reads and decodes its captures. A later import of the
-    same module waits for that one (Python's per-module import lock), so nothing is imported twice or half."""
-    import importlib
-    import threading
-
-    def run():
-        for name in modules:
-            try:
-                importlib.import_module(name)
-            except ImportError:  # the command's own import will raise it where it is needed
-                return
-
-    threading.Thread(target=run, name="procam-preload", daemon=True).start()
-
-
 #: glibc's ``mallopt`` parameters (malloc.h) and the values :func:`keep_freed_memory` sets: blocks up to 32 MB (its
 #: largest) from the heap, and up to 256 MB of freed heap kept.
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3

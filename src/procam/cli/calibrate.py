@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import app, console, fail, keep_freed_memory, preload, say, user_errors, warn
+from ._app import app, console, fail, keep_freed_memory, say, user_errors, warn
 from ._options import (
     BackgroundOpt,
     BoardOpt,
@@ -141,11 +141,6 @@ def _left_out(dropped, n_views: int) -> list[str]:
     return reasons
 
 
-#: What the corner fit and the calibration import once they get there (scipy's optimizer alone is about 0.4 s):
-#: imported in a thread while the poses are read and decoded, so the import costs no wall time.
-SOLVER_MODULES = ("scipy.special", "scipy.optimize", "procam.verify")
-
-
 @app.command("calibrate")
 @user_errors
 @with_pose_options
@@ -199,13 +194,15 @@ def calibrate_cmd(
     reader = None
     if not camera_only:
         # the pose folders' images are read from here on (reader threads; the first pose at once, each next one
-        # while the one before is processed) and scipy's optimizer imported, while the rest of the calibration is
-        # imported and its options are checked; a camera-only calibration reads photos, not pose folders
+        # while the one before is processed), while the rest of the calibration is imported and its options are
+        # checked; a camera-only calibration reads photos, not pose folders.  scipy is imported where it is first
+        # used (the corner fit, the calibration), not ahead in a thread: an import holds the interpreter lock
+        # for a fifth of a second, and every numpy call of the pose being decoded beside it waited for the lock
+        # (a 5-pose calibrate took 0.06 s longer with the import ahead than without)
         from ..stream import Prefetcher
         from . import take_reader
 
         reader = take_reader(poses) or Prefetcher(poses)  # started before the parsing by procam.cli.main, or now
-        preload(SOLVER_MODULES)
     try:
         _calibrate(reader, **params)
     finally:
