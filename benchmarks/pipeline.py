@@ -253,7 +253,7 @@ def profile_once(data: Path, out: Path) -> dict:
     """Import procam's CLI, wrap the stage functions with timers, run ``calibrate``; stage -> (wall s, CPU s).
 
     The CPU outside the stages is given per thread group (every thread's CPU is counted when it ends): the main
-    thread's, the reader threads' beyond decoding the PNGs, the import thread's, the worker threads'."""
+    thread's, the reader threads' beyond decoding the PNGs, the worker threads'."""
     import importlib
     import io as _io
     import threading
