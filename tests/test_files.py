@@ -98,6 +98,40 @@ def test_a_hostile_manifest_or_json_output_is_read_as_not_procams_not_crashed(tm
     assert not files.procam_wrote(out)
 
 
+def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path):
+    """A folder, a missing file, a dangling link, a named pipe (opened without blocking: never waited on) and an
+    unreadable file each get a one-line error naming the file."""
+    import os
+    import threading
+
+    from procam.errors import CaptureError
+
+    (tmp_path / "dir.png").mkdir()
+    (tmp_path / "link.png").symlink_to(tmp_path / "gone.png")
+    cases = [("dir.png", "is a folder"), ("missing.png", "no such file"), ("link.png", "symbolic link to")]
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(tmp_path / "pipe.png")
+        cases.append(("pipe.png", "not a regular file"))
+    if hasattr(os, "geteuid") and os.geteuid() != 0:  # root reads anything
+        (tmp_path / "locked.png").write_bytes(b"\x89PNG")
+        (tmp_path / "locked.png").chmod(0)
+        cases.append(("locked.png", "cannot be read"))
+    for name, words in cases:
+        got = []
+
+        def read(path=tmp_path / name):
+            try:
+                _files.read_image(path)
+            except CaptureError as e:
+                got.append(str(e))
+
+        t = threading.Thread(target=read, daemon=True)
+        t.start()
+        t.join(10)
+        assert not t.is_alive(), f"{name}: read_image waited"
+        assert got and got[0].startswith(str(tmp_path / name)) and words in got[0], (name, got)
+
+
 def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
     """Files read one after another: a file after a larger one, a larger after a smaller, 8- and 16-bit PNGs and
     JPEGs come out as OpenCV reads them, and a truncated JPEG or PNG is refused."""

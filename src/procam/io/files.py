@@ -243,7 +243,8 @@ def _file_bytes(path: Path) -> bytes:
     import stat
 
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+        # not blocking: a named pipe given as an image must be refused, not waited on
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0))
     except OSError as e:
         if not path.is_file():
             raise CaptureError(f"{path}: {_not_a_file(path)}") from None
