@@ -100,7 +100,7 @@ def test_a_hostile_manifest_or_json_output_is_read_as_not_procams_not_crashed(tm
 
 def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path):
     """A folder, a missing file, a dangling link, a named pipe (opened without blocking: never waited on) and an
-    unreadable file each get a one-line error naming the file."""
+    unreadable file each get a one-line error naming the file; a pipe has no PNG header."""
     import os
     import threading
 
@@ -130,6 +130,12 @@ def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path
         t.join(10)
         assert not t.is_alive(), f"{name}: read_image waited"
         assert got and got[0].startswith(str(tmp_path / name)) and words in got[0], (name, got)
+    if hasattr(os, "mkfifo"):  # nor does the header of a pipe, read before a stack is made
+        heads = []
+        t = threading.Thread(target=lambda: heads.append(_files.png_header(tmp_path / "pipe.png")), daemon=True)
+        t.start()
+        t.join(10)
+        assert not t.is_alive() and heads == [None]
 
 
 def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):

@@ -235,6 +235,10 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
     return img
 
 
+#: ``os.open`` flags of an image read: not blocking, so a named pipe given as an image is refused, not waited on
+_READ_FLAGS = os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0)
+
+
 def _file_bytes(path: Path) -> bytes:
     """The contents of the image file ``path``, read in four system calls (open, size, read, close).  Each lets the
     interpreter lock go, and a reader thread then waits up to Python's switch interval to get it back while another
@@ -243,8 +247,7 @@ def _file_bytes(path: Path) -> bytes:
     import stat
 
     try:
-        # not blocking: a named pipe given as an image must be refused, not waited on
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0))
+        fd = os.open(path, _READ_FLAGS)
     except OSError as e:
         if not path.is_file():
             raise CaptureError(f"{path}: {_not_a_file(path)}") from None
@@ -269,11 +272,18 @@ def _file_bytes(path: Path) -> bytes:
 def png_header(path) -> tuple[int, int, int] | None:
     """``(height, width, bytes per sample)`` of a PNG file from its IHDR chunk, without decoding it; None for
     another format or a header that cannot be read (:func:`read_image` then says what is wrong)."""
+    import stat
+
     try:
-        with open(path, "rb") as f:
-            head = f.read(26)
+        fd = os.open(path, _READ_FLAGS)
     except OSError:
         return None
+    try:
+        head = os.read(fd, 26) if stat.S_ISREG(os.fstat(fd).st_mode) else b""
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
     if len(head) < 26 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
         return None
     w, h = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
