@@ -239,11 +239,10 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
 _READ_FLAGS = os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0)
 
 
-def _file_bytes(path: Path) -> bytes:
-    """The contents of the image file ``path``, read in four system calls (open, size, read, close).  Each lets the
-    interpreter lock go, and a reader thread then waits up to Python's switch interval to get it back while another
-    thread runs Python: ``Path.read_bytes`` (with the check that it is a file) made eight.  Raises
-    :class:`CaptureError` naming the file when it is not a readable regular file."""
+def _open_image(path: Path) -> tuple[int, int]:
+    """``(descriptor, size in bytes)`` of the image file ``path``, opened without blocking (a named pipe named like an
+    image is refused, not waited on); the caller closes it.  Raises :class:`CaptureError` naming the file when it is
+    not a readable regular file."""
     import stat
 
     try:
@@ -252,13 +251,23 @@ def _file_bytes(path: Path) -> bytes:
         if not path.is_file():
             raise CaptureError(f"{path}: {_not_a_file(path)}") from None
         raise CaptureError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)
+        raise CaptureError(f"{path}: {_not_a_file(path)}")
+    return fd, st.st_size
+
+
+def _file_bytes(path: Path) -> bytes:
+    """The contents of the image file ``path``, read in four system calls (open, size, read, close).  Each lets the
+    interpreter lock go, and a reader thread then waits up to Python's switch interval to get it back while another
+    thread runs Python: ``Path.read_bytes`` (with the check that it is a file) made eight.  Raises
+    :class:`CaptureError` naming the file when it is not a readable regular file."""
+    fd, size = _open_image(path)
     try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise CaptureError(f"{path}: {_not_a_file(path)}")
-        data = os.read(fd, st.st_size)  # a file still being written is read as it was: a truncated PNG says so
-        while len(data) < st.st_size:  # a short read (over 2 GB, or a file that shrank)
-            more = os.read(fd, st.st_size - len(data))
+        data = os.read(fd, size)  # a file still being written is read as it was: a truncated PNG says so
+        while len(data) < size:  # a short read (over 2 GB, or a file that shrank)
+            more = os.read(fd, size - len(data))
             if not more:
                 break
             data += more
@@ -272,14 +281,12 @@ def _file_bytes(path: Path) -> bytes:
 def png_header(path) -> tuple[int, int, int] | None:
     """``(height, width, bytes per sample)`` of a PNG file from its IHDR chunk, without decoding it; None for
     another format or a header that cannot be read (:func:`read_image` then says what is wrong)."""
-    import stat
-
     try:
-        fd = os.open(path, _READ_FLAGS)
-    except OSError:
+        fd, _ = _open_image(Path(path))
+    except CaptureError:
         return None
     try:
-        head = os.read(fd, 26) if stat.S_ISREG(os.fstat(fd).st_mode) else b""
+        head = os.read(fd, 26)
     except OSError:
         return None
     finally:
