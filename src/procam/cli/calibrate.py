@@ -198,7 +198,7 @@ def calibrate_cmd(
         # checked; a camera-only calibration reads photos, not pose folders.  scipy is imported where it is first
         # used (the corner fit, the calibration), not ahead in a thread: an import holds the interpreter lock
         # for a fifth of a second, and every numpy call of the pose being decoded beside it waited for the lock
-        # (a 5-pose calibrate took 0.06 s longer with the import ahead than without)
+        # (a 5-pose calibrate took 0.02-0.06 s longer with the import ahead than without)
         from ..stream import Prefetcher
         from . import take_reader
 
