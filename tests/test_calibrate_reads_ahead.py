@@ -129,3 +129,43 @@ def test_the_collector_runs_less_often_during_a_calibrate_and_as_before_after_it
     finally:
         gc.set_threshold(*before)
     assert seen == [cli.COLLECT_AFTER]
+
+
+def test_a_header_asking_for_more_than_memory_is_an_error_not_a_wait(tmp_path):
+    """A pose whose first PNG's header says 300000 x 300000 (its checksum right): the reader cannot make a stack of
+    that size, and read() says what is wrong (the ordinary read's error, naming the file) instead of waiting for a
+    frame that never comes; the image alone is refused with OpenCV's reason in one line."""
+    import threading
+    import zlib
+
+    import cv2
+    import numpy as np
+
+    from procam.errors import CaptureError
+    from procam.io import files
+    from procam.stream import Prefetcher
+
+    for k in range(4):
+        assert cv2.imwrite(str(tmp_path / f"{k:02d}.png"), np.full((8, 8), 40 * k, np.uint8))
+    data = (tmp_path / "00.png").read_bytes()
+    ihdr = (300000).to_bytes(4, "big") * 2 + data[24:29]
+    crc = (zlib.crc32(b"IHDR" + ihdr) & 0xFFFFFFFF).to_bytes(4, "big")
+    (tmp_path / "00.png").write_bytes(data[:16] + ihdr + crc + data[33:])
+    names = sorted(tmp_path.glob("*.png"))
+    with pytest.raises(CaptureError, match=r"00\.png: cannot be read as an image \(OpenCV: .*\)"):
+        files.read_image(names[0])
+    got = []
+
+    def read():
+        with Prefetcher([tmp_path]) as pf:
+            try:
+                pf.read(names)
+            except CaptureError as e:
+                got.append(str(e))
+
+    t = threading.Thread(target=read, daemon=True)
+    t.start()
+    t.join(30)
+    assert not t.is_alive(), "read() waited for a frame that never came"
+    assert got and got[0].startswith(str(names[0])), got
+    assert not _readers()

@@ -144,12 +144,16 @@ class Prefetcher:
         if self._closed or pose.failed:
             pose.put(i, None)
             return
-        slot = pose.slot(i, path) if self.gray else None
+        slot = img = None
         try:
+            slot = pose.slot(i, path) if self.gray else None
             img = _files.read_image(path, self.gray, slot)
-        except Exception:
-            img = None
-        pose.put(i, img, slot)
+        except Exception:  # no memory for a stack a header asks for, a file that cannot be read: read() reads
+            pass           # the pose again the ordinary way, which says what is wrong
+        try:
+            pose.put(i, img, slot)
+        except Exception:  # no memory for the stack: the frame still counts, or read() would wait for it forever
+            pose.put(i, None)
 
     # -- the reader ----------------------------------------------------------------------------
     def read(self, files) -> np.ndarray:

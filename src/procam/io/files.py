@@ -216,7 +216,11 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
 
         img = png.decode(raw, parts, into)
     if img is None and raw:
-        img = cv2.imdecode(np.frombuffer(raw, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
+        try:
+            img = cv2.imdecode(np.frombuffer(raw, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
+        except cv2.error as e:  # OpenCV refuses a header over its limits by an assertion, not None
+            raise CaptureError(f"{path}: cannot be read as an image ({_opencv_says(e)}); remove it from the folder "
+                               "or re-save it as PNG") from None
     if img is None:
         raise CaptureError(f"{path}: cannot be read as an image (corrupt, empty or not an image); "
                            "remove it from the folder or re-save it as PNG")
@@ -233,6 +237,14 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
         else:
             raise CaptureError(f"{path}: {ch} channels are not supported; save as grey or colour (BGR) images")
     return img
+
+
+def _opencv_says(e) -> str:
+    """What an OpenCV error says is wrong, without its source file, line and function: ``OpenCV: pixels <=
+    CV_IO_MAX_IMAGE_PIXELS (assertion failed)``."""
+    text = " ".join(str(e).split())
+    m = re.search(r"error: \(-?\d+:([^)]*)\)\s*(.*?)(?:\s+in function\b.*)?$", text)
+    return f"OpenCV: {m.group(2)} ({m.group(1).lower()})" if m else f"OpenCV: {text}"
 
 
 #: ``os.open`` flags of an image read: not blocking, so a named pipe given as an image is refused, not waited on
