@@ -54,6 +54,15 @@ def test_wrong_count(pose):
     assert code == 2 and "expected 26 images" in err and "found 25" in err and "Traceback" not in err
 
 
+def test_wrong_count_for_a_projector_too_small_for_every_step(pose):
+    """The count's hint tries --step 2, 3, 4 and 8; for an 8x8 projector most of them leave fewer than 2 codes per
+    axis: the hint skips them, and the error is the count, exit 2 (it was an internal error)."""
+    with pytest.raises(CaptureError, match=r"expected 14 images for a 8x8 projector.*found 26"):
+        capture.load_capture(pose, (8, 8))
+    code, out, err = run_cli(["decode", pose, "--projector", "8x8"])
+    assert code == 2 and "expected 14 images" in err and "internal error" not in err
+
+
 def test_missing_white_black_hint(tmp_path):
     write_stack(tmp_path, camera_view_of_patterns(W, H)[:-2])
     with pytest.raises(CaptureError, match="white and black frames seem to be missing"):

@@ -126,6 +126,15 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None):
         raise CaptureError(f"{where}: {text}{fix}") from None
 
 
+def _count_with_step(w: int, h: int, order: str, step: int) -> int | None:
+    """Frames of the Gray sequence of a ``w`` x ``h`` projector at ``step``, None when the step leaves it too few
+    codes (a small projector)."""
+    try:
+        return patterns.pattern_set(w, h, order, step).count
+    except ValueError:
+        return None
+
+
 def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     w, h = ps.width, ps.height
     if found == ps.count - 2:
@@ -138,7 +147,7 @@ def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     guesses = [f"{a}x{b}" for a, b in [(1920, 1080), (1280, 800), (1280, 720), (1024, 768), (800, 600),
                                         (1920, 1200), (3840, 2160), (1400, 1050), (1366, 768), (912, 1140)]
                if patterns.pattern_set(a, b).count == found and (a, b) != (w, h)]
-    steps = [k for k in (2, 3, 4, 8) if ps.step == 1 and patterns.pattern_set(w, h, ps.order, k).count == found]
+    steps = [k for k in (2, 3, 4, 8) if ps.step == 1 and _count_with_step(w, h, ps.order, k) == found]
     hints = []
     if guesses:
         hints.append(f"that count fits a projector of {', '.join(guesses[:3])}: check --projector")
