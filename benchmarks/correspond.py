@@ -322,7 +322,7 @@ def section_real(data):
     if data is None or not data.is_dir():
         print(f"skipped: {data} not found\n")
         return
-    from procam.io import files as _files
+    from procam.io import images as _images
 
     obj = board.object_points(9, 6, 25.0).astype(np.float32)
     print("cv2.calibrateCamera on the images each option finds the board in (left: CALIB_FIX_ASPECT_RATIO as "
@@ -334,7 +334,7 @@ def section_real(data):
     sets = {}
     for side in ("left", "right"):
         files = sorted(data.glob(f"{side}*.jpg"))
-        imgs = [_files.read_image(f) for f in files]
+        imgs = [_images.read_image(f) for f in files]
         per = {label: [] for label in OPTIONS}
         per["cornerSubPix 11, no clamp (published reference)"] = []
         for img in imgs:

@@ -2,7 +2,7 @@
 
 Renders a realistic capture once (a 1920x1080 projector's sequence seen through a perspective warp,
 with defocus, vignetting, ambient light and camera noise), writes it as PNGs to a temporary folder,
-then times, in one run: reading the stack (procam.io.files.read_images, the same path the CLI uses) and
+then times, in one run: reading the stack (procam.io.images.read_images, the same path the CLI uses) and
 decoding it with both classifiers.  Peak memory is the process's maximum resident set size.
 
     python benchmarks/decode.py [--repeat 5]
@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header  # noqa: E402
 
 from procam import decode, patterns  # noqa: E402
-from procam.io import files as _files  # noqa: E402
+from procam.io import images as _images  # noqa: E402
 
 
 def render(cam=(1280, 800), proj=(1920, 1080), seed=0):
@@ -62,10 +62,10 @@ def main():
         t_read, t_read1, t_simple, t_robust = [], [], [], []
         for _ in range(args.repeat):
             t = time.perf_counter()
-            st = _files.read_images(files)
+            st = _images.read_images(files)
             t_read.append(time.perf_counter() - t)
             t = time.perf_counter()
-            _files.read_images(files, threads=1)
+            _images.read_images(files, threads=1)
             t_read1.append(time.perf_counter() - t)
             t = time.perf_counter()
             decode.decode(st, ps, "simple")
@@ -80,7 +80,7 @@ def main():
           f"median of {args.repeat} runs\n")
     print("| step | seconds | % of read (threaded) | % of read (1 thread) |")
     print("| --- | --- | --- | --- |")
-    print(f"| read 46 PNGs (_files.read_images, threads) | {r:.3f} | 100 | {100 * r / r1:.0f} |")
+    print(f"| read 46 PNGs (_images.read_images, threads) | {r:.3f} | 100 | {100 * r / r1:.0f} |")
     print(f"| read 46 PNGs (1 thread) | {r1:.3f} | {100 * r1 / r:.0f} | 100 |")
     for name, t in (("decode simple", t_simple), ("decode robust", t_robust)):
         m = np.median(t)

@@ -7,7 +7,7 @@ commands round by round (the machine may be shared, so every command sees the sa
 1. ``procam calibrate pose1 .. pose5`` as a cold process (interpreter start and imports included);
 2. a cold process that only reads the 210 PNGs with two threads (``cv2.imread`` grey, the function
    :func:`read_all` below) -- the floor any tool that reads PNGs with OpenCV must pay; and the same with procam's
-   own reader (:func:`procam.io.files.read_image`, which decodes these PNGs itself, :mod:`procam.io.png`): the
+   own reader (:func:`procam.io.images.read_image`, which decodes these PNGs itself, :mod:`procam.io.png`): the
    floor procam itself cannot go below;
 3. ``procam --version`` and ``procam calibrate --help`` as cold processes (start-up; issue 35's targets 0.2 s
    and 0.3 s);
@@ -146,11 +146,11 @@ def kamino_layout(data: Path) -> Path:
 
 def read_all(files, threads: int = 2, reader: str = "opencv"):
     """Read ``files`` as grey images with ``threads`` threads (``reader``: ``opencv``, cv2.imread; ``procam``,
-    procam.io.files.read_image); returns the list of arrays."""
+    procam.io.images.read_image); returns the list of arrays."""
     from concurrent.futures import ThreadPoolExecutor
 
     if reader == "procam":
-        from procam.io.files import read_image as read
+        from procam.io.images import read_image as read
     else:
         import cv2
 
@@ -210,8 +210,8 @@ def run_cold(argv, cwd=None) -> dict:
 
 #: (stage, module, function) -- functions that do not exist in the profiled version are skipped
 STAGES = [
-    ("read PNGs (all reader threads)", "procam.io.files", "read_image"),
-    ("waiting for the images", "procam.io.files", "read_images"),
+    ("read PNGs (all reader threads)", "procam.io.images", "read_image"),
+    ("waiting for the images", "procam.io.images", "read_images"),
     ("waiting for the images", "procam.stream", "Prefetcher.read"),
     ("capture checks", "procam.capture.read", "_sample"),
     ("capture checks", "procam.capture.read", "check_light"),

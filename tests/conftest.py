@@ -215,3 +215,23 @@ def job_result(client, job: dict, headers: dict, timeout: float = 300.0) -> dict
         time.sleep(0.1)
     raise AssertionError(f"job {job} did not end within {timeout} s")
 
+
+
+def within(seconds: float, fn, *args):
+    """``fn(*args)`` in a daemon thread, failing the test when it has not finished after ``seconds`` (a call that
+    must answer, not wait); returns what it returned, or the exception it raised."""
+    import threading
+
+    out = []
+
+    def run():
+        try:
+            out.append(fn(*args))
+        except Exception as e:  # the caller asserts on it
+            out.append(e)
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(seconds)
+    assert not t.is_alive(), f"{getattr(fn, '__name__', fn)} did not answer within {seconds} s"
+    return out[0]

@@ -8,7 +8,7 @@ import json
 import threading
 
 import pytest
-from conftest import run_cli
+from conftest import run_cli, within
 
 BOARD = ["--board", "10x6", "--square", "24"]
 
@@ -49,13 +49,13 @@ def test_the_poses_read_ahead_give_the_views_read_one_by_one(poses):
     import numpy as np
 
     from procam import capture
-    from procam.io import files
+    from procam.io import files, images
     from procam.stream import Prefetcher
 
     with Prefetcher(poses) as pf:
         for folder in poses:
             names, _ = capture.sequence_files(folder, files.list_images(folder))
-            np.testing.assert_array_equal(pf.read(names), files.read_images(names))
+            np.testing.assert_array_equal(pf.read(names), images.read_images(names))
 
 
 def test_a_multi_pose_calibrate_does_not_import_the_single_pose_solver(poses, tmp_path):
@@ -135,14 +135,13 @@ def test_a_header_asking_for_more_than_memory_is_an_error_not_a_wait(tmp_path):
     """A pose whose first PNG's header says 300000 x 300000 (its checksum right): the reader cannot make a stack of
     that size, and read() says what is wrong (the ordinary read's error, naming the file) instead of waiting for a
     frame that never comes; the image alone is refused with OpenCV's reason in one line."""
-    import threading
     import zlib
 
     import cv2
     import numpy as np
 
     from procam.errors import CaptureError
-    from procam.io import files
+    from procam.io import images
     from procam.stream import Prefetcher
 
     for k in range(4):
@@ -153,19 +152,11 @@ def test_a_header_asking_for_more_than_memory_is_an_error_not_a_wait(tmp_path):
     (tmp_path / "00.png").write_bytes(data[:16] + ihdr + crc + data[33:])
     names = sorted(tmp_path.glob("*.png"))
     with pytest.raises(CaptureError, match=r"00\.png: cannot be read as an image \(OpenCV: .*\)"):
-        files.read_image(names[0])
-    got = []
-
+        images.read_image(names[0])
     def read():
         with Prefetcher([tmp_path]) as pf:
-            try:
-                pf.read(names)
-            except CaptureError as e:
-                got.append(str(e))
+            return pf.read(names)
 
-    t = threading.Thread(target=read, daemon=True)
-    t.start()
-    t.join(30)
-    assert not t.is_alive(), "read() waited for a frame that never came"
-    assert got and got[0].startswith(str(names[0])), got
+    got = within(30, read)  # not a wait for a frame that never comes
+    assert isinstance(got, CaptureError) and str(got).startswith(str(names[0])), got
     assert not _readers()

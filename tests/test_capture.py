@@ -9,6 +9,7 @@ from conftest import camera_view_of_patterns, run_cli, write_stack
 from procam import capture, patterns
 from procam.errors import CaptureError, OutputError, ProcamError
 from procam.io import files as _files
+from procam.io import images as _images
 
 W, H = 64, 48  # projector; the 'camera' sees it pixel for pixel
 
@@ -167,7 +168,7 @@ def test_cli_patterns_roundtrip(tmp_path):
     assert code == 0, err
     files = _files.list_images(tmp_path / "p")
     assert len(files) == 44
-    st = _files.read_images(files)
+    st = _images.read_images(files)
     assert np.array_equal(st, patterns.generate(1280, 720))
     code, _, err = run_cli(["patterns", "--projector", "1280x720", "-o", tmp_path / "q", "--order", "zigzag"])
     assert code == 2 and "--order" in err

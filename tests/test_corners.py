@@ -121,11 +121,11 @@ def test_no_board_no_hint():
 def test_real_photos_calibrate_better(shared_data):
     """OpenCV's 13 left photographs: the fitted corners lower calibrateCamera's RMS below procam's
     earlier corners (classic + cornerSubPix 11, clamped), and f agrees with the published 536.1."""
-    from procam.io import files as _files
+    from procam.io import images as _images
 
     files = sorted((shared_data / "opencv-left-right").glob("left*.jpg"))
     assert len(files) == 13
-    imgs = [_files.read_image(f) for f in files]
+    imgs = [_images.read_image(f) for f in files]
     obj = board.object_points(9, 6, 25.0).astype(np.float32)
 
     def calibrate(refine):

@@ -252,13 +252,14 @@ def test_prefetched_captures_equal_load_capture(tmp_path):
 def test_prefetcher_reads_other_files_itself_and_out_of_order(tmp_path):
     from procam import stream
     from procam.io import files as _files
+    from procam.io import images as _images
 
     folders = _small_poses(tmp_path)
     files = [_files.list_images(f) for f in folders]
     with stream.Prefetcher(folders, ahead=2) as pf:
-        np.testing.assert_array_equal(pf.read(files[2]), _files.read_images(files[2]))  # read ahead
-        np.testing.assert_array_equal(pf.read(files[0][:5]), _files.read_images(files[0][:5]))  # not a folder's
-        np.testing.assert_array_equal(pf.read(files[1]), _files.read_images(files[1]))
+        np.testing.assert_array_equal(pf.read(files[2]), _images.read_images(files[2]))  # read ahead
+        np.testing.assert_array_equal(pf.read(files[0][:5]), _images.read_images(files[0][:5]))  # not a folder's
+        np.testing.assert_array_equal(pf.read(files[1]), _images.read_images(files[1]))
 
 
 @pytest.mark.parametrize("damage", ["corrupt", "size", "depth"])
@@ -267,6 +268,7 @@ def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
 
     from procam import stream
     from procam.io import files as _files
+    from procam.io import images as _images
     from procam.errors import CaptureError
 
     folders = _small_poses(tmp_path, 2)
@@ -278,7 +280,7 @@ def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
     else:
         cv2.imwrite(str(victim), np.zeros((48, 64), np.uint16))
     with pytest.raises(CaptureError) as ref:
-        _files.read_images(_files.list_images(folders[1]))
+        _images.read_images(_files.list_images(folders[1]))
     with stream.Prefetcher(folders) as pf:
         pf.read(_files.list_images(folders[0]))
         with pytest.raises(CaptureError) as got:
@@ -431,14 +433,15 @@ def test_prefetcher_reads_each_frame_once_beside_procams_own_outputs(tmp_path, m
 
     from procam import capture, stream
     from procam.io import files as _files
+    from procam.io import images as _images
 
     folders = _small_poses(tmp_path, 2)
     for f in folders:
         _files.write_image(f / "overlay.png", np.zeros((48, 64), np.uint8))
         _files.record_files(f, {"overlay.png": "output"}, writer="check")
     reads = []
-    real = _files.read_image
-    monkeypatch.setattr(_files, "read_image", lambda p, *a, **k: (reads.append(Path(p).name), real(p, *a, **k))[1])
+    real = _images.read_image
+    monkeypatch.setattr(_images, "read_image", lambda p, *a, **k: (reads.append(Path(p).name), real(p, *a, **k))[1])
     with stream.Prefetcher(folders, ahead=1) as pf:
         caps = [capture.load_capture(f, (64, 48), reader=pf.read) for f in folders]
     n = len(caps[0].files)

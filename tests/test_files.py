@@ -4,10 +4,12 @@ import json
 
 import numpy as np
 import pytest
+from conftest import within
 
 from procam import io
 from procam.io import files as _files
 from procam.io import formats
+from procam.io import images as _images
 
 
 def test_atomic_write_leaves_nothing_on_error(tmp_path):
@@ -30,10 +32,10 @@ def test_full_scale_of_bit_depths():
 def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
     """Each writer leaves the mark of io.formats, and files.procam_wrote knows it (no manifest here)."""
     from conftest import camera_view_of_patterns
-    from procam.simulate import truth_calibration
     from sim_small import small_scene
 
     from procam import decode, export, patterns
+    from procam.simulate import truth_calibration
 
     assert formats.NPZ_KEY not in formats.DECODED_MAPS_KEYS + formats.REMAP_MARK
     calib = truth_calibration(small_scene())
@@ -102,7 +104,6 @@ def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path
     """A folder, a missing file, a dangling link, a named pipe (opened without blocking: never waited on) and an
     unreadable file each get a one-line error naming the file; a pipe has no PNG header."""
     import os
-    import threading
 
     from procam.errors import CaptureError
 
@@ -117,25 +118,10 @@ def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path
         (tmp_path / "locked.png").chmod(0)
         cases.append(("locked.png", "cannot be read"))
     for name, words in cases:
-        got = []
-
-        def read(path=tmp_path / name):
-            try:
-                _files.read_image(path)
-            except CaptureError as e:
-                got.append(str(e))
-
-        t = threading.Thread(target=read, daemon=True)
-        t.start()
-        t.join(10)
-        assert not t.is_alive(), f"{name}: read_image waited"
-        assert got and got[0].startswith(str(tmp_path / name)) and words in got[0], (name, got)
+        got = within(10, _images.read_image, tmp_path / name)
+        assert isinstance(got, CaptureError) and str(got).startswith(str(tmp_path / name)) and words in str(got), name
     if hasattr(os, "mkfifo"):  # nor does the header of a pipe, read before a stack is made
-        heads = []
-        t = threading.Thread(target=lambda: heads.append(_files.png_header(tmp_path / "pipe.png")), daemon=True)
-        t.start()
-        t.join(10)
-        assert not t.is_alive() and heads == [None]
+        assert within(10, _images.png_header, tmp_path / "pipe.png") is None
 
 
 def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
@@ -152,11 +138,11 @@ def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
     for name, img in files.items():
         assert cv2.imwrite(str(tmp_path / name), img)
     for name in ["big.png", "small.png", "deep.png", "small.png", "photo.jpg", "big.png"]:
-        got = _files.read_image(tmp_path / name)
+        got = _images.read_image(tmp_path / name)
         want = cv2.imread(str(tmp_path / name), cv2.IMREAD_UNCHANGED)
         assert got.dtype == want.dtype and np.array_equal(got, want), name
     for name, what in (("photo.jpg", "no JPEG end marker"), ("big.png", "truncated")):
         data = (tmp_path / name).read_bytes()
         (tmp_path / f"cut-{name}").write_bytes(data[:len(data) * 2 // 3])
         with pytest.raises(CaptureError, match=what):
-            _files.read_image(tmp_path / f"cut-{name}")
+            _images.read_image(tmp_path / f"cut-{name}")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from procam.errors import CaptureError
-from procam.io import files as _files
+from procam.io import images as _images
 from procam.io import png
 
 FAST = {"none": cv2.IMWRITE_PNG_FILTER_NONE, "sub": cv2.IMWRITE_PNG_FILTER_SUB, "up": cv2.IMWRITE_PNG_FILTER_UP}
@@ -99,7 +99,7 @@ def test_an_8bit_grey_image_is_decoded_into_the_frame_given(filt, tmp_path):
         paths.append(tmp_path / f"{k}.png")
         cv2.imwrite(str(paths[-1]), _image((48, 101), np.uint8, seed=20 + k), [cv2.IMWRITE_PNG_FILTER, FAST[filt]])
     ref = np.stack([cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in paths])
-    assert np.array_equal(_files.read_images(paths), ref)
+    assert np.array_equal(_images.read_images(paths), ref)
 
 
 @pytest.mark.parametrize("filt", SLOW)
@@ -110,7 +110,7 @@ def test_average_and_paeth_rows_and_alpha_are_left_to_opencv(filt, tmp_path):
     bgra = _image((20, 30, 4), np.uint8, seed=2)
     assert _decoded(_encode(bgra, FAST["sub"])) is None
     (tmp_path / "a.png").write_bytes(data)
-    assert np.array_equal(_files.read_image(tmp_path / "a.png"), img)
+    assert np.array_equal(_images.read_image(tmp_path / "a.png"), img)
 
 
 def test_pillows_adaptive_filters_are_left_to_opencv(tmp_path):
@@ -126,7 +126,7 @@ def test_pillows_adaptive_filters_are_left_to_opencv(tmp_path):
         path.write_bytes(data)
         ref = _opencv(data)
         want = ref if ref.ndim == 2 else cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY)
-        assert np.array_equal(_files.read_image(path), want)
+        assert np.array_equal(_images.read_image(path), want)
 
 
 @pytest.mark.parametrize("kind", sorted(png.IGNORED))
@@ -185,7 +185,7 @@ def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
     assert png.chunks(bad)[1] is None and _decoded(bad) is None
     (tmp_path / "bad.png").write_bytes(bad)
     with pytest.raises(CaptureError, match="cannot be read as an image"):
-        _files.read_image(tmp_path / "bad.png")
+        _images.read_image(tmp_path / "bad.png")
 
     def header(w, h, interlace=0):
         ihdr = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
@@ -201,8 +201,8 @@ def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
         img = _image((21, 33, 3), dtype, seed=11 + k)
         path = tmp_path / f"c{k}.png"
         path.write_bytes(_encode(img, FAST["sub"]))
-        assert np.array_equal(_files.read_image(path), cv2.cvtColor(_opencv(path.read_bytes()), cv2.COLOR_BGR2GRAY))
-        assert np.array_equal(_files.read_image(path, gray=False), img)
+        assert np.array_equal(_images.read_image(path), cv2.cvtColor(_opencv(path.read_bytes()), cv2.COLOR_BGR2GRAY))
+        assert np.array_equal(_images.read_image(path, gray=False), img)
 
 
 def test_a_file_opencv_refuses_is_never_decoded_here():

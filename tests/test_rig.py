@@ -192,7 +192,7 @@ def test_blend_sums_to_one_in_the_overlap_and_falls_off_smoothly(tmp_path):
     from scipy import ndimage
 
     from procam import simulate as sim
-    from procam.io.files import read_image
+    from procam.io.images import read_image
     from procam.rig.blend import blend_masks, write_blend
     from rig_sim import bare_wall
 

@@ -73,7 +73,7 @@ def test_rendered_rig_end_to_end(tmp_path):
     # the blend masks of the first pose's two projectors
     code, stdout, _ = run_cli(["blend", folders[0], "-o", tmp_path / "blend"])
     assert code == 0, stdout
-    from procam.io.files import read_image
+    from procam.io.images import read_image
 
     a = read_image(tmp_path / "blend" / "alpha_left.png")
     assert a.dtype == np.uint16 and a.shape == (1080, 1920) and a.min() < 1000 and a.max() == 65535

@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .io import files as _files
+from .io import images as _images
 from . import capture as _capture
 from .board import corners as _corners
 from . import correspond as _corr
@@ -235,7 +235,7 @@ def camera_only_view(image_path, board: Board, *, options: PoseOptions = PoseOpt
     if Path(image_path).is_dir():
         img = _capture.load_capture(image_path, projector, order, step=step).white
     else:
-        img = _files.read_image(image_path)
+        img = _images.read_image(image_path)
     c, hint = _corners.find_corners([img], board.pattern_size, detector=options.detector,
                                     refine_window=options.refine_window, refine=options.refine)
     if hint is not None:

@@ -5,10 +5,10 @@ processed, so decoding, corner detection and the checks of a multi-pose run over
 :class:`Prefetcher` reads the folders' images in order, at most ``ahead`` poses ahead of the one being
 processed (memory stays bounded: the pose in use plus ``ahead`` being read; a stack the caller no longer refers
 to is filled again with a later pose instead of a new one), and hands them over through
-:meth:`Prefetcher.read`, a drop-in for :func:`procam.io.files.read_images` that
+:meth:`Prefetcher.read`, a drop-in for :func:`procam.io.images.read_images` that
 :func:`procam.capture.load_capture` takes as its ``reader``. Anything unusual (a file list other than the
 folder's, images of different sizes or bit depths, a file that cannot be read) is read again by
-:func:`procam.io.files.read_images` itself, so errors are the same, word for word.
+:func:`procam.io.images.read_images` itself, so errors are the same, word for word.
 
 >>> from procam import stream, capture
 >>> with stream.Prefetcher(["pose1", "pose2"]) as pf:            # doctest: +SKIP
@@ -27,6 +27,7 @@ import numpy as np
 
 from . import capture
 from .io import files as _files
+from .io import images as _images
 
 
 class _Pose:
@@ -56,7 +57,7 @@ class _Pose:
         image, or after a failure."""
         with self.lock:
             if self.stack is None and not self.failed:
-                head = _files.png_header(path)  # (height, width, bytes per sample)
+                head = _images.png_header(path)  # (height, width, bytes per sample)
                 if head is not None:
                     self._new_stack(head[:2], np.uint8 if head[2] == 1 else np.uint16)
             return None if self.stack is None or self.failed else self.stack[i]
@@ -88,7 +89,7 @@ class Prefetcher:
     threads : reader threads (OpenCV's PNG decoder releases the GIL); default ``min(2, cpu_count)``.
     ahead : poses read ahead of the one handed out last (1: the next pose is read while this one is processed;
         the first pose is read from the start).
-    gray : as :func:`procam.io.files.read_images`.
+    gray : as :func:`procam.io.images.read_images`.
 
     Use as a context manager (the threads stop on exit); :meth:`read` is the reader for
     :func:`procam.capture.load_capture`.
@@ -147,7 +148,7 @@ class Prefetcher:
         slot = img = None
         try:
             slot = pose.slot(i, path) if self.gray else None
-            img = _files.read_image(path, self.gray, slot)
+            img = _images.read_image(path, self.gray, slot)
         except Exception:  # no memory for a stack a header asks for, a file that cannot be read: read() reads
             pass           # the pose again the ordinary way, which says what is wrong
         try:
@@ -159,7 +160,7 @@ class Prefetcher:
     def read(self, files) -> np.ndarray:
         """The stack of ``files`` (K, H, W): read ahead when they are a folder's images, else read now.
 
-        Same result and same errors as :func:`procam.io.files.read_images`.
+        Same result and same errors as :func:`procam.io.images.read_images`.
         """
         key = tuple(str(Path(f)) for f in files)
         with self._lock:
@@ -172,7 +173,7 @@ class Prefetcher:
                 with self._lock:  # kept for reuse: the last few only (others are the caller's to free)
                     self._handed_stacks = [*self._handed_stacks[-self.ahead:], pose.stack]
                 return pose.stack
-        return _files.read_images(files, self.gray)
+        return _images.read_images(files, self.gray)
 
     def close(self):
         """Stop reading (pending images are skipped) and wait for the threads."""

@@ -30,6 +30,7 @@ import numpy as np
 from .. import patterns
 from ..errors import CaptureError
 from ..io import files as _files
+from ..io import images as _images
 from .bit_order import check_bit_order
 from .frames import describe_frame, frame_role
 from .sample import _sample, frame_levels, sample_index  # noqa: F401 (sample_index, frame_levels: re-exported)
@@ -58,9 +59,9 @@ class Capture:
         :attr:`white` (a phase family without a white frame: the mean of its fringes, grey)."""
         if self.pattern_set.white is None:
             return self.white
-        from ..io import files as _files
+        from ..io import images as _images
 
-        return _files.read_image(self.files[self.pattern_set.white], gray=False)
+        return _images.read_image(self.files[self.pattern_set.white], gray=False)
 
     @property
     def black(self) -> np.ndarray | None:
@@ -393,7 +394,7 @@ def _explain_count(folder: Path, files: list, ps: patterns.PatternSet) -> str:
         return ""
     shapes = []
     for f in files:
-        img = _files.read_image(f)
+        img = _images.read_image(f)
         shapes.append((img.shape, img.dtype.itemsize))
     kinds: dict = {}
     for k, sh in enumerate(shapes):
@@ -415,7 +416,7 @@ def _explain_count(folder: Path, files: list, ps: patterns.PatternSet) -> str:
     avail = _files.available_memory()
     if avail is not None and need > 0.5 * avail:
         return ""
-    stack = _files.read_images(files)
+    stack = _images.read_images(files)
     stats = _sequence_stats(stack)
     if stats is None:
         return ""
@@ -520,7 +521,7 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     order : "opencv" (default) or "moreno", or None for ``patterns.json``'s / the default.
     check : run the image-based checks (white/black position, pattern/inverse pairs).
     step : projector pixels per code (None: patterns.json's, else 1).
-    reader : ``reader(files) -> stack``, default :func:`procam.io.files.read_images` (e.g.
+    reader : ``reader(files) -> stack``, default :func:`procam.io.images.read_images` (e.g.
         :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
     from .rig import rig_without_manifest
@@ -549,12 +550,12 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
                            f"({ps.col_bits} column + {ps.row_bits} row bits, pattern + inverse each, plus white "
                            f"and black; the same count for --order opencv and moreno), found {len(files)}"
                            + (why or _count_hint(len(files), ps)))
-    head = _files.png_header(files[0])  # size and depth without decoding a frame the reader reads anyway
+    head = _images.png_header(files[0])  # size and depth without decoding a frame the reader reads anyway
     if head is None:
-        first = _files.read_image(files[0])
+        first = _images.read_image(files[0])
         head = (*first.shape[:2], first.dtype.itemsize)
     check_memory(folder, len(files), head[:2], head[2])
-    stack = (reader or _files.read_images)(files)
+    stack = (reader or _images.read_images)(files)
     warnings = notes
     if check and patterns.is_phase(ps):
         from .phase import check_phase_capture

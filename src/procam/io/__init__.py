@@ -1,8 +1,10 @@
 """procam's files: one home for every file procam reads or writes.
 
     formats           which files are procam's: the marks its writers leave, defined once
-    files             plumbing: natural sort, image reads, atomic writes, JSON helpers, the manifest of procam's
-                      files, whether an existing file is procam's
+    files             plumbing: which files are images, natural sort, atomic writes, JSON helpers, the manifest of
+                      procam's files, whether an existing file is procam's
+    images            reading capture images: one file as OpenCV reads it, a pose's files into one stack, a PNG's
+                      header
     png               the PNGs capture scripts write, decoded faster than OpenCV and to its pixels (the rest:
                       OpenCV's)
     folders           output folders: what procam may overwrite or delete; a folder made ready for a writer
@@ -27,12 +29,12 @@ from __future__ import annotations
 
 import importlib
 
-_SUBMODULES = ("formats", "files", "png", "folders", "validate", "procam", "opencv", "kamino410", "layouts",
+_SUBMODULES = ("formats", "files", "images", "png", "folders", "validate", "procam", "opencv", "kamino410", "layouts",
                "calibration_file", "rig", "maps", "engines", "ply")
 
 #: Public names handed on here: name -> submodule.
 _EXPORTS = {
-    "IMAGE_EXTS": "files", "read_image": "files", "read_images": "files", "write_image": "files",
+    "IMAGE_EXTS": "files", "read_image": "images", "read_images": "images", "write_image": "files",
     "validate_calibration": "validate",
     "CONVENTIONS": "procam", "UNCERTAINTY_NOTE": "procam", "VERDICT_MEANING": "procam",
     "calibration_to_dict": "procam", "view_from_dict": "procam", "view_to_dict": "procam",

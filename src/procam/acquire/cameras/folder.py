@@ -65,7 +65,7 @@ class FolderWatchCamera(_Camera):
         self._seen = {p.name for p in self._candidates()}
 
     def grab(self) -> Frame:
-        from ...io.files import read_image
+        from ...io.images import read_image
 
         deadline = time.monotonic() + self.timeout_s
         sizes: dict[str, tuple[int, float]] = {}
