@@ -484,6 +484,40 @@ def test_the_page_in_a_browser(served, page, tmp_path):
     assert page.problems == [], page.problems
 
 
+def test_a_photo_right_after_a_new_pose_is_taken_at_that_pose(served, page):
+    """The page sends its changes in order: the board's pose chosen just before a photo applies to that photo, even
+    when the pose's request is answered late (held here until the photo's would have run). Sent together, the photo's
+    request could be handled first, and the photo taken at the pose before (seen once in the whole flow, under
+    load)."""
+    url, folder = served
+    page.goto(url)
+    page.fill("#board-cols", "10")
+    page.fill("#board-rows", "6")
+    page.fill("#board-square", "24")
+    page.click("#board-save")
+    page.wait_for_selector("#board-svg:not([hidden])")
+    page.select_option("#virtual-pose", "0")
+    page.click("#camera-photo")
+    _expect(page, "#camera-status", "1 photo(s): f_c", 30)
+    held = []
+
+    def hold(route):
+        held.append(route)
+
+    page.route("**/api/devices**", hold)
+    page.select_option("#virtual-pose", "3")
+    page.click("#camera-photo")
+    page.wait_for_timeout(1500)  # long enough for a photo request sent beside the held one to have been handled
+    assert len(held) == 1 and len(list((folder / "camera").glob("photo*.png"))) == 1
+    held[0].continue_()
+    page.unroute("**/api/devices**", hold)
+    _expect(page, "#camera-status", "2 photo(s): f_c", 30)
+    first, second = ((np.min(o, axis=0), np.max(o, axis=0)) for o in
+                     json.loads((folder / "procam-app.json").read_text())["photos"]["outlines"])
+    assert np.abs(np.subtract(first, second)).max() > 20  # px, the board's extent: two poses, not one twice
+    assert page.problems == [], page.problems
+
+
 @pytest.mark.slow
 def test_the_whole_virtual_flow_in_a_browser(served, page, tmp_path):
     """Devices (with the exposure check) -> Board -> Camera (4 photos) -> Projector pose -> Calibrate -> Check in the

@@ -11,14 +11,29 @@ const DRAWN = { frames: 0, advice: 0, lastAdvice: null };
 function url(path) { return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN); }
 function fileUrl(name, download) { return url("files/" + name.split("/").map(encodeURIComponent).join("/")) + (download ? "&download=1" : "") + "&t=" + Date.now(); }
 
+// The changes (POSTs) go to the server one at a time, in the order they were made: each is sent once the one
+// before has been answered. Sent together, two requests on two connections are handled in either order, and a
+// photo taken right after choosing the board's pose could be taken at the pose before.
+let CHANGES = Promise.resolve();
+
 async function api(path, body) {
   const opts = { headers: { "X-Procam-Token": TOKEN } };
-  if (body !== undefined) {
-    opts.method = "POST";
-    opts.headers["Content-Type"] = "application/json";
-    opts.body = JSON.stringify(body);
+  if (body === undefined) return answer(await fetch(path, opts));
+  opts.method = "POST";
+  opts.headers["Content-Type"] = "application/json";
+  opts.body = JSON.stringify(body);
+  const before = CHANGES;
+  let done;
+  CHANGES = new Promise((r) => { done = r; });
+  try {
+    await before;
+    return await answer(await fetch(path, opts));
+  } finally {
+    done();
   }
-  const r = await fetch(path, opts);
+}
+
+async function answer(r) {
   const data = await r.json().catch(() => ({ error: r.status + " " + r.statusText }));
   if (!r.ok) throw new Error(data.error || (r.status + " " + r.statusText));
   return data;
