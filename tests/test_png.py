@@ -172,6 +172,19 @@ def test_pythons_zlib_decodes_the_same(monkeypatch):
     assert np.array_equal(_decoded(data), fast) and np.array_equal(fast, img)
 
 
+@pytest.mark.parametrize("crc", ["isal-or-zlib", "zlib"])
+def test_the_chunk_checksum_is_zlibs_taken_in_pieces(crc, monkeypatch):
+    """``_crc`` (ISA-L's CRC-32 where installed, else zlib's, in pieces small enough that neither lets the
+    interpreter lock go) is zlib's ``crc32`` of the whole, at every length around the pieces' size."""
+    if crc == "zlib":
+        monkeypatch.setattr(png, "_inflater", zlib)
+    rng = np.random.default_rng(11)
+    for n in (0, 1, 4095, 4096, 4097, 8192 + 3, 70001):
+        b = rng.integers(0, 256, n, dtype=np.uint8).tobytes()
+        assert png._crc(memoryview(b)) == zlib.crc32(b), n
+    assert png._CRC_PIECE <= 5 * 1024  # both let the lock go above 5 KB
+
+
 def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
     """A stream with valid checksums that does not inflate (or to the wrong size), an interlaced or huge header:
     decode hands it back, and read_image says what OpenCV says."""
