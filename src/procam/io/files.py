@@ -286,24 +286,34 @@ NPZ_LEVEL = 1
 
 def write_npz(path, fmt: str | None = None, compress: bool = True, **arrays) -> Path:
     """Write ``arrays`` as a NumPy ``.npz`` atomically, byte for byte the same for the same arrays (the zip
-    entries carry a fixed date, unlike ``np.savez``'s; deflated at :data:`NPZ_LEVEL` when ``compress``).  With
-    ``fmt`` (one of :data:`~procam.io.formats.NPZ_FORMATS`) the file carries procam's mark, the member
+    entries carry a fixed date, unlike ``np.savez``'s; deflated at :data:`NPZ_LEVEL` when ``compress``, the
+    members in parallel threads: :mod:`procam.io.zipwriter`).  With ``fmt`` (one of
+    :data:`~procam.io.formats.NPZ_FORMATS`) the file carries procam's mark, the member
     :data:`~procam.io.formats.NPZ_KEY` holding ``fmt``; without, only its folder's manifest says it is procam's."""
     import io
     import zipfile
+
+    from . import zipwriter
 
     if fmt is not None:
         if fmt not in formats.NPZ_FORMATS:
             raise ValueError(f"fmt must be one of {formats.NPZ_FORMATS}, got {fmt!r}")
         arrays = {**arrays, formats.NPZ_KEY: np.array(fmt)}
+    members = []
+    for name, a in arrays.items():
+        buf = io.BytesIO()
+        np.lib.format.write_array(buf, np.asanyarray(a), allow_pickle=False)
+        members.append((f"{name}.npy", buf.getbuffer()))
     path = Path(path)
-    mode = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
-    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", mode, allowZip64=True) as zf:
-        for name, a in arrays.items():
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-            buf = io.BytesIO()
-            np.lib.format.write_array(buf, np.asanyarray(a), allow_pickle=False)
-            zf.writestr(info, buf.getbuffer(), compress_type=mode, compresslevel=NPZ_LEVEL if compress else None)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            if compress and zipwriter.write(f, members, NPZ_LEVEL):
+                return path
+        mode = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+        with zipfile.ZipFile(tmp, "w", mode, allowZip64=True) as zf:
+            for name, data in members:
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                zf.writestr(info, data, compress_type=mode, compresslevel=NPZ_LEVEL if compress else None)
     return path
 
 
