@@ -98,28 +98,43 @@ def ensure_data(data: Path) -> None:
         print(f"rendered {folder} in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
-#: the decode pair: name -> (folder under --data, pattern_set keywords for a 1920x1080 projector)
-DECODE_PAIR = {"gray": ("decode-gray", {}),
-               "phase": ("decode-phase", dict(family="phase", steps=3, period=64, white_black=False))}
+#: the decode captures: name -> (folder under --data, pattern_set keywords for a 1920x1080 projector, the camera's
+#: size (None: the ``paper`` rig's 1280x800)).  The first two are the same camera's; the last two have the shapes of
+#: the real pair issue 35 measured (a 12-frame 3-step capture of 1688x1352 against a Gray capture of 1280x1024),
+#: compared per megapixel
+PHASE = dict(family="phase", steps=3, period=64, white_black=False)
+DECODE_PAIR = {"gray": ("decode-gray", {}, None), "phase": ("decode-phase", PHASE, None),
+               "gray-1280x1024": ("decode-gray-1280x1024", {}, (1280, 1024)),
+               "phase-1688x1352": ("decode-phase-1688x1352", PHASE, (1688, 1352))}
 
 
 def ensure_decode_pair(data: Path) -> dict:
-    """Render (unless there) the ``paper`` rig's board at the recommended pose as a 46-frame Gray capture and as a
-    12-frame 3-step phase capture; name -> (folder, frame count)."""
+    """Render (unless there) the ``paper`` rig's board at the recommended pose as 46-frame Gray captures and as
+    12-frame 3-step phase captures (:data:`DECODE_PAIR`); name -> (folder, frame count, megapixels)."""
     from procam import patterns
 
     out = {}
-    for name, (sub, kw) in DECODE_PAIR.items():
+    for name, (sub, kw, size) in DECODE_PAIR.items():
         folder, ps = data / sub, patterns.pattern_set(1920, 1080, **kw)
         if not ((folder / "patterns.json").is_file() and len(list(folder.glob("[0-9][0-9].png"))) == ps.count):
+            import dataclasses
+
+            import numpy as np
+
             from procam import simulate as S
 
             t0 = time.perf_counter()
             scene = S.with_board_pose(S.preset("paper"), S.RECOMMENDED_POSE)
+            if size is not None:  # another camera: the same field of view, its principal point scaled
+                (w0, h0), K = scene.cam_size, np.array(scene.K_cam, float)
+                K[[0, 1, 0], [0, 1, 2]] *= size[0] / w0
+                K[1, 2] *= size[1] / h0
+                scene = dataclasses.replace(scene, cam_size=tuple(size), K_cam=K)
             stack, truth = S.render(scene, order=ps, seed=7)
             S.write_capture(folder, stack, truth, order=ps)
             print(f"rendered {folder} in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
-        out[name] = (folder, ps.count)
+        w, h = size or (1280, 800)
+        out[name] = (folder, ps.count, w * h / 1e6)
     return out
 
 
@@ -179,7 +194,7 @@ def commands(args, data: Path, out: Path) -> dict:
         "version": ([*procam, "--version"], None),
         "calibrate-help": ([*procam, "calibrate", "--help"], None),
     }
-    for name, (folder, _) in ensure_decode_pair(data).items():
+    for name, (folder, _, _) in ensure_decode_pair(data).items():
         cmds[f"decode-{name}"] = ([*procam, "decode", str(folder), "-o", str(out.parent / f"{name}.npz")], None)
     if args.kamino410:
         root = kamino_layout(data)
@@ -393,7 +408,10 @@ def _med(xs):
 #: (what, command, baseline command or a time in seconds, the target ratio) of the summary (issue 35)
 TARGETS = [("5-pose Gray calibrate vs reading its PNGs (the floor)", "procam", "read", 1.5),
            ("5-pose Gray calibrate vs kamino410's calibrate.py", "procam", "kamino410", 0.8),
-           ("phase capture (12 frames) vs Gray capture (46 frames), procam decode", "decode-phase", "decode-gray", 1.0),
+           ("phase capture (12 frames) vs Gray capture (46 frames) of one camera, procam decode", "decode-phase",
+            "decode-gray", 1.0),
+           ("per megapixel: phase capture of 1688x1352 (12 frames) vs Gray of 1280x1024 (46), procam decode",
+            "decode-phase-1688x1352", "decode-gray-1280x1024", 1.0, (1688 * 1352) / (1280 * 1024)),
            ("cold start: procam --version vs 0.2 s", "version", 0.2, 1.0),
            ("cold start: procam calibrate --help vs 0.3 s", "calibrate-help", 0.3, 1.0)]
 
@@ -403,14 +421,17 @@ def summary(runs: dict) -> str:
     CPU) and the median of the per-round wall ratios (each round's commands ran back to back, under one load)."""
     lines = ["| what | seconds (median wall) | baseline | wall ratio | per-round wall ratio | CPU ratio | target |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
-    for what, a, b, target in TARGETS:
+    for what, a, b, target, *per in TARGETS:
+        scale = per[0] if per else 1.0  # a per-megapixel comparison: a's camera has this many times b's pixels
         if a not in runs or (isinstance(b, str) and b not in runs):
             lines.append(f"| {what} | - | not run | | | | <= {target:g} |")
             continue
         wa, ca = [x["wall"] for x in runs[a]], [x["cpu"] for x in runs[a]]
         if isinstance(b, str):
-            wb, cb = [x["wall"] for x in runs[b]], [x["cpu"] for x in runs[b]]
+            wb, cb = [x["wall"] * scale for x in runs[b]], [x["cpu"] * scale for x in runs[b]]
             base, per_round = f"{_med(wb):.2f} s", _med([x / y for x, y in zip(wa, wb)])
+            if scale != 1.0:
+                base = f"{_med(wb) / scale:.2f} s x {scale:.2f} (pixels)"
             cpu = f"{_med(ca) / _med(cb):.2f}"
         else:
             wb, base, per_round, cpu = [b], f"{b:g} s (target)", _med([x / b for x in wa]), ""
@@ -430,6 +451,7 @@ def main():
     ap.add_argument("--kamino410-python", default=None, help="the Python that runs it (with opencv-contrib)")
     ap.add_argument("--read-only", choices=("opencv", "procam"), default=None, help=argparse.SUPPRESS)
     ap.add_argument("--profile", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--render-only", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     data = args.data.resolve()
@@ -444,13 +466,22 @@ def main():
     if args.profile:  # one in-process per-stage run
         print(json.dumps(profile_once(data, args.out)))
         return
+    if args.render_only:  # the captures, rendered in a process of their own (below)
+        ensure_data(data)
+        ensure_decode_pair(data)
+        return
     if args.kamino410 and not args.kamino410_python:
         ap.error("--kamino410 needs --kamino410-python (a Python with opencv-contrib)")
 
     sys.path.insert(0, str(HERE))
     from _common import header
 
-    ensure_data(data)
+    # rendered in a child process: on Linux a child's peak memory (ru_maxrss) starts from its parent's at the fork,
+    # and rendering here would make every command's peak the renderer's
+    import subprocess
+
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--render-only", "--data", str(data)], env=_env(),
+                   check=True)
     import compileall
     import tempfile
 
@@ -497,7 +528,8 @@ def main():
              "read-procam": "read the 210 PNGs, 2 threads, procam's reader (cold process)",
              "kamino410": "kamino410 calibrate.py, 5 poses (cold process)", "version": "procam --version",
              "calibrate-help": "procam calibrate --help",
-             **{f"decode-{n}": f"procam decode, {n} capture ({k} frames)" for n, (_, k) in pair.items()}}
+             **{f"decode-{n}": f"procam decode, {n} capture ({k} frames, {mp:.2f} MP)"
+                for n, (_, k, mp) in pair.items()}}
     for n in names:
         w = [x["wall"] for x in runs[n]]
         print(f"| {label[n]} | {_med(w):.2f} | {min(w):.2f} | {_med([x['cpu'] for x in runs[n]]):.2f} | "
