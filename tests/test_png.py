@@ -174,14 +174,22 @@ def test_pythons_zlib_decodes_the_same(monkeypatch):
 
 @pytest.mark.parametrize("crc", ["isal-or-zlib", "zlib"])
 def test_the_chunk_checksum_is_zlibs_taken_in_pieces(crc, monkeypatch):
-    """``_crc`` (ISA-L's CRC-32 where installed, else zlib's, in pieces small enough that neither lets the
-    interpreter lock go) is zlib's ``crc32`` of the whole, at every length around the pieces' size."""
+    """The chunks' CRC-32 (ISA-L's where installed, else zlib's, in pieces small enough that neither lets the
+    interpreter lock go) is zlib's ``crc32`` of the whole: chunks of every length around the pieces' size pass, and
+    each fails with one bit of its contents flipped."""
     if crc == "zlib":
         monkeypatch.setattr(png, "_inflater", zlib)
     rng = np.random.default_rng(11)
-    for n in (0, 1, 4095, 4096, 4097, 8192 + 3, 70001):
-        b = rng.integers(0, 256, n, dtype=np.uint8).tobytes()
-        assert png._crc(memoryview(b)) == zlib.crc32(b), n
+    sizes = (0, 1, 4091, 4092, 4093, 8192 + 3, 70001)  # with the 4 bytes of its kind: around 4096 and 8192
+    bodies = [rng.integers(0, 256, n, dtype=np.uint8).tobytes() for n in sizes]
+    data = b"\x89PNG\r\n\x1a\n" + b"".join(_chunk(b"tEXt", b) for b in bodies) + _chunk(b"IEND", b"")
+    parts, problem = png.chunks(data)
+    assert problem is None and [data[s:e] for _, s, e in parts] == bodies + [b""]
+    for (_, s, e), n in zip(parts, sizes):
+        if n:
+            bad = bytearray(data)
+            bad[s + n // 2] ^= 0x10
+            assert png.chunks(bytes(bad))[1] == "is damaged (tEXt chunk fails its checksum)", n
     assert png._CRC_PIECE <= 5 * 1024  # both let the lock go above 5 KB
 
 

@@ -25,6 +25,7 @@ and files with bytes changed and chunks moved: whatever decodes here, OpenCV dec
 
 from __future__ import annotations
 
+import struct
 import zlib
 
 import numpy as np
@@ -65,28 +66,32 @@ def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
     pos, n = 8, len(data)
     mv = memoryview(data)
     out = []
+    head, stored, crc32, piece = _HEAD.unpack_from, _STORED.unpack_from, _inflater.crc32, _CRC_PIECE
     while pos + 12 <= n:
-        length = int.from_bytes(data[pos:pos + 4], "big")
-        kind = bytes(data[pos + 4:pos + 8])
-        name = kind.decode("latin-1") + " chunk" if kind.isalpha() else "a chunk"
+        length, kind = head(data, pos)
         end = pos + 12 + length
         if end > n:
-            return out, f"is truncated ({name} ends after the end of the file)"
-        if _crc(mv[pos + 4:end - 4]) != int.from_bytes(data[end - 4:end], "big"):
-            return out, f"is damaged ({name} fails its checksum)"
-        out.append((kind, pos + 8, end - 4))
+            return out, f"is truncated ({_name(kind)} ends after the end of the file)"
+        crc, i, stop = 0, pos + 4, end - 4  # over the kind and the contents, in pieces (_CRC_PIECE)
+        while i < stop:
+            crc = crc32(mv[i:min(i + piece, stop)], crc)
+            i += piece
+        if crc != stored(data, stop)[0]:
+            return out, f"is damaged ({_name(kind)} fails its checksum)"
+        out.append((kind, pos + 8, stop))
         pos = end
         if kind == b"IEND":
             return out, None
     return out, "is truncated (no end marker: the file was not written completely)"
 
 
-def _crc(mv: memoryview) -> int:
-    """CRC-32 of ``mv``, holding the interpreter lock (:data:`_CRC_PIECE`)."""
-    crc = 0
-    for i in range(0, len(mv), _CRC_PIECE):
-        crc = _inflater.crc32(mv[i:i + _CRC_PIECE], crc)
-    return crc
+_HEAD = struct.Struct(">I4s")    # a chunk's length and kind
+_STORED = struct.Struct(">I")    # its CRC
+
+
+def _name(kind: bytes) -> str:
+    """A chunk's kind in words for a message: ``IDAT chunk``, or ``a chunk`` when it is not letters."""
+    return kind.decode("latin-1") + " chunk" if kind.isalpha() else "a chunk"
 
 
 def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | None = None
