@@ -47,6 +47,11 @@ def test_an_archive_too_large_is_left_to_zipfile_and_write_npz_writes_the_same_f
     monkeypatch.setattr(zipwriter, "LIMIT", 1000)
     buf = io.BytesIO()
     assert zipwriter.write(buf, [("a", bytes(2000))], 1) is False and buf.getvalue() == b""
+    monkeypatch.setattr(zipwriter, "LIMIT", (1 << 31) - 1)
+    assert zipwriter.write(buf, [("a", b""), ("b", b"")], 1) and buf.getvalue()
+    monkeypatch.setattr(zipwriter, "COUNT_LIMIT", 2)  # as many members as the end record can count: zipfile's
+    buf = io.BytesIO()
+    assert zipwriter.write(buf, [("a", b""), ("b", b"")], 1) is False and buf.getvalue() == b""
     slow = files.write_npz(tmp_path / "slow.npz", **arrays)
     assert slow.read_bytes() == fast
     with np.load(slow) as z:

@@ -8,8 +8,8 @@ order. The archive is the one :mod:`zipfile` writes for the same members, byte f
 descriptors, the file mode ``rw-------`` (zipfile's for a member written from bytes), and the creating system
 zipfile names (3, Unix; 0 on Windows).
 
-An archive whose sizes or offsets could need ZIP64 records (members of over 2 GB in all, zipfile's limit) is left
-to :mod:`zipfile` (:func:`write` says so by returning False).
+An archive that could need ZIP64 records (members of over 2 GB in all, or 65535 members or more: zipfile's limits)
+is left to :mod:`zipfile` (:func:`write` says so by returning False).
 """
 
 from __future__ import annotations
@@ -17,11 +17,14 @@ from __future__ import annotations
 import os
 import struct
 import zlib
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import BinaryIO, Sequence
+from typing import BinaryIO
 
-#: zipfile's limit (bytes) past which it writes ZIP64 records; an archive that might reach it is left to zipfile
+#: zipfile's limits past which it writes ZIP64 records: bytes, and members; an archive that might reach either is
+#: left to zipfile
 LIMIT = (1 << 31) - 1
+COUNT_LIMIT = 0xFFFF
 
 _LOCAL = struct.Struct("<4s2B4HL2L2H")
 _CENTRAL = struct.Struct("<4s4B4HL2L5H2L")
@@ -43,9 +46,9 @@ def write(f: BinaryIO, members: Sequence[tuple[str, object]], level: int, thread
     """Write the archive of ``members`` (``(name, data)``: a name, and bytes or any contiguous buffer) to the
     binary file ``f`` (at its start), each deflated at zlib ``level``, ``threads`` at once (default: the CPUs, at
     most 4).  Returns False, having written nothing, when the members are too large for an archive without ZIP64
-    records (:data:`LIMIT`): write those with :mod:`zipfile`."""
+    records (:data:`LIMIT`, :data:`COUNT_LIMIT`): write those with :mod:`zipfile`."""
     views = [(name, memoryview(data).cast("B")) for name, data in members]
-    if sum(v.nbytes for _, v in views) * 1.05 + 1024 * (len(views) + 1) > LIMIT:
+    if len(views) >= COUNT_LIMIT or sum(v.nbytes + 2 * len(n) for n, v in views) * 1.05 + 1024 * (len(views) + 1) > LIMIT:
         return False
     n = max(1, min(len(views), threads if threads is not None else min(4, os.cpu_count() or 1)))
     if n > 1:  # the largest first: the threads end together
