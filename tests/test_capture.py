@@ -31,6 +31,14 @@ def test_natural_sort_and_any_names(tmp_path):
     assert np.array_equal(cap.stack, st)
 
 
+def test_natural_order_reads_decimal_digits_of_any_script_and_nothing_else():
+    """Runs of decimal digits (Arabic-Indic ones too) are numbers; a superscript or circled digit is text, not an
+    internal error (``int('\u00b2')`` raises)."""
+    names = ["img10.png", "\u00b21.png", "img2.png", "1\u00b22.png", "\u2460.png", "img\u0663.png", "IMG1.png"]
+    assert sorted(names, key=_files.natural_key) == ["1\u00b22.png", "IMG1.png", "img2.png", "img\u0663.png",
+                                                     "img10.png", "\u00b21.png", "\u2460.png"]
+
+
 def test_colour_and_16bit_images_decode(tmp_path):
     from procam import decode
 

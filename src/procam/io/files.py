@@ -36,8 +36,10 @@ IMAGE_EXTS = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", 
 
 
 def natural_key(name: str):
-    """Sort key that orders embedded numbers numerically (``img2`` < ``img10``)."""
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", str(name))]
+    """Sort key that orders embedded numbers numerically (``img2`` < ``img10``): the runs of decimal digits (any
+    script's, as ``int`` reads them) are numbers and the text between them is compared without case; other
+    characters that only look like digits (superscripts, circled numbers) are text."""
+    return [int(t) if k % 2 else t.lower() for k, t in enumerate(re.split(r"(\d+)", str(name)))]
 
 
 def list_images(folder) -> list[Path]:
