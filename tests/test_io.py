@@ -230,3 +230,15 @@ def test_decoded_maps_round_trip_and_are_checked(tmp_path):
     np.savez(tmp_path / "short.npz", **z)
     with pytest.raises(CaptureError, match="short.npz: has no row"):
         io.load_decoded_maps(tmp_path / "short.npz")
+    # a map of another kind of value or another shape is refused in one line (it was an internal error further on)
+    with np.load(path) as f:
+        good = dict(f)
+    for key, value, words in (("valid_col", good["valid_col"].astype(float), "valid_col holds float64 values, not "
+                               "true/false"), ("col", good["col"] * 1j, "col holds complex64 values, not real"),
+                              ("reason_row", good["reason_row"].astype(np.int8), "reason_row holds int8 values"),
+                              ("col", good["col"][..., None], "col is 32x64x1, not a map"),
+                              ("col", np.float32(1), "col is a single value, not a map"),
+                              ("row", good["row"][:16], "row is 16x64, the maps are 32x64")):
+        np.savez(tmp_path / "odd.npz", **{**good, key: value})
+        with pytest.raises(CaptureError, match=f"odd.npz: {words}"):
+            io.load_decoded_maps(tmp_path / "odd.npz")

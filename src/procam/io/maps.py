@@ -25,6 +25,10 @@ from .validate import bad, check_size
 _FIX = "re-run 'procam decode -o'"
 #: The members of a decoded-maps file that are not (H, W) maps.
 _META = ("projector_size", "order")
+#: Each map's numpy dtype kinds and what they are in words (procam writes float32, bool and uint8).
+_KINDS = {**dict.fromkeys(("col", "row", "confidence"), ("f", "real numbers")),
+          **dict.fromkeys(("valid_col", "valid_row"), ("b", "true/false values")),
+          **dict.fromkeys(("reason_col", "reason_row", "dropped_col", "dropped_row"), ("u", "unsigned integers"))}
 
 
 def save_decoded_maps(path, result) -> Path:
@@ -41,8 +45,10 @@ def load_decoded_maps(path) -> dict:
     """Read a decoded-maps file: ``{member: (H, W) array}`` for the maps, ``projector_size`` as ``(width,
     height)`` and ``order`` as a string.
 
-    Raises :class:`~procam.errors.CaptureError` naming the file: missing, not an ``.npz``, a member missing,
-    maps of different shapes, or a projector size that is not one.
+    Raises :class:`~procam.errors.CaptureError` naming the file: missing, not an ``.npz``, a member missing, a map
+    that is not 2-D or not of the others' shape or of another kind of value (real numbers for the coordinates and
+    the confidence, true/false for the validity, unsigned integers for the reasons and dropped bits), or a projector
+    size that is not one.
     """
     import zipfile
 
@@ -61,8 +67,15 @@ def load_decoded_maps(path) -> dict:
     maps = [k for k in DECODED_MAPS_KEYS if k not in _META]
     shape = data[maps[0]].shape
     for k in maps:
-        if data[k].ndim != 2 or data[k].shape != shape:
-            bad(path, k, f"is {'x'.join(map(str, data[k].shape))}, the maps are {'x'.join(map(str, shape))}", **how)
+        a = data[k]
+        if a.ndim != 2:
+            bad(path, k, f"is {'x'.join(map(str, a.shape)) or 'a single value'}, not a map (camera rows x columns)",
+                **how)
+        if a.shape != shape:
+            bad(path, k, f"is {'x'.join(map(str, a.shape))}, the maps are {'x'.join(map(str, shape))}", **how)
+        kind, what = _KINDS[k]
+        if a.dtype.kind not in kind:
+            bad(path, k, f"holds {a.dtype} values, not {what}", **how)
     out = {k: data[k] for k in maps}
     out["projector_size"] = check_size(path, "projector_size", data["projector_size"], **how)
     out["order"] = str(data["order"])
