@@ -192,6 +192,15 @@ def test_write_ply_extra_properties_and_no_colour(tmp_path):
     assert cols is None
 
 
+def test_ply_comments_are_ascii_lines_whatever_the_names(tmp_path):
+    """A folder named with non-ASCII characters, or with bytes no encoding decodes (a name read from an old USB
+    stick), or a line break, gives an ASCII comment line (it was an internal error in plyfile)."""
+    odd = ["pose \u00e9", "pose\udcff1", "two\nlines", "plain"]
+    path = write_ply(tmp_path / "x.ply", np.zeros((2, 3)), comments=odd)
+    _, _, comments = read_ply(path)
+    assert comments == ["pose \\xe9", "pose\\udcff1", "two lines", "plain"]
+
+
 def test_write_ply_without_plyfile_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "plyfile", None)
     with pytest.raises(ProcamError, match="pip install plyfile"):

@@ -39,7 +39,9 @@ def write_ply(path, points, colours=None, *, extra: dict | None = None, comments
     points : (N, 3) -> vertex properties ``x, y, z`` (float32).
     colours : optional (N, 3) uint8 RGB -> ``red, green, blue`` (uchar).
     extra : optional ``{name: (N,) array}`` of further vertex properties (their dtype is kept).
-    comments : header comment lines (e.g. the units and the frame).
+    comments : header comment lines (e.g. the units and the frame).  A PLY header is ASCII, one comment a line:
+        other characters (a folder named ``pose é``) are written as Python's escapes (``pose \\xe9``), a line break
+        as a space.
 
     Raises
     ------
@@ -71,12 +73,19 @@ def write_ply(path, points, colours=None, *, extra: dict | None = None, comments
     for name, arr in extra.items():
         vert[name] = np.asarray(arr).reshape(-1)
     ply = PlyData([PlyElement.describe(vert, "vertex")], text=False, byte_order="<",
-                  comments=[str(c) for c in comments])
+                  comments=[_ascii(c) for c in comments])
     path = Path(path)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
             ply.write(f)
     return path
+
+
+def _ascii(comment) -> str:
+    """One comment line of a PLY header: ASCII, non-ASCII characters (and undecodable bytes of a file name) as
+    backslash escapes, line breaks as spaces."""
+    text = " ".join(str(comment).splitlines())
+    return text.encode("ascii", "backslashreplace").decode("ascii")
 
 
 def read_ply(path):
