@@ -32,6 +32,25 @@ def test_calibrate_single_pose_end_to_end(ideal_capture, tmp_path):
     assert doc["poses"][0]["advice"]["camera"]["paper_rule_ok"]
 
 
+def test_output_in_a_legacy_encoding_writes_escapes_not_an_internal_error(ideal_capture, tmp_path):
+    """stdout in cp1252 or ascii (Windows output redirected to a file) cannot encode the table's sigma and +-: they
+    are written as backslash escapes and the calibration is written (it was exit 1 before any file), and the
+    streams' own error handling is left as it was after the command."""
+    import os
+    import subprocess
+
+    folder = ideal_capture[0]
+    script = ("import sys; from procam.cli import main\ntry:\n    main()\nexcept SystemExit as e:\n    code = e.code\n"
+              "print('after', code, sys.stdout.errors, file=sys.stderr)")
+    env = {**os.environ, "PYTHONIOENCODING": "ascii",
+           "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), os.environ.get("PYTHONPATH", "")])}
+    out = tmp_path / "calib.json"
+    res = subprocess.run([sys.executable, "-c", script, "calibrate", str(folder), "--board", "10x6", "--square", "24",
+                          "-o", str(out)], env=env, capture_output=True, timeout=300)
+    assert res.stderr.decode("ascii").strip().splitlines()[-1] == "after 0 strict", res.stderr
+    assert "\\xb1" in res.stdout.decode("ascii") and io.load_calibration(out).projector is not None
+
+
 def test_calibrate_errors(ideal_capture, tmp_path):
     folder, _, _, _ = ideal_capture
     out = tmp_path / "c.json"

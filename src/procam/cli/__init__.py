@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import gc
 import importlib
+import io
 import sys
 
 #: Sub-command -> the module of this package that registers it, in the order ``procam --help`` lists them.
@@ -49,6 +50,12 @@ def main(argv: list[str] | None = None) -> None:
         return
     first = next((a for a in args if not a.startswith("-")), None)
     thresholds = gc.get_threshold()
+    # a terminal or file in a legacy encoding (cp1252, ascii: Windows output redirected to a file) cannot encode
+    # every character the tables print (sigma, box lines): written as backslash escapes, as Python's own stderr
+    # does, rather than an error that would end the command before its files are written
+    strict = [f for f in (sys.stdout, sys.stderr) if isinstance(f, io.TextIOWrapper) and f.errors == "strict"]
+    for f in strict:
+        f.reconfigure(errors="backslashreplace")
     try:
         if first in ("calibrate", "decode"):
             # Python's cyclic collector, at its default thresholds, runs hundreds of times over the start-up's
@@ -62,6 +69,8 @@ def main(argv: list[str] | None = None) -> None:
 
         app(args=argv, standalone_mode=True)
     finally:
+        for f in strict:
+            f.reconfigure(errors="strict")
         gc.set_threshold(*thresholds)
         reader = _EARLY.pop("reader", None)
         if reader is not None:  # not taken: the command line was not what it looked like
