@@ -51,6 +51,26 @@ def test_output_in_a_legacy_encoding_writes_escapes_not_an_internal_error(ideal_
     assert "\\xb1" in res.stdout.decode("ascii") and io.load_calibration(out).projector is not None
 
 
+@pytest.mark.skipif(sys.platform in ("win32", "darwin"), reason="the file system takes only valid names")
+def test_a_folder_named_with_undecodable_bytes_is_calibrated_decoded_and_reported(ideal_capture, tmp_path):
+    """A pose folder whose name is not UTF-8 (a byte 0xFF: an old archive, a USB stick): every figure's title and
+    the report show the byte as an escape. Each command was an internal error in matplotlib after its main files
+    were written."""
+    import os
+    import shutil
+
+    folder = Path(os.fsdecode(os.path.join(os.fsencode(tmp_path), b"pose\xff1")))
+    shutil.copytree(ideal_capture[0], folder)
+    c = tmp_path / "c.json"
+    for args in (["calibrate", folder, "--board", "10x6", "--square", "24", "-o", c, "--png", tmp_path / "c.png"],
+                 ["decode", folder, "-o", tmp_path / "m.npz", "--png", tmp_path / "m.png"],
+                 ["report", c, "-o", tmp_path / "r.html"]):
+        code, out, err = run_cli(args)
+        assert code == 0, (args[0], err)
+    assert "pose\\xff1" in (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert cv2.imread(str(tmp_path / "c.png")) is not None and cv2.imread(str(tmp_path / "m.png")) is not None
+
+
 def test_calibrate_errors(ideal_capture, tmp_path):
     folder, _, _, _ = ideal_capture
     out = tmp_path / "c.json"

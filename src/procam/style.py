@@ -1,4 +1,4 @@
-"""How procam presents what it found: the text of a number in a table, and the one palette.
+"""How procam presents what it found: the text of a number in a table, of a file name, and the one palette.
 
 Every picture, figure and page colours a verdict and a device the same way: the report's verdict box, the
 residual figure's title, the check overlay, the rig drawing, the live preview's advice (its states are verdicts
@@ -58,3 +58,18 @@ def bgr(colour: str) -> tuple[int, int, int]:
 def on_dark(colour: str, amount: float = 0.4) -> str:
     """``colour`` mixed ``amount`` of the way to white: the same hue, readable on a dark panel (the live preview)."""
     return "#" + "".join(f"{round(c + (255 - c) * amount):02x}" for c in rgb(colour))
+
+
+def shown(text: str) -> str:
+    """``text`` as a person reads it (a figure's title, a page): the bytes of a file name that no encoding decodes,
+    which Python keeps as lone surrogates (``pose\\udcff1``: fonts and UTF-8 files refuse them), as escapes of the
+    bytes (``pose\\xff1``); any other text unchanged."""
+    try:
+        text.encode("utf-8")
+        return text
+    except UnicodeEncodeError:
+        pass
+    try:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate that is not a byte's (a broken UTF-16 pair)
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")

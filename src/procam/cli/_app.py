@@ -19,6 +19,7 @@ import typer
 from typer.core import TyperGroup
 
 from ..errors import ProcamError, ProcamWarning
+from ..style import shown
 
 
 class _OneLineErrors(TyperGroup):
@@ -113,20 +114,22 @@ def escape(text: str) -> str:
 
 
 def fail(message: str, code: int = 2, label: str = "error"):
-    """Print a one-line ``label: message`` to stderr and exit with ``code`` (plain text, not markup). Exit codes:
+    """Print a one-line ``label: message`` to stderr and exit with ``code`` (plain text, not markup; a file name's
+    undecodable bytes as escapes, :func:`procam.style.shown`, as in every line below). Exit codes:
     2 the user's input is wrong, 3 the result must not be trusted (a degenerate or failed calibration)."""
-    err_console.print(f"[bold red]{escape(label)}:[/bold red] {escape(str(message))}", highlight=False, soft_wrap=True)
+    err_console.print(f"[bold red]{escape(label)}:[/bold red] {escape(shown(str(message)))}", highlight=False,
+                      soft_wrap=True)
     raise typer.Exit(code)
 
 
 def warn(message: str):
     """Print a warning line (plain text, not markup)."""
-    console.print(f"[yellow]warning:[/yellow] {escape(str(message))}", highlight=False)
+    console.print(f"[yellow]warning:[/yellow] {escape(shown(str(message)))}", highlight=False)
 
 
 def say(message: str):
     """Print an information line (plain text, not markup)."""
-    console.print(escape(str(message)), highlight=False)
+    console.print(escape(shown(str(message))), highlight=False)
 
 
 #: What to do about an OS error, by errno.
@@ -153,7 +156,7 @@ def plain(text):
     """``text`` as rich Text: printed as is, never read as markup (file names like ``cap[red]``, table cells)."""
     from rich.text import Text
 
-    return Text(str(text))
+    return Text(shown(str(text)))
 
 
 def user_errors(fn):

@@ -99,7 +99,7 @@ def write_calibration_report(calib, path, *, views=None, decodes=None, check=Non
 
     text = build_report(calib, views, decodes=decodes, check=check, name=name or Path(path).stem, notes=notes)
     write_report(text, path)
-    say(f"wrote {path} ({len(text.encode('utf-8')) / 1e6:.2f} MB)")
+    say(f"wrote {path} ({Path(path).stat().st_size / 1e6:.2f} MB)")
     return Path(path)
 
 

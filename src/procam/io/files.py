@@ -275,9 +275,10 @@ def atomic_path(path, record: bool = True, role: str = "output"):
 
 
 def write_text(path, text: str, record: bool = True, role: str = "output") -> Path:
-    """Write ``text`` to ``path`` atomically (``record``, ``role``: see :func:`atomic_path`)."""
+    """Write ``text`` to ``path`` atomically as UTF-8 (``record``, ``role``: see :func:`atomic_path`); the lone
+    surrogates that stand for a file name's undecodable bytes are written as Python's escapes (``\\udcff``)."""
     with atomic_path(path, record, role) as tmp:
-        Path(tmp).write_text(text)
+        Path(tmp).write_text(text, encoding="utf-8", errors="backslashreplace")
     return Path(path)
 
 

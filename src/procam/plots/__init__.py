@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-__all__ = ["save_figure"]
+__all__ = ["save_figure", "printable"]
 
 
 def _figure(**kwargs):
@@ -29,6 +29,21 @@ def _close(fig) -> None:
     plt = sys.modules.get("matplotlib.pyplot")
     if plt is not None:
         plt.close(fig)
+
+
+def printable(fig):
+    """``fig`` with every text drawable: the bytes of a file name that no encoding decodes (lone surrogates, which
+    matplotlib's fonts refuse) shown as escapes (:func:`procam.style.shown`).  Called before a figure is drawn to
+    a file or an image; returns ``fig``."""
+    from matplotlib.text import Text
+
+    from ..style import shown
+
+    for t in fig.findobj(Text):
+        s = t.get_text()
+        if isinstance(s, str):
+            t.set_text(shown(s))
+    return fig
 
 
 def save_figure(fig, path, dpi: int = 110) -> Path:
@@ -73,7 +88,7 @@ def save_figure(fig, path, dpi: int = 110) -> Path:
             extra = {"metadata": meta} if meta else {}
             if fmt in ("jpg", "jpeg"):  # JPEG has no metadata dict in matplotlib: the mark is a comment segment
                 extra = {"pil_kwargs": {"comment": SOFTWARE.encode()}}
-            fig.savefig(tmp, dpi=dpi, format=fmt, **extra)
+            printable(fig).savefig(tmp, dpi=dpi, format=fmt, **extra)
     finally:
         _close(fig)
     return path

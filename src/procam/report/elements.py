@@ -71,8 +71,10 @@ def text_table(t) -> str:
 
 def png(fig, alt: str, dpi: int = 80) -> str:
     """A matplotlib figure as an inline ``<img>`` (base64 PNG)."""
+    from ..plots import printable
+
     buf = _stdio.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
+    printable(fig).savefig(buf, format="png", dpi=dpi)
     data = base64.b64encode(buf.getvalue()).decode("ascii")
     return f'<img src="data:image/png;base64,{data}" alt="{escape(alt)}">'
 

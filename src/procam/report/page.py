@@ -90,10 +90,12 @@ def html_page(title: str, heading: str, parts) -> str:
 
 
 def write_report(text: str, path) -> Path:
-    """Write the page ``text`` to ``path`` (UTF-8, atomically: temporary name, then rename)."""
+    """Write the page ``text`` to ``path`` (UTF-8, atomically: temporary name, then rename; a file name's
+    undecodable bytes shown as escapes, :func:`procam.style.shown`)."""
     from ..io.files import atomic_path
+    from ..style import shown
 
     path = Path(path)
     with atomic_path(path) as tmp:
-        Path(tmp).write_bytes(text.encode("utf-8"))
+        Path(tmp).write_bytes(shown(text).encode("utf-8"))
     return path
