@@ -124,6 +124,25 @@ def test_read_image_refuses_what_is_not_a_readable_file_without_waiting(tmp_path
         assert within(10, _images.png_header, tmp_path / "pipe.png") is None
 
 
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="no named pipes here")
+def test_a_named_pipe_named_like_a_json_file_is_refused_not_waited_on(tmp_path):
+    """A named pipe as a folder's manifest (the folder then counts as not procam's), or as any JSON file procam
+    reads, answers at once (opening it blocked until a writer came: a command hung on a pose folder holding one)."""
+    import errno
+    import os
+
+    from procam.io import jsonfile
+
+    os.mkfifo(tmp_path / _files.MANIFEST)
+    assert within(10, _files.read_manifest, tmp_path) is None
+    got = within(10, jsonfile.load_json, tmp_path / _files.MANIFEST)
+    assert isinstance(got, OSError) and got.errno == errno.EINVAL and "not a regular file" in str(got)
+    (tmp_path / "dir.json").mkdir()
+    assert isinstance(within(10, jsonfile.load_json, tmp_path / "dir.json"), IsADirectoryError)
+    (tmp_path / "ok.json").write_text('{"a": [1, 2]}')
+    assert jsonfile.load_json(tmp_path / "ok.json") == {"a": [1, 2]}
+
+
 def test_read_image_reads_files_of_any_size_one_after_another(tmp_path):
     """Files read one after another: a file after a larger one, a larger after a smaller, 8- and 16-bit PNGs and
     JPEGs come out as OpenCV reads them, and a truncated JPEG or PNG is refused."""

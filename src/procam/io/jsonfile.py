@@ -31,6 +31,26 @@ class JSONError(ValueError):
     """A JSON text procam does not read; the message says what is wrong, without the file's name."""
 
 
+def _regular_file_bytes(path: Path) -> bytes:
+    """The contents of ``path``, opened without blocking; OSError when it is not a regular file (a folder: EISDIR; a
+    named pipe, a device or a socket: EINVAL) or cannot be read."""
+    import errno
+    import os
+    import stat
+
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(errno.EISDIR, "is a folder", str(path))
+        if not stat.S_ISREG(mode):
+            raise OSError(errno.EINVAL, "not a regular file (a named pipe, a device or a socket)", str(path))
+        with os.fdopen(os.dup(fd), "rb") as f:
+            return f.read()
+    finally:
+        os.close(fd)
+
+
 def _path(parts) -> str:
     """``sequence[1].period``-style name of a place in a document."""
     out = ""
@@ -86,8 +106,9 @@ def loads(text: str, finite: bool = True):
 
 def load_json(path, finite: bool = True):
     """The bounded document of the JSON file ``path`` (:func:`loads`).  Raises :class:`JSONError` for a text
-    procam does not read, OSError when the file cannot be read."""
-    data = Path(path).read_bytes()
+    procam does not read, OSError when the file cannot be read or is not a regular file (a named pipe named like
+    the file is refused, not waited on)."""
+    data = _regular_file_bytes(Path(path))
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as e:
