@@ -194,6 +194,28 @@ def test_a_rig_pair_that_is_another_pairs_capture_is_refused_naming_both(tmp_pat
     assert [p.projector for p in capture.read_rig_pose(fine).pairs] == ["left", "right"]
 
 
+def test_a_rig_json_of_the_wrong_shape_is_a_one_line_error_and_its_reference_is_kept(tmp_path):
+    """No cameras (an internal error before), names given as one string (split into letters), pairs that are not an
+    object, a reference that is no camera (it was replaced by the first camera without a word): one line naming
+    rig.json. A reference that is another of the cameras is the rig's reference."""
+    from procam import capture
+    from procam.errors import CaptureError
+
+    root = _rig_pose(tmp_path / "rig", lambda a, b: _pose(b, 2))
+    good = json.loads((root / "rig.json").read_text())
+    for change, words in (({"cameras": []}, "a rig needs at least one camera and one projector"),
+                          ({"projectors": []}, "a rig needs at least one camera and one projector"),
+                          ({"cameras": "cam"}, "cameras must be a list of names, got 'cam'"),
+                          ({"pairs": "x"}, "pairs must be an object"),
+                          ({"reference": "nobody"}, "reference 'nobody' is not one of the cameras")):
+        (root / "rig.json").write_text(json.dumps({**good, **change}))
+        with pytest.raises(CaptureError, match=f"rig.json: {words}"):
+            capture.read_rig_pose(root)
+    two = capture.rig_manifest(["a", "b"], ["left"], {"left": ["a", "left"], "right": ["b", "left"]})
+    (root / "rig.json").write_text(json.dumps({**two, "reference": "b"}))
+    assert capture.read_rig_pose(root).cameras == ("b", "a")
+
+
 def test_a_pose_folder_given_twice_as_a_copy_is_refused_for_multi_pose_and_rig_poses(tmp_path):
     """A multi-pose list with one pose twice under two names (a copy, a link), and two rig poses that are one:
     refused, naming both, before any decoding."""

@@ -97,6 +97,8 @@ def rig_manifest(cameras, projectors, pairs=None) -> dict:
     reference) and ``pairs`` (sub-folder -> [camera, projector]; default every pair, named by
     :func:`pair_folder_name`)."""
     cameras, projectors = [check_device_name(c) for c in cameras], [check_device_name(p) for p in projectors]
+    if not cameras or not projectors:
+        raise ValueError("a rig needs at least one camera and one projector")
     if len(set(cameras + projectors)) != len(cameras + projectors):
         raise ValueError(f"device names must be unique, got {cameras + projectors}")
     if pairs is None:
@@ -190,6 +192,10 @@ def read_rig_pose(folder) -> RigPose:
             raise CaptureError(f"{man}: not a readable rig manifest: it {e}") from None
         if not isinstance(doc, dict) or doc.get("format") != RIG_POSE_FORMAT:
             raise CaptureError(f"{man}: not a procam rig manifest (missing format: {RIG_POSE_FORMAT})")
+    for key, kind, what in (("cameras", list, "a list of names"), ("projectors", list, "a list of names"),
+                            ("pairs", dict, "an object: sub-folder -> [camera, projector]")):
+        if key in doc and not isinstance(doc[key], kind):
+            raise CaptureError(f"{man}: {key} must be {what}, got {doc[key]!r:.60}")
     try:
         cams, projs = list(doc["cameras"]), list(doc["projectors"])
         pairs_doc = dict(doc["pairs"])
@@ -197,6 +203,10 @@ def read_rig_pose(folder) -> RigPose:
     except (KeyError, TypeError, ValueError) as e:
         raise CaptureError(f"{man}: {e if isinstance(e, ValueError) else 'needs cameras, projectors and pairs'}") \
             from None
+    ref = doc.get("reference", cams[0])
+    if ref not in cams:  # the reference the file names is the reference, or the file is wrong
+        raise CaptureError(f"{man}: reference {ref!r} is not one of the cameras {cams}")
+    cams = [ref] + [c for c in cams if c != ref]
     if not cams or not projs or not pairs_doc:
         raise CaptureError(f"{man}: a rig needs at least one camera, one projector and one pair")
     pairs = []
