@@ -1,6 +1,7 @@
 """File plumbing: atomic writes, full-scale detection, procam's marks (procam.io.files, procam.io.formats)."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -73,6 +74,31 @@ def test_every_file_procam_writes_carries_the_mark_procam_wrote_knows(tmp_path):
     cv2.imwrite(str(tmp_path / "theirs.jpg"), np.zeros((8, 8), np.uint8))
     for name in ("theirs.npz", "theirs.yml", "theirs.html", "theirs.jpg"):
         assert not _files.procam_wrote(tmp_path / name), name
+
+
+def test_a_captures_frame_is_never_an_outputs_to_replace_once_out_of_its_folder(tmp_path):
+    """A sequence's frames carry the frame's mark: in their folder its manifest lets their writer replace them
+    (re-rendering); copied out of it (``cp pose/*.png``, the hidden manifest left behind) no output replaces one:
+    a figure given that name was written over a frame of the capture."""
+    import shutil
+
+    from conftest import camera_view_of_patterns
+
+    from procam import capture, patterns
+    from procam.errors import OutputError
+
+    ps = patterns.pattern_set(64, 32)
+    frames = capture.write_sequence(tmp_path / "seq", camera_view_of_patterns(64, 32), ps)
+    assert _files.procam_wrote(frames[0])  # listed as a frame by its folder's manifest
+    (tmp_path / "loose").mkdir()
+    loose = Path(shutil.copy(frames[0], tmp_path / "loose" / frames[0].name))
+    before = loose.read_bytes()
+    assert not _files.procam_wrote(loose) and "is a frame of a capture" in _files.kept_because(loose)
+    with pytest.raises(OutputError, match="is a frame of a capture"):
+        io.write_image(loose, np.zeros((4, 4), np.uint8))
+    assert loose.read_bytes() == before
+    again = capture.write_sequence(tmp_path / "seq", camera_view_of_patterns(64, 32, seed=3), ps)  # its writer
+    assert again == frames and frames[0].read_bytes() != before
 
 
 def test_importing_the_file_plumbing_imports_no_format_code():

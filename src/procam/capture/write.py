@@ -155,8 +155,12 @@ class SequenceWriter:
         return False
 
     def add(self, k: int, image) -> Path:
-        """Write frame ``k`` of the sequence, (H, W) uint8/uint16; returns its path (in :attr:`folder`)."""
-        path = _files.write_image(self.folder / self.names[k], np.asarray(image), record=False)
+        """Write frame ``k`` of the sequence, (H, W) uint8/uint16; returns its path (in :attr:`folder`).  Frame
+        ``k`` again (a capture's retake) replaces the one this writer wrote."""
+        if self._paths[k] is not None:  # its own frame: a frame's mark keeps it from any other writer
+            self._paths[k].unlink(missing_ok=True)
+            self._paths[k] = None
+        path = _files.write_image(self.folder / self.names[k], np.asarray(image), record=False, frame=True)
         self._paths[k] = path
         return path
 

@@ -120,8 +120,7 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
         if not os.access(path, os.W_OK):
             fail(f"{option} {path}: the file is read-only; give another name or make it writable")
         if not _files.procam_wrote(path):
-            fail(f"{option} {path}: the file exists and procam did not write it; give another name, or move it "
-                 "away first (procam never overwrites a file it did not write)")
+            fail(f"{option} {path}: {_files.kept_because(path)}")
     folder = path.parent
     if _capture_folder(folder, inputs):
         own = folders.replaceable(folder)

@@ -82,13 +82,30 @@ def not_a_file(p: Path) -> str:
     return "no such file"
 
 
+def kept_because(path) -> str:
+    """Why procam does not write over the existing file ``path`` (:func:`procam_wrote` says no), and what to do, in
+    words for a message after the file's name."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            head = f.read(1 << 12)
+    except OSError:
+        head = b""
+    if head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.FRAME_MARK:
+        return ("the file is a frame of a capture (data procam wrote, not an output); give another name, or move it "
+                "away first (procam never overwrites a capture's frames)")
+    return ("the file exists and procam did not write it; give another name, or move it away first (procam never "
+            "overwrites a file it did not write)")
+
+
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
     Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
     :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a FileStorage file or ``.npz`` whose
     ``procam_format`` names one of procam's formats, a PLY with procam's header comment, a PNG/JPEG/PDF/SVG
-    marked ``procam`` (every figure and image procam writes is), an HTML page whose head names procam its
+    marked ``procam`` (every figure and image procam writes is; not a sequence's frame, marked ``procam frame``,
+    which only its folder's manifest lists as replaceable), an HTML page whose head names procam its
     generator (the report), a script whose first line is procam's mark with the digest of the rest, or an empty
     file.
     """
@@ -248,8 +265,7 @@ def atomic_path(path, record: bool = True, role: str = "output"):
     """
     path = Path(path)
     if path.name != MANIFEST and path.exists() and not procam_wrote(path):  # the last line of defence
-        raise OutputError(f"{path}: the file exists and procam did not write it; give another name, or move it away "
-                          "first (procam never overwrites a file it did not write)")
+        raise OutputError(f"{path}: {kept_because(path)}")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -320,9 +336,10 @@ def write_npz(path, fmt: str | None = None, compress: bool = True, **arrays) -> 
     return path
 
 
-def write_image(path, img: np.ndarray, record: bool = True) -> Path:
+def write_image(path, img: np.ndarray, record: bool = True, frame: bool = False) -> Path:
     """Write an image atomically with OpenCV (format from the extension; ``record``: see :func:`atomic_path`); a PNG
-    or JPEG carries procam's mark (:mod:`procam.io.formats`)."""
+    or JPEG carries procam's mark (:mod:`procam.io.formats`), a PNG ``frame`` of a sequence the frame's mark
+    (:data:`~procam.io.formats.FRAME_MARK`: :func:`procam_wrote` does not offer it to outputs)."""
     import cv2
 
     path = Path(path)
@@ -332,7 +349,7 @@ def write_image(path, img: np.ndarray, record: bool = True) -> Path:
             raise CaptureError(f"{path}: could not encode image")
         data = buf.tobytes()
         if data[:8] == PNG_SIGNATURE:
-            data = png_with_text(data, formats.PNG_TEXT_KEY, formats.SOFTWARE)
+            data = png_with_text(data, formats.PNG_TEXT_KEY, formats.FRAME_MARK if frame else formats.SOFTWARE)
         elif data[:2] == b"\xff\xd8":
             data = jpeg_with_comment(data, formats.SOFTWARE.encode())
         Path(tmp).write_bytes(data)

@@ -13,7 +13,8 @@ FileStorage         YAML (``%YAML``) or XML (``<opencv_storage>``) whose key :da
                     :data:`FILESTORAGE_FORMATS` (procam's layout :data:`OPENCV`, kamino410's :data:`KAMINO410`)
 ``.npz``            a member :data:`NPZ_KEY` naming a format of :data:`NPZ_FORMATS` (decoded maps, a remap table)
 PLY                 a header comment line :data:`PLY_COMMENT` (the key and a format, as in FileStorage)
-PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`
+PNG                 a ``tEXt`` chunk :data:`PNG_TEXT_KEY` = :data:`SOFTWARE`; a frame of a sequence (a pattern, a
+                    rendered or a camera's frame) :data:`FRAME_MARK` instead: data, never replaced by an output
 Python script       a first line :data:`SCRIPT_MARK` and the SHA-256 of the rest of the file (:func:`script_mark`)
 JPEG                a comment (``COM``) segment :data:`SOFTWARE` (a figure written as ``.jpg``)
 PDF, SVG, PS, EPS   :data:`SOFTWARE` as the figure's Creator
@@ -111,6 +112,10 @@ HTML_GENERATOR = f'<meta name="generator" content="{SOFTWARE}">'
 
 #: The PNG ``tEXt`` key procam's signature stands under (value :data:`SOFTWARE`).
 PNG_TEXT_KEY = "Software"
+#: The PNG ``Software`` text of a frame of a sequence (:class:`procam.capture.write.SequenceWriter`): procam wrote
+#: it, but it is a capture's data, not an output: only its folder's manifest lets its own writer replace it (a
+#: frame copied out of its folder, manifest left behind, is never overwritten by a figure).
+FRAME_MARK = f"{SOFTWARE} frame"
 #: The first line of a script procam writes (``procam export --format blender``): this, then the SHA-256 of the rest.
 SCRIPT_MARK = "# procam-script sha256:"
 
