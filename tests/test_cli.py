@@ -71,6 +71,17 @@ def test_a_folder_named_with_undecodable_bytes_is_calibrated_decoded_and_reporte
     assert cv2.imread(str(tmp_path / "c.png")) is not None and cv2.imread(str(tmp_path / "m.png")) is not None
 
 
+def test_names_are_shown_with_their_control_characters_and_undecodable_bytes_escaped(tmp_path):
+    """A folder named with a terminal's escape sequence is named in the error line with the escape written out (a
+    raw ESC would recolour or rewrite the user's terminal); text, tabs and line breaks are left as they are."""
+    from procam.style import shown
+
+    assert shown("a\x1b[31mred\tb\nc\r\x85") == "a\\x1b[31mred\tb\nc\\r\\x85"
+    assert shown("pose\udcff1 \u00e9\u00b1\u03c3") == "pose\\xff1 \u00e9\u00b1\u03c3"
+    code, out, err = run_cli(["decode", tmp_path / "pose\x1b[2J", "-o", tmp_path / "m.npz"])
+    assert code == 2 and "\x1b" not in err and "pose\\x1b[2J: no such folder" in err
+
+
 def test_calibrate_errors(ideal_capture, tmp_path):
     folder, _, _, _ = ideal_capture
     out = tmp_path / "c.json"

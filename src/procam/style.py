@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 
 #: Text of a missing value (None or NaN) in tables.
 MISSING = "—"
@@ -61,15 +62,19 @@ def on_dark(colour: str, amount: float = 0.4) -> str:
 
 
 def shown(text: str) -> str:
-    """``text`` as a person reads it (a figure's title, a page): the bytes of a file name that no encoding decodes,
-    which Python keeps as lone surrogates (``pose\\udcff1``: fonts and UTF-8 files refuse them), as escapes of the
-    bytes (``pose\\xff1``); any other text unchanged."""
+    """``text`` as a person reads it (a figure's title, a page, a line in a terminal): the bytes of a file name that
+    no encoding decodes, which Python keeps as lone surrogates (``pose\\udcff1``: fonts and UTF-8 files refuse
+    them), as escapes of the bytes (``pose\\xff1``), and control characters but tab and line break (a name holding
+    a terminal's escape sequence, which would recolour or rewrite the terminal) as escapes (``\\x1b``); any other
+    text unchanged."""
     try:
         text.encode("utf-8")
-        return text
     except UnicodeEncodeError:
-        pass
-    try:
-        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-    except UnicodeEncodeError:  # a surrogate that is not a byte's (a broken UTF-16 pair)
-        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+        try:
+            text = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+        except UnicodeEncodeError:  # a surrogate that is not a byte's (a broken UTF-16 pair)
+            text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
+
+
+_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
