@@ -193,20 +193,30 @@ def test_the_chunk_checksum_is_zlibs_taken_in_pieces(crc, monkeypatch):
     assert png._CRC_PIECE <= 5 * 1024  # both let the lock go above 5 KB
 
 
-def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
-    """A stream with valid checksums that does not inflate (or to the wrong size), an interlaced or huge header:
-    decode hands it back, and read_image says what OpenCV says."""
+def test_damaged_streams_and_odd_headers_are_said_in_one_line_or_left_to_opencv(tmp_path):
+    """A stream with valid chunk checksums that does not inflate, or ends early, and a header of a zero size:
+    damaged, said in one line naming the file (OpenCV refuses each too, after libpng printed its own lines); an
+    interlaced or huge header, and a stream whose fault comes after its rows, are handed back to OpenCV."""
     data = _encode(_image((32, 32), np.uint8, seed=10), FAST["sub"])
     parts, _ = png.chunks(data)
     _, s, e = next(p for p in parts if p[0] == b"IDAT")
-    bad = bytearray(data)
-    bad[s + 10:e] = bytes(e - s - 10)  # zeros after the stream's start: it no longer inflates to the image
-    bad[e:e + 4] = (zlib.crc32(bytes(bad[s - 4:e])) & 0xFFFFFFFF).to_bytes(4, "big")
-    bad = bytes(bad)
-    assert png.chunks(bad)[1] is None and _decoded(bad) is None
-    (tmp_path / "bad.png").write_bytes(bad)
-    with pytest.raises(CaptureError, match="cannot be read as an image"):
-        _images.read_image(tmp_path / "bad.png")
+
+    def with_idat(body):
+        return data[:s - 8] + _chunk(b"IDAT", body) + data[e + 4:]
+
+    stream = data[s:e]
+    cases = [(with_idat(stream[:10] + bytes(len(stream) - 10)), "its image data does not inflate"),
+             (with_idat(zlib.compress(zlib.decompress(stream)[:-40])), "its image data ends early: 1016 of the 1056")]
+    for w, h in ((0, 32), (32, 0), (1 << 31, 32)):
+        ihdr = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, 0])
+        cases.append((data[:8] + _chunk(b"IHDR", ihdr) + data[33:], f"its header gives a size of {w} x {h} pixels"))
+    for k, (bad, words) in enumerate(cases):
+        assert png.chunks(bad)[1] is None and _opencv(bad) is None, words
+        with pytest.raises(png.Damaged, match=words):
+            _decoded(bad)
+        (tmp_path / f"bad{k}.png").write_bytes(bad)
+        with pytest.raises(CaptureError, match=f"bad{k}.png: is damaged \\({words}"):
+            _images.read_image(tmp_path / f"bad{k}.png")
 
     def header(w, h, interlace=0):
         ihdr = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 0, 0, 0, interlace])
@@ -215,6 +225,9 @@ def test_damaged_streams_and_odd_headers_are_left_to_opencv(tmp_path):
     assert _decoded(header(32, 32)) is not None
     assert _decoded(header(32, 32, interlace=1)) is None
     assert _decoded(header(1 << 16, 1 << 16)) is None  # 4 GiB of rows: not allocated here
+    # a stream that fails only after its rows (its checksum): libpng stops reading once it has the rows, and reads
+    # such a file when the checksum is in an image data chunk of its own; OpenCV says what is wrong
+    assert _decoded(with_idat(stream[:-4] + bytes(4))) is None
 
 
 def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
@@ -229,7 +242,7 @@ def test_read_image_gives_opencvs_grey_of_a_colour_png(tmp_path):
 def test_a_file_opencv_refuses_is_never_decoded_here():
     """Chunks out of place (text between the image data, a second header, image data dropped, repeated or empty)
     and random bytes changed with every checksum made right again: whatever decodes here, OpenCV decodes to the
-    same array; what OpenCV refuses is handed back."""
+    same array; what OpenCV refuses is handed back, or said to be damaged."""
     rng = np.random.default_rng(12)
     img = _image((40, 50), np.uint8, seed=12)
     small = [cv2.IMWRITE_PNG_FILTER, FAST["sub"], cv2.IMWRITE_PNG_ZLIBBUFFER_SIZE, 64]  # many small IDAT chunks
@@ -252,15 +265,20 @@ def test_a_file_opencv_refuses_is_never_decoded_here():
             b[end - 4:end] = (zlib.crc32(bytes(b[pos + 4:end - 4])) & 0xFFFFFFFF).to_bytes(4, "big")
             pos = end
         files.append(bytes(b))
-    fast = 0
+    fast = damaged = 0
     for f in files:
         parts, problem = png.chunks(f)
-        got = png.decode(f, parts) if problem is None else None
+        try:
+            got = png.decode(f, parts) if problem is None else None
+        except png.Damaged:  # what is called damaged here, OpenCV refuses too
+            assert _opencv(f) is None
+            damaged += 1
+            continue
         if got is not None:
             fast += 1
             ref = _opencv(f)
             assert ref is not None and ref.dtype == got.dtype and np.array_equal(ref, got)
-    assert fast > 50  # the unchanged kinds of file did decode here
+    assert fast > 50 and damaged > 50  # the unchanged kinds of file did decode here, and broken streams were seen
 
 
 def test_sizes_opencv_refuses_are_left_to_it(monkeypatch):

@@ -59,7 +59,11 @@ def read_image(path, gray: bool = True, into: np.ndarray | None = None) -> np.nd
     if parts:  # the common PNG, decoded faster than OpenCV does and to the same array (procam.io.png)
         from . import png
 
-        img = png.decode(raw, parts, into)
+        try:
+            img = png.decode(raw, parts, into)
+        except png.Damaged as e:
+            raise CaptureError(f"{path}: is damaged ({e}); re-save or re-capture it, or remove it from the folder") \
+                from None
     if img is None and raw:
         try:
             img = cv2.imdecode(np.frombuffer(raw, dtype=np.uint8), cv2.IMREAD_UNCHANGED)

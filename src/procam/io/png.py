@@ -17,10 +17,12 @@ It takes what cameras' capture scripts write (OpenCV's ``imwrite`` filters every
 grey or colour, not interlaced, every row under one filter of ``None``, ``Sub`` or ``Up``, and no chunks but
 those OpenCV's reader ignores (:data:`IGNORED`).  For anything else (palette, alpha, a transparency chunk, rows
 under ``Average`` or ``Paeth`` as Pillow's and most image editors' adaptive filters write, a stream that does
-not inflate to the image's size, image data split by another chunk, a size over libpng's or OpenCV's limits)
-:func:`decode` returns None and the caller decodes with OpenCV, so the result is always OpenCV's: the same
+inflates to more than the image's size, image data split by another chunk, a size over libpng's or OpenCV's
+limits) :func:`decode` returns None and the caller decodes with OpenCV, so the result is always OpenCV's: the same
 array, bit for bit (``tests/test_png.py`` compares every filter, depth and channel count with ``cv2.imdecode``,
-and files with bytes changed and chunks moved: whatever decodes here, OpenCV decodes to the same array).
+and files with bytes changed and chunks moved: whatever decodes here, OpenCV decodes to the same array).  A file
+no PNG reader decodes (a zero size, image data that does not inflate or ends early, its checksums right) is
+:class:`Damaged`: said in one line, where OpenCV would have let libpng print its own first.
 """
 
 from __future__ import annotations
@@ -54,6 +56,12 @@ _CHANNELS = {0: 1, 2: 3}  # colour type -> channels: grey, RGB
 #: frame take 0.08 ms with ISA-L's (0.2 ms with zlib's).
 _CRC_PIECE = 4096
 _BAD_STREAM = (zlib.error, getattr(_inflater, "error", zlib.error), ValueError, MemoryError)
+_NOT_INFLATED = (zlib.error, getattr(_inflater, "error", zlib.error))
+
+
+class Damaged(ValueError):
+    """A PNG whose chunks are whole but whose contents no PNG reader decodes (libpng refuses it too, after printing
+    its own lines): the message says what is wrong, after the file's name."""
 
 
 def chunks(data: bytes) -> tuple[list[tuple[bytes, int, int]], str | None]:
@@ -97,7 +105,8 @@ def _name(kind: bytes) -> str:
 def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | None = None
            ) -> np.ndarray | None:
     """The image of the PNG ``data`` as ``cv2.imdecode(data, cv2.IMREAD_UNCHANGED)`` gives it, or None when it is
-    not of the kind decoded here (the module docstring).
+    not of the kind decoded here (the module docstring).  Raises :class:`Damaged` for a file libpng refuses too: a
+    width or height of 0 (or over 2^31 - 1), image data that does not inflate or ends early.
 
     ``parts``: its :func:`chunks`, checked.  Returns (H, W) for grey, (H, W, 3) BGR for colour; ``uint8`` or
     ``uint16`` (native byte order).  ``into``: an 8-bit (H, W) array (a frame of a stack) that an 8-bit grey image
@@ -108,6 +117,8 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | 
     s = parts[0][1]
     w, h = int.from_bytes(data[s:s + 4], "big"), int.from_bytes(data[s + 4:s + 8], "big")
     depth, ctype, method, filtering, interlace = data[s + 8:s + 13]
+    if not (0 < w < 1 << 31 and 0 < h < 1 << 31):  # the PNG standard's sizes: libpng refuses any other
+        raise Damaged(f"its header gives a size of {w} x {h} pixels")
     ch = _CHANNELS.get(ctype)
     if ch is None or depth not in (8, 16) or method or filtering or interlace or not _within_limits(w, h):
         return None
@@ -125,10 +136,17 @@ def decode(data: bytes, parts: list[tuple[bytes, int, int]], into: np.ndarray | 
     idat = [mv[parts[k][1]:parts[k][2]] for k in at]
     if not _uniform_start(idat[0], stride):
         return None
+    stream = idat[0] if len(idat) == 1 else b"".join(idat)
     try:
-        raw = _inflater.decompress(idat[0] if len(idat) == 1 else b"".join(idat), 15, size)
-    except _BAD_STREAM:  # a stream that does not inflate: OpenCV says so
+        raw = _inflater.decompress(stream, 15, size)
+    except _NOT_INFLATED as e:
+        if _rows_before_error(stream, size):  # past the rows (the stream's checksum): libpng may read it
+            return None
+        raise Damaged(f"its image data does not inflate: {e}") from None  # libpng refuses it too
+    except _BAD_STREAM:
         return None
+    if len(raw) < size:  # libpng: "Not enough image data"
+        raise Damaged(f"its image data ends early: {len(raw)} of the {size} bytes of its rows")
     if len(raw) != size:
         return None
     kinds = raw[::stride + 1]  # each row's filter (bytes, not numpy: no call here lets the interpreter lock go)
@@ -174,14 +192,35 @@ def _within_limits(w: int, h: int) -> bool:
             and w * h <= limit("PIXELS", 1 << 30))
 
 
+def _rows_before_error(stream, size: int) -> bool:
+    """Whether the zlib ``stream``, which fails to inflate, gives its ``size`` bytes of rows before it fails (the
+    error is in what follows them, as its checksum: libpng stops reading once it has the rows).  Inflated in pieces
+    of 4 KB, then the failing piece byte by byte, to see how far it gets; only ever called for a damaged file."""
+    def inflated(pieces):
+        d, got = zlib.decompressobj(), 0
+        for k, piece in enumerate(pieces):
+            try:
+                got += len(d.decompress(piece))
+            except zlib.error:
+                return got, k
+        return got, None
+
+    data = bytes(stream)
+    got, failed = inflated(data[i:i + 4096] for i in range(0, len(data), 4096))
+    if failed is not None:
+        start = failed * 4096
+        got, _ = inflated([data[:start]] + [data[i:i + 1] for i in range(start, min(len(data), start + 4096))])
+    return got >= size
+
+
 def _uniform_start(first, stride: int, rows: int = 8) -> bool:
     """Whether the first ``rows`` rows (inflated from the start of the first IDAT chunk) are under None, Sub or Up:
     an adaptive writer's Paeth or Average rows show there, before the whole image is inflated for nothing."""
     d = zlib.decompressobj()
     try:
         head = d.decompress(first[:4 * rows * (stride + 1) + 64], rows * (stride + 1))
-    except zlib.error:
-        return False
+    except zlib.error as e:  # not a stream cut short (that raises nothing): one no PNG reader inflates
+        raise Damaged(f"its image data does not inflate: {e}") from None
     return all(b in (0, 1, 2) for b in head[::stride + 1])
 
 
