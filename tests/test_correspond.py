@@ -52,6 +52,24 @@ def test_estimators_all_work(paper_capture, estimator):
     assert rms(proj, proj_t) < 0.2
 
 
+def test_the_trimmed_fit_in_batches_of_corners_is_the_fit_of_all_at_once(paper_capture, monkeypatch):
+    """Corners fitted in batches (their windows' pixels bounded: a 1000 px window held 9.6 GB for 60 corners at
+    once) give the same projector corners and diagnostics (to the last bits of the sums: BLAS picks its kernel by
+    the product's size); a board of the default window's size is one batch."""
+    _, stack, truth, _ = paper_capture
+    cam_t = _truth(truth)[0]
+    maps = decode.decode(stack, PS)
+    opts = correspond.CornerOptions()
+    whole = correspond.projector_corners(cam_t, maps, opts)
+    assert len(cam_t) * opts.window ** 2 <= correspond.TRIMMED_BATCH  # the board at the default window: one batch
+    monkeypatch.setattr(correspond, "TRIMMED_BATCH", 7 * opts.window ** 2)  # 9 batches of 7 corners
+    batched = correspond.projector_corners(cam_t, maps, opts)
+    np.testing.assert_allclose(batched[0], whole[0], rtol=0, atol=1e-9)
+    for k in ("reason", "pixels", "window_pixels", "inliers"):
+        assert np.array_equal(whole[1][k], batched[1][k]), k
+    np.testing.assert_allclose(batched[1]["residual_px"], whole[1]["residual_px"], rtol=1e-9)
+
+
 def test_partially_lit_board_works_corner_by_corner(paper_capture):
     _, stack, truth, _ = paper_capture
     cam_t, proj_t, _ = _truth(truth)

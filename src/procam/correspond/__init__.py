@@ -99,7 +99,12 @@ def projector_corners(cam_pts: np.ndarray, maps: DecodeResult, options: CornerOp
         fit.append(k)
     ransac = fit
     if options.estimator == "trimmed" and fit:
-        ransac = _trimmed_corners(np.array(fit), cam_pts, maps, half, options, proj, reason, inliers, resid)
+        # all at once, in batches of corners whose windows hold at most TRIMMED_BATCH pixels in all: a window of
+        # 1000 px held 9.6 GB for 60 corners at once
+        per = max(1, TRIMMED_BATCH // (2 * half) ** 2)
+        ransac = [k for i in range(0, len(fit), per) for k in
+                  _trimmed_corners(np.array(fit[i:i + per]), cam_pts, maps, half, options, proj, reason, inliers,
+                                   resid)]
     if ransac:
         _cv2_corners(ransac, cam_pts, maps, half, options, proj, reason, inliers, resid)
     return proj, {"reason": reason, "pixels": pixels, "window_pixels": wpix, "inliers": inliers,
@@ -146,6 +151,11 @@ def _cv2_corners(ks, cam_pts, maps, half, options, proj, reason, inliers, resid)
             continue
         inl = mask.ravel().astype(bool) if mask is not None else np.ones(len(src), bool)
         _finish(k, Hm, src - so, dst - do, do, inl, options, proj, reason, inliers, resid)
+
+
+#: Most window pixels (all corners' together) :func:`projector_corners` fits at once with the trimmed estimator
+#: (its arrays hold about 20 float64 values a pixel): 2^21 is 60 windows of 187 px, or 582 of the default 60 px.
+TRIMMED_BATCH = 1 << 21
 
 
 def _trimmed_corners(ks, cam_pts, maps, half, options, proj, reason, inliers, resid) -> list:
