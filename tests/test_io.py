@@ -191,6 +191,27 @@ def test_rule_rotation_tolerance_takes_a_yaml_written_with_few_digits(tmp_path):
         io.load_calibration(_edited_json(tmp_path, lambda d: d.__setitem__("R", bent.tolist())))
 
 
+def test_rule_a_distortion_no_lens_has_is_refused(tmp_path):
+    """A division k1 of 1e10 (the whole image on its centre: every pixel of an exported undistortion map invalid,
+    exit 0 before) or OpenCV coefficients that fold the image's edge are refused naming the field; strong real
+    lenses (a wide angle's barrel, a pincushion) are read."""
+    import dataclasses
+
+    c = _calib()
+    for dist in (Distortion("division", (674.0, 512.0), -4e-7, 0.0), Distortion("division", (674.0, 512.0), 2e-7, 0.0),
+                 Distortion("opencv", coeffs=(-0.4, 0.15, 0.0, 0.0, -0.02))):
+        io.save_calibration(dataclasses.replace(c, camera=dataclasses.replace(c.camera, distortion=dist)),
+                            tmp_path / "ok.json")
+        assert io.load_calibration(tmp_path / "ok.json").camera.distortion == dist
+    for dist in (Distortion("division", (674.0, 512.0), 1e10, 0.0), Distortion("division", (674.0, 512.0), -1e-3, 0.0),
+                 Distortion("opencv", coeffs=(1e6, 0.0, 0.0, 0.0, 0.0))):
+        io.save_calibration(dataclasses.replace(c, camera=dataclasses.replace(c.camera, distortion=dist)),
+                            tmp_path / "bad.json")
+        with pytest.raises(CalibrationFileError, match="bad.json: camera.distortion puts the image's edge .* times as "
+                                                       "far from the principal point .*: not a lens"):
+            io.load_calibration(tmp_path / "bad.json")
+
+
 def test_rule_an_empty_distortion_vector_is_no_distortion(tmp_path):
     c = io.load_calibration(_kamino(tmp_path / "k.xml", cam_dist=np.zeros((1, 0))))    # OpenCV's empty Mat
     assert c.camera.distortion == Distortion()

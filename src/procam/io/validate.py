@@ -23,7 +23,10 @@ The rules, and why each is what it is:
   5, 8, 12 or 14 finite numbers; no vector or an empty one means no distortion, as for OpenCV's ``distCoeffs``
   (an empty ``Mat`` is zero distortion), so files that write ``[]`` for a distortion-free device are read.  In a
   FileStorage file, all-zero coefficients are no distortion too (procam writes a distortion-free projector so).
-  Division model: a finite centre ``(x, y)`` and finite ``k1``, ``k2``.
+  Division model: a finite centre ``(x, y)`` and finite ``k1``, ``k2``.  Either model is a lens's: the image's
+  corners and the middles of its sides, undistorted, are finite and from 0.1 to 10 times as far from the principal
+  point as in the image (:func:`check_lens`; a 170-degree lens is about 8): a division ``k1`` of 1e10 put the whole
+  image on its centre, and every pixel of an exported undistortion map was invalid, without a word.
 * translation ``T``: 3 finite numbers, ``0 < |T| <= MAX_BASELINE`` (camera and projector are apart).
 * an RMS error: a number of pixels, or absent (NaN).
 * a JSON file: each key once in every object (:func:`load_json`); a second value of a key is refused, never
@@ -46,6 +49,9 @@ MAX_IMAGE_SIDE = 100000
 MAX_BASELINE = 1e9
 #: Largest ``max |R^T R - I|`` of a rotation read from a file.
 ROTATION_TOL = 1e-3
+#: The range of a lens's distortion: the image's edge undistorted is this many times as far from the principal point
+#: as in the image (a 170-degree lens about 8 times, pincushion a little under 1).
+MIN_STRETCH, MAX_STRETCH = 0.1, 10.0
 #: The lengths of an OpenCV distortion vector (besides an empty one: no distortion).
 OPENCV_DIST_LENGTHS = (4, 5, 8, 12, 14)
 
@@ -151,6 +157,29 @@ def check_distortion(path, field: str, d) -> Distortion:
     bad(path, f"{field}.model", f"must be none, division or opencv, got {short(model)}")
 
 
+def check_lens(path, field: str, dev) -> None:
+    """The distortion of the device ``dev`` (its ``K``, ``image_size``, ``distortion``) is a lens's (module rules):
+    the image's corners and the middles of its sides, undistorted, are finite and from :data:`MIN_STRETCH` to
+    :data:`MAX_STRETCH` times as far from the principal point as they are in the image."""
+    if dev.distortion.model == "none" or dev.image_size is None:
+        return
+    w, h = dev.image_size
+    K = np.asarray(dev.K, float)
+    edge = np.array([[0, 0], [w - 1, 0], [0, h - 1], [w - 1, h - 1], [(w - 1) / 2, 0], [(w - 1) / 2, h - 1],
+                     [0, (h - 1) / 2], [w - 1, (h - 1) / 2]], float)
+    c = K[:2, 2]
+    r = np.hypot(*(edge - c).T)
+    with np.errstate(all="ignore"):
+        und = dev.distortion.undistort(edge, K)
+        stretch = np.hypot(*(und - c).T) / r
+    far = r > 0.05 * max(w, h)  # a side's middle may sit on the principal point
+    worst = stretch[far][np.argmax(np.abs(np.log(np.where(np.isfinite(stretch[far]) & (stretch[far] > 0),
+                                                              stretch[far], np.inf))))] if far.any() else 1.0
+    if not np.all(np.isfinite(und)) or not MIN_STRETCH <= worst <= MAX_STRETCH:
+        bad(path, field, f"puts the image's edge {worst:.3g} times as far from the principal point as the image does "
+                         f"(a lens's distortion: {MIN_STRETCH:g} to {MAX_STRETCH:g} times): not a lens")
+
+
 def off_centre(K, size) -> float:
     """How far the principal point of ``K`` sits from the centre of a ``size`` = (w, h) image, as the larger of its
     two offsets in fractions of the side (the reader's test of which order a pair of sides is in)."""
@@ -228,6 +257,7 @@ def validate_calibration(calib, path) -> Calibration:
                 bad(path, f"{name}.distortion.coeffs", f"must have {', '.join(map(str, OPENCV_DIST_LENGTHS))} OpenCV "
                                                        f"coefficients, got {len(d.coeffs)}")
             numbers(path, f"{name}.distortion.coeffs", d.coeffs, (len(d.coeffs),))
+        check_lens(path, f"{name}.distortion", dev)
     if calib.projector is not None or calib.R is not None or calib.T is not None:
         if calib.projector is None:
             bad(path, "projector", "is missing (null) while R and T are given")
