@@ -115,6 +115,46 @@ def test_a_wrong_shift_direction_is_named_with_the_change_that_fixes_it(other_to
     assert 'with "shift": -1 (the phase steps the other way) in the column blocks they agree' in str(e.value)
 
 
+def test_a_frame_of_the_other_axis_swapped_in_is_refused_not_decoded_to_nothing(other_tool, tmp_path):
+    """A column frame and a row frame exchanged (two files renamed by hand) is refused in one line naming the frame
+    order, and no change of the description is offered: one pixel "agreed at 100 %" with the column blocks' start
+    turned, and was offered as the fix. (The bench's capture, whose fringes decode nowhere then, was decoded to
+    0.0 % with exit 0: the next test.)"""
+    folder, _ = other_tool
+    bad = _copy_with(folder, tmp_path, OTHER_TOOL)
+    first, seventh = (bad / "img_1.png").read_bytes(), (bad / "img_7.png").read_bytes()
+    (bad / "img_1.png").write_bytes(seventh)
+    (bad / "img_7.png").write_bytes(first)
+    with pytest.raises(CaptureError, match=r"the description does not match the frames: along the columns .* — fix "
+                                           r"patterns.json \(docs/patterns.md: the conventions and the frame order\)$"
+                       ) as e:
+        capture.load_capture(bad)
+    assert " with " not in str(e.value).split("well-lit pixels")[1]  # no change of the description offered
+    code, _, err = run_cli(["decode", bad, "-o", tmp_path / "maps.npz"])
+    assert code == 2 and not (tmp_path / "maps.npz").exists() and "does not match the frames" in err
+
+
+def test_a_capture_that_decodes_nowhere_is_refused_not_written(tmp_path):
+    """A 3-step capture of one camera with no white or black frame, its first column frame and first row frame
+    exchanged: no lit pixel decodes along either axis (every one's fringes too faint to order); written as 0.0 %
+    decoded with exit 0 before, now a one-line error naming the frame order and the exposure."""
+    from procam import simulate
+
+    ps = patterns.pattern_set(1920, 1080, family="phase", steps=3, period=64, white_black=False)
+    scene = simulate.with_board_pose(simulate.preset("paper"), simulate.RECOMMENDED_POSE)
+    stack, truth = simulate.render(scene, order=ps, seed=7)
+    folder = tmp_path / "pose"
+    simulate.write_capture(folder, stack, truth, order=ps)
+    first, row = ps.phase_blocks("col")[0].first, ps.phase_blocks("row")[0].first
+    a, b = folder / f"{first:02d}.png", folder / f"{row:02d}.png"
+    da, db = a.read_bytes(), b.read_bytes()
+    a.write_bytes(db)
+    b.write_bytes(da)
+    with pytest.raises(CaptureError, match=r"0\.0% of the lit pixels decode along the columns .*the frame order in "
+                                           r"patterns.json .* and the capture's exposure and focus"):
+        capture.load_capture(folder)
+
+
 def test_a_wrong_phase_sign_mirrors_the_coordinates_and_is_named(other_tool, tmp_path):
     """The columns' sign of the wrong way round is self-consistent (the column coordinates decode mirrored): the
     frames agree, the board comes out mirrored, and the message names the description's sign. (Both axes'

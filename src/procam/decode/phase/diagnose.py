@@ -9,6 +9,8 @@ one-line :class:`~procam.errors.CaptureError` naming the frame and how it disagr
   as decoded): a frame's typical residual over :data:`MAX_FRAME_RESIDUAL` of the modulation -- the frames that
   stand out are named (from 5 steps; with 4 the one degree of freedom left shows a wrong frame in all four), else
   the block: out of order, repeated or from another sequence;
+* **anything decoded**: under :data:`MIN_DECODED` of the lit pixels decode along an axis -- a frame of the other
+  axis among its frames, frames out of order, or fringes too faint for the camera to tell their periods apart;
 * **the cue's consistency**: the frequencies (or the Gray code and the fringes) give different fringe periods at
   over :data:`MAX_DISAGREEMENT` of the well-lit pixels -- a wrong period, phase sign, shift direction or frame
   order.  procam then tries the description with the shift direction and the phase sign of that axis's blocks
@@ -39,6 +41,9 @@ from ...patterns.phase import Fringe, PhaseSet
 from . import response as _resp
 
 MIN_RELATIVE_MODULATION = 0.15
+#: Fewest of the lit pixels (not in shadow, not saturated) of the decoder's sample that must decode along each axis:
+#: below it nothing can be ordered (a frame of the other axis swapped in decoded 0.0 %, and was written with exit 0)
+MIN_DECODED = 0.01
 MAX_FRAME_RESIDUAL = 0.3
 MAX_DISAGREEMENT = 0.2
 
@@ -164,12 +169,23 @@ def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, op
         for words, alt in _variants(ps, axis):
             f2 = _fractions(_decode_sample(np.ascontiguousarray(sub[:, None, :]), alt, opts2), lit)[axis]
             bad = f2[0] + f2[1]
-            if bad < 0.05 and (best is None or bad < best[0]):
+            # judged at as many pixels (a variant under which almost nothing decodes agrees at the few that do: one
+            # pixel of a capture with a frame of the other axis swapped in "agreed at 100 %")
+            if bad < 0.05 and f2[2] >= 0.5 * n and (best is None or bad < best[0]):
                 best = (bad, words)
         if best is not None:
             hint = f"; with {best[1]} they agree at {1 - best[0]:.0%} of them"
         raise CaptureError(f"{name}: the description does not match the frames: along the {label}s {how}{hint} — fix "
                            "patterns.json (docs/patterns.md: the conventions and the frame order)")
+    for axis, r in (("col", res.reason_col[0]), ("row", res.reason_row[0])):
+        ok = float(np.mean(r[lit] == _d.OK))
+        if ok < MIN_DECODED:
+            label = "column" if axis == "col" else "row"
+            raise CaptureError(
+                f"{name}: {ok:.1%} of the lit pixels decode along the {label}s (the fringes' periods cannot be told "
+                f"apart anywhere): a frame that is not the described one (a frame of the other axis among them, frames "
+                f"out of order) or fringes too faint for the camera — check the frame order in patterns.json "
+                f"(docs/patterns.md) and the capture's exposure and focus")
     _check_upright(res, idx, lit, ps, W, name)
 
 
