@@ -602,7 +602,7 @@ def test_unwritable_and_impossible_outputs(tmp_path, poses, calib_file):
     afile.write_text("x")
     cases = [
         (["calibrate", poses[0], *BOARD, "-o", "/proc/nope/c.json"], ["cannot create the folder"]),
-        (["calibrate", poses[0], *BOARD, "-o", tmp_path], ["must end in"]),
+        (["calibrate", poses[0], *BOARD, "-o", tmp_path], ["is a folder; give a file name"]),
         (["calibrate", poses[0], *BOARD, "-o", tmp_path / "d.json"], None),  # placeholder, replaced below
         (["experiment", *poses, *BOARD, "-o", afile], ["-o", "not a folder"]),
         (["study", "camera", "-o", afile, "--grid", "0"], ["not a folder"]),
@@ -616,6 +616,17 @@ def test_unwritable_and_impossible_outputs(tmp_path, poses, calib_file):
     for args, needles in cases:
         bad(args, *needles)
     assert afile.read_text() == "x" and not leftovers(tmp_path)
+
+
+def test_decode_names_its_maps_file_as_given_or_adds_npz_only_to_a_bare_name(tmp_path, poses):
+    """``-o maps`` writes maps.npz; an existing folder or another suffix is refused (they were written as
+    ``folder.npz`` beside it and ``x.npz``, a name the user did not give)."""
+    (tmp_path / "existdir").mkdir()
+    bad(["decode", poses[0], "-o", tmp_path / "existdir"], "is a folder; give a file name")
+    bad(["decode", poses[0], "-o", tmp_path / "x.txt"], "must end in .npz")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["existdir"]
+    code, out, err = run_cli(["decode", poses[0], "-o", tmp_path / "maps"])
+    assert code == 0 and (tmp_path / "maps.npz").is_file(), err
 
 
 def test_loop_link_as_output(tmp_path, poses):

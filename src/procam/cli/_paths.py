@@ -95,10 +95,10 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
     from ..io import folders
 
     path = Path(path)
-    if path.suffix.lower() not in suffixes:
-        fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
     if path.is_dir():
         fail(f"{option} {path}: is a folder; give a file name")
+    if path.suffix.lower() not in suffixes:
+        fail(f"{option} {path}: the file name must end in {' or '.join(suffixes)}")
     # the folder is created when the file is written (an early failure leaves no empty folder behind)
     parent = path.parent
     while not parent.exists() and parent != parent.parent:

@@ -60,7 +60,7 @@ def decode_cmd(
         number(gamma, "--gamma", lo=0.2, hi=5, what="auto, none or a projector gamma")
     number(camera_noise, "--camera-noise", lo=0, hi=100, lo_open=True, unit=" DN", what="a noise sigma")
     opts = dataclasses.replace(opts, gamma=gamma, camera_noise=camera_noise)
-    if out is not None and out.suffix != ".npz":
+    if out is not None and not out.suffix and not out.is_dir():  # -o maps: maps.npz (any other suffix is refused)
         out = out.with_suffix(".npz")
     output_path(out, "-o", (".npz",), inputs=(pose_dir,))
     output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
