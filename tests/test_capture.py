@@ -74,8 +74,20 @@ def test_wrong_count_for_a_projector_too_small_for_every_step(pose):
 
 def test_missing_white_black_hint(tmp_path):
     write_stack(tmp_path, camera_view_of_patterns(W, H)[:-2])
-    with pytest.raises(CaptureError, match="white and black frames seem to be missing"):
+    with pytest.raises(CaptureError, match="two short: the white and black frames seem to be missing"):
         capture.load_capture(tmp_path, (W, H))
+
+
+def test_two_short_for_a_projector_one_pixel_too_wide_names_the_common_size_too(tmp_path):
+    """A 1024x768 capture read as 1025x768 is two frames short too (one more column bit): the hint names the size
+    that fits before the missing white and black (which only it blamed, wrongly)."""
+    from procam import patterns as P
+
+    ps = P.pattern_set(1024, 768)
+    write_stack(tmp_path, np.zeros((ps.count, 4, 4), np.uint8))
+    with pytest.raises(CaptureError, match="two short: that count fits a projector of 1024x768.*check --projector; "
+                                           "or the white and black frames seem to be missing"):
+        capture.load_capture(tmp_path, (1025, 768))
 
 
 def test_wrong_projector_size_hint(tmp_path):

@@ -138,16 +138,18 @@ def _count_with_step(w: int, h: int, order: str, step: int) -> int | None:
 
 def _count_hint(found: int, ps: patterns.PatternSet) -> str:
     w, h = ps.width, ps.height
+    guesses = [f"{a}x{b}" for a, b in [(1920, 1080), (1280, 800), (1280, 720), (1024, 768), (800, 600),
+                                        (1920, 1200), (3840, 2160), (1400, 1050), (1366, 768), (912, 1140)]
+               if patterns.pattern_set(a, b).count == found and (a, b) != (w, h)]
     if found == ps.count - 2:
-        return (" — two short: the white and black frames seem to be missing (OpenCV's GrayCodePattern.generate() "
-                "does not include them; capture them as the last two frames, or use 'procam patterns')")
+        other = f"that count fits a projector of {', '.join(guesses[:3])}: check --projector; or " if guesses else ""
+        return (f" — two short: {other}the white and black frames seem to be missing (OpenCV's "
+                "GrayCodePattern.generate() does not include them; capture them as the last two frames, or use "
+                "'procam patterns')")
     n = min(ps.col_bits, ps.row_bits)
     if ps.col_bits != ps.row_bits and found == 2 + 4 * n:
         return (f" — this matches scan3d-capture's sequence with {n} bits on both axes, which drops column bits; "
                 "re-capture with the sequence from 'procam patterns'")
-    guesses = [f"{a}x{b}" for a, b in [(1920, 1080), (1280, 800), (1280, 720), (1024, 768), (800, 600),
-                                        (1920, 1200), (3840, 2160), (1400, 1050), (1366, 768), (912, 1140)]
-               if patterns.pattern_set(a, b).count == found and (a, b) != (w, h)]
     steps = [k for k in (2, 3, 4, 8) if ps.step == 1 and _count_with_step(w, h, ps.order, k) == found]
     hints = []
     if guesses:
