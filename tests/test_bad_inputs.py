@@ -407,6 +407,10 @@ JSON_EDITS = {
     "projector missing": (lambda d: d.__setitem__("projector", None), "projector is missing"),
     "rms string": (lambda d: d.__setitem__("stereo_rms_px", "small"), "stereo_rms_px must be a number"),
     "views garbage": (lambda d: d.__setitem__("views", [{"x": 1}]), "views are not procam correspondences"),
+    "a view's board": (lambda d: d.__setitem__("views", [{"board_points": [[0, 0, 0]], "camera_points": [[0, 0]],
+                                                          "projector_points": [[0, 0]],
+                                                          "board": {"cols": 0, "rows": 6, "square": 24.0}}]),
+                       "views are not procam correspondences (views[0]: board 0x6: columns of inner corners"),
     "not procam": (lambda d: d.__setitem__("format", "other"), "not a procam calibration"),
 }
 

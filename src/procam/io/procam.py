@@ -21,14 +21,14 @@ from ..datasheet import calibration_datasheet
 from ..mounting import mounting
 from ..calibration import Calibration, Device
 from ..distortion import opencv_from_division
-from ..errors import CalibrationFileError
+from ..errors import CalibrationFileError, ProcamError
 from ..summary import projector_assumptions
 from ..view import CORNER_REASONS, View
 from ..verdict import MEANING, VERDICTS
 from .files import portable_names, to_jsonable, write_text
 from .formats import CALIBRATION_FORMAT, CORRESPONDENCES_FORMAT
 from .validate import (bad, check_distortion, check_K, check_rms, check_rotation, check_size, check_translation, numbers,
-                       short)
+                       short, FIX)
 
 
 def _nan_to_none(a) -> list:
@@ -220,10 +220,15 @@ def calibration_from_json(path, doc: dict) -> Calibration:
     for key in ("poses", "views", "warnings"):
         if not isinstance(doc.get(key, []), list):
             bad(path, key, "must be a list")
-    try:
-        views = tuple(view_from_dict(v) for v in doc.get("views", []))
-    except (KeyError, ValueError, TypeError, AttributeError, IndexError) as e:
-        raise CalibrationFileError(f"{path}: views are not procam correspondences ({type(e).__name__}: {e})") from None
+    views = []
+    for i, v in enumerate(doc.get("views", [])):
+        try:
+            views.append(view_from_dict(v))
+        except (KeyError, ValueError, TypeError, AttributeError, IndexError, ProcamError) as e:  # a Board's own
+            what = str(e) if isinstance(e, ProcamError) else f"{type(e).__name__}: {e}"
+            raise CalibrationFileError(f"{path}: views are not procam correspondences (views[{i}]: {what}); {FIX}") \
+                from None
+    views = tuple(views)
     info = doc.get("info", {})
     if "covariance" in doc:
         info = {**info, "covariance": _covariance_from_json(path, doc["covariance"])}
