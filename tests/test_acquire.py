@@ -456,7 +456,7 @@ def cli():
     (["--order", "zigzag"], "'zigzag' is not one of 'opencv', 'moreno'"),
     (["--virtual", "--camera", "folder:x"], "--virtual uses the simulator"),
     (["--virtual", "--step", "2"], "renders step-1 sequences only"),
-    (["--family", "phase", "--step", "2"], "--step applies to the Gray family only"),
+    (["--family", "phase", "--step", "2"], "--step applies to the Gray family (--family gray, the default), not to --family phase"),
     (["--steps", "4"], "--steps applies to the phase families"),
     (["--family", "phase", "--counts", "7,6,5"], "--counts applies to --family heterodyne"),
     (["--family", "gray-phase", "--steps", "2"], "--steps must be"),

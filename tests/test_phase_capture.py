@@ -331,3 +331,38 @@ def test_cli_patterns_and_simulate_write_a_phase_family(tmp_path):
     code, out, err = run_cli(["patterns", "-p", "320x240", "-o", tmp_path / "p3", "--family", "heterodyne",
                               "--counts", "7,6"])
     assert code == 2 and "--counts must be three numbers" in err
+
+
+@pytest.mark.parametrize("command", ["patterns", "simulate"])
+@pytest.mark.parametrize("args, phrase", [
+    (["--no-white-black"], "--no-white-black applies to the phase families, not to --family gray"),
+    (["--white-black"], "--white-black applies to the phase families"),
+    (["--no-complementary"], "--no-complementary applies to --family gray-phase, not to --family gray"),
+    (["--family", "phase", "--no-inverse"], "--no-inverse applies to --family gray-phase, not to --family phase"),
+    (["--family", "heterodyne", "--complementary"], "--complementary applies to --family gray-phase"),
+    (["--family", "phase", "--order", "moreno"], "--order applies to the Gray family"),
+    (["--family", "phase", "--order", "opencv"], "--order applies to the Gray family"),
+    (["--family", "gray-phase", "--counts", "7,6,5"], "--counts applies to --family heterodyne"),
+    (["--family", "heterodyne", "--period", "16"], "the heterodyne's periods are given as --counts"),
+    (["--period", "16"], "--period applies to --family phase or gray-phase, not to --family gray"),
+])
+def test_an_option_of_another_family_is_refused_not_ignored(command, args, phrase, tmp_path):
+    """Every family-specific pattern option given with a family it does not apply to is a one-line error before
+    anything is written (an option that changes nothing and exits 0 would let the user believe it did)."""
+    where = ["-p", "320x240", "-o", tmp_path / "out"] if command == "patterns" else [tmp_path / "out"]
+    code, out, err = run_cli([command, *where, *args])
+    assert code == 2 and phrase in err and len(err.strip().splitlines()) == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_option_of_its_own_family_is_taken(tmp_path):
+    """The same options with their own family change the sequence."""
+    for args, want in ((["--family", "phase", "--no-white-black"], patterns.pattern_set(320, 240, family="phase",
+                                                                                          white_black=False)),
+                       (["--family", "gray-phase", "--no-complementary"],
+                        patterns.pattern_set(320, 240, family="gray-phase", complementary=False)),
+                       (["--order", "moreno"], patterns.pattern_set(320, 240, "moreno"))):
+        out = tmp_path / "_".join(a.strip("-") for a in args)
+        code, _, err = run_cli(["patterns", "-p", "320x240", "-o", out, *args])
+        assert code == 0, err
+        assert patterns.from_dict(json.loads((out / "patterns.json").read_text())) == want

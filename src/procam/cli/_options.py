@@ -216,44 +216,77 @@ PeriodOpt = Annotated[Optional[list[float]], typer.Option(
                      "cue, gray-phase 16); phase: repeat it for more levels below the cue.")]
 CountsOpt = Annotated[Optional[str], typer.Option(
     "--counts", help="heterodyne: the three counts of periods across the panel, e.g. 70,64,59 (the default).")]
-InverseOpt = Annotated[bool, typer.Option("--inverse/--no-inverse", help="gray-phase: every Gray bit followed by its "
-                                          "inverse.")]
-ComplementaryOpt = Annotated[bool, typer.Option(
-    "--complementary/--no-complementary", help="gray-phase: a complementary Gray bit (removes stripe-edge errors).")]
-WhiteBlackOpt = Annotated[bool, typer.Option("--white-black/--no-white-black",
-                                             help="Phase families: end with a white and a black frame.")]
+InverseOpt = Annotated[Optional[bool], typer.Option(
+    "--inverse/--no-inverse", help="gray-phase: every Gray bit followed by its inverse (default: on).")]
+ComplementaryOpt = Annotated[Optional[bool], typer.Option(
+    "--complementary/--no-complementary", help="gray-phase: a complementary Gray bit (removes stripe-edge errors; "
+                                               "default: on).")]
+WhiteBlackOpt = Annotated[Optional[bool], typer.Option(
+    "--white-black/--no-white-black", help="Phase families: end with a white and a black frame (default: on).")]
 
 
-GrayOrderOpt = Annotated[Order, typer.Option("--order", help="Gray family: sequence order.")]
-GrayStepOpt = Annotated[int, typer.Option(
-    "--step", help="Gray family: projector pixels per code, 1-64 (>1 against moire, as kamino410's graycode_step).")]
-#: The pattern options of the commands that write or show a sequence: (parameter, option, default).
-PATTERN_OPTIONS = (("order", GrayOrderOpt, Order.opencv), ("step", GrayStepOpt, 1), ("family", FamilyOpt, Family.gray),
+GrayOrderOpt = Annotated[Optional[Order], typer.Option("--order", help="Gray family: sequence order (default: opencv).")]
+GrayStepOpt = Annotated[Optional[int], typer.Option(
+    "--step", help="Gray family: projector pixels per code, 1-64 (>1 against moire, as kamino410's graycode_step; "
+                   "default 1).")]
+#: The pattern options of the commands that write or show a sequence: (parameter, option, default). A family's own
+#: options default to None (not given) and are refused with another family (:data:`PATTERN_SCOPE`).
+PATTERN_OPTIONS = (("order", GrayOrderOpt, None), ("step", GrayStepOpt, None), ("family", FamilyOpt, Family.gray),
                    ("steps", StepsOpt, None), ("period", PeriodOpt, None), ("counts", CountsOpt, None),
-                   ("inverse", InverseOpt, True), ("complementary", ComplementaryOpt, True),
-                   ("white_black", WhiteBlackOpt, True))
+                   ("inverse", InverseOpt, None), ("complementary", ComplementaryOpt, None),
+                   ("white_black", WhiteBlackOpt, None))
+#: The families each family-specific pattern option applies to, its option names (given, not given) and its value
+#: when not given: an option of another family is refused, never silently ignored.
+PATTERN_SCOPE = {
+    "order": (("gray",), ("--order",), "opencv"),
+    "step": (("gray",), ("--step",), 1),
+    "steps": (("phase", "heterodyne", "gray-phase"), ("--steps",), None),
+    "period": (("phase", "gray-phase"), ("--period",), None),
+    "counts": (("heterodyne",), ("--counts",), None),
+    "inverse": (("gray-phase",), ("--inverse", "--no-inverse"), True),
+    "complementary": (("gray-phase",), ("--complementary", "--no-complementary"), True),
+    "white_black": (("phase", "heterodyne", "gray-phase"), ("--white-black", "--no-white-black"), True),
+}
+
+
+def pattern_defaults(args: dict) -> dict:
+    """The pattern options ``args`` (as typer gives them: None where not given) checked against the family and
+    with every option not given at its default: an option of another family (``--no-inverse`` with Gray codes,
+    ``--order`` with a phase family) is a one-line error naming the family it belongs to."""
+    family = value(args.get("family", "gray"))
+    out = dict(args)
+    for name, (families, flags, default) in PATTERN_SCOPE.items():
+        if name not in args:
+            continue
+        given = args[name]
+        if given in (None, ()) or (isinstance(given, list) and not given):
+            out[name] = default
+            continue
+        if family not in families:
+            flag = flags[0] if len(flags) == 1 or given else flags[1]
+            where = ("the Gray family (--family gray, the default)" if families == ("gray",) else
+                     "the phase families" if len(families) == 3 else
+                     f"--family {' or '.join(families)}")
+            hint = " (the heterodyne's periods are given as --counts)" if name == "period" else ""
+            fail(f"{flag} applies to {where}, not to --family {family}{hint}; leave it out or choose that family")
+    return out
 #: Most projector pixels per Gray code (``--step``).
 MAX_STEP = 64
 
 
 def pattern_sequence(size, *, family, order="opencv", step: int = 1, steps=None, period=None, counts=None,
                      inverse: bool = True, complementary: bool = True, white_black: bool = True):
-    """The sequence (:func:`procam.patterns.pattern_set`) of the pattern options, validated (one-line errors)."""
+    """The sequence (:func:`procam.patterns.pattern_set`) of the pattern options (as :func:`pattern_defaults` leaves
+    them: each option of the family's own), validated (one-line errors)."""
     from .. import patterns
 
     number(step, "--step", lo=1, hi=MAX_STEP, what="a whole number of projector pixels")
     family = value(family)
     if family == "gray":
-        given = [o for o, v in (("--steps", steps), ("--period", period), ("--counts", counts)) if v]
-        if given:
-            fail(f"{', '.join(given)} appl{'y' if len(given) > 1 else 'ies'} to the phase families; add --family "
-                 "phase, heterodyne or gray-phase")
         try:
             return patterns.pattern_set(*size, value(order), step)
         except ValueError as e:
             fail(f"--step {step}: {e}; use a smaller --step")
-    if step != 1:
-        fail("--step applies to the Gray family only")
     kw = phase_keywords(family, steps=steps, period=period, counts=counts, inverse=inverse,
                         complementary=complementary, white_black=white_black)
     try:
@@ -272,10 +305,6 @@ def phase_keywords(family, *, steps=None, period=None, counts=None, inverse: boo
         kw["steps"] = int(number(steps, "--steps", lo=3, hi=64, what="a number of phase shifts"))
     for p in period or ():
         number(p, "--period", lo=2, hi=1e6, unit=" projector px", what="a fringe period")
-    if period and family == "heterodyne":
-        fail("--period: the heterodyne's periods are given as --counts (periods across the panel)")
-    if counts is not None and family != "heterodyne":
-        fail("--counts applies to --family heterodyne")
     if family == "heterodyne" and counts is not None:
         try:
             kw["periods"] = tuple(float(v) for v in counts.replace(";", ",").split(","))
@@ -296,9 +325,9 @@ POSE_OPTIONS = (("decode_method", DecodeOpt, DecodeMethod.robust), ("shadow", Sh
                 ("estimator", EstimatorOpt, Estimator.trimmed))
 
 
-def _with_group(fn, group):
+def _with_group(fn, group, prepare=None):
     """``fn`` with the keyword-only options of ``group`` (``(name, annotation, default)``) added to its signature;
-    it receives them in its ``**kwargs``."""
+    it receives them in its ``**kwargs`` (passed through ``prepare(kwargs) -> kwargs`` first, when given)."""
     import inspect
 
     sig = inspect.signature(fn, eval_str=True)  # typer reads a given __signature__ as it is
@@ -308,7 +337,7 @@ def _with_group(fn, group):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        return fn(*args, **kwargs)
+        return fn(*args, **(kwargs if prepare is None else prepare(kwargs)))
 
     wrapper.__signature__ = sig.replace(parameters=params)
     return wrapper
@@ -327,13 +356,14 @@ def with_pose_options(fn):
 def with_pattern_options(*, leave_out: tuple = ()):
     """Give a command that writes or shows a pattern sequence (patterns, simulate, capture) the pattern options
     (:data:`PATTERN_OPTIONS`: ``--order``, ``--step``, ``--family`` ... ``--white-black``) but those it leaves out:
-    one definition, one help text, one set of bounds (checked by :func:`pattern_sequence`).
+    one definition, one help text, one set of bounds (checked by :func:`pattern_sequence`), an option of another
+    family refused (:func:`pattern_defaults`).
 
     The command declares ``**pattern_args`` and receives them there, ready for ``pattern_sequence(size,
     **pattern_args)``.
     """
     group = tuple(o for o in PATTERN_OPTIONS if o[0] not in leave_out)
-    return lambda fn: _with_group(fn, group)
+    return lambda fn: _with_group(fn, group, pattern_defaults)
 
 
 def number(value, option: str, *, lo: float | None = None, hi: float | None = None, lo_open: bool = False,
