@@ -260,7 +260,8 @@ def test_export_writes_the_calibration_for_the_next_tools(client):
     calib = _truth_calibration(project)
     for body, words in (({"formats": ["maya"]}, "export formats"), ({"formats": "blender"}, "export formats"),
                         ({"formats": ["blender"], "near": 10, "far": 5}, "near < far"),
-                        ({"formats": ["blender"], "near": "x"}, "export near")):
+                        ({"formats": ["blender"], "near": "x"}, "export near"),
+                        ({"formats": ["opengl"], "near": 1, "far": 1.0000000000000002}, "hardly beyond near")):
         r = client.post("/api/export", headers=H, json=body)
         assert r.status_code == 400 and words in r.json()["error"], body
     assert not (project / "export").exists()

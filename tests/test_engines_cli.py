@@ -177,10 +177,23 @@ def test_projector_view_of_a_rendered_pose(files, tmp_path):
     (["--format", "maps", "-o", "m", "--pose", "x"], "--pose belongs to --format projector-view"),
     (["--format", "unity", "-o", "u.json", "--unit", "furlong"], "--unit"),
     (["--format", "blender", "-o", "b.txt"], "must end in .json"),
+    # an option of another format is refused, never taken and ignored
+    (["--format", "maps", "-o", "m", "--scale", "2"], "--scale is the rectified images' focal length"),
+    (["--format", "opengl", "-o", "g.json", "--near", "10", "--far", "99", "--scale", "2"],
+     "--scale belongs to --format maps, not opengl"),
+    (["--format", "opengl", "-o", "g.json", "--near", "10", "--far", "99", "--unit", "cm"],
+     "--unit belongs to --format blender or unity, not opengl"),
+    (["--format", "maps", "-o", "m", "--world", "projector"], "--world belongs to --format opengl or blender or unity"),
+    (["--format", "kamino410", "-o", "k.xml", "--order", "moreno"], "--order belongs to --format projector-view"),
+    (["--format", "yaml", "-o", "k.xml", "--step", "2"], "--step belongs to --format projector-view"),
+    (["--format", "yaml", "-o", "k.xml", "--projector", "321x123"], "stores a"),
+    # a depth range too thin for a projection matrix
+    (["--format", "opengl", "-o", "g.json", "--near", "1", "--far", "1.0000000000000002"], "hardly beyond near"),
+    (["--format", "unity", "-o", "u.json", "--near", "100", "--far", "100.001"], "hardly beyond near"),
 ])
 def test_export_refuses_bad_options_in_one_line(files, tmp_path, args, phrase):
     root, pose, calib, paths = files
-    args = [a if not isinstance(a, str) or a not in ("v.png", "g.json", "b.json", "u.json", "m", "b.txt")
+    args = [a if not isinstance(a, str) or a not in ("v.png", "g.json", "b.json", "u.json", "m", "b.txt", "k.xml")
             else tmp_path / a for a in args]
     code, out, err = run_cli(["export", paths["procam.json"], *args])
     assert code == 2 and phrase in err and len(err.strip().splitlines()) == 1, err

@@ -396,3 +396,24 @@ def test_rectification_of_a_vertical_rig_through_the_maps_and_q(tmp_path):
     X = h[:, :3] / h[:, 3:4]
     X_true = (c["board"] @ np.asarray(sc.R_board).T + sc.t_board) @ R1.T
     np.testing.assert_allclose(X, X_true, atol=1e-6 * np.abs(X_true).max())
+
+
+@pytest.mark.parametrize("near, far, words", [
+    (1.0, 1.0000000000000002, "hardly beyond near"), (100.0, 100.001, "hardly beyond near"),
+    (1e-300, 1000.0, "far / near is"), (10.0, 5.0, "0 < near < far"), (1.0, float("inf"), "finite"),
+    (float("nan"), 10.0, "finite"), (1.0, 2e12, "<= 1e+12"), ("x", 10.0, "must be numbers")])
+def test_a_clipping_range_no_projection_matrix_can_hold_is_refused(near, far, words):
+    """One check of near and far (the CLI's, the app's and the library's): a range too thin (the depth terms ~ 1 /
+    (far - near) explode: with far one ulp beyond near the matrix's depth row is ~ 1e16) or too deep is refused; a
+    range at the least accepted thickness still gives a projection whose depth maps near to -1 and far to +1."""
+    from procam.export.frames import MIN_DEPTH_RATIO, check_clip
+
+    K = np.array([[800.0, 0, 320], [0, 800.0, 240], [0, 0, 1]])
+    with pytest.raises(CalibrationError) as e:
+        ex.opengl_projection(K, (640, 480), near, far)
+    assert words in str(e.value)
+    near, far = check_clip(1000.0, 1000.0 * MIN_DEPTH_RATIO)
+    P = ex.opengl_projection(K, (640, 480), near, far)
+    for z, want in ((near, -1.0), (far, 1.0)):
+        clip = P @ [0.0, 0.0, -z, 1.0]
+        assert clip[2] / clip[3] == pytest.approx(want, abs=1e-6)

@@ -459,8 +459,12 @@ def export_checked(project: Project, formats, near, far):
     for name, v in (("near", near), ("far", far)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ProcamError(f"export {name}: give a clipping distance in the board's unit, got {v!r}")
-    if not 0 < near < far <= 1e12 or far / near > 1e7:
-        raise ProcamError(f"export near/far: need 0 < near < far and far/near <= 1e7, got {near:g} and {far:g}")
+    from ..export.frames import check_clip
+
+    try:
+        check_clip(near, far)
+    except ProcamError as e:
+        raise ProcamError(f"export near/far: {e}") from None
     return calib
 
 

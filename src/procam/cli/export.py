@@ -3,7 +3,6 @@ XML, OpenCV YAML) and the projector's view of a pose."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Optional
 
@@ -32,14 +31,15 @@ def _clip(fmt: str, near, far, unit: str):
     if near is None or far is None:
         fail(f"--format {fmt} needs --near and --far together (clipping distances in the calibration's units, "
              "e.g. mm)" + ("" if fmt == "opengl" else "; leave both out for the engine's defaults"))
-    if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far <= 1e12):
-        fail(f"--near and --far must be finite with 0 < near < far <= 1e12, got {near} and {far}")
-    if far / near > 1e7:
-        fail(f"--far / --near is {far / near:.3g}; at most 1e7 (a depth buffer has no precision left beyond), "
-             "so raise --near")
+    from ..errors import CalibrationError
+    from ..export.frames import check_clip, metres_per_unit
+
+    try:
+        near, far = check_clip(near, far)
+    except CalibrationError as e:
+        fail(f"--near {near:g} and --far {far:g}: {e}")
     if fmt == "opengl":
         return near, far
-    from ..export.frames import metres_per_unit
 
     return near * metres_per_unit(unit), far * metres_per_unit(unit)
 
@@ -126,15 +126,15 @@ def export_cmd(
     near: Optional[float] = typer.Option(None, "--near", help="Near clipping distance, calibration units (opengl: "
                                                               "required; blender, unity: default the engine's)."),
     far: Optional[float] = typer.Option(None, "--far", help="Far clipping distance, calibration units."),
-    world: World = typer.Option(World.camera, "--world", help="Engines: the device whose frame is the world, taken "
-                                                              "as mounted upright."),
-    unit: Unit = typer.Option(Unit.mm, "--unit", help="blender, unity: the calibration's length unit (the board's "
-                                                      "square), turned into metres."),
+    world: Optional[World] = typer.Option(None, "--world", help="Engines: the device whose frame is the world, taken "
+                                                                "as mounted upright (default: camera)."),
+    unit: Optional[Unit] = typer.Option(None, "--unit", help="blender, unity: the calibration's length unit (the "
+                                                            "board's square), turned into metres (default: mm)."),
     y_down: bool = typer.Option(False, "--y-down", help="opengl: NDC y down (Vulkan) instead of up (OpenGL, Unity)."),
     zero_to_one: bool = typer.Option(False, "--zero-to-one", help="opengl: NDC depth 0..1 instead of -1..1."),
     rectify: bool = typer.Option(False, "--rectify", help="maps: also the stereo rectification maps of both devices."),
-    scale: float = typer.Option(1.0, "--scale", help="maps --rectify: rectified focal length in units of the "
-                                                     "camera's."),
+    scale: Optional[float] = typer.Option(None, "--scale", help="maps --rectify: rectified focal length in units of "
+                                                               "the camera's (default 1)."),
     pose: Optional[Path] = typer.Option(None, "--pose", help="projector-view: the pose folder (its white frame, or "
                                                              "the mean of the fringes without one)."),
     maps_file: Optional[Path] = typer.Option(None, "--maps", help="projector-view: the pose's decoded maps (procam "
@@ -150,21 +150,31 @@ def export_cmd(
     """Write the calibration in the form the next tool wants (see docs/exports.md)."""
     from .. import io
 
-    fmt, world, unit = value(fmt), value(world), value(unit)
+    fmt = value(fmt)
     inputs = tuple(p for p in (calibration, pose, maps_file) if p is not None)
     _check_outputs(fmt, out, calibration, inputs, force, rectify)
     for opt, given, fmts in (("--pose", pose, ("projector-view",)), ("--maps", maps_file, ("projector-view",)),
-                             ("--rectify", rectify, ("maps",)), ("--y-down", y_down, ("opengl",)),
-                             ("--zero-to-one", zero_to_one, ("opengl",)), ("--near", near, ENGINES),
-                             ("--far", far, ENGINES)):
-        if given and fmt not in fmts:
-            fail(f"{opt} belongs to --format {' or '.join(fmts)}, not {fmt}")
+                             ("--order", order, ("projector-view",)), ("--step", step, ("projector-view",)),
+                             ("--rectify", rectify, ("maps",)), ("--scale", scale, ("maps",)),
+                             ("--y-down", y_down, ("opengl",)), ("--zero-to-one", zero_to_one, ("opengl",)),
+                             ("--near", near, ENGINES), ("--far", far, ENGINES), ("--world", world, ENGINES),
+                             ("--unit", unit, ("blender", "unity"))):
+        if given is not None and given is not False and fmt not in fmts:
+            fail(f"{opt} belongs to --format {' or '.join(fmts)}, not {fmt}; leave it out")
+    if scale is not None and not rectify:
+        fail("--scale is the rectified images' focal length: it belongs to --rectify; add --rectify or leave it out")
+    world, unit, scale = value(world) or "camera", value(unit) or "mm", 1.0 if scale is None else scale
     clip = _clip(fmt, near, far, unit) if fmt in ENGINES else (None, None)
     if fmt == "maps":
         number(scale, "--scale", lo=0.1, hi=10, what="a focal-length factor")
     calib = io.load_calibration(calibration, pair=pair)
-    if projector is not None and fmt != "projector-view":
-        calib = io.complete_sizes(calib, proj_size=optional_size(projector))
+    if projector is not None and fmt != "projector-view" and calib.projector is not None:
+        size = optional_size(projector)
+        calib = io.complete_sizes(calib, proj_size=size)
+        if tuple(calib.projector.image_size) != tuple(size):
+            fail(f"--projector {projector}: {calibration} stores a {calib.projector.image_size[0]}x"
+                 f"{calib.projector.image_size[1]} projector; leave --projector out (it is for files that store no "
+                 "projector size, like kamino410's)")
     for w in calib.warnings:   # a size the file does not store (kamino410's, other tools' files) is said
         if "does not store the projector size" in w:
             warn(w + " (--projector WIDTHxHEIGHT)")

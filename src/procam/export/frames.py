@@ -44,6 +44,34 @@ def require_rig(calib: Calibration) -> None:
         raise CalibrationError("the calibration has no projector or no camera->projector extrinsics")
 
 
+#: The clipping range an export accepts: ``0 < near < far <= MAX_FAR``, ``far / near`` from :data:`MIN_DEPTH_RATIO`
+#: (a thinner range makes the projection's depth terms, ~ 1 / (far - near), explode) to :data:`MAX_DEPTH_RATIO` (a
+#: depth buffer has no precision left beyond).
+MAX_FAR = 1e12
+MIN_DEPTH_RATIO = 1.0001
+MAX_DEPTH_RATIO = 1e7
+
+
+def check_clip(near, far) -> tuple[float, float]:
+    """``(near, far)`` clipping distances (any one length unit) as floats, or a :class:`CalibrationError` saying
+    which bound they break and what to change."""
+    try:
+        near, far = float(near), float(far)
+    except (TypeError, ValueError):
+        raise CalibrationError(f"near and far must be numbers, got {near!r} and {far!r}") from None
+    if not (np.isfinite(near) and np.isfinite(far) and 0 < near < far <= MAX_FAR):
+        raise CalibrationError(f"near and far must be finite with 0 < near < far <= {MAX_FAR:g}, got near={near:g}, "
+                               f"far={far:g}")
+    if far / near > MAX_DEPTH_RATIO:
+        raise CalibrationError(f"far / near is {far / near:.3g}; at most {MAX_DEPTH_RATIO:g} (a depth buffer has no "
+                               "precision left beyond), so raise near")
+    if far < near * MIN_DEPTH_RATIO:
+        raise CalibrationError(f"far {far:g} is hardly beyond near {near:g}: the depth range must reach at least "
+                               f"{MIN_DEPTH_RATIO:g} x near (a thinner one makes a degenerate projection matrix); "
+                               "lower near or raise far")
+    return near, far
+
+
 def check_world(world: str) -> str:
     if world not in choices.WORLDS:
         raise ValueError(f"world must be one of {', '.join(choices.WORLDS)}, got {world!r}")

@@ -18,20 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..calibration import Calibration
-from ..errors import CalibrationError
 from ..io.formats import OPENGL_FORMAT
-from .frames import check_world, device_poses, rt4
+from .frames import check_clip, check_world, device_poses, rt4
 
 #: OpenCV camera frame (x right, y down, z forward) -> OpenGL eye frame (x right, y up, z backward).
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
-
-
-def _check_near_far(near, far):
-    near, far = float(near), float(far)
-    if not (np.isfinite(near) and np.isfinite(far) and 0 < near < far):
-        raise CalibrationError(f"near and far must be finite with 0 < near < far (board units), got near={near}, "
-                               f"far={far}")
-    return near, far
 
 
 def opengl_projection(K, image_size, near: float, far: float, *, y_up: bool = True,
@@ -64,7 +55,7 @@ def opengl_projection(K, image_size, near: float, far: float, *, y_up: bool = Tr
     (4, 4) float64, to be used as ``P @ v`` (column vectors; ``P.T`` flattened is OpenGL's
     column-major ``glUniformMatrix4fv(..., GL_FALSE, ...)`` layout).
     """
-    near, far = _check_near_far(near, far)
+    near, far = check_clip(near, far)
     K = np.asarray(K, float)
     W, H = (float(v) for v in image_size)
     fx, s, cx, fy, cy = K[0, 0], K[0, 1], K[0, 2], K[1, 1], K[1, 2]
@@ -115,7 +106,7 @@ def opengl_document(calib: Calibration, near: float, far: float, *, world: str =
                     zero_to_one: bool = False) -> dict:
     """A JSON-able document with both devices' projection and view matrices (row-major nested lists
     and OpenGL column-major flat lists), their image sizes, K, distortion and the conventions."""
-    near, far = _check_near_far(near, far)
+    near, far = check_clip(near, far)
     V = view_matrices(calib, world)
     out = {"format": OPENGL_FORMAT, "version": 1,
            "conventions": {
