@@ -196,6 +196,21 @@ def test_user_mistakes_give_one_line_errors(ideal_capture, tmp_path, shared_data
     assert code == 2 and "not a procam calibration" in err
 
 
+@pytest.mark.parametrize("args, words", [
+    (["study", "-o", "x", "--trials", "0"], "Missing argument 'device'. Choose from: camera, projector"),
+    (["study", "tripod", "-o", "x"], "'tripod' is not one of"),
+    (["calibrate"], "Missing argument 'poses'"),
+    (["export", "c.json", "--format", "opengl", "--nope"], "No such option: --nope"),
+])
+def test_usage_errors_are_one_line(args, words, tmp_path, monkeypatch):
+    """click words some usage errors over several lines (a missing choice argument lists its choices one per
+    line): every one is a single line naming the command's help, exit code 2."""
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(args)
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1 and "--help'" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_bad_patterns_json(ideal_capture, tmp_path):
     import shutil
 

@@ -40,11 +40,12 @@ class _OneLineErrors(TyperGroup):
                               **extra)
         except _click.exceptions.UsageError as e:
             cmd = e.ctx.command_path if e.ctx is not None else "procam"
-            err_console.print(f"[bold red]error:[/bold red] {escape(e.format_message())} (see '{escape(cmd)} --help')",
+            err_console.print(f"[bold red]error:[/bold red] {escape(one_line(e.format_message()))} (see "
+                              f"'{escape(cmd)} --help')",
                               highlight=False, soft_wrap=True)
             rv = 2
         except _click.exceptions.ClickException as e:
-            err_console.print(f"[bold red]error:[/bold red] {escape(e.format_message())}", highlight=False,
+            err_console.print(f"[bold red]error:[/bold red] {escape(one_line(e.format_message()))}", highlight=False,
                               soft_wrap=True)
             rv = e.exit_code
         except (Abort, KeyboardInterrupt):
@@ -111,6 +112,12 @@ def escape(text: str) -> str:
     from rich.markup import escape as _escape
 
     return _escape(text)
+
+
+def one_line(text: str) -> str:
+    """``text`` with its line breaks and runs of spaces as single spaces (click words some usage errors over
+    several lines: ``Choose from:\n\tcamera,\n\tprojector``)."""
+    return " ".join(text.split())
 
 
 def fail(message: str, code: int = 2, label: str = "error"):
