@@ -26,6 +26,15 @@ class _OneLineErrors(TyperGroup):
     """A command group whose usage errors (bad option values, missing arguments) are one line on stderr
     with exit code 2, like procam's own errors, instead of a framed usage panel."""
 
+    def get_help_option(self, ctx):
+        """The group's ``--help`` flag, off by default: typer 0.29 coerces a flag that is not given (None) through a
+        pydantic adapter, importing pydantic (a tenth of a second) for ``procam CMD --help``, where nothing else
+        needs it."""
+        opt = super().get_help_option(ctx)
+        if opt is not None and opt.default is None:
+            opt.default = False
+        return opt
+
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         try:  # typer vendors click since 0.20-something; before, it used click itself
             from typer import _click
