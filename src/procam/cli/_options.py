@@ -237,15 +237,16 @@ PATTERN_OPTIONS = (("order", GrayOrderOpt, None), ("step", GrayStepOpt, None), (
                    ("white_black", WhiteBlackOpt, None))
 #: The families each family-specific pattern option applies to, its option names (given, not given) and its value
 #: when not given: an option of another family is refused, never silently ignored.
+_PHASE = tuple(f for f in choices.PATTERN_FAMILIES if f != "gray")
 PATTERN_SCOPE = {
     "order": (("gray",), ("--order",), "opencv"),
     "step": (("gray",), ("--step",), 1),
-    "steps": (("phase", "heterodyne", "gray-phase"), ("--steps",), None),
+    "steps": (_PHASE, ("--steps",), None),
     "period": (("phase", "gray-phase"), ("--period",), None),
     "counts": (("heterodyne",), ("--counts",), None),
     "inverse": (("gray-phase",), ("--inverse", "--no-inverse"), True),
     "complementary": (("gray-phase",), ("--complementary", "--no-complementary"), True),
-    "white_black": (("phase", "heterodyne", "gray-phase"), ("--white-black", "--no-white-black"), True),
+    "white_black": (_PHASE, ("--white-black", "--no-white-black"), True),
 }
 
 
@@ -259,13 +260,13 @@ def pattern_defaults(args: dict) -> dict:
         if name not in args:
             continue
         given = args[name]
-        if given in (None, ()) or (isinstance(given, list) and not given):
+        if given is None or (isinstance(given, (list, tuple)) and not given):
             out[name] = default
             continue
         if family not in families:
             flag = flags[0] if len(flags) == 1 or given else flags[1]
             where = ("the Gray family (--family gray, the default)" if families == ("gray",) else
-                     "the phase families" if len(families) == 3 else
+                     "the phase families" if families == _PHASE else
                      f"--family {' or '.join(families)}")
             hint = " (the heterodyne's periods are given as --counts)" if name == "period" else ""
             fail(f"{flag} applies to {where}, not to --family {family}{hint}; leave it out or choose that family")
