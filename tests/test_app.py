@@ -362,7 +362,7 @@ def test_procam_app_checks_its_options(tmp_path):
     from conftest import run_cli
 
     (tmp_path / "file").write_text("x")
-    for args, words in ((["--port", "70000"], "--port must be"), (["--camera", "opencv:1", "--virtual"], "leave out"),
+    for args, words in ((["--port", "70000"], "--port must be"), (["--camera", "opencv:1", "--virtual"], "leave it out"),
                         ([], "not a folder")):
         code, _, err = run_cli(["app", tmp_path / "file" if not args else tmp_path / "p", "--no-browser", *args])
         assert code == 2 and words in err and err.count("\n") == 1, (args, err)

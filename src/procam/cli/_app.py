@@ -138,6 +138,35 @@ def fail(message: str, code: int = 2, label: str = "error"):
     raise typer.Exit(code)
 
 
+def given(*names: str) -> list[str]:
+    """The options among ``names`` (parameter names) the user typed on the command line (or set by an environment
+    variable), each as its flag (the one typed of ``--x/--no-x``), in the command's order; [] outside a command line
+    (a command function called from Python)."""
+    try:  # typer vendors click since 0.20-something; before, it used click itself
+        from typer._click.globals import get_current_context
+    except ImportError:  # pragma: no cover - older typer
+        from click import get_current_context
+    ctx = get_current_context(silent=True)
+    if ctx is None:
+        return []
+    flags = []
+    for p in ctx.command.params:
+        source = ctx.get_parameter_source(p.name) if p.name in names else None
+        if source is None or source.name not in ("COMMANDLINE", "ENVIRONMENT"):
+            continue
+        off = ctx.params.get(p.name) is False and getattr(p, "secondary_opts", None)
+        flags.append(max(p.secondary_opts if off else p.opts, key=len))
+    return flags
+
+
+def refuse(names, why: str) -> None:
+    """Refuse (one line, exit 2) the first of the options ``names`` (parameter names) the user typed, which the
+    command would ignore: ``"{flag} {why}; leave it out"`` (``why``: what it applies to, and why not here)."""
+    flags = given(*names)
+    if flags:
+        fail(f"{flags[0]} {why}; leave it out")
+
+
 def warn(message: str):
     """Print a warning line (plain text, not markup)."""
     console.print(f"[yellow]warning:[/yellow] {escape(shown(str(message)))}", highlight=False)

@@ -20,7 +20,7 @@ import typer
 
 from .. import choices
 from ..errors import ProcamError
-from ._app import fail
+from ._app import fail, given, refuse
 
 
 def choice(name: str, values) -> type[enum.Enum]:
@@ -85,12 +85,17 @@ def parse_board(text: str, square: float):
 
 def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
                  refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
-                 min_corners: int = 10, background: bool = True):
-    """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated."""
+                 min_corners: int = 10, background: bool = True, poses=()):
+    """The :class:`procam.pipeline.PoseOptions` of the shared capture-reading options, validated; an option typed
+    that these options or the pose folders ``poses`` leave unread is refused (:func:`refuse_unread_decoder`,
+    ``--refine-window`` with ``--corner-refine none``)."""
     from .. import correspond as _corr
     from .. import decode as _decode
     from .. import pipeline
 
+    if value(refine) == "none":
+        refuse(("refine_window",), "is the corner refinement's half-window; --corner-refine none refines nothing")
+    refuse_unread_decoder(poses)
     for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
         if not (math.isfinite(v) and 0 <= v <= 255):
             fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
@@ -103,6 +108,41 @@ def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 
     return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
                                 refine=value(refine) or "fit", corners=corners, min_corners=min_corners,
                                 background=background)
+
+
+_PHASE = tuple(f for f in choices.PATTERN_FAMILIES if f != "gray")
+#: The decoder options only some capture families' decoders read: parameter -> (families, what it is).
+DECODER_SCOPE = {
+    "decode_method": (("gray",), "the Gray-code bit classifier"),
+    "contrast": (("gray", "gray-phase"), "the Gray-code bits' contrast threshold"),
+    "gamma": (_PHASE, "the phase decoder's projector gamma"),
+    "camera_noise": (_PHASE, "the phase decoder's camera noise"),
+}
+
+
+def refuse_unread_decoder(poses) -> None:
+    """Refuse (one line naming the folder and its family, before any decoding) a decoder option typed that the
+    family of a pose folder in ``poses`` does not read: ``--decode`` on a phase capture, ``--gamma`` on Gray codes
+    (:data:`DECODER_SCOPE`).  A rig pose folder is checked pair by pair; a folder that cannot be read is left to
+    its loader to name."""
+    if not given(*DECODER_SCOPE):
+        return
+    from ..capture import is_rig_pose
+    from ..capture.read import read_patterns_json
+    from ..patterns import family_of
+
+    for p in map(Path, poses):
+        if not p.is_dir():
+            continue
+        try:
+            folders = sorted(q for q in p.iterdir() if q.is_dir()) if is_rig_pose(p) else [p]
+            families = [family_of(read_patterns_json(f)) for f in folders]
+        except (ProcamError, OSError):
+            continue
+        for folder, family in zip(folders, families):
+            for name, (families_read, what) in DECODER_SCOPE.items():
+                if family not in families_read:
+                    refuse((name,), f"is {what}; {folder} holds a {family} capture, whose decoder does not read it")
 
 
 # Options shared by the commands that read capture folders (one definition, one help text each).
@@ -237,7 +277,6 @@ PATTERN_OPTIONS = (("order", GrayOrderOpt, None), ("step", GrayStepOpt, None), (
                    ("white_black", WhiteBlackOpt, None))
 #: The families each family-specific pattern option applies to, its option names (given, not given) and its value
 #: when not given: an option of another family is refused, never silently ignored.
-_PHASE = tuple(f for f in choices.PATTERN_FAMILIES if f != "gray")
 PATTERN_SCOPE = {
     "order": (("gray",), ("--order",), "opencv"),
     "step": (("gray",), ("--step",), 1),

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .. import choices
-from ._app import app, console, fail, keep_freed_memory, say, user_errors, warn
+from ._app import app, console, fail, given, keep_freed_memory, say, user_errors, warn
 from ._options import (
     BackgroundOpt,
     BoardOpt,
@@ -90,7 +90,17 @@ _APPLIES = {
                    {"multi-pose", "camera-only (several photos)", "rig multi-pose"}),
     "--proj-dist": ("the projector distortion model of a multi-pose calibration", {"multi-pose", "rig multi-pose"}),
     "--no-refine": ("skips a multi-pose calibration's joint refinement", {"multi-pose", "rig multi-pose"}),
+    "--strict": ("how a multi-pose calibration treats a pose whose board is not found", {"multi-pose"}),
 }
+#: The calibrations of a projector and a camera from pattern captures (not camera-only): what reads pose folders.
+_PAIRS = {"single-pose", "multi-pose", "rig single-pose", "rig multi-pose"}
+#: The options (parameter -> flag) that read pose folders' pattern captures, which a camera-only calibration (photos)
+#: has none of: what they are.
+_PATTERN_READING = {"method": "--method", "projector": "--projector", "order": "--order", "step": "--step",
+                    "decode_method": "--decode", "shadow": "--shadow-threshold", "contrast": "--contrast-threshold",
+                    "window": "--window", "estimator": "--estimator"}
+_APPLIES.update({flag: ("how the pattern captures of a projector-camera calibration are read or calibrated", _PAIRS)
+                 for flag in _PATTERN_READING.values()})
 
 
 def _path(how: str, rig: bool, method: str | None, n: int) -> str:
@@ -235,13 +245,14 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
                    {"--camera": camera_file is not None, "--projector-intrinsics": projector_file is not None,
                     "--throw-ratio": bool(throw_ratio), "--lens-shift": bool(lens_shift), "--cod": cod is not None,
                     "--background": background is not None, "--cam-dist": cam_dist is not None,
-                    "--proj-dist": proj_dist is not None, "--no-refine": no_refine}, poses)
+                    "--proj-dist": proj_dist is not None, "--no-refine": no_refine, "--strict": strict,
+                    **dict.fromkeys(given(*_PATTERN_READING), True)}, poses)
     cod, background = value(cod) or "auto", value(background) or "free"
     cam_dist, proj_dist = value(cam_dist) or "auto", value(proj_dist) or "auto"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
     opts = pose_options(**pose_args,
                         min_corners=_mp.MIN_CORNERS_PER_POSE if multi else 10,
-                        background=not multi)
+                        background=not multi, poses=() if camera_only else poses)
     camera = background_options = dense_options = None  # the single-pose solver's: a multi-pose one has none
     if rig or not multi:
         from .. import single_pose as _sp

@@ -12,7 +12,7 @@ from typing import Optional
 import typer
 
 from ..errors import ProcamError
-from ._app import app, console, err_console, fail, is_tty, plain, text_on_stderr, user_errors
+from ._app import app, console, err_console, fail, given, is_tty, plain, refuse, text_on_stderr, user_errors
 from ._options import (
     CameraSizeOpt,
     DisplayOpt,
@@ -135,6 +135,10 @@ def capture_cmd(
     cam_size = camera_settings(exposure, gain, camera_size, seed, display)
     live_limits(max_frames)
     order, step, family = value(pattern_args["order"]), pattern_args["step"], pattern_args["family"]
+    number(square, "--square", lo=0, lo_open=True, hi=1e9, what="a square size")
+    if not board:
+        refuse(("square",), "is the size of the board's squares: it applies with --board (the instant verdict) or "
+                            "--advise")
     board_size = parse_size(board, "--board") if board else None
     brd = parse_board(board, 1.0 if square is None else square) if board else None
     # --rig (issue 27): checked here, captured by procam.acquire.rig (cli/_rig.py)
@@ -145,6 +149,7 @@ def capture_cmd(
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
     kind, _ = parse_camera_spec("virtual" if virtual else camera)
+    _refuse_unused(kind, virtual)
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
     # the sequence, checked at the projector's size (or a 1920x1080 one until the display is known)
@@ -163,13 +168,25 @@ def capture_cmd(
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 
+def _refuse_unused(kind: str, virtual: bool) -> None:
+    """Refuse the device options the devices of this capture would ignore: the simulator (``--virtual``, ``--camera
+    virtual``) has no exposure, resolution or file timeout, a virtual projector no display, a real camera no seed."""
+    if kind == "virtual":
+        refuse(("camera_size", "exposure"), "is a setting of a real camera; the simulator renders at its scene's "
+                                            "size and exposure")
+    if kind != "folder":
+        refuse(("timeout",), "is how long a folder camera (--camera folder:PATH) waits for each file")
+    if kind != "virtual":
+        refuse(("seed",), "is the simulator's noise seed: it applies with --virtual or --camera virtual")
+    if virtual:
+        refuse(("display",), "chooses the real projector's display; --virtual projects on a virtual one")
+
+
 def _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual):
     """The advising session of ``--advise`` (None without it), every option checked before a device opens."""
     if not advise:
-        for flag, given in (("--auto", auto), ("--json", json_lines), ("--calibration", calibration is not None),
-                            ("--max-frames", max_frames is not None)):
-            if given:
-                fail(f"{flag} belongs to --advise; add --advise")
+        for flag in given("auto", "json_lines", "calibration", "max_frames", "target"):
+            fail(f"{flag} belongs to --advise; add --advise")
         return None
     from ..acquire.live import advisor_options, calibration_square, load_calibration_for
     from ._live import live_advice

@@ -45,7 +45,7 @@ def check_cmd(
     from . import _show
 
     brd = parse_board(board, square)
-    opts = pose_options(**pose_args)
+    opts = pose_options(**pose_args, poses=[pose_dir])
     output_path(png, "--png", (".png", ".jpg", ".jpeg"), inputs=(pose_dir,))  # the overlay is a picture, not a plot
     check = check_pose(pose_dir, brd, optional_size(projector), value(order), options=opts, step=step,
                        background=value(background))

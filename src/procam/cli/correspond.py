@@ -47,7 +47,7 @@ def correspond_cmd(
     from ..io import files as _files
 
     brd = parse_board(board, square)
-    opts = pose_options(**pose_args)
+    opts = pose_options(**pose_args, poses=[pose_dir])
     output_path(out, "-o", (".json",), inputs=(pose_dir,))
     output_path(png, "--png", FIGURE_SUFFIXES, inputs=(pose_dir,))
     cap = capture.load_capture(pose_dir, optional_size(projector), value(order), step=step)

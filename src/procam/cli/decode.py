@@ -32,7 +32,7 @@ def decode_cmd(
     projector: ProjectorOpt = None,
     order: OrderOpt = None,
     step: StepOpt = None,
-    method: DecodeOpt = DecodeMethod.robust,
+    decode_method: DecodeOpt = DecodeMethod.robust,
     shadow: ShadowOpt = 10.0,
     contrast: ContrastOpt = 3.0,
     gamma: str = typer.Option("auto", "--gamma", help="Phase families: the projector's gamma: auto (measure it from "
@@ -51,7 +51,7 @@ def decode_cmd(
 
     keep_freed_memory()
     size = optional_size(projector)
-    opts = pose_options(decode_method=method, shadow=shadow, contrast=contrast).decode
+    opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, poses=[pose_dir]).decode
     if gamma not in ("auto", "none"):
         try:
             gamma = float(gamma)

@@ -14,7 +14,8 @@ from ._options import ForceOpt, SimPreset, number, value
 from ._paths import output_dir, output_path
 
 #: The files the demo writes beside its capture folder (name, suffix).
-DEMO_FILES = (("calib.json", ".json"), ("calib.yml", ".yml"), ("decode.png", ".png"), ("corners.png", ".png"))
+DEMO_FILES = (("calib.json", ".json"), ("calib.yml", ".yml"), ("decode.png", ".png"), ("corners.png", ".png"),
+              ("demo_summary.json", ".json"))
 
 
 def _row(t, name, true, est, std=None, fmt=".2f"):
@@ -96,7 +97,7 @@ def demo_cmd(
                   f"({time.perf_counter() - t0:.1f} s)")
     calib = single_pose.calibrate(view)
     _show.print_calibration(calib)
-    cal_json, cal_yml, dec_png, cor_png = (out_dir / n for n, _ in DEMO_FILES)
+    cal_json, cal_yml, dec_png, cor_png, summary_json = (out_dir / n for n, _ in DEMO_FILES)
     io.save_calibration(calib, cal_json)
     io.save_opencv_yaml(calib, cal_yml)
     save_figure(decode_figure(maps, stack[ps.white], title="demo: decoded maps"), dec_png)
@@ -141,5 +142,5 @@ def demo_cmd(
     console.print("projector model: " + "; ".join(projector_assumptions(calib)))
     summary = {"preset": preset, "seed": seed, "pose_deg": list(simulate.RECOMMENDED_POSE),
                "camera_f": [cam["f"], float(K[0, 0])], "projector_f": [proj["f"], float(Kp[0, 0])]}
-    _files.write_text(out_dir / "demo_summary.json", json.dumps(summary, indent=1))
-    say(f"wrote {out_dir}/capture, calib.json, calib.yml, decode.png, corners.png")
+    _files.write_text(summary_json, json.dumps(summary, indent=1))
+    say(f"wrote {out_dir}/capture, {', '.join(n for n, _ in DEMO_FILES)}")

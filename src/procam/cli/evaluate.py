@@ -79,7 +79,7 @@ def evaluate_cmd(
 
     brd = parse_board(board, square)
     distinct_poses(poses)
-    opts = pose_options(**pose_args, min_corners=6, background=False)  # the evaluation reads no background
+    opts = pose_options(**pose_args, min_corners=6, background=False, poses=poses)  # the evaluation reads no background
     output_path(out, "-o", (".json",), inputs=(calibration, *poses))
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:

@@ -23,7 +23,7 @@ from ._options import (
     value,
     with_pose_options,
 )
-from ._paths import distinct_poses, output_dir
+from ._paths import distinct_poses, output_dir, output_path
 
 if TYPE_CHECKING:  # annotations only: rich is imported where a table is drawn
     from rich.table import Table
@@ -107,10 +107,11 @@ def experiment_cmd(
     from .. import pipeline
     from ..multi_pose import DIST_CHOICES
     from ..paper import experiment, report
+    from ..paper.report import REPORT_FILES
 
     brd = parse_board(board, square)
     distinct_poses(poses)
-    opts = pose_options(**pose_args)
+    opts = pose_options(**pose_args, poses=poses)
     if min_set < 2:
         fail(f"--min-set must be at least 2, got {min_set}")
     if len(poses) < min_set:
@@ -127,10 +128,9 @@ def experiment_cmd(
         if d not in DIST_CHOICES:
             fail(f"{name} must be one of {', '.join(DIST_CHOICES)}, got {d!r}")
     size = optional_size(projector)
-    if html_report is not None:
-        from ._paths import output_path
-
-        output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
+    for name in REPORT_FILES:  # with --force the folder may hold a user's file of one of these names
+        output_path(out / name, "-o", (Path(name).suffix,), inputs=poses)
+    output_path(html_report, "--report", (".html", ".htm"), inputs=poses)
     bar = (Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                     TextColumn("{task.fields[label]}", markup=False), console=err_console.real, transient=True)
            if is_tty() else _LineProgress())

@@ -7,8 +7,9 @@ from typing import Optional
 
 import typer
 
-from ._app import app, console, fail, say, user_errors, warn
+from ._app import app, console, fail, refuse, say, user_errors, warn
 from ._options import (
+    POSE_OPTIONS,
     OrderOpt,
     ProjectorOpt,
     StepOpt,
@@ -53,7 +54,11 @@ def report_cmd(
         if board is None or square is None:
             fail("give --board COLSxROWS and --square with the pose folders (the board they show)")
         brd = parse_board(board, square)
-        opts = pose_options(**pose_args)
+        opts = pose_options(**pose_args, poses=poses)
+    else:
+        refuse(("board", "square", "projector", "order", "step", *(o[0] for o in POSE_OPTIONS)),
+               "is how pose folders are read; this report has none (give pose folders after the calibration file to "
+               "show and verify them)")
     from ..io.rig import is_rig_calibration
 
     if is_rig_calibration(calibration):  # several projectors / cameras (procam.rig): the rig's page

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, fail, say, user_errors, warn
-from ._options import DisplayOpt, SeedOpt
+from ._app import app, fail, refuse, say, user_errors, warn
+from ._options import DisplayOpt, SeedOpt, camera_settings
 
 
 @app.command("app")
@@ -33,11 +33,15 @@ def app_cmd(
     Check in the world, Export, More projectors (docs/app.md). Ctrl+C stops it; the project folder keeps everything."""
     from .. import app as procam_app
 
-    procam_app.need_extra()
     if not 0 <= port <= 65535:
         fail(f"--port must be from 0 to 65535, got {port}")
-    if virtual and camera != "opencv:0":
-        fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
+    camera_settings(None, None, None, seed, display)
+    if virtual:
+        refuse(("camera",), "chooses the real camera; --virtual uses the simulator as the camera")
+        refuse(("display",), "chooses the real projector's display; --virtual projects on a virtual one")
+    else:
+        refuse(("seed",), "is the simulator's noise seed: it applies with --virtual")
+    procam_app.need_extra()
     if host not in ("127.0.0.1", "localhost"):
         warn(f"--host {host}: the app is reachable from other machines (the token still guards it)")
     token = procam_app.new_token()

@@ -93,6 +93,12 @@ def markdown(result: ExperimentResult, figures: Sequence[str] = ()) -> str:
     return "\n".join(lines)
 
 
+#: The files :func:`write_report` writes (the figures of :func:`procam.plots.experiment.experiment_figures`, the
+#: tables of :meth:`ExperimentResult.tables`), for a command to check before any work.
+REPORT_FILES = ("focal_errors.png", "sigma_T.png", "single_pose.csv", "single_extrinsics.csv", "multi_sets.csv",
+                "multi_summary.csv", "multi_params.csv", "experiment.json", "report.md")
+
+
 def write_report(result: ExperimentResult, out_dir) -> list[Path]:
     """Write ``report.md``, one CSV per table, ``experiment.json`` and the PNG figures to ``out_dir``.
 

@@ -1,0 +1,173 @@
+"""An option the command would not read is refused, never silently ignored (attack round 3): one line naming
+the option and what it applies to, exit 2, before any work and with nothing written; where it does apply, the
+same option is taken.  And a command that writes several files checks every one of them before its work, so a
+user's file of the same name stops it at once, not after the rendering or the calibrations."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from conftest import camera_view_of_patterns, run_cli, write_stack
+
+from procam import patterns
+
+
+def _refused(args, flag, *words):
+    code, out, err = run_cli(args)
+    assert code == 2, (code, out, err)
+    assert err.startswith(f"error: {flag} ") and err.rstrip().endswith("leave it out"), err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    for w in words:
+        assert w in err, err
+    return err
+
+
+def _phase_folder(folder, family):
+    """A pose folder whose patterns.json describes ``family`` (the refusal reads nothing else)."""
+    folder.mkdir()
+    (folder / "patterns.json").write_text(json.dumps(patterns.pattern_set(256, 160, family=family).to_dict()))
+    return folder
+
+
+@pytest.mark.parametrize("args, flag, why", [
+    (["--virtual", "--camera-size", "640x480"], "--camera-size", "real camera"),
+    (["--virtual", "--exposure", "5"], "--exposure", "real camera"),
+    (["--camera", "virtual", "--gain", "2", "--exposure", "5"], "--exposure", "real camera"),
+    (["--virtual", "--display", "1"], "--display", "virtual one"),
+    (["--virtual", "--timeout", "3"], "--timeout", "folder camera"),
+    (["--camera", "opencv:1", "--seed", "3"], "--seed", "--virtual"),
+    (["--virtual", "--target", "2"], "--target", None),
+    (["--virtual", "--square", "5"], "--square", "--board"),
+])
+def test_capture_refuses_what_its_devices_would_ignore(tmp_path, args, flag, why):
+    """The simulator has no exposure or resolution setting, a virtual projector no display, a real camera no seed;
+    --target is live advice's, --square the board's: each was accepted and ignored."""
+    out = tmp_path / "pose"
+    code, _, err = run_cli(["capture", out, *args])
+    if flag == "--target":
+        assert code == 2 and err.strip() == "error: --target belongs to --advise; add --advise", err
+    else:
+        _refused(["capture", out, *args], flag, why)
+    assert not out.exists()
+
+
+def test_capture_checks_the_square_size_it_takes():
+    code, _, err = run_cli(["capture", "x", "--virtual", "--board", "10x6", "--square", "nan"])
+    assert code == 2 and "--square must be a square size > 0" in err, err
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--seed", "5"], "--seed"), (["--virtual", "--display", "1"], "--display"),
+    (["--virtual", "--camera", "opencv:0"], "--camera"),
+])
+def test_app_refuses_device_options_of_the_other_rig(tmp_path, args, flag):
+    _refused(["app", tmp_path / "project", "--no-browser", *args], flag)
+    assert not (tmp_path / "project").exists()
+
+
+@pytest.mark.parametrize("args, option", [(["--virtual", "--seed", "-5"], "--seed"),
+                                          (["--display", "-1"], "--display"),
+                                          (["--virtual", "--seed", "99999999999"], "--seed")])
+def test_app_checks_its_numbers_before_creating_the_project(tmp_path, args, option):
+    """--seed -5 was an internal error after the project folder was created."""
+    code, _, err = run_cli(["app", tmp_path / "project", "--no-browser", *args])
+    assert code == 2 and err.startswith(f"error: {option} must be"), err
+    assert not (tmp_path / "project").exists()
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--method", "multi"], "--method"), (["--decode", "simple"], "--decode"), (["-p", "800x600"], "--projector"),
+    (["--order", "opencv"], "--order"), (["--step", "2"], "--step"), (["--shadow-threshold", "5"],
+                                                                     "--shadow-threshold"),
+    (["--contrast-threshold", "5"], "--contrast-threshold"), (["--window", "30"], "--window"),
+    (["--estimator", "lsq"], "--estimator"), (["--strict"], "--strict"),
+])
+def test_a_camera_only_calibration_refuses_the_pattern_options(tmp_path, args, flag):
+    """A camera-only calibration reads photos of the board: the options of pattern captures were ignored."""
+    photo = tmp_path / "photo.png"
+    write_stack(tmp_path, np.full((1, 48, 64), 255, np.uint8), names=["photo.png"])
+    _refused(["calibrate", photo, "--camera-only", "--board", "10x6", "--square", "24", "-o", tmp_path / "c.json",
+              *args], flag, "camera-only (one photo) calibration")
+
+
+def test_strict_is_refused_on_one_pose(tmp_path):
+    pose = tmp_path / "pose"
+    write_stack(pose, camera_view_of_patterns())
+    _refused(["calibrate", pose, "--strict", "--board", "10x6", "--square", "24", "-o", tmp_path / "c.json"],
+             "--strict", "single-pose calibration")
+
+
+@pytest.mark.parametrize("family, args, flag", [
+    ("phase", ["--decode", "simple"], "--decode"), ("phase", ["--contrast-threshold", "5"], "--contrast-threshold"),
+    ("heterodyne", ["--decode", "simple"], "--decode"), ("gray-phase", ["--decode", "simple"], "--decode"),
+])
+@pytest.mark.parametrize("command", ["decode", "check", "calibrate"])
+def test_a_gray_code_decoder_option_is_refused_on_a_phase_capture(tmp_path, family, args, flag, command):
+    pose = _phase_folder(tmp_path / "pose", family)
+    extra = {"decode": [], "check": ["--board", "10x6", "--square", "24"],
+             "calibrate": ["--board", "10x6", "--square", "24", "-o", tmp_path / "c.json"]}[command]
+    _refused([command, pose, *args, *extra], flag, f"{pose} holds a {family} capture")
+    assert not (tmp_path / "c.json").exists()
+
+
+def test_the_phase_decoder_options_are_refused_on_gray_codes_and_taken_where_they_apply(tmp_path):
+    """--gamma and --camera-noise were a no-op on a Gray capture; --contrast-threshold applies to gray-phase's Gray
+    bits, --decode to Gray codes."""
+    gray = tmp_path / "gray"
+    write_stack(gray, camera_view_of_patterns())
+    _refused(["decode", gray, "--gamma", "2.2"], "--gamma", f"{gray} holds a gray capture")
+    _refused(["decode", gray, "--camera-noise", "1"], "--camera-noise", "phase decoder")
+    code, out, err = run_cli(["decode", gray, "-p", "64x48", "--decode", "simple", "--contrast-threshold", "5"])
+    assert code == 0 and "simple classifier" in out, err
+    gp = tmp_path / "gp"
+    ps = patterns.pattern_set(256, 160, family="gray-phase")
+    write_stack(gp, [(20 + 0.7 * f).astype(np.uint8) for f in patterns.frames(ps)])
+    (gp / "patterns.json").write_text(json.dumps(ps.to_dict()))
+    code, out, err = run_cli(["decode", gp, "--contrast-threshold", "5", "--camera-noise", "1"])
+    assert code == 0 and "both 100.0 %" in out, err
+
+
+def test_refine_window_is_refused_without_a_refinement(tmp_path):
+    pose = tmp_path / "pose"
+    write_stack(pose, camera_view_of_patterns())
+    _refused(["check", pose, "--board", "10x6", "--square", "24", "--corner-refine", "none", "--refine-window",
+              "7"], "--refine-window", "refines nothing")
+
+
+@pytest.mark.parametrize("args, flag", [(["--square", "nan"], "--square"), (["--board", "10x6"], "--board"),
+                                        (["--decode", "simple"], "--decode"), (["--window", "30"], "--window")])
+def test_a_report_without_pose_folders_refuses_the_pose_options(tmp_path, args, flag):
+    from procam import io, simulate
+
+    io.save_calibration(simulate.truth_calibration(simulate.preset("paper")), tmp_path / "c.json")
+    _refused(["report", tmp_path / "c.json", "-o", tmp_path / "r.html", *args], flag, "this report has none")
+    assert not (tmp_path / "r.html").exists()
+
+
+def test_demo_force_finds_a_users_file_before_rendering(tmp_path):
+    """--force lets the demo write into a folder that holds other files; a user's demo_summary.json was found only
+    after the rendering and the calibration, with the other files already written."""
+    out = tmp_path / "demo"
+    out.mkdir()
+    (out / "demo_summary.json").write_text('{"mine": 1}')
+    code, _, err = run_cli(["demo", out, "--force"])
+    assert code == 2 and "demo_summary.json" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["demo_summary.json"]
+    assert (out / "demo_summary.json").read_text() == '{"mine": 1}'
+
+
+def test_experiment_force_finds_a_users_file_before_decoding(tmp_path):
+    from procam.paper.report import REPORT_FILES
+
+    poses = []
+    for i in range(3):
+        poses.append(tmp_path / f"pose{i}")
+        write_stack(poses[-1], camera_view_of_patterns(seed=i))
+    out = tmp_path / "exp"
+    out.mkdir()
+    (out / "report.md").write_text("my notes")
+    code, _, err = run_cli(["experiment", *poses, "--board", "10x6", "--square", "24", "-o", out, "--force"])
+    assert code == 2 and "report.md" in err and "decoding" not in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["report.md"] and "report.md" in REPORT_FILES
