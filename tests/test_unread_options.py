@@ -171,3 +171,103 @@ def test_experiment_force_finds_a_users_file_before_decoding(tmp_path):
     code, _, err = run_cli(["experiment", *poses, "--board", "10x6", "--square", "24", "-o", out, "--force"])
     assert code == 2 and "report.md" in err and "decoding" not in err, err
     assert sorted(p.name for p in out.iterdir()) == ["report.md"] and "report.md" in REPORT_FILES
+
+
+def _truth_calibration(tmp_path):
+    from procam import io, simulate
+
+    path = tmp_path / "calib.json"
+    io.save_calibration(simulate.truth_calibration(simulate.preset("ideal")), path)
+    return path
+
+
+def test_reconstruct_refuses_max_residual_with_one_coordinate(tmp_path):
+    pytest.importorskip("plyfile", reason="reconstruct writes PLY through plyfile (pip install \".[ply]\")")
+    pose = tmp_path / "pose"
+    write_stack(pose, camera_view_of_patterns())
+    _refused(["reconstruct", _truth_calibration(tmp_path), pose, "-o", tmp_path / "x.ply", "--use", "col",
+              "--max-residual", "1"], "--max-residual", "--use col")
+
+
+def test_simulate_refuses_a_preset_for_a_rig(tmp_path):
+    _refused(["simulate", tmp_path / "rig", "--rig", "two_projectors", "--preset", "ideal"], "--preset",
+             "--rig two_projectors")
+    assert not (tmp_path / "rig").exists()
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--mode", "camera", "-o", "{tmp}/cam.json", "--target", "2"], "--target"),
+    (["--mode", "camera", "-o", "{tmp}/cam.json", "--still", "1"], "--still"),
+    (["--f-target", "1"], "--f-target"), (["--pp-target", "1"], "--pp-target"),
+    (["--camera", "virtual", "--gain", "2"], "--gain"), (["--camera", "virtual", "--camera-size", "640x480"],
+                                                         "--camera-size"),
+    (["--camera", "opencv:3", "--seed", "2"], "--seed"),
+])
+def test_advise_refuses_the_other_modes_and_devices_options(tmp_path, args, flag):
+    _refused(["advise", "--board", "10x6", *(a.format(tmp=tmp_path) for a in args)], flag)
+    assert not (tmp_path / "cam.json").exists()
+
+
+def test_advise_on_the_virtual_camera_without_a_square_sees_the_simulators_board():
+    """Without --square the simulated board was drawn with squares of one unit (a millimetre), too small to find;
+    the advice's lengths are in squares, the board the simulator's."""
+    code, out, err = run_cli(["advise", "--board", "9x6", "--camera", "virtual", "--json", "--max-frames", "2"])
+    assert code == 0, err
+    states = [json.loads(line)["state"] for line in out.splitlines() if line.startswith("{")]
+    assert len(states) == 2 and "no-board" not in states, out
+
+
+@pytest.mark.parametrize("args, flag, why", [
+    (["--virtual", "--settle-ms", "10"], "--settle-ms", "--virtual uses the simulator"),
+    (["--virtual", "--exposure", "3"], "--exposure", "--virtual uses the simulator"),
+])
+def test_world_check_refuses_device_settings_under_virtual(tmp_path, args, flag, why):
+    _refused(["world-check", _truth_calibration(tmp_path), *args], flag, why)
+
+
+def test_world_check_refuses_a_seed_without_the_simulator_and_names_a_bad_square(tmp_path):
+    cal = _truth_calibration(tmp_path)
+    code, _, err = run_cli(["world-check", cal, "--board", "9x6", "--square", "30", "--seed", "3"])
+    assert code == 2 and err.strip() == "error: --seed belongs to --virtual; add --virtual or leave it out", err
+    code, _, err = run_cli(["world-check", cal, "--virtual", "--square", "nan"])
+    assert code == 2 and err.startswith("error: --square must be"), err
+    code, _, err = run_cli(["world-check", tmp_path, "--virtual"])
+    assert code == 2 and "a folder, not a calibration file" in err, err
+
+
+@pytest.mark.parametrize("args, flag", [(["--no-slices", "--slice-grid", "0"], "--slice-grid"),
+                                        (["--psi", "0", "--nu", "0", "--grid", "0"], "--grid")])
+def test_study_refuses_angles_it_would_not_use(tmp_path, args, flag):
+    _refused(["study", "camera", "-o", tmp_path / "st", "--trials", "0", *args], flag)
+    assert not (tmp_path / "st").exists()
+
+
+@pytest.mark.parametrize("args, option", [(["--psi", "abc"], "--psi: grid must be"), (["--nu", "1:2"], "--nu: grid"),
+                                          (["--slice-grid", "x"], "--slice-grid: grid"),
+                                          (["--model-error", "foo"], "--model-error must be paper or none")])
+def test_study_errors_name_the_option(tmp_path, args, option):
+    code, _, err = run_cli(["study", "camera", "-o", tmp_path / "st", "--trials", "0", "--grid", "0", *args])
+    assert code == 2 and err.startswith(f"error: {option}"), err
+
+
+def test_a_study_of_one_trial_per_cell_summarises_without_a_warning(tmp_path):
+    """One trial has no spread (std/sqrt(CRLB) NaN in every cell): the summary said so through numpy's All-NaN
+    RuntimeWarning (an error under this suite's filterwarnings)."""
+    code, out, err = run_cli(["study", "camera", "-o", tmp_path / "st", "--trials", "1", "--grid", "0,10",
+                              "--no-slices", "--no-figures"])
+    assert code == 0, err
+    summary = json.loads((tmp_path / "st" / "study_camera_paper.json").read_text())["summary"]
+    assert summary["cells"] == 4 and summary["median_ratio_std"] is None, summary
+    assert np.isfinite(summary["median_ratio_median"]), summary
+
+
+def test_export_refuses_force_for_a_single_file(tmp_path):
+    _refused(["export", _truth_calibration(tmp_path), "--format", "opengl", "--near",
+              "100", "--far", "5000", "-o", tmp_path / "gl.json", "--force"], "--force", "--format maps")
+
+
+def test_a_folder_given_as_the_calibration_is_called_a_folder(tmp_path):
+    pose = tmp_path / "pose"
+    write_stack(pose, camera_view_of_patterns())
+    code, _, err = run_cli(["report", tmp_path, "-o", tmp_path / "r.html"])
+    assert code == 2 and f"{tmp_path}: a folder, not a calibration file" in err, err

@@ -12,7 +12,7 @@ from typing import Optional
 
 import typer
 
-from ._app import app, fail, say, text_on_stderr, user_errors
+from ._app import app, fail, refuse, say, text_on_stderr, user_errors
 from ._live import live_advice
 from ._options import (
     BoardOpt,
@@ -94,16 +94,19 @@ def advise_cmd(
     if mode == "camera":
         if known_camera is not None:
             fail("--known-camera applies to --mode pose; the camera mode calibrates the camera itself")
+        refuse(("target", "still", "still_px"), "is the pose advice's (--mode pose); the camera mode stops at "
+                                                "--f-target and --pp-target")
         return _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, gain, camera_size,
                             virtual_pose, seed, out, f_target, pp_target, calibration)
     if out is not None:
         fail("-o writes the camera file of --mode camera; the pose mode writes nothing")
+    refuse(("f_target", "pp_target"), "is when the camera mode (--mode camera) has photos enough")
     if calibration is not None and square is None:
         square = calibration_square(calibration)
     b = parse_board(board, 1.0 if square is None else square)
     options = advisor_options(target, still, still_px)
     live_limits(max_frames)
-    opener = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed)
+    opener = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, square)
     calib, source = (None, "")
     if calibration is not None:
         calib, source = load_calibration_for(calibration, b)
@@ -125,10 +128,11 @@ def advise_cmd(
         say(f"stopped ({res.reason}) after {res.frames} frames: {a.state}: {a.message}")
 
 
-def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed):
+def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, square):
     """The live camera's options checked (before any other work); returns ``open(default_pose, **scene_changes)``,
     which opens it: the simulator's ``ideal`` rig with the board ``b`` at ``--virtual-pose`` (or ``default_pose``,
-    or the recommended pose) for ``virtual``, else the device."""
+    or the recommended pose) for ``virtual``, else the device.  ``square``: the square size given (None: the
+    simulated board keeps its own, the advice's lengths are in squares)."""
     from ..acquire import cameras as cams
 
     cam_size = camera_settings(exposure, gain, camera_size, seed)
@@ -139,6 +143,11 @@ def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed):
              "(opencv:, genicam:) or virtual")
     if pose is not None and kind != "virtual":
         fail("--virtual-pose applies to --camera virtual only")
+    if kind == "virtual":
+        refuse(("camera_size", "exposure", "gain"), "is a setting of a real camera; the simulator renders at its "
+                                                    "scene's size and exposure")
+    else:
+        refuse(("seed",), "is the simulator's noise seed: it applies with --camera virtual")
 
     def open_(default_pose, **changes):
         if kind != "virtual":
@@ -147,8 +156,9 @@ def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed):
         from ..acquire.cameras import VirtualLiveCamera
 
         scene = simulate.preset("ideal")
-        if (b.cols, b.rows, b.square) != (scene.board_cols, scene.board_rows, scene.square):
-            scene = scene.replace(board_cols=b.cols, board_rows=b.rows, square=b.square)
+        size = (b.cols, b.rows, scene.square if square is None else b.square)
+        if size != (scene.board_cols, scene.board_rows, scene.square):
+            scene = scene.replace(board_cols=size[0], board_rows=size[1], square=size[2])
         scene = simulate.with_board_pose(scene, pose or default_pose or simulate.RECOMMENDED_POSE)
         return VirtualLiveCamera(scene.replace(**changes) if changes else scene, seed=seed)
 
@@ -177,7 +187,7 @@ def _camera_mode(board, square, camera, json_lines, auto, max_frames, exposure, 
     b = parse_board(board, 1.0 if square is None else square)
     live_limits(max_frames)
     # photos in room light: the board is seen wherever it is put, not only in the projector's light
-    cam = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed)((5.0, 3.0, 0.0),
+    cam = _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, square)((5.0, 3.0, 0.0),
                                                                                      ambient=0.8, gain=0.5)
     options = replace(AdvisorOptions(), camera_f_pct=float(f_target), camera_pp_px=float(pp_target))
     state = {"advisor": None, "last": None}

@@ -158,7 +158,7 @@ def export_cmd(
                              ("--rectify", rectify, ("maps",)), ("--scale", scale, ("maps",)),
                              ("--y-down", y_down, ("opengl",)), ("--zero-to-one", zero_to_one, ("opengl",)),
                              ("--near", near, ENGINES), ("--far", far, ENGINES), ("--world", world, ENGINES),
-                             ("--unit", unit, ("blender", "unity"))):
+                             ("--unit", unit, ("blender", "unity")), ("--force", force, ("maps",))):
         if given is not None and given is not False and fmt not in fmts:
             fail(f"{opt} belongs to --format {' or '.join(fmts)}, not {fmt}; leave it out")
     if scale is not None and not rectify:

@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from .. import choices
-from ._app import app, console, fail, plain, say, user_errors, warn
+from ._app import app, console, fail, plain, refuse, say, user_errors, warn
 from ._options import OrderOpt, ProjectorOpt, StepOpt, choice, parse_size, value
 from ._paths import assumed_size, load_pose, output_path
 
@@ -54,6 +54,9 @@ def reconstruct_cmd(
     use = value(use)
     if not (math.isfinite(max_residual) and 0 < max_residual <= 10000):
         fail(f"--max-residual must be a positive number of projector pixels (at most 10000), got {max_residual}")
+    if use != "both":
+        refuse(("max_residual",), f"compares the projector column and row of a point; --use {use} triangulates "
+                                  "with one of them only")
     if residuals is not None and board is None:
         fail("--residuals needs --board (the plane is fitted to the board's points)")
     lo, hi = _board.CORNERS_PER_SIDE

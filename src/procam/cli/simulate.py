@@ -8,7 +8,7 @@ import typer
 
 from ..choices import PATTERN_ORDERS as ORDERS
 from ..errors import OutputError
-from ._app import app, console, fail, is_tty, say, user_errors, warn
+from ._app import app, console, fail, is_tty, refuse, say, user_errors, warn
 from ._options import DeviceName, ForceOpt, SimPreset, number, parse_pose, pattern_sequence, value, with_pattern_options
 
 #: Largest seed numpy's generators take from the CLI (2**32 - 1, as every procam command).
@@ -52,6 +52,8 @@ def simulate_cmd(
         fail(f"--rig must be one of {', '.join(sim.RIG_PRESETS)}, got {rig!r}")
     if rig is not None and frame != "camera":
         fail("--frame does not apply to a rig: --pose is in the reference camera's frame")
+    if rig is not None:
+        refuse(("preset",), f"chooses a camera-projector pair's rig; --rig {rig} renders its own devices")
     if preset not in sim.PRESETS:
         fail(f"--preset must be one of {', '.join(sim.PRESETS)}, got {preset!r}")
     if bits not in (8, 16):

@@ -10,7 +10,7 @@ import typer
 
 from ..errors import ProcamError
 from ..style import fmt_number
-from ._app import app, console, err_console, fail, plain, say, user_errors
+from ._app import app, console, err_console, fail, plain, refuse, say, user_errors
 from ._options import DeviceName, ForceOpt, number, value
 from ._paths import output_dir, output_path
 
@@ -54,7 +54,7 @@ def study(
     )
     from rich.table import Table
 
-    from ..paper.study import StudyConfig, parse_grid, run_study
+    from ..paper.study import MODEL_ERRORS, StudyConfig, parse_grid, run_study
 
     device = value(device)
     if device not in ("camera", "projector"):
@@ -65,11 +65,24 @@ def study(
     number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
     if not (jobs == -1 or 1 <= jobs <= 1024):
         fail(f"-j/--jobs must be -1 (all cores) or from 1 to 1024 worker processes, got {jobs}")
-    psi = parse_grid(psi_grid or grid)
-    nu = parse_grid(nu_grid or grid)
+    if model_error not in MODEL_ERRORS:
+        fail(f"--model-error must be {' or '.join(MODEL_ERRORS)}, got {model_error!r}")
+    if psi_grid is not None and nu_grid is not None:
+        refuse(("grid",), "gives the angles of --psi and --nu not given; both are given")
+    if not slices:
+        refuse(("slice_grid",), "gives the angles of the paper's slices; --no-slices runs none")
+
+    def angles(text, option):
+        try:
+            return parse_grid(text)
+        except ProcamError as e:
+            fail(f"{option}: {e}")
+
+    psi = angles(psi_grid, "--psi") if psi_grid is not None else angles(grid, "--grid")
+    nu = angles(nu_grid, "--nu") if nu_grid is not None else angles(grid, "--grid")
     cfg = StudyConfig(device=device, psi=psi, nu=nu, trials=trials, noise=noise, model_error=model_error,
                       distance=distance, slices=slices,
-                      slice_angles=None if slice_grid is None else parse_grid(slice_grid), seed=seed,
+                      slice_angles=None if slice_grid is None else angles(slice_grid, "--slice-grid"), seed=seed,
                       render=render)
     from ..paper.study import study_cells
 

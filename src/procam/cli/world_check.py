@@ -12,7 +12,7 @@ from typing import Optional
 
 import typer
 
-from ._app import app, fail, say, user_errors
+from ._app import app, fail, given, refuse, say, user_errors
 from ._options import (
     _SIZE,
     BoardOpt,
@@ -76,19 +76,20 @@ def world_check_cmd(
     cam_size = camera_settings(exposure, gain, camera_size, seed, display)
     wall_grid = _wall_grid(wall) if wall is not None else None
     angles = parse_pose(pose) if pose is not None else None
+    number(square, "--square", lo=0, lo_open=True, hi=1e9, what="a square size")
     if not virtual:
-        for flag, given in (("--pose", pose is not None), ("--preset", value(preset) != "ideal")):
-            if given:
-                fail(f"{flag} belongs to --virtual; add --virtual or leave it out")
+        for flag in given("pose", "preset", "seed"):
+            fail(f"{flag} belongs to --virtual; add --virtual or leave it out")
         if board is None:
             fail("give the board in view: --board COLSxROWS (inner corners) and --square")
-    elif camera != "opencv:0" or display is not None or cam_size is not None or exposure is not None:
-        fail("--virtual uses the simulator as the camera and projector; leave out --camera, --display, "
-             "--camera-size and --exposure")
+    else:
+        refuse(("camera", "display", "camera_size", "exposure", "settle_ms"),
+               "is a real device's setting; --virtual uses the simulator as the camera and projector")
     png = output_path(png, "--png", (".png", ".jpg", ".jpeg"), inputs=(calibration,))
     json_out = output_path(json_out, "--json", (".json",), inputs=(calibration,))
     if not calibration.is_file():
-        fail(f"{calibration}: no such calibration file; give the file procam calibrate wrote")
+        what = "a folder, not a calibration file" if calibration.is_dir() else "no such calibration file"
+        fail(f"{calibration}: {what}; give the file procam calibrate wrote")
     calib = load_calibration(calibration)
     if calib.projector is None or calib.R is None or calib.T is None:
         fail(f"{calibration}: a camera-only calibration (no projector, no R, T); the world check needs the "

@@ -167,7 +167,9 @@ def load_calibration(path, pair: str | None = None) -> Calibration:
     """
     path = Path(path)
     if not path.is_file():
-        raise CalibrationFileError(f"{path}: no such file; give a calibration written by 'procam calibrate'")
+        what = ("a folder, not a calibration file" if path.is_dir() else "not a regular file" if path.exists() else
+                "no such file")
+        raise CalibrationFileError(f"{path}: {what}; give a calibration written by 'procam calibrate'")
     kind = _kind(path)
     if kind == "json":
         doc = _json(path, "not a procam calibration JSON file", CALIBRATION_FORMATS)

@@ -476,10 +476,11 @@ class StudyResult:
     def summary(self) -> dict:
         """Key numbers: cells, time, cells/s, median ratios over finite-bound cells."""
         ok = [r for r in self.rows if np.isfinite(r["ratio_median"])]
+        stds = [r["ratio_std"] for r in ok if np.isfinite(r["ratio_std"])]  # none with one trial per cell
         return {"cells": len(self.rows), "seconds": self.seconds,
                 "cells_per_second": len(self.rows) / self.seconds if self.seconds > 0 else float("nan"),
                 "median_ratio_median": float(np.median([r["ratio_median"] for r in ok])) if ok else float("nan"),
-                "median_ratio_std": float(np.nanmedian([r["ratio_std"] for r in ok])) if ok else float("nan"),
+                "median_ratio_std": float(np.median(stds)) if stds else float("nan"),
                 **self.run}
 
     def config_dict(self) -> dict:
