@@ -238,6 +238,16 @@ def camera_settings(exposure, gain, camera_size, seed, display=None) -> tuple[in
     return parse_size(camera_size, "--camera-size") if camera_size else None
 
 
+#: Why a device option is refused with the simulator's devices (or the seed with a real camera): :func:`refuse` texts.
+SIMULATED_CAMERA = "is a setting of a real camera; the simulator renders at its scene's size and exposure"
+SIMULATED_PROJECTOR = "chooses the real projector's display; --virtual projects on a virtual one"
+
+
+def seed_applies(where: str) -> str:
+    """Why ``--seed`` is refused with a real camera: it applies with ``where`` (the simulator's option)."""
+    return f"is the simulator's noise seed: it applies with {where}"
+
+
 def live_limits(max_frames) -> None:
     """Check ``--max-frames`` (the other live-advice numbers: :func:`procam.acquire.live.advisor_options`)."""
     number(max_frames, "--max-frames", lo=1, hi=MAX_FRAMES, what="a frame count")

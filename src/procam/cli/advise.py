@@ -15,6 +15,7 @@ import typer
 from ._app import app, fail, refuse, say, text_on_stderr, user_errors
 from ._live import live_advice
 from ._options import (
+    SIMULATED_CAMERA,
     BoardOpt,
     CameraSizeOpt,
     ExposureOpt,
@@ -28,6 +29,7 @@ from ._options import (
     camera_settings,
     live_limits,
     parse_board,
+    seed_applies,
 )
 
 
@@ -144,10 +146,9 @@ def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, s
     if pose is not None and kind != "virtual":
         fail("--virtual-pose applies to --camera virtual only")
     if kind == "virtual":
-        refuse(("camera_size", "exposure", "gain"), "is a setting of a real camera; the simulator renders at its "
-                                                    "scene's size and exposure")
+        refuse(("camera_size", "exposure", "gain"), SIMULATED_CAMERA)
     else:
-        refuse(("seed",), "is the simulator's noise seed: it applies with --camera virtual")
+        refuse(("seed",), seed_applies("--camera virtual"))
 
     def open_(default_pose, **changes):
         if kind != "virtual":

@@ -14,6 +14,8 @@ import typer
 from ..errors import ProcamError
 from ._app import app, console, err_console, fail, given, is_tty, plain, refuse, text_on_stderr, user_errors
 from ._options import (
+    SIMULATED_CAMERA,
+    SIMULATED_PROJECTOR,
     CameraSizeOpt,
     DisplayOpt,
     ExposureOpt,
@@ -31,6 +33,7 @@ from ._options import (
     parse_size,
     pattern_sequence,
     phase_keywords,
+    seed_applies,
     value,
     with_pattern_options,
 )
@@ -149,7 +152,7 @@ def capture_cmd(
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
     kind, _ = parse_camera_spec("virtual" if virtual else camera)
-    _refuse_unused(kind, virtual)
+    _refuse_unused(kind, virtual, rig_spec is not None)
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
     # the sequence, checked at the projector's size (or a 1920x1080 one until the display is known)
@@ -168,18 +171,18 @@ def capture_cmd(
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 
-def _refuse_unused(kind: str, virtual: bool) -> None:
+def _refuse_unused(kind: str, virtual: bool, rig: bool) -> None:
     """Refuse the device options the devices of this capture would ignore: the simulator (``--virtual``, ``--camera
-    virtual``) has no exposure, resolution or file timeout, a virtual projector no display, a real camera no seed."""
+    virtual``) has no exposure, file timeout or (but for a virtual rig's camera) resolution, a virtual projector no
+    display, a real camera no seed."""
     if kind == "virtual":
-        refuse(("camera_size", "exposure"), "is a setting of a real camera; the simulator renders at its scene's "
-                                            "size and exposure")
+        refuse(("exposure",) if rig else ("camera_size", "exposure"), SIMULATED_CAMERA)
     if kind != "folder":
         refuse(("timeout",), "is how long a folder camera (--camera folder:PATH) waits for each file")
     if kind != "virtual":
-        refuse(("seed",), "is the simulator's noise seed: it applies with --virtual or --camera virtual")
+        refuse(("seed",), seed_applies("--virtual or --camera virtual"))
     if virtual:
-        refuse(("display",), "chooses the real projector's display; --virtual projects on a virtual one")
+        refuse(("display",), SIMULATED_PROJECTOR)
 
 
 def _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual):

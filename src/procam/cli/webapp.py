@@ -11,7 +11,7 @@ from pathlib import Path
 import typer
 
 from ._app import app, fail, refuse, say, user_errors, warn
-from ._options import DisplayOpt, SeedOpt, camera_settings
+from ._options import SIMULATED_PROJECTOR, DisplayOpt, SeedOpt, camera_settings, seed_applies
 
 
 @app.command("app")
@@ -38,9 +38,9 @@ def app_cmd(
     camera_settings(None, None, None, seed, display)
     if virtual:
         refuse(("camera",), "chooses the real camera; --virtual uses the simulator as the camera")
-        refuse(("display",), "chooses the real projector's display; --virtual projects on a virtual one")
+        refuse(("display",), SIMULATED_PROJECTOR)
     else:
-        refuse(("seed",), "is the simulator's noise seed: it applies with --virtual")
+        refuse(("seed",), seed_applies("--virtual"))
     procam_app.need_extra()
     if host not in ("127.0.0.1", "localhost"):
         warn(f"--host {host}: the app is reachable from other machines (the token still guards it)")
