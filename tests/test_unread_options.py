@@ -271,3 +271,28 @@ def test_a_folder_given_as_the_calibration_is_called_a_folder(tmp_path):
     write_stack(pose, camera_view_of_patterns())
     code, _, err = run_cli(["report", tmp_path, "-o", tmp_path / "r.html"])
     assert code == 2 and f"{tmp_path}: a folder, not a calibration file" in err, err
+
+
+# attack round 4: a board of 3 corners a side, and a failed board step after the cloud was written
+
+
+def test_a_board_with_a_side_of_three_is_not_found_and_named_not_an_internal_error(paper_capture):
+    """The search for the board actually in view handed OpenCV a pattern of 2 corners a side (an internal error,
+    exit 1); now the usual one line naming the board in view."""
+    folder = paper_capture[0]
+    code, _, err = run_cli(["check", folder, "--board", "4x3", "--square", "24"])
+    assert code == 2 and "4x3 inner corners not found" in err and "internal error" not in err, err
+
+
+def test_reconstruct_writes_no_cloud_when_the_board_is_not_found(tmp_path, paper_capture):
+    pytest.importorskip("plyfile", reason="reconstruct writes PLY through plyfile (pip install \".[ply]\")")
+    from procam import io, simulate
+
+    folder, _, _, scene = paper_capture
+    cal = tmp_path / "calib.json"
+    io.save_calibration(simulate.truth_calibration(scene), cal)
+    code, _, err = run_cli(["reconstruct", cal, folder, "-o", tmp_path / "r.ply", "--board", "9x5"])
+    assert code == 2 and "9x5 inner corners not found" in err, err
+    assert not (tmp_path / "r.ply").exists()
+    code, out, err = run_cli(["reconstruct", cal, folder, "-o", tmp_path / "r.ply", "--board", "10x6"])
+    assert code == 0 and "board plane RMS" in out and (tmp_path / "r.ply").is_file(), err

@@ -542,7 +542,7 @@ def size_hint(image: np.ndarray, pattern_size, *, max_width: int = 640, _pyr=Non
 
     def found(size):
         key = tuple(sorted(size))
-        if key in tried or min(size) < 2:
+        if key in tried or min(size) < 3:
             return False
         tried.add(key)
         return _find(g8, size, "classic") is not None

@@ -85,6 +85,12 @@ def reconstruct_cmd(
     if len(cloud) == 0:
         fail(f"{pose_dir}: no camera pixel could be triangulated (nothing decoded in front of both devices); "
              "check the decode picture (procam decode --png)")
+    if pattern is not None:  # the board found before anything is written: a failure leaves no cloud behind
+        corners = pipeline.find_board(cap.stack, ps, pattern, name=str(pose_dir))
+        on_board = cloud.image_mask(_board.board_region(corners, (W, H)))
+        if on_board.sum() < 3:
+            fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
+        plane = rc.fit_plane(cloud.points[on_board])
     io.write_ply(out, cloud.points, cloud.colours,
                  comments=[PLY_COMMENT, "procam reconstruct", f"calibration {Path(calibration).name}",
                            f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"])
@@ -99,11 +105,6 @@ def reconstruct_cmd(
     t.add_row("from column and row", f"{np.mean(cloud.both):.1%}")
     t.add_row("median depth z", f"{np.median(cloud.points[:, 2]):.1f}")
     if pattern is not None:
-        corners = pipeline.find_board(cap.stack, ps, pattern, name=str(pose_dir))
-        on_board = cloud.image_mask(_board.board_region(corners, (W, H)))
-        if on_board.sum() < 3:
-            fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
-        plane = rc.fit_plane(cloud.points[on_board])
         t.add_row("board points", f"{int(on_board.sum())}")
         t.add_row("board plane RMS (inliers)", f"{plane.rms:.3f}")
         t.add_row("board plane robust sigma", f"{plane.sigma:.3f}")
