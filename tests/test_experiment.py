@@ -95,6 +95,7 @@ def test_write_report(result, tmp_path):
     names = {p.name for p in paths}
     assert {"report.md", "experiment.json", "focal_errors.png", "sigma_T.png", "multi_sets.csv",
             "multi_summary.csv", "multi_params.csv", "single_pose.csv", "single_extrinsics.csv"} <= names
+    assert names == set(report.REPORT_FILES)  # the files procam experiment checks before any work
     assert all(p.exists() and p.stat().st_size > 0 for p in paths)
     assert not [p for p in (tmp_path / "rep").iterdir() if p.name.startswith(".")]  # no temp files left
     with open(tmp_path / "rep" / "multi_sets.csv") as f:

@@ -94,13 +94,14 @@ _APPLIES = {
 }
 #: The calibrations of a projector and a camera from pattern captures (not camera-only): what reads pose folders.
 _PAIRS = {"single-pose", "multi-pose", "rig single-pose", "rig multi-pose"}
-#: The options (parameter -> flag) that read pose folders' pattern captures, which a camera-only calibration (photos)
-#: has none of: what they are.
-_PATTERN_READING = {"method": "--method", "projector": "--projector", "order": "--order", "step": "--step",
-                    "decode_method": "--decode", "shadow": "--shadow-threshold", "contrast": "--contrast-threshold",
-                    "window": "--window", "estimator": "--estimator"}
+#: The options that read pose folders' pattern captures, which a camera-only calibration (photos) has none of.
 _APPLIES.update({flag: ("how the pattern captures of a projector-camera calibration are read or calibrated", _PAIRS)
-                 for flag in _PATTERN_READING.values()})
+                 for flag in ("--method", "--projector", "--order", "--step", "--decode", "--shadow-threshold",
+                              "--contrast-threshold", "--window", "--estimator")})
+#: The parameters of the options in :data:`_APPLIES` (:func:`procam.cli._app.given` names each by its flag).
+_APPLIES_PARAMS = ("camera_file", "projector_file", "throw_ratio", "lens_shift", "cod", "background", "cam_dist",
+                   "proj_dist", "no_refine", "strict", "method", "projector", "order", "step", "decode_method",
+                   "shadow", "contrast", "window", "estimator")
 
 
 def _path(how: str, rig: bool, method: str | None, n: int) -> str:
@@ -242,11 +243,7 @@ def _calibrate(reader, *, board, square, poses, out, method, camera_only, camera
         fail(f"{rig[0]}: a rig pose folder (pattern captures of each camera-projector pair); --camera-only "
              "calibrates a camera from photos of the board: leave --camera-only out, or give the photos")
     _refuse_unused(_path(how, bool(rig), _METHODS[value(method)], len(poses)),
-                   {"--camera": camera_file is not None, "--projector-intrinsics": projector_file is not None,
-                    "--throw-ratio": bool(throw_ratio), "--lens-shift": bool(lens_shift), "--cod": cod is not None,
-                    "--background": background is not None, "--cam-dist": cam_dist is not None,
-                    "--proj-dist": proj_dist is not None, "--no-refine": no_refine, "--strict": strict,
-                    **dict.fromkeys(given(*_PATTERN_READING), True)}, poses)
+                   dict.fromkeys(given(*_APPLIES_PARAMS), True), poses)
     cod, background = value(cod) or "auto", value(background) or "free"
     cam_dist, proj_dist = value(cam_dist) or "auto", value(proj_dist) or "auto"
     # corners a pose needs: multi-pose needs fewer per pose than single-pose (its count check is per model)
