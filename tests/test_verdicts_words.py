@@ -15,7 +15,7 @@ from conftest import run_cli, verdict_warnings
 from procam import multi_pose, patterns, pipeline, simulate, single_pose, summary
 from procam.board import Board
 from procam.calibration import Calibration, Device, Distortion
-from procam.errors import CaptureError
+from procam.errors import CaptureError, ModelErrorWarning
 from procam.view import View
 
 
@@ -216,15 +216,19 @@ def test_reconstruct_accounts_for_every_dropped_pixel():
 
     scene, _, _, maps = small_capture()
     right = simulate.truth_calibration(scene)
-    cloud = rc.reconstruct(right, maps)
-    lines, warns = rc.dropped_lines(cloud)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ModelErrorWarning)
+        cloud = rc.reconstruct(right, maps)
+    lines, warns, misfit = rc.dropped_lines(cloud)
     a = cloud.accounting
-    assert a["decoded"] == a["kept"] + a["disagree"] + a["not_in_front"] and warns == []
+    assert a["decoded"] == a["kept"] + a["disagree"] + a["not_in_front"] and warns == [] and misfit == ""
     assert a["median_disagreement_px"] < 0.5 and any("median" in ln for ln in lines)
     moved = right.replace(T=np.asarray(right.T) + [12.0, 0.0, 0.0])  # the projector moved since the calibration
-    cloud = rc.reconstruct(moved, maps)
-    lines, warns = rc.dropped_lines(cloud)
+    with pytest.warns(ModelErrorWarning, match="the point cloud must not be trusted"):
+        cloud = rc.reconstruct(moved, maps)
+    lines, warns, misfit = rc.dropped_lines(cloud)
     a = cloud.accounting
+    assert misfit == warns[0]
     assert a["disagree"] > 0.5 * a["decoded"] and a["median_disagreement_px"] > 2.0
     assert len(warns) == 1 and "the calibration does not describe this camera and projector" in warns[0]
     assert re.search(r"dropped, projector column and row disagree by more than 2 px: \d+ \(\d+%\)", "\n".join(lines))
@@ -242,9 +246,16 @@ def test_cli_reconstruct_prints_the_dropped_pixels(tmp_path):
     calib = simulate.truth_calibration(scene)
     io.save_calibration(calib.replace(T=np.asarray(calib.T) + [12.0, 0.0, 0.0]), tmp_path / "moved.json")
     code, out, err = run_cli(["reconstruct", tmp_path / "moved.json", folder, "-o", tmp_path / "c.ply"])
-    assert code == 0, err
+    assert code == 3, err  # written, and said in the table, the file, the exit code: the cloud is not trusted
     assert "dropped, projector column and row disagree" in out and "column/row disagreement" in out
     assert "decoded pixels" in out and "were dropped: the median disagreement" in out
+    assert "NOT TRUSTED" in out and "not trusted:" in err and "c.ply" in err
+    header = (tmp_path / "c.ply").read_bytes().split(b"end_header")[0]
+    assert b"comment NOT TRUSTED: " in header and b"does not describe this camera and projector" in header
+    io.save_calibration(calib, tmp_path / "right.json")  # the rig's own calibration: trusted, exit 0
+    code, out, err = run_cli(["reconstruct", tmp_path / "right.json", folder, "-o", tmp_path / "r.ply"])
+    assert code == 0, err
+    assert "NOT TRUSTED" not in out and b"NOT TRUSTED" not in (tmp_path / "r.ply").read_bytes()[:2000]
 
 
 # --------------------------------------------------------------------------------------------------

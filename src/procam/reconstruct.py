@@ -14,11 +14,13 @@ the calibration's ``T`` (the board's square unit, e.g. mm).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
-from .errors import ProcamError
+from .errors import ModelErrorWarning, ProcamError
 from .io.files import full_scale_of
 from .stats import rms as _rms
 from .stats import robust_sigma, tls_plane
@@ -105,6 +107,12 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
     -------
     :class:`PointCloud`
 
+    Warns
+    -----
+    ModelErrorWarning
+        Most decoded pixels were dropped because the calibration does not describe the capture's rig (or the
+        maps are wrong): :attr:`Dropped.misfit` of :func:`dropped_lines`, the cloud is not to be trusted.
+
     Raises
     ------
     ProcamError
@@ -138,12 +146,29 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
         if rgb.shape[:2] != (H, W):
             raise ProcamError(f"the colour image is {rgb.shape[1]}x{rgb.shape[0]}, the maps {W}x{H}")
         cols = rgb[pix[:, 1], pix[:, 0]]
-    return PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H),
-                      accounting)
+    cloud = PointCloud(out["points"][keep], cols, pix, out["both"][keep], out["residual_px"][keep], (W, H),
+                       accounting)
+    misfit = dropped_lines(cloud).misfit
+    if misfit:
+        warnings.warn(f"the point cloud must not be trusted: {misfit}", ModelErrorWarning, stacklevel=2)
+    return cloud
 
 
-def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> tuple[list[str], list[str]]:
-    """What :func:`reconstruct` dropped, and why, in words: ``(lines, warnings)``.
+class Dropped(NamedTuple):
+    """What :func:`reconstruct` dropped, in words (:func:`dropped_lines`).
+
+    lines : the accounting, one line per quantity; warnings : at most one, when many pixels were dropped;
+    misfit : why the cloud must not be trusted (the calibration does not describe the capture's rig, or the
+    decoded maps are wrong), else ``""``.
+    """
+
+    lines: list
+    warnings: list
+    misfit: str
+
+
+def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> Dropped:
+    """What :func:`reconstruct` dropped, and why, in words (:class:`Dropped`).
 
     The lines account for every decoded camera pixel (kept; dropped because its projector column and row
     disagree; no point in front of both devices) and give the median column/row disagreement. A pixel's
@@ -151,11 +176,12 @@ def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> tuple[list[s
     least-squares point: with a right calibration and a right decode it is the decoding noise (well under a
     pixel). A warning when more than ``warn_fraction`` of the decoded pixels were dropped, saying what the
     median means: far above the threshold, the calibration does not describe this rig or the decoded maps are
-    wrong (swapped pattern pairs, another capture's patterns); near it, noisy decoding at edges and in shadow.
+    wrong (swapped pattern pairs, another capture's patterns) -- a misfit, the cloud is not to be trusted;
+    near it, noisy decoding at edges and in shadow.
     """
     a = cloud.accounting
     if not a:
-        return [], []
+        return Dropped([], [], "")
     n = max(a["decoded"], 1)
     thr = a["max_residual_px"]
     lines = [f"decoded camera pixels: {a['decoded']}; kept {a['kept']} ({a['kept'] / n:.0%})"]
@@ -166,22 +192,28 @@ def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> tuple[list[s
     med, p90 = a["median_disagreement_px"], a["p90_disagreement_px"]
     if np.isfinite(med):
         lines.append(f"column/row disagreement (pixels with both): median {med:.2f} px, 90th percentile {p90:.2f} px")
-    warnings = []
     dropped = a["disagree"] + a["not_in_front"]
-    if dropped > warn_fraction * n:
-        if thr is not None and np.isfinite(med) and med > thr:
-            why = (f"the median disagreement ({med:.1f} px) is above the {thr:g} px limit: for most pixels the decoded "
-                   "column and row do not meet on one point -- the calibration does not describe this camera and "
-                   "projector (another rig, a moved projector, a wrong --projector size), or the decoded maps are "
-                   "wrong (swapped pattern pairs, patterns from another capture: procam decode --png shows them)")
-        elif a["not_in_front"] > a["disagree"]:
-            why = ("most of them triangulate behind a device: the calibration's R, T do not describe this rig (or the "
-                   "capture is of another one)")
-        else:
-            why = (f"the median disagreement ({med:.2f} px) is small: the dropped pixels are the noisy ones (edges, "
-                   "shadows, dark or glossy surfaces); --max-residual keeps more of them")
-        warnings.append(f"{dropped} of {a['decoded']} decoded pixels ({dropped / n:.0%}) were dropped: {why}")
-    return lines, warnings
+    if dropped <= warn_fraction * n:
+        return Dropped(lines, [], "")
+    why, misfit = _why_dropped(a)
+    head = f"{dropped} of {a['decoded']} decoded pixels ({dropped / n:.0%}) were dropped: "
+    return Dropped(lines, [head + why], head + why if misfit else "")
+
+
+def _why_dropped(a: dict) -> tuple[str, bool]:
+    """Why most dropped pixels were dropped, from :attr:`PointCloud.accounting`: ``(words, misfit)``, misfit
+    when the calibration or the decoded maps, not the noise, explain it."""
+    thr, med = a["max_residual_px"], a["median_disagreement_px"]
+    if thr is not None and np.isfinite(med) and med > thr:
+        return (f"the median disagreement ({med:.1f} px) is above the {thr:g} px limit: for most pixels the decoded "
+                "column and row do not meet on one point -- the calibration does not describe this camera and "
+                "projector (another rig, a moved projector, a wrong --projector size), or the decoded maps are "
+                "wrong (swapped pattern pairs, patterns from another capture: procam decode --png shows them)"), True
+    if a["not_in_front"] > a["disagree"]:
+        return ("most of them triangulate behind a device: the calibration's R, T do not describe this rig (or the "
+                "capture is of another one)"), True
+    return (f"the median disagreement ({med:.2f} px) is small: the dropped pixels are the noisy ones (edges, "
+            "shadows, dark or glossy surfaces); --max-residual keeps more of them"), False
 
 
 @dataclass(frozen=True)

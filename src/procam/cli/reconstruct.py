@@ -91,14 +91,17 @@ def reconstruct_cmd(
         if on_board.sum() < 3:
             fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
         plane = rc.fit_plane(cloud.points[on_board])
+    accounted, dropped_warnings, misfit = rc.dropped_lines(cloud)
     io.write_ply(out, cloud.points, cloud.colours,
                  comments=[PLY_COMMENT, "procam reconstruct", f"calibration {Path(calibration).name}",
-                           f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"])
+                           f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"]
+                 + ([f"NOT TRUSTED: {misfit}"] if misfit else []))
     t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))
     t.add_column("quantity")
     t.add_column("value", justify="right")
     t.add_row("points", f"{len(cloud)}")
-    accounted, dropped_warnings = rc.dropped_lines(cloud)
+    if misfit:
+        t.add_row("verdict", "NOT TRUSTED: the calibration does not fit this capture")
     for line in accounted:
         name, val = line.split(": ", 1)
         t.add_row(name, val)
@@ -119,3 +122,6 @@ def reconstruct_cmd(
     say(f"wrote {out}")
     if residuals is not None:
         say(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")
+    if misfit:
+        fail(f"the point cloud in {out} must not be trusted: most decoded pixels do not fit the calibration "
+             "(see the warning above)", code=3, label="not trusted")
