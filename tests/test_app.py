@@ -57,6 +57,7 @@ def _advice(c):
 # ---------------------------------------------------------------------------------------------------------------
 def test_every_request_without_the_token_is_refused(client):
     project = Path(client.app.state.procam.project.root)
+    fresh = (project / "procam-app.json").read_bytes()  # written when the folder became a project
     (project / "mine.txt").write_text("secret")
     gets = ["/", "/api/state", "/api/preview", "/static/app.js", "/files/mine.txt", "/api/jobs/1"]
     posts = ["/api/board", "/api/devices", "/api/camera", "/api/capture", "/api/calibrate", "/api/world",
@@ -70,7 +71,7 @@ def test_every_request_without_the_token_is_refused(client):
             r = client.post(path, headers=bad, json={"cols": 5, "rows": 4, "square": 10})
             assert r.status_code == 403, (path, bad)
     assert client.get("/?token=wrong").status_code == 403
-    assert not (project / "board.svg").exists() and not (project / "procam-app.json").exists()
+    assert not (project / "board.svg").exists() and (project / "procam-app.json").read_bytes() == fresh
     # with the token: the page (in the query, as the printed address has it) and the API (in the header)
     assert client.get(f"/?token={TOKEN}").status_code == 200
     assert client.get("/api/state", headers=H).json()["root"] == str(project)
@@ -79,24 +80,28 @@ def test_every_request_without_the_token_is_refused(client):
 
 def test_a_foreign_host_is_refused(client):
     """DNS rebinding: a page of evil.example whose name now points at 127.0.0.1 sends Host: evil.example."""
+    state = Path(client.app.state.procam.project.root) / "procam-app.json"
+    fresh = state.read_bytes()
     for host in ("evil.example", "evil.example:8000", "127.0.0.1.evil.example:8000", ""):
         r = client.get("/api/state", headers={**H, "Host": host})
         assert r.status_code == 400 and "root" not in r.text, host
         r = client.post("/api/board", headers={**H, "Host": host}, json={"cols": 5, "rows": 4, "square": 10})
         assert r.status_code == 400, host
-    assert not (Path(client.app.state.procam.project.root) / "procam-app.json").exists()
-    for host in ("127.0.0.1:8000", "localhost:8000"):
+    assert state.read_bytes() == fresh
+    for host in ("127.0.0.1:8000", "localhost:8000", "[::1]:8000"):
         assert client.get("/api/state", headers={**H, "Host": host}).status_code == 200
 
 
 def test_a_post_from_a_foreign_origin_is_refused(client):
     """A cross-site request from another page the user has open: refused even with the token."""
     body = {"cols": 5, "rows": 4, "square": 10}
+    state = Path(client.app.state.procam.project.root) / "procam-app.json"
+    fresh = state.read_bytes()
     for headers in ({"Origin": "http://evil.example"}, {"Origin": "http://127.0.0.1:9999"},
                     {"Origin": "null"}, {"Sec-Fetch-Site": "cross-site"}):
         r = client.post("/api/board", headers={**H, **headers}, json=body)
         assert r.status_code == 403 and "another site" in r.text, headers
-    assert not (Path(client.app.state.procam.project.root) / "procam-app.json").exists()
+    assert state.read_bytes() == fresh
     r = client.post("/api/board", headers={**H, "Origin": BASE, "Sec-Fetch-Site": "same-origin"}, json=body)
     assert r.status_code == 200 and r.json()["board"] == {"cols": 5, "rows": 4, "square": 10.0}
 
@@ -135,7 +140,8 @@ def test_the_board_is_checked_and_printed_at_true_scale(client):
         assert r.status_code == 400 and field in r.json()["error"] and "\n" not in r.json()["error"], body
     r = client.post("/api/board", headers=H, content=b"{not json")
     assert r.status_code == 400 and "not JSON" in r.json()["error"]
-    assert sorted(p.name for p in project.iterdir()) == []  # nothing half-written
+    assert sorted(p.name for p in project.iterdir()) == ["procam-app.json"]  # nothing half-written
+    assert json.loads((project / "procam-app.json").read_text())["board"] == {"cols": 10, "rows": 6, "square": 24.0}
     r = client.post("/api/board", headers=H, json={"cols": 9, "rows": 6, "square": 20})
     assert r.status_code == 200 and r.json()["file"] == "board.svg"
     svg = ET.parse(project / "board.svg").getroot()
@@ -366,6 +372,71 @@ def test_procam_app_checks_its_options(tmp_path):
                         ([], "not a folder")):
         code, _, err = run_cli(["app", tmp_path / "file" if not args else tmp_path / "p", "--no-browser", *args])
         assert code == 2 and words in err and err.count("\n") == 1, (args, err)
+
+
+def test_procam_app_listens_before_it_makes_the_project(tmp_path):
+    """A port in use or an address of another machine is a one-line error naming the option, before the address is
+    printed and before the project folder is made (it was exit 3 after the address, an empty folder left behind)."""
+    import socket
+
+    from conftest import run_cli
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        code, out, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser", "--port", str(port)])
+    assert code == 2 and err.startswith(f"error: --port {port}: in use on 127.0.0.1") and err.count("\n") == 1, err
+    assert "http://" not in out and not (tmp_path / "p").exists()
+    for host in ("no-such-host.invalid", "192.0.2.1"):  # a name that does not resolve; a documentation address
+        code, out, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser", "--host", host])
+        assert code == 2 and err.startswith(f"error: --host {host}: not an address") and err.count("\n") == 1, err
+        assert "http://" not in out and not (tmp_path / "p").exists()
+
+
+def test_procam_app_says_who_can_reach_it():
+    """Loopback addresses (IPv4 and IPv6) are this machine only; the URL of an IPv6 address has brackets, as the Host
+    header the app then answers to; a wildcard address is every network (::1 was warned about as reachable)."""
+    from procam import app
+
+    assert app.address("127.0.0.1") == ("127.0.0.1", app.LOCAL_HOSTS, False)
+    assert app.address("localhost") == ("localhost", app.LOCAL_HOSTS, False)
+    assert app.address("::1") == ("[::1]", app.LOCAL_HOSTS, False)
+    name, hosts, reachable = app.address("0.0.0.0")
+    assert (name, reachable) == ("127.0.0.1", True) and hosts[:3] == app.LOCAL_HOSTS
+    assert app.address("::")[0] == "[::1]" and app.address("::")[2]
+    name, hosts, reachable = app.address("192.168.7.9")
+    assert name == "192.168.7.9" and "192.168.7.9" in hosts and reachable
+    assert app.address("fe80::1")[:1] == ("[fe80::1]",) and "[fe80::1]" in app.address("fe80::1")[1]
+
+
+def test_procam_app_takes_only_its_own_project_folders(tmp_path):
+    """A capture folder (or any folder of other files) is not a project: the app would have written beside the
+    user's files; a new folder becomes one at once (its state file), an empty one too, and reopens."""
+    from procam.app.project import Project
+    from procam.errors import ProcamError
+
+    cap = tmp_path / "pose1"
+    cap.mkdir()
+    (cap / "capture.json").write_text("{}")
+    with pytest.raises(ProcamError, match="pose1: a capture folder, not a project the app made"):
+        Project(cap)
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("x")
+    with pytest.raises(ProcamError, match="a folder of other files"):
+        Project(tmp_path / "mine")
+    assert sorted(p.name for p in cap.iterdir()) == ["capture.json"]
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "empty" / ".DS_Store").write_text("")
+    for folder in (tmp_path / "new", tmp_path / "empty"):
+        Project(folder)
+        assert (folder / "procam-app.json").is_file()
+        (folder / "calib.json").write_text("{}")
+        assert Project(folder).root == folder.resolve()  # reopened: the app's own
+    from conftest import run_cli
+
+    code, out, err = run_cli(["app", cap, "--virtual", "--no-browser"])
+    assert code == 2 and "a capture folder, not a project the app made" in err and "http://" not in out, err
 
 
 def test_procam_app_serves_its_page_and_stops_on_ctrl_c(tmp_path):

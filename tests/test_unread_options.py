@@ -67,6 +67,37 @@ def test_app_refuses_device_options_of_the_other_rig(tmp_path, args, flag):
     assert not (tmp_path / "project").exists()
 
 
+_REAL_CAMERA_SETTINGS = [
+    ("folder:shots", ["--exposure", "10"], "--exposure", "a folder camera"),
+    ("folder:shots", ["--gain", "2"], "--gain", "a folder camera"),
+    ("folder:shots", ["--camera-size", "640x480"], "--camera-size", "a folder camera"),
+    ("genicam:/opt/x/producer.cti", ["--camera-size", "640x480"], "--camera-size", "GenICam"),
+]
+
+
+@pytest.mark.parametrize("command, extra, camera, args, flag, why", [
+    (command, extra, *case) for command, extra in (("capture", []), ("advise", ["--board", "10x6"]),
+                                                   ("world-check", ["CALIB", "--board", "10x6"]))
+    for case in _REAL_CAMERA_SETTINGS
+    if not (command == "advise" and case[0].startswith("folder:"))])  # advise refuses a folder camera itself
+def test_a_real_camera_refuses_the_settings_it_does_not_read(tmp_path, command, extra, camera, args, flag, why):
+    """A folder camera reads files (no exposure, gain or size of its own), a GenICam camera has its own size: each was
+    accepted and ignored by capture, advise and world-check."""
+    extra = [tmp_path / "c.json" if a == "CALIB" else a for a in extra]
+    out = [tmp_path / "pose"] if command == "capture" else []
+    _refused([command, *out, *extra, "--camera", camera, *args], flag, why)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command, extra", [("world-check", ["c.json", "--board", "10x6"]), ("app", ["p", "--no-browser"])])
+def test_the_simulators_camera_comes_with_virtual(tmp_path, command, extra):
+    """--camera virtual without --virtual: the simulated camera without its simulated projector."""
+    code, _, err = run_cli([command, *[tmp_path / a if a in ("c.json", "p") else a for a in extra],
+                            "--camera", "virtual"])
+    assert code == 2 and err.strip().endswith("use --virtual instead") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("args, option", [(["--virtual", "--seed", "-5"], "--seed"),
                                           (["--display", "-1"], "--display"),
                                           (["--virtual", "--seed", "99999999999"], "--seed")])

@@ -17,6 +17,9 @@ import socket
 
 from ..errors import ProcamError
 
+#: The ``Host`` header names the app always answers to (this machine).
+LOCAL_HOSTS = ("127.0.0.1", "localhost", "[::1]")
+
 #: What ``procam app`` says when the extra is missing.
 INSTALL_HINT = 'the app needs its extra: pip install "procam[app]" (starlette and uvicorn)'
 
@@ -35,11 +38,63 @@ def new_token() -> str:
     return secrets.token_urlsafe(24)
 
 
-def free_port(host: str) -> int:
-    """A TCP port free on ``host`` now."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind((host, 0))
-        return s.getsockname()[1]
+def listen(host: str, port: int) -> socket.socket:
+    """A TCP socket bound to ``host:port`` (port 0: a free one) for :func:`uvicorn_server` ``.run(sockets=[it])``,
+    bound before anything is written, so a port in use or an address of another machine is a one-line
+    :class:`ProcamError` naming ``--host`` or ``--port`` (not a server that prints its address and stops)."""
+    import errno
+
+    try:
+        family, _, _, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
+                                                      flags=socket.AI_PASSIVE)[0]
+    except (socket.gaierror, UnicodeError) as e:
+        raise ProcamError(f"--host {host}: not an address this machine can listen on ({e}); give one of its "
+                          "addresses, e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every network)") from None
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds: a restart reuses the port
+    try:
+        sock.bind(address)
+    except OSError as e:
+        sock.close()
+        if e.errno == errno.EADDRINUSE:
+            raise ProcamError(f"--port {port}: in use on {host} (another program, or another procam app); choose "
+                              "another port, or leave --port out for a free one") from None
+        if e.errno == errno.EACCES:
+            raise ProcamError(f"--port {port}: not allowed for this user (ports below 1024 need administrator "
+                              "rights); choose 1024 to 65535, or leave --port out for a free one") from None
+        if e.errno == errno.EADDRNOTAVAIL:
+            raise ProcamError(f"--host {host}: not an address of this machine; give one of its addresses, e.g. "
+                              "127.0.0.1 (this machine only) or 0.0.0.0 (every network)") from None
+        raise ProcamError(f"--host {host} --port {port}: cannot listen there ({e.strerror})") from None
+    return sock
+
+
+def address(host: str) -> tuple[str, tuple[str, ...], bool]:
+    """What ``--host`` means for the page: ``(name in the URL, Host header names the app answers to, reachable
+    from other machines)``.  A loopback address (``127.0.0.1``, ``::1``, ``localhost``) is this machine only; a
+    wildcard (``0.0.0.0``, ``::``) every network, the URL then names the loopback address of its family."""
+    import ipaddress
+
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        ip = None
+    if ip is not None and ip.is_unspecified:  # the names other machines reach this one by
+        return ("127.0.0.1" if ip.version == 4 else "[::1]"), LOCAL_HOSTS + _own_names(), True
+    name = f"[{ip.compressed}]" if ip is not None and ip.version == 6 else host
+    local = host == "localhost" or (ip is not None and ip.is_loopback)
+    return name, tuple(dict.fromkeys(LOCAL_HOSTS + (name.lower(),))), not local
+
+
+def _own_names() -> tuple[str, ...]:
+    """This machine's host name and the addresses it resolves to (IPv6 in brackets, as a ``Host`` header has them)."""
+    names = [socket.gethostname().lower()]
+    try:
+        infos = socket.getaddrinfo(names[0], None, type=socket.SOCK_STREAM)
+    except OSError:
+        infos = []
+    names += [f"[{a[4][0]}]" if a[0] == socket.AF_INET6 else a[4][0] for a in infos]
+    return tuple(n for n in dict.fromkeys(names) if n not in LOCAL_HOSTS)
 
 
 def make(project_dir, *, virtual: bool, token: str, camera: str = "opencv:0", display=None, seed: int = 0,
@@ -48,7 +103,7 @@ def make(project_dir, *, virtual: bool, token: str, camera: str = "opencv:0", di
     need_extra()
     from .devices import Devices
     from .project import Project
-    from .server import LOCAL_HOSTS, create_app
+    from .server import create_app
 
     project = Project(project_dir)
     devices = Devices(virtual, camera=camera, display=display, seed=seed,
@@ -84,10 +139,11 @@ class Served:
         import threading
         import time
 
-        self.port = free_port("127.0.0.1")
+        sock = listen("127.0.0.1", 0)
+        self.port = sock.getsockname()[1]
         self.asgi = make(project_dir, virtual=virtual, token=token)
         self.server = uvicorn_server(self.asgi, "127.0.0.1", self.port)
-        self.thread = threading.Thread(target=self.server.run, daemon=True)
+        self.thread = threading.Thread(target=self.server.run, kwargs={"sockets": [sock]}, daemon=True)
         self.thread.start()
         t0 = time.monotonic()
         while not self.server.started:

@@ -38,10 +38,20 @@ class Project:
         root = Path(root).expanduser()
         if root.exists() and not root.is_dir():
             raise ProcamError(f"{root}: not a folder; give the project folder (new or one the app made)")
+        state = root / FILES["state"]
+        if root.is_dir() and not state.exists() and any(not p.name.startswith(".") for p in root.iterdir()):
+            what = ("a capture folder" if any((root / n).is_file() for n in ("capture.json", "patterns.json", "rig.json"))
+                    else "a folder of other files")
+            raise ProcamError(f"{root}: {what}, not a project the app made (no {FILES['state']}); give a new or "
+                              "empty folder, or one the app made (procam calibrate and the other commands read "
+                              "capture folders)")
         root.mkdir(parents=True, exist_ok=True)
         self.root = root.resolve()
         self.state = dict(DEFAULTS)
-        self._load()
+        if state.exists():
+            self._load()
+        else:
+            self.save()  # the folder is the app's from now on: reopened, it is recognised
 
     def file(self, key: str) -> Path:
         """The project file of ``key`` (:data:`FILES`)."""
@@ -60,8 +70,6 @@ class Project:
 
     def _load(self) -> None:
         f = self.file("state")
-        if not f.exists():
-            return
         from ..io.jsonfile import load_json
 
         try:

@@ -22,7 +22,7 @@ from starlette.responses import FileResponse, HTMLResponse, JSONResponse, PlainT
 from starlette.routing import Route
 
 from ..errors import ProcamError
-from . import rig, work
+from . import LOCAL_HOSTS, rig, work
 from .devices import Devices
 from .jobs import Busy, Jobs, error_line, results_carry_warnings
 from .project import Project
@@ -32,8 +32,6 @@ STATIC = Path(__file__).with_name("static")
 #: report's 3-D view) in an opaque origin, which can neither read the app's pages nor pass its guards.
 FILES_POLICY = ("default-src 'none'; img-src 'self' data: blob:; style-src 'unsafe-inline'; "
                 "script-src 'unsafe-inline'; sandbox allow-scripts")
-#: The hosts the app answers to (the ``Host`` header without its port).
-LOCAL_HOSTS = ("127.0.0.1", "localhost")
 
 
 class Guard:
@@ -91,9 +89,9 @@ async def _body(request: Request) -> dict:
     return body
 
 
-def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS) -> Starlette:
+def create_app(project: Project, devices: Devices, token: str, hosts=None) -> Starlette:
     """The ASGI app of ``project`` on ``devices``; every request must carry ``token``; ``hosts`` the names the app
-    answers to."""
+    answers to (the `Host` header without its port; default: :data:`procam.app.LOCAL_HOSTS`)."""
     st = AppState(project, devices)
 
     def guarded(handler):
@@ -255,7 +253,7 @@ def create_app(project: Project, devices: Devices, token: str, hosts=LOCAL_HOSTS
               Route("/api/jobs/{job_id}", guarded(job)),
               Route("/api/jobs/{job_id}/cancel", guarded(cancel), methods=["POST"]),
               Route("/files/{path:path}", guarded(files))]
-    middleware = [Middleware(TrustedHostMiddleware, allowed_hosts=list(hosts)), Middleware(Guard, token=token)]
+    middleware = [Middleware(TrustedHostMiddleware, allowed_hosts=list(hosts or LOCAL_HOSTS)), Middleware(Guard, token=token)]
     app = Starlette(routes=routes, middleware=middleware)
     app.state.procam = st
     return app

@@ -243,6 +243,35 @@ SIMULATED_CAMERA = "is a setting of a real camera; the simulator renders at its 
 SIMULATED_PROJECTOR = "chooses the real projector's display; --virtual projects on a virtual one"
 
 
+#: The options a real camera of a kind does not read (a folder camera reads files; GenICam has its own size).
+_CAMERA_IGNORES = {
+    "folder": (("camera_size", "exposure", "gain"), "is a setting of a streaming camera; a folder camera "
+               "(--camera folder:) reads the files the camera's own software saves: set it there"),
+    "genicam": (("camera_size",), "is an OpenCV camera's resolution; a GenICam camera delivers the size set in its "
+                "own settings (the vendor's tool)"),
+}
+
+
+def real_camera(camera: str, *, virtual_flag: str = "--virtual") -> str:
+    """The kind (:func:`procam.acquire.cameras.parse_camera_spec`) of a real ``--camera``, the spec checked and the
+    device options that kind would not read refused; ``--camera virtual`` names ``virtual_flag`` (the simulator's
+    camera comes with the simulated rig)."""
+    from ..acquire.cameras import parse_camera_spec
+
+    kind, _ = parse_camera_spec(camera)
+    if kind == "virtual":
+        fail(f"--camera {camera}: the simulator's camera comes with its projector; use {virtual_flag} instead")
+    refuse_unread_camera(kind)
+    return kind
+
+
+def refuse_unread_camera(kind: str) -> None:
+    """Refuse the device options a camera of ``kind`` would not read (a folder camera's exposure, gain and size; a
+    GenICam camera's ``--camera-size``)."""
+    if kind in _CAMERA_IGNORES:
+        refuse(*_CAMERA_IGNORES[kind])
+
+
 def seed_applies(where: str) -> str:
     """Why ``--seed`` is refused with a real camera: it applies with ``where`` (the simulator's option)."""
     return f"is the simulator's noise seed: it applies with {where}"

@@ -29,6 +29,7 @@ from ._options import (
     camera_settings,
     live_limits,
     parse_board,
+    refuse_unread_camera,
     seed_applies,
 )
 
@@ -149,6 +150,7 @@ def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, s
         refuse(("camera_size", "exposure", "gain"), SIMULATED_CAMERA)
     else:
         refuse(("seed",), seed_applies("--camera virtual"))
+    refuse_unread_camera(kind)
 
     def open_(default_pose, **changes):
         if kind != "virtual":

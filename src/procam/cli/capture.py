@@ -33,6 +33,7 @@ from ._options import (
     parse_size,
     pattern_sequence,
     phase_keywords,
+    refuse_unread_camera,
     seed_applies,
     value,
     with_pattern_options,
@@ -179,6 +180,7 @@ def _refuse_unused(kind: str, virtual: bool, rig: bool) -> None:
         refuse(("exposure",) if rig else ("camera_size", "exposure"), SIMULATED_CAMERA)
     if kind != "folder":
         refuse(("timeout",), "is how long a folder camera (--camera folder:PATH) waits for each file")
+    refuse_unread_camera(kind)
     if kind != "virtual":
         refuse(("seed",), seed_applies("--virtual or --camera virtual"))
     if virtual:

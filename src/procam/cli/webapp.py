@@ -11,7 +11,7 @@ from pathlib import Path
 import typer
 
 from ._app import app, fail, refuse, say, user_errors, warn
-from ._options import SIMULATED_PROJECTOR, DisplayOpt, SeedOpt, camera_settings, seed_applies
+from ._options import SIMULATED_PROJECTOR, DisplayOpt, SeedOpt, camera_settings, real_camera, seed_applies
 
 
 @app.command("app")
@@ -41,15 +41,20 @@ def app_cmd(
         refuse(("display",), SIMULATED_PROJECTOR)
     else:
         refuse(("seed",), seed_applies("--virtual"))
+        real_camera(camera)
     procam_app.need_extra()
-    if host not in ("127.0.0.1", "localhost"):
+    name, hosts, reachable = procam_app.address(host)
+    sock = procam_app.listen(host, port)  # a port in use or another machine's address: before the folder is made
+    try:
+        token = procam_app.new_token()
+        asgi = procam_app.make(project, virtual=virtual, token=token, camera=camera, display=display, seed=seed,
+                               hosts=hosts)
+    except BaseException:
+        sock.close()
+        raise
+    if reachable:
         warn(f"--host {host}: the app is reachable from other machines (the token still guards it)")
-    token = procam_app.new_token()
-    hosts = ("127.0.0.1", "localhost") + (() if host in ("127.0.0.1", "localhost", "0.0.0.0") else (host,))
-    asgi = procam_app.make(project, virtual=virtual, token=token, camera=camera, display=display, seed=seed,
-                           hosts=hosts)
-    port = port or procam_app.free_port(host)
-    url = f"http://{'127.0.0.1' if host == '0.0.0.0' else host}:{port}/?token={token}"
+    url = f"http://{name}:{sock.getsockname()[1]}/?token={token}"
     say(f"procam app on {project.resolve()}: {url}")
     say("Ctrl+C stops it")
     if not no_browser:
@@ -58,7 +63,7 @@ def app_cmd(
 
         threading.Timer(0.8, webbrowser.open, args=(url,)).start()
     try:
-        procam_app.uvicorn_server(asgi, host, port).run()
+        procam_app.uvicorn_server(asgi, host, port).run(sockets=[sock])
     except KeyboardInterrupt:  # Ctrl+C is how the app is stopped (uvicorn raises it again after its shutdown)
         pass
     finally:

@@ -27,6 +27,7 @@ from ._options import (
     number,
     parse_board,
     parse_pose,
+    real_camera,
     value,
 )
 from ._paths import output_path
@@ -82,6 +83,7 @@ def world_check_cmd(
             fail(f"{flag} belongs to --virtual; add --virtual or leave it out")
         if board is None:
             fail("give the board in view: --board COLSxROWS (inner corners) and --square")
+        real_camera(camera)
     else:
         refuse(("camera", "display", "camera_size", "exposure", "settle_ms"),
                "is a real device's setting; --virtual uses the simulator as the camera and projector")
