@@ -322,3 +322,26 @@ def test_a_rig_calibration_writes_over_its_own_yaml_and_json(monkeypatch, tmp_pa
                                 tmp_path / "rig.yml"])
         assert rc == 0, (out, err)
     assert _files.procam_wrote(tmp_path / "rig.yml") and _files.procam_wrote(tmp_path / "rig.json")
+
+
+def test_patterns_never_replace_the_description_of_another_sequence(tmp_path):
+    """`procam patterns --force` into a simulated capture (or a copy of one) wrote its pattern_*.png beside the
+    capture's frames and replaced the capture's patterns.json: the folder then decoded the patterns, not the
+    capture.  A folder of its own earlier patterns still takes a shorter sequence (the longer one's frames go)."""
+    from sim_small import small_capture
+
+    from procam import patterns, simulate
+
+    _, stack, truth, _ = small_capture()
+    cap = tmp_path / "sim"
+    simulate.write_capture(cap, stack, truth)
+    before = snapshot(cap)
+    code, _, err = run_cli(["patterns", "-o", cap, "--force", "-p", "1024x768"])
+    assert code == 2 and f"-o {cap}: holds another sequence" in err and err.count("\n") == 1, err
+    assert snapshot(cap) == before
+    own = tmp_path / "pat"
+    assert run_cli(["patterns", "-o", own, "-p", "1920x1080"])[0] == 0
+    code, _, err = run_cli(["patterns", "-o", own, "-p", "1024x768"])
+    assert code == 0, err
+    names = sorted(p.name for p in own.glob("*.png"))
+    assert len(names) == patterns.pattern_set(1024, 768).count and names[-1] == f"pattern_{len(names) - 1:02d}.png"

@@ -93,7 +93,33 @@ def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, wr
     names = sequence_names(ps, prefix)
     sidecars = ["patterns.json", *(extra or {})]
     folders.check_overwrite(out_dir, names + sidecars, option)
+    orphans = _other_sequence(Path(out_dir), names, prefix)
+    if orphans:
+        from ..errors import OutputError
+
+        where = f"{option} {out_dir}" if option else str(out_dir)
+        raise OutputError(f"{where}: holds another sequence ({len(orphans)} frames {orphans[0]} ... that its "
+                          f"patterns.json describes); writing {names[0]} ... here would replace that description "
+                          "and leave its frames beside the new ones (even with --force); write into another folder")
     return names, sidecars
+
+
+def _other_sequence(out: Path, names, prefix: str) -> list[str]:
+    """The frames of the sequence ``out/patterns.json`` describes that writing ``names`` would neither replace nor
+    remove as stale (:func:`remove_stale`): another sequence (a capture, a simulator render), whose description the
+    new ``patterns.json`` would replace."""
+    try:
+        listed = json.loads((out / "patterns.json").read_text(encoding="utf-8")).get("files")
+    except (OSError, ValueError, AttributeError):
+        return []  # no sequence's description (check_overwrite has judged the file itself)
+    if not isinstance(listed, list):
+        return []
+    man = _files.read_manifest(out)
+    frames = {n for n, r in man["files"].items() if r == "frame"} if man is not None else set()
+    stale = re.compile(re.escape(prefix) + r"\d+\.png")
+    new = set(names)
+    return [n for n in listed if isinstance(n, str) and n not in new and (out / n).is_file()
+            and not (n in frames and stale.fullmatch(n))]
 
 
 class SequenceWriter:
