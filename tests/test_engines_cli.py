@@ -162,11 +162,31 @@ def test_projector_view_of_a_rendered_pose(files, tmp_path):
     assert np.sqrt(np.mean(err_px ** 2)) < 0.5 and err_px.max() < 1.0
     inside = np.rint(np.array(truth["corners"]["projector"])).astype(int)
     assert mask[inside[:, 1], inside[:, 0]].all() and 0.2 < mask.mean() < 0.95 and not img[~mask].any()
-    io.save_decoded_maps(tmp_path / "maps.npz", maps)
+    assert run_cli(["decode", pose, "-o", tmp_path / "maps.npz"])[0] == 0
     code, out, err = run_cli(["export", paths["procam.json"], "--format", "projector-view", "--pose", pose,
                               "--maps", tmp_path / "maps.npz", "-o", tmp_path / "view2.png"])
-    assert code == 0, err
+    assert code == 0 and "warning" not in out, err
     assert np.array_equal(cv2.imread(str(tmp_path / "view2.png"), cv2.IMREAD_GRAYSCALE), img)
+
+
+def test_projector_view_refuses_another_captures_maps(files, tmp_path):
+    """The decoded maps say which capture they are of: another pose's maps of the same sizes were taken as this
+    pose's (a wrong view, exit 0); a file that does not say (an older procam's) is taken with a warning."""
+    from procam import simulate
+
+    root, pose, calib, paths = files
+    _, stack, truth, maps = small_capture()
+    other = tmp_path / "other"
+    simulate.write_capture(other, np.roll(stack, 7, axis=2), truth)  # the board elsewhere: another capture
+    assert run_cli(["decode", other, "-o", tmp_path / "other.npz"])[0] == 0
+    export = ["export", paths["procam.json"], "--format", "projector-view", "--pose", pose, "-o", tmp_path / "v.png"]
+    code, out, err = run_cli(export + ["--maps", tmp_path / "other.npz"])
+    assert code == 2 and "its maps were decoded from another capture, not" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "v.png").exists()
+    io.save_decoded_maps(tmp_path / "old.npz", maps)  # no source recorded
+    code, out, err = run_cli(export + ["--maps", tmp_path / "old.npz"])
+    assert code == 0 and "does not say which capture it was decoded from" in out, err
+    assert io.load_decoded_maps(tmp_path / "other.npz")["source"].startswith("sha256:")
 
 
 @pytest.mark.parametrize("args, phrase", [

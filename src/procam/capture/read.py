@@ -54,6 +54,17 @@ class Capture:
 
         return board_image(self.stack, self.pattern_set)
 
+    @property
+    def fingerprint(self) -> str:
+        """Which capture this is, for the files made from it (decoded maps): ``sha256:`` of the frames' size and
+        of :attr:`white` as read (hex)."""
+        import hashlib
+
+        white = np.ascontiguousarray(self.white)
+        h = hashlib.sha256(f"{white.shape} {white.dtype.str} {self.pattern_set.count}".encode())
+        h.update(white.tobytes())
+        return "sha256:" + h.hexdigest()
+
     def picture(self) -> np.ndarray:
         """The board as a person sees it: the white frame's file read again in colour when it is colour, else
         :attr:`white` (a phase family without a white frame: the mean of its fringes, grey)."""

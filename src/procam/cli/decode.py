@@ -95,7 +95,7 @@ def decode_cmd(
         for line in res.phase.warnings:
             warn(line)
     if out is not None:
-        save_decoded_maps(out, res)
+        save_decoded_maps(out, res, source=cap.fingerprint)
         say(f"wrote {out}")
     if png is not None:
         from ..plots import save_figure

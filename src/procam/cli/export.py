@@ -99,6 +99,12 @@ def _projector_view(calib, out, pose, maps_file, projector, order, step):
         m = io.load_decoded_maps(maps_file)
         if m["col"].shape != cap.stack.shape[1:] or tuple(m["projector_size"]) != (ps.width, ps.height):
             fail(f"--maps {maps_file}: its maps are not of {pose} (another camera size or projector size)")
+        if m["source"] and m["source"] != cap.fingerprint:
+            fail(f"--maps {maps_file}: its maps were decoded from another capture, not {pose} (procam decode {pose} "
+                 "-o writes that pose's maps)")
+        if not m["source"]:
+            warn(f"--maps {maps_file}: it does not say which capture it was decoded from (an older procam wrote it); "
+                 f"it is taken as {pose}'s maps (procam decode {pose} -o writes them again with their source)")
         col, row, valid = m["col"], m["row"], m["valid_col"] & m["valid_row"]
     else:
         d = decode.decode(cap.stack, ps)

@@ -31,19 +31,23 @@ _KINDS = {**dict.fromkeys(("col", "row", "confidence"), ("f", "real numbers")),
           **dict.fromkeys(("reason_col", "reason_row", "dropped_col", "dropped_row"), ("u", "unsigned integers"))}
 
 
-def save_decoded_maps(path, result) -> Path:
-    """Write a pose's decoded maps (a :class:`procam.decode.DecodeResult`) as ``.npz``, atomically."""
+def save_decoded_maps(path, result, source: str | None = None) -> Path:
+    """Write a pose's decoded maps (a :class:`procam.decode.DecodeResult`) as ``.npz``, atomically; ``source`` the
+    capture's :attr:`procam.capture.Capture.fingerprint` (member ``source``: a reader of the maps with the capture
+    can tell they are its)."""
     ps = result.pattern_set
     arrays = {"col": result.col, "row": result.row, "valid_col": result.valid_col, "valid_row": result.valid_row,
               "reason_col": result.reason_col, "reason_row": result.reason_row, "confidence": result.confidence,
               "dropped_col": result.dropped_col, "dropped_row": result.dropped_row,
               "projector_size": np.array([ps.width, ps.height]), "order": np.array(ps.order)}
-    return write_npz(path, DECODED_MAPS_FORMAT, **{k: arrays[k] for k in DECODED_MAPS_KEYS})
+    extra = {} if source is None else {"source": np.array(str(source))}
+    return write_npz(path, DECODED_MAPS_FORMAT, **{k: arrays[k] for k in DECODED_MAPS_KEYS}, **extra)
 
 
 def load_decoded_maps(path) -> dict:
     """Read a decoded-maps file: ``{member: (H, W) array}`` for the maps, ``projector_size`` as ``(width,
-    height)`` and ``order`` as a string.
+    height)``, ``order`` as a string and ``source`` the fingerprint of the capture they were decoded from (``""``
+    in a file without one: written before procam recorded it).
 
     Raises :class:`~procam.errors.CaptureError` naming the file: missing, not an ``.npz``, a member missing, a map
     that is not 2-D or not of the others' shape or of another kind of value (real numbers for the coordinates and
@@ -79,6 +83,7 @@ def load_decoded_maps(path) -> dict:
     out = {k: data[k] for k in maps}
     out["projector_size"] = check_size(path, "projector_size", data["projector_size"], **how)
     out["order"] = str(data["order"])
+    out["source"] = str(data["source"]) if "source" in data and data["source"].ndim == 0 else ""
     return out
 
 
