@@ -252,7 +252,9 @@ def test_patterns_json_round_trips_for_every_family(family, tmp_path):
     meta = json.loads((tmp_path / "patterns.json").read_text())
     assert meta["format"] == "procam-patterns" and meta["family"] == family and len(meta["files"]) == ps.count
     assert capture.resolve_pattern_set(tmp_path) == ps
-    assert capture.resolve_pattern_set(tmp_path, projector=(320, 240)).width == 320  # --projector overrides
+    assert capture.resolve_pattern_set(tmp_path, projector=(ps.width, ps.height)) == ps  # --projector agrees
+    with pytest.raises(CaptureError, match=f"made for a {ps.width}x{ps.height} projector"):
+        capture.resolve_pattern_set(tmp_path, projector=(320, 240))  # contradicts it: the codes would be misread
 
 
 @pytest.mark.parametrize("meta, words", [

@@ -86,9 +86,22 @@ def _calibrate(folder, tmp_path, *extra):
 
 
 def test_cli_wrong_projector_size(paper_capture, tmp_path):
-    code, err, out = _calibrate(paper_capture[0], tmp_path, "--projector", "1500x1080")
+    """Without a patterns.json (another tool's capture) the codes name the size; with one, --projector must agree
+    with the size it states (1920x1200 on a 1920x1080 sequence fits every code: it was calibrated as "good")."""
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for f in sorted(paper_capture[0].glob("*.png")):
+        shutil.copy(f, folder / f.name)
+    code, err, out = _calibrate(folder, tmp_path, "--projector", "1500x1080")
     assert code == 2 and len(err.strip().splitlines()) == 1 and "about 1920x1080" in err and "Traceback" not in err
     assert not out.exists()
+    for size in ("1500x1080", "1920x1200"):
+        code, err, out = _calibrate(paper_capture[0], tmp_path, "--projector", size)
+        assert code == 2 and err.count("\n") == 1 and "says the sequence was made for a 1920x1080 projector" in err
+        assert not out.exists()
+    for command in (["decode", paper_capture[0]], ["check", paper_capture[0], "--board", "10x6"]):
+        code, _, err = run_cli([*command, "--projector", "1920x1200"])
+        assert code == 2 and "made for a 1920x1080 projector; leave --projector out" in err, (command, err)
 
 
 def test_cli_swapped_frames_are_named_by_file(paper_capture, tmp_path):

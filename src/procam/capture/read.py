@@ -103,12 +103,19 @@ def read_patterns_json(folder) -> dict | None:
 def resolve_pattern_set(folder, projector=None, order=None, step=None):
     """The sequence of ``folder``: from ``projector`` (w, h), ``order`` and ``step``, else from its
     patterns.json, else the defaults (opencv order, step 1).  A patterns.json of a phase family
-    (:func:`procam.patterns.from_dict`) gives a :class:`~procam.patterns.PhaseSet` (``projector`` overrides its
-    size; ``order`` and ``step`` are the Gray family's).  A Gray-family patterns.json's ``bit_order`` is kept."""
+    (:func:`procam.patterns.from_dict`) gives a :class:`~procam.patterns.PhaseSet` (``order`` and ``step`` are the
+    Gray family's).  A Gray-family patterns.json's ``bit_order`` is kept.  ``projector`` completes a description
+    without a size; one that contradicts the size patterns.json states is a :class:`CaptureError` (the sequence
+    shown was made for that projector: another size reads its codes as another projector's)."""
     from ..patterns.describe import gray_from_dict
 
     meta = read_patterns_json(folder)
     where = Path(folder) / "patterns.json"
+    stated = (meta.get("width"), meta.get("height")) if meta is not None else (None, None)
+    if projector is not None and all(type(v) is int for v in stated) and tuple(projector) != stated:
+        raise CaptureError(f"--projector {projector[0]}x{projector[1]}: {where} says the sequence was made for a "
+                           f"{stated[0]}x{stated[1]} projector; leave --projector out (or, if that is wrong, correct "
+                           "its width and height)")
     family = patterns.family_of(meta)
     if family != "gray":
         if order is not None or step is not None:

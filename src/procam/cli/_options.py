@@ -149,7 +149,8 @@ def refuse_unread_decoder(poses) -> None:
 BoardOpt = Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS (OpenCV pattern_size), e.g. 10x6.")]
 SquareOpt = Annotated[float, typer.Option("--square", help="Square size; the length unit of every output (e.g. mm).")]
 ProjectorOpt = Annotated[Optional[str], typer.Option(
-    "--projector", "-p", help="Projector size WIDTHxHEIGHT (default: the folder's patterns.json).")]
+    "--projector", "-p", help="Projector size WIDTHxHEIGHT, for a folder whose patterns.json does not state it "
+                             "(a size it states cannot be changed).")]
 OrderOpt = Annotated[Optional[Order], typer.Option(
     "--order", help="Sequence order (default: the folder's patterns.json, else opencv).")]
 StepOpt = Annotated[Optional[int], typer.Option(
