@@ -327,3 +327,37 @@ def test_reconstruct_writes_no_cloud_when_the_board_is_not_found(tmp_path, paper
     assert not (tmp_path / "r.ply").exists()
     code, out, err = run_cli(["reconstruct", cal, folder, "-o", tmp_path / "r.ply", "--board", "10x6"])
     assert code == 0 and "board plane RMS" in out and (tmp_path / "r.ply").is_file(), err
+
+
+@pytest.mark.parametrize("command", [["capture", "POSE", "--virtual"], ["world-check", "c.json", "--virtual"]])
+def test_the_simulators_gain_is_a_factor_above_zero(tmp_path, command):
+    """--gain 0 on the simulator rendered black frames and failed at the pre-flight without naming the option."""
+    args = [tmp_path / "pose" if a == "POSE" else tmp_path / a if a == "c.json" else a for a in command]
+    code, _, err = run_cli([*args, "--gain", "0"])
+    assert code == 2 and err.startswith("error: --gain must be a gain factor > 0") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_study_refuses_a_noise_with_no_noisy_trials(tmp_path):
+    _refused(["study", "camera", "--trials", "0", "--noise", "0.5", "-o", tmp_path / "st"], "--noise", "--trials 0")
+    assert not (tmp_path / "st").exists()
+
+
+@pytest.mark.parametrize("command", [["decode", "RIG"], ["export", "c.json", "--format", "projector-view", "--pose",
+                                                         "RIG", "-o", "v.png"]])
+def test_a_rig_pose_given_for_one_pose_names_its_pose_folders(tmp_path, command):
+    """A rig pose folder (rig.json, one pose folder per projector) where one pose is read: "no images found" did
+    not say what to give."""
+    from procam import io, simulate
+    from sim_small import small_capture
+
+    scene, stack, truth, _ = small_capture()
+    rig = tmp_path / "rig1"
+    for name in ("left", "right"):
+        simulate.write_capture(rig / name, stack, truth)
+    (rig / "rig.json").write_text('{"format": "procam-rig-pose"}')
+    io.save_calibration(simulate.truth_calibration(scene), tmp_path / "c.json")
+    args = [rig if a == "RIG" else tmp_path / a if a in ("c.json", "v.png") else a for a in command]
+    code, _, err = run_cli(args)
+    assert code == 2 and "rig1: a rig pose folder (one pose folder per projector: left, right)" in err, err
+    assert f"give one of them, e.g. {rig / 'left'}" in err and not (tmp_path / "v.png").exists()

@@ -194,6 +194,25 @@ def test_spots_not_seen_are_reported_not_guessed():
     assert "only 0 of" in wc.reasons[0]
 
 
+def test_a_calibration_of_another_rig_is_off_not_inconclusive():
+    """The projector moved 20 mm since the calibration (16-22 mm: the same): the spots land far from where it puts
+    them (none within half a square), yet the camera sees them; 'inconclusive' (light the board better) was the wrong advice: 'off'.  A
+    dimly lit board (spots under the noise) stays inconclusive."""
+    sc = small_scene()
+    truth = simulate.truth_calibration(sc)
+    moved = truth.replace(T=np.asarray(truth.T) + [20.0, 0.0, 0.0])
+    wc = world_check(moved, _board(sc), _device())
+    assert wc.verdict == "off" and "found" not in set(wc.status), (wc.verdict, wc.status)
+    assert "yet the camera sees" in wc.reasons[0] and "does not describe this camera and projector" in wc.reasons[0]
+    dev = _device()
+
+    def faint(image):  # the white frame as it is, the spots at 2 % of their level: under the camera's noise
+        return dev(image if image.min() == 255 else np.rint(image * 0.02).astype(np.uint8))
+
+    wc = world_check(moved, _board(sc), faint)
+    assert wc.verdict == "inconclusive" and "light the board better" in wc.reasons[0], wc.reasons
+
+
 def test_no_board_or_no_projector_is_a_one_line_error():
     sc = small_scene()
     calib = simulate.truth_calibration(sc)

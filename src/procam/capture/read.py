@@ -544,13 +544,21 @@ def load_capture(folder, projector=None, order=None, check: bool = True, step=No
     reader : ``reader(files) -> stack``, default :func:`procam.io.images.read_images` (e.g.
         :meth:`procam.stream.Prefetcher.read`, which has them read already).
     """
-    from .rig import rig_without_manifest
+    from .rig import is_rig_pose, rig_without_manifest
 
     folder = Path(folder)
     why = rig_without_manifest(folder)
     if why is not None:
         raise CaptureError(why)
-    images = _files.list_images(folder)
+    try:
+        images = _files.list_images(folder)
+    except CaptureError:
+        if not is_rig_pose(folder):
+            raise
+        subs = sorted(d.name for d in folder.iterdir() if (d / "patterns.json").is_file())
+        raise CaptureError(f"{folder}: a rig pose folder (one pose folder per projector: {', '.join(subs[:4])}"
+                           f"{', ...' if len(subs) > 4 else ''}); this reads one pose: give one of them, e.g. "
+                           f"{folder / (subs or ['NAME'])[0]} (procam calibrate {folder} calibrates the rig)") from None
     ps = resolve_pattern_set(folder, projector, order, step)
     files, notes = sequence_files(folder, images)
     if len(files) != ps.count and patterns.is_phase(ps):

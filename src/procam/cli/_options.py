@@ -266,6 +266,12 @@ def real_camera(camera: str, *, virtual_flag: str = "--virtual") -> str:
     return kind
 
 
+def virtual_gain(gain) -> None:
+    """Check ``--gain`` for the simulator's camera: a factor on the light (0 would render black frames)."""
+    number(gain, "--gain", lo=0, lo_open=True, hi=GAIN[1], what="a gain factor",
+           unit=" (the simulator's camera multiplies the light by it)")
+
+
 def refuse_unread_camera(kind: str) -> None:
     """Refuse the device options a camera of ``kind`` would not read (a folder camera's exposure, gain and size; a
     GenICam camera's ``--camera-size``)."""

@@ -34,6 +34,7 @@ from ._options import (
     pattern_sequence,
     phase_keywords,
     refuse_unread_camera,
+    virtual_gain,
     seed_applies,
     value,
     with_pattern_options,
@@ -154,6 +155,8 @@ def capture_cmd(
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
     kind, _ = parse_camera_spec("virtual" if virtual else camera)
     _refuse_unused(kind, virtual, rig_spec is not None)
+    if kind == "virtual":
+        virtual_gain(gain)
     if kind == "virtual" and step != 1:
         fail("the virtual camera renders step-1 sequences only; leave out --step")
     # the sequence, checked at the projector's size (or a 1920x1080 one until the display is known)

@@ -61,6 +61,8 @@ def study(
         raise ProcamError(f"device must be camera or projector, got {device!r}")
     number(trials, "--trials", lo=0, hi=10**6, what="a number of trials")
     number(noise, "--noise", lo=0, hi=100, unit=" px", what="a corner noise")
+    if trials == 0:
+        refuse(("noise",), "is the noise of the noisy trials; --trials 0 runs the noise-free one only")
     number(distance, "--distance", lo=50, hi=20000, unit=" mm", what="a board depth")
     number(seed, "--seed", lo=0, hi=2**32 - 1, what="a seed")
     if not (jobs == -1 or 1 <= jobs <= 1024):

@@ -28,6 +28,7 @@ from ._options import (
     parse_board,
     parse_pose,
     real_camera,
+    virtual_gain,
     value,
 )
 from ._paths import output_path
@@ -87,6 +88,7 @@ def world_check_cmd(
     else:
         refuse(("camera", "display", "camera_size", "exposure", "settle_ms"),
                "is a real device's setting; --virtual uses the simulator as the camera and projector")
+        virtual_gain(gain)
     png = output_path(png, "--png", (".png", ".jpg", ".jpeg"), inputs=(calibration,))
     json_out = output_path(json_out, "--json", (".json",), inputs=(calibration,))
     if not calibration.is_file():

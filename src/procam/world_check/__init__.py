@@ -34,7 +34,7 @@ import numpy as np
 
 from ..board import Board
 from ..errors import BoardNotFoundError, CalibrationError, ProcamError
-from .spots import centroid, spot_levels, spots_image
+from .spots import centroid, count_spots, spot_levels, spots_image
 from .wall import WallCheck
 
 __all__ = ["VERDICTS", "WALL_GRID_MAX", "WorldCheck", "WorldCheckOptions", "capture_device", "draw", "virtual_device",
@@ -358,7 +358,13 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     shown = int(inside.sum())
     need = max(4, int(np.ceil(options.min_found * shown)))
     reasons = []
-    if shown < 4 or ok.sum() < need:
+    seen = count_spots(smooth, floor, sigma_cam) if shown >= 4 and ok.sum() < need else 0
+    if shown >= 4 and ok.sum() < need and seen >= need:
+        verdict = "off"  # the camera saw the spots, elsewhere: not a dark board, a calibration of another rig
+        reasons.append(f"only {int(ok.sum())} of {shown} spots shown on the board were found within half a square of "
+                       f"where the calibration puts them, yet the camera sees {seen} spots elsewhere: the calibration "
+                       "does not describe this camera and projector (another rig, a moved projector, R or T)")
+    elif shown < 4 or ok.sum() < need:
         verdict = "inconclusive"
         reasons.append(f"only {int(ok.sum())} of {shown} spots shown on the board were found ({n} targets); light "
                        "the board better, or bring all of it into the projector's image")

@@ -72,3 +72,14 @@ def spot_levels(lit: np.ndarray, dark: np.ndarray, sigma_cam: float, min_snr: fl
     smooth = cv2.GaussianBlur(diff, (0, 0), sigmaX=max(sigma_cam, 0.5))
     floor = min_snr * max(robust_sigma(smooth[::2, ::2]), 0.5 / (2 * np.sqrt(np.pi) * max(sigma_cam, 0.5)))
     return diff, smooth, noise, floor
+
+
+def count_spots(smooth: np.ndarray, floor: float, sigma_cam: float) -> int:
+    """How many spots stand above ``floor`` anywhere in ``smooth`` (:func:`spot_levels`): its local maxima at least
+    about two spot widths apart, a plateau counted once -- the spots the camera saw wherever they landed."""
+    import cv2
+
+    r = max(1, int(np.ceil(2 * sigma_cam)))
+    peak = cv2.dilate(smooth, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
+    mask = ((smooth >= peak) & (smooth > floor)).astype(np.uint8)
+    return int(cv2.connectedComponents(mask, connectivity=8)[0]) - 1
