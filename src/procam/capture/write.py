@@ -108,9 +108,11 @@ def _other_sequence(out: Path, names, prefix: str) -> list[str]:
     """The frames of the sequence ``out/patterns.json`` describes that writing ``names`` would neither replace nor
     remove as stale (:func:`remove_stale`): another sequence (a capture, a simulator render), whose description the
     new ``patterns.json`` would replace."""
+    from ..io.jsonfile import JSONError, load_json
+
     try:
-        listed = json.loads((out / "patterns.json").read_text(encoding="utf-8")).get("files")
-    except (OSError, ValueError, AttributeError):
+        listed = load_json(out / "patterns.json").get("files")
+    except (OSError, JSONError, ValueError, AttributeError):
         return []  # no sequence's description (check_overwrite has judged the file itself)
     if not isinstance(listed, list):
         return []
