@@ -1,7 +1,8 @@
 """The capture-folder format, both ways: a pose's folder -> validated image stack and its
 :class:`~procam.patterns.PatternSet` (:mod:`~procam.capture.read`: :func:`load_capture`), and a pattern or
 capture sequence -> a folder of zero-padded PNGs plus ``patterns.json`` (:mod:`~procam.capture.write`:
-:func:`write_sequence`); :mod:`~procam.capture.frames` names the frames of a sequence;
+:func:`write_sequence`); :mod:`~procam.capture.describe` is the sequence a folder holds (its ``patterns.json`` and
+the options given); :mod:`~procam.capture.frames` names the frames of a sequence;
 :mod:`~procam.capture.phase` checks a phase family's folder and makes its board image; :mod:`~procam.capture.rig`
 is the layout of a rig pose (one pose folder per camera-projector pair).
 """

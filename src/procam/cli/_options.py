@@ -128,7 +128,7 @@ def refuse_unread_decoder(poses) -> None:
     if not given(*DECODER_SCOPE):
         return
     from ..capture import is_rig_pose
-    from ..capture.read import read_patterns_json
+    from ..capture.describe import read_patterns_json
     from ..patterns import family_of
 
     for p in map(Path, poses):
