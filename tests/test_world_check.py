@@ -211,6 +211,13 @@ def test_a_calibration_of_another_rig_is_off_not_inconclusive():
 
     wc = world_check(moved, _board(sc), faint)
     assert wc.verdict == "inconclusive" and "light the board better" in wc.reasons[0], wc.reasons
+    speckle = (np.random.default_rng(3).random(sc.proj_size[::-1]) > 0.995).astype(np.uint8) * 255
+
+    def changing(image):  # something else lit between the frames (hundreds of blobs): not the spots, no verdict
+        return dev(image if image.min() == 255 or image.max() == 0 else speckle)
+
+    wc = world_check(moved, _board(sc), changing)
+    assert wc.verdict == "inconclusive" and "light the board better" in wc.reasons[0], wc.reasons
 
 
 def test_no_board_or_no_projector_is_a_one_line_error():

@@ -359,7 +359,7 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     need = max(4, int(np.ceil(options.min_found * shown)))
     reasons = []
     seen = count_spots(smooth, floor, sigma_cam) if shown >= 4 and ok.sum() < need else 0
-    if shown >= 4 and ok.sum() < need and seen >= need:
+    if shown >= 4 and ok.sum() < need and need <= seen <= 1.25 * shown + 2:  # more: changes that are not the spots
         verdict = "off"  # the camera saw the spots, elsewhere: not a dark board, a calibration of another rig
         reasons.append(f"only {int(ok.sum())} of {shown} spots shown on the board were found within half a square of "
                        f"where the calibration puts them, yet the camera sees {seen} spots elsewhere: the calibration "
