@@ -396,7 +396,10 @@ def test_procam_app_listens_before_it_makes_the_project(tmp_path):
 
 def test_procam_app_says_who_can_reach_it():
     """Loopback addresses (IPv4 and IPv6) are this machine only; the URL of an IPv6 address has brackets, as the Host
-    header the app then answers to; a wildcard address is every network (::1 was warned about as reachable)."""
+    header the app then answers to; a wildcard address is every network, and answers to this machine's name and
+    address (::1 was warned about as reachable; 0.0.0.0 refused every other machine's Host header)."""
+    import socket
+
     from procam import app
 
     assert app.address("127.0.0.1") == ("127.0.0.1", app.LOCAL_HOSTS, False)
@@ -404,6 +407,13 @@ def test_procam_app_says_who_can_reach_it():
     assert app.address("::1") == ("[::1]", app.LOCAL_HOSTS, False)
     name, hosts, reachable = app.address("0.0.0.0")
     assert (name, reachable) == ("127.0.0.1", True) and hosts[:3] == app.LOCAL_HOSTS
+    assert socket.gethostname().lower() in hosts  # other machines reach it by its name, or its address:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:
+            s.connect(("198.51.100.7", 9))  # any address off this machine: the route's source address
+            assert s.getsockname()[0] in hosts
+        except OSError:  # no IPv4 route at all
+            pass
     assert app.address("::")[0] == "[::1]" and app.address("::")[2]
     name, hosts, reachable = app.address("192.168.7.9")
     assert name == "192.168.7.9" and "192.168.7.9" in hosts and reachable

@@ -87,13 +87,22 @@ def address(host: str) -> tuple[str, tuple[str, ...], bool]:
 
 
 def _own_names() -> tuple[str, ...]:
-    """This machine's host name and the addresses it resolves to (IPv6 in brackets, as a ``Host`` header has them)."""
+    """This machine's host name, the addresses it resolves to and the address of its default route of each family
+    (IPv6 in brackets, as a ``Host`` header has them)."""
     names = [socket.gethostname().lower()]
     try:
         infos = socket.getaddrinfo(names[0], None, type=socket.SOCK_STREAM)
     except OSError:
         infos = []
     names += [f"[{a[4][0]}]" if a[0] == socket.AF_INET6 else a[4][0] for a in infos]
+    for family, probe in ((socket.AF_INET, "192.0.2.1"), (socket.AF_INET6, "2001:db8::1")):
+        try:  # the address other machines reach this one at: a UDP "connection" sends nothing, it picks the route
+            with socket.socket(family, socket.SOCK_DGRAM) as s:
+                s.connect((probe, 9))
+                ip = s.getsockname()[0]
+            names.append(f"[{ip}]" if family == socket.AF_INET6 else ip)
+        except OSError:
+            pass  # no route of that family
     return tuple(n for n in dict.fromkeys(names) if n not in LOCAL_HOSTS)
 
 
