@@ -345,3 +345,27 @@ def test_patterns_never_replace_the_description_of_another_sequence(tmp_path):
     assert code == 0, err
     names = sorted(p.name for p in own.glob("*.png"))
     assert len(names) == patterns.pattern_set(1024, 768).count and names[-1] == f"pattern_{len(names) - 1:02d}.png"
+
+
+def test_a_cameras_frames_beside_a_copied_patterns_json_are_never_overwritten(tmp_path):
+    """A user's capture: camera frames named pattern_NN.png (another tool's, unmarked) beside the patterns.json
+    copied from `procam patterns`, no manifest.  `procam patterns` into it took the frames for an older procam's
+    pattern images and wrote over all of them, even without --force."""
+    import cv2
+
+    from procam import patterns
+
+    pat = tmp_path / "pat"
+    assert run_cli(["patterns", "-o", pat, "-p", "320x200"])[0] == 0
+    cap = tmp_path / "capture"
+    cap.mkdir()
+    (cap / "patterns.json").write_bytes((pat / "patterns.json").read_bytes())
+    rng = np.random.default_rng(4)
+    for k in range(patterns.pattern_set(320, 200).count):
+        cv2.imwrite(str(cap / f"pattern_{k:02d}.png"), rng.integers(0, 255, (24, 32), dtype=np.uint8))
+    before = snapshot(cap)
+    for force in ([], ["--force"]):
+        code, _, err = run_cli(["patterns", "-o", cap, "-p", "320x200", *force])
+        assert code == 2 and "procam did not write" in err and err.count("\n") == 1, (force, err)
+        assert snapshot(cap) == before
+    assert run_cli(["patterns", "-o", pat, "-p", "320x200"])[0] == 0  # its own pattern images: rewritten

@@ -82,16 +82,21 @@ def not_a_file(p: Path) -> str:
     return "no such file"
 
 
-def kept_because(path) -> str:
-    """Why procam does not write over the existing file ``path`` (:func:`procam_wrote` says no), and what to do, in
-    words for a message after the file's name."""
-    path = Path(path)
+def is_frame(path) -> bool:
+    """Is ``path`` a PNG frame procam wrote (a pattern image, a render, a capture's frame): marked
+    :data:`~procam.io.formats.FRAME_MARK`?"""
     try:
         with open(path, "rb") as f:
             head = f.read(1 << 12)
     except OSError:
-        head = b""
-    if head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.FRAME_MARK:
+        return False
+    return head[:8] == PNG_SIGNATURE and png_texts(head).get(formats.PNG_TEXT_KEY) == formats.FRAME_MARK
+
+
+def kept_because(path) -> str:
+    """Why procam does not write over the existing file ``path`` (:func:`procam_wrote` says no), and what to do, in
+    words for a message after the file's name."""
+    if is_frame(path):
         return ("the file is a frame of a capture (data procam wrote, not an output); give another name, or move it "
                 "away first (procam never overwrites a capture's frames)")
     return ("the file exists and procam did not write it; give another name, or move it away first (procam never "

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ..errors import OutputError
 from . import formats
-from .files import (IMAGE_EXTS, MANIFEST, fmt_bytes, natural_key, plain_name, read_manifest, record_files, remove_stale_temps, unlist_files, write_manifest)
+from .files import (IMAGE_EXTS, MANIFEST, fmt_bytes, is_frame, natural_key, plain_name, read_manifest, record_files, remove_stale_temps, unlist_files, write_manifest)
 from .jsonfile import JSONError, load_json
 
 
@@ -28,7 +28,8 @@ def _visible(folder: Path) -> list[str]:
 
 def _legacy_files(folder: Path) -> set[str]:
     """Files an older procam (before manifests) wrote: a sequence folder's ``patterns.json`` lists its
-    frames; ``truth.json`` is the simulator's.  A camera capture (``capture.json``) is not counted."""
+    frames, each marked as procam's (a camera's frames copied beside a copied patterns.json are not); ``truth.json``
+    is the simulator's.  A camera capture (``capture.json``) is not counted."""
     try:
         meta = load_json(folder / "patterns.json")
     except (OSError, JSONError):  # none, or not one procam wrote: nothing in the folder counts as procam's
@@ -38,7 +39,9 @@ def _legacy_files(folder: Path) -> set[str]:
         return set()
     if (folder / "capture.json").exists():
         return set()
-    return {str(f) for f in meta["files"] if plain_name(str(f))} | {"patterns.json", "truth.json"}
+    frames = {str(f) for f in meta["files"] if plain_name(str(f))}  # procam's only with procam's mark: a user's
+    frames = {n for n in frames if not (folder / n).exists() or is_frame(folder / n)}  # camera frames can share names
+    return frames | {"patterns.json", "truth.json"}
 
 
 def _listing(names: list[str], n: int = 4) -> str:
