@@ -229,6 +229,14 @@ def test_reconstruct_accounts_for_every_dropped_pixel():
     lines, warns, misfit = rc.dropped_lines(cloud)
     a = cloud.accounting
     assert misfit == warns[0]
+    for kw in ({"use": "col"}, {"use": "row"}, {"max_residual_px": 50.0}):  # one coordinate, or a lax limit: the
+        with pytest.warns(ModelErrorWarning, match="the point cloud must not be trusted"):  # disagreement still
+            other = rc.reconstruct(moved, maps, **kw)  # measures the fit (they gave exit 0, a cloud 11 % too near)
+        assert rc.dropped_lines(other).misfit and other.accounting["median_disagreement_px"] > 2.0, kw
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ModelErrorWarning)
+        for kw in ({"use": "col"}, {"max_residual_px": 50.0}):
+            assert rc.dropped_lines(rc.reconstruct(right, maps, **kw)).misfit == ""
     assert a["disagree"] > 0.5 * a["decoded"] and a["median_disagreement_px"] > 2.0
     assert len(warns) == 1 and "the calibration does not describe this camera and projector" in warns[0]
     assert re.search(r"dropped, projector column and row disagree by more than 2 px: \d+ \(\d+%\)", "\n".join(lines))
@@ -248,7 +256,7 @@ def test_cli_reconstruct_prints_the_dropped_pixels(tmp_path):
     code, out, err = run_cli(["reconstruct", tmp_path / "moved.json", folder, "-o", tmp_path / "c.ply"])
     assert code == 3, err  # written, and said in the table, the file, the exit code: the cloud is not trusted
     assert "dropped, projector column and row disagree" in out and "column/row disagreement" in out
-    assert "decoded pixels" in out and "were dropped: the median disagreement" in out
+    assert "decoded pixels" in out and "were dropped: the median column/row disagreement" in out
     assert "NOT TRUSTED" in out and "not trusted:" in err and "c.ply" in err
     header = (tmp_path / "c.ply").read_bytes().split(b"end_header")[0]
     assert b"comment NOT TRUSTED: " in header and b"does not describe this camera and projector" in header

@@ -43,7 +43,8 @@ class PointCloud:
         ``decoded`` (camera pixels with a decoded column or row), ``not_in_front`` (no point in front of both
         devices), ``disagree`` (dropped: column and row disagree by more than ``max_residual_px``), ``kept``,
         ``max_residual_px``, and over the pixels with both coordinates ``median_disagreement_px`` and
-        ``p90_disagreement_px`` (before dropping); empty for a subset.
+        ``p90_disagreement_px`` (before dropping; with ``use`` col or row from a sample of them triangulated with
+        both); empty for a subset.
     """
 
     points: np.ndarray
@@ -134,6 +135,11 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
         keep = out["residual_px"] <= float(max_residual_px)
     decoded = int(np.count_nonzero((vc & (use != "row")) | (vr & (use != "col"))))  # as triangulate_dense reads them
     both_res = out["residual_px"][out["both"]]
+    if use != "both":  # one coordinate triangulates, yet both were decoded: their disagreement still tests the fit
+        ys, xs = np.nonzero(vc & vr)
+        step = max(1, len(xs) // 20000)  # a sample is enough for a median
+        sample = np.column_stack([xs[::step], ys[::step]])
+        both_res = triangulate_dense(calib, maps.col, maps.row, vc, vr, use="both", pixels=sample)["residual_px"]
     accounting = {"decoded": decoded, "not_in_front": decoded - len(out["points"]),
                   "disagree": int(np.count_nonzero(~keep)), "kept": int(np.count_nonzero(keep)),
                   "max_residual_px": None if max_residual_px is None else float(max_residual_px),
@@ -152,6 +158,11 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
     if misfit:
         warnings.warn(f"the point cloud must not be trusted: {misfit}", ModelErrorWarning, stacklevel=2)
     return cloud
+
+
+#: The median column/row disagreement (projector px) above which the calibration does not fit the capture: decoding
+#: noise is well under a pixel, a calibration of this rig leaves it there.
+MISFIT_PX = 2.0
 
 
 class Dropped(NamedTuple):
@@ -174,10 +185,11 @@ def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> Dropped:
     disagree; no point in front of both devices) and give the median column/row disagreement. A pixel's
     disagreement is the distance (projector pixels) between its decoded (column, row) and the projection of its
     least-squares point: with a right calibration and a right decode it is the decoding noise (well under a
-    pixel). A warning when more than ``warn_fraction`` of the decoded pixels were dropped, saying what the
-    median means: far above the threshold, the calibration does not describe this rig or the decoded maps are
-    wrong (swapped pattern pairs, another capture's patterns) -- a misfit, the cloud is not to be trusted;
-    near it, noisy decoding at edges and in shadow.
+    pixel).  A misfit -- the cloud is not to be trusted -- when the median is above :data:`MISFIT_PX` (measured on
+    the pixels with both coordinates whatever ``use`` and ``max_residual_px`` were) or most pixels triangulate
+    behind a device: the calibration does not describe this rig or the decoded maps are wrong (swapped pattern
+    pairs, another capture's patterns).  Else a warning when more than ``warn_fraction`` of the decoded pixels
+    were dropped: the noisy ones, at edges and in shadow.
     """
     a = cloud.accounting
     if not a:
@@ -193,27 +205,21 @@ def dropped_lines(cloud: PointCloud, warn_fraction: float = 0.1) -> Dropped:
     if np.isfinite(med):
         lines.append(f"column/row disagreement (pixels with both): median {med:.2f} px, 90th percentile {p90:.2f} px")
     dropped = a["disagree"] + a["not_in_front"]
+    head = f"{dropped} of {a['decoded']} decoded pixels ({dropped / n:.0%}) were dropped: "
+    if np.isfinite(med) and med > MISFIT_PX:
+        why = (f"the median column/row disagreement ({med:.1f} px) is above {MISFIT_PX:g} px: for most pixels the "
+               "decoded column and row do not meet on one point -- the calibration does not describe this camera "
+               "and projector (another rig, a moved projector, a wrong --projector size), or the decoded maps are "
+               "wrong (swapped pattern pairs, patterns from another capture: procam decode --png shows them)")
+        return Dropped(lines, [head + why], head + why)
+    if a["not_in_front"] > 0.5 * n:
+        why = ("most of them triangulate behind a device: the calibration's R, T do not describe this rig (or the "
+               "capture is of another one)")
+        return Dropped(lines, [head + why], head + why)
     if dropped <= warn_fraction * n:
         return Dropped(lines, [], "")
-    why, misfit = _why_dropped(a)
-    head = f"{dropped} of {a['decoded']} decoded pixels ({dropped / n:.0%}) were dropped: "
-    return Dropped(lines, [head + why], head + why if misfit else "")
-
-
-def _why_dropped(a: dict) -> tuple[str, bool]:
-    """Why most dropped pixels were dropped, from :attr:`PointCloud.accounting`: ``(words, misfit)``, misfit
-    when the calibration or the decoded maps, not the noise, explain it."""
-    thr, med = a["max_residual_px"], a["median_disagreement_px"]
-    if thr is not None and np.isfinite(med) and med > thr:
-        return (f"the median disagreement ({med:.1f} px) is above the {thr:g} px limit: for most pixels the decoded "
-                "column and row do not meet on one point -- the calibration does not describe this camera and "
-                "projector (another rig, a moved projector, a wrong --projector size), or the decoded maps are "
-                "wrong (swapped pattern pairs, patterns from another capture: procam decode --png shows them)"), True
-    if a["not_in_front"] > a["disagree"]:
-        return ("most of them triangulate behind a device: the calibration's R, T do not describe this rig (or the "
-                "capture is of another one)"), True
-    return (f"the median disagreement ({med:.2f} px) is small: the dropped pixels are the noisy ones (edges, "
-            "shadows, dark or glossy surfaces); --max-residual keeps more of them"), False
+    return Dropped(lines, [head + f"the median disagreement ({med:.2f} px) is small: the dropped pixels are the noisy "
+                           "ones (edges, shadows, dark or glossy surfaces); --max-residual keeps more of them"], "")
 
 
 @dataclass(frozen=True)
