@@ -5,6 +5,7 @@ pose, reconstruct's dropped pixels) and a report that lists what was flagged."""
 
 from __future__ import annotations
 
+import json
 import re
 import warnings
 
@@ -319,3 +320,36 @@ def test_report_coverage_shows_the_calibrated_pose_beside_the_given_ones(monkeyp
     with verdict_warnings():
         report_page.build_report(calib, [other], name="c.json")
     assert seen["names"] == ["calibrated", "held-out"]
+
+
+@pytest.mark.parametrize("command", [["reconstruct", "CAL", "POSE", "-o", "c.ply"],
+                                     ["export", "CAL", "--format", "opengl", "--near", "10", "--far", "5000", "-o",
+                                      "g.json"],
+                                     ["export", "CAL", "--format", "yaml", "-o", "c.yml"]])
+def test_a_calibration_written_with_force_is_not_trusted_downstream(tmp_path, command):
+    """calibrate --force writes a degenerate calibration, "marked as such": reconstruct and export used it with exit
+    0 and no word (a cloud 39 times too far).  They still write, and say it: a warning, exit 3, the file marked
+    where its format can hold it."""
+    pytest.importorskip("plyfile")
+    from sim_small import small_capture
+
+    from procam import io
+
+    scene, stack, truth, _ = small_capture()
+    simulate.write_capture(tmp_path / "pose", stack, truth)
+    calib = simulate.truth_calibration(scene)
+    io.save_calibration(calib.replace(verdict="degenerate", verdict_reasons=("the pose is fronto-parallel",)),
+                        tmp_path / "deg.json")
+    io.save_calibration(calib, tmp_path / "good.json")
+    args = [tmp_path / "pose" if a == "POSE" else tmp_path / a if "." in a and a[0].isalpha() else a for a in command]
+    code, out, err = run_cli([tmp_path / "deg.json" if a == "CAL" else a for a in args])
+    assert code == 3 and "not trusted:" in err and "its verdict is degenerate" in out + err, err
+    assert "the pose is fronto-parallel" in out
+    written = args[-1].read_bytes()
+    if args[-1].suffix == ".ply":
+        assert b"comment NOT TRUSTED: " in written.split(b"end_header")[0]
+    if args[-1].suffix == ".json":
+        assert "its verdict is degenerate" in json.loads(written)["not_trusted"]
+    args[-1].unlink()
+    code, out, err = run_cli([tmp_path / "good.json" if a == "CAL" else a for a in args])
+    assert code == 0 and "not trusted" not in out + err and "verdict is" not in out, err

@@ -75,6 +75,16 @@ def pose_sizes(calib, path, cam_size, proj_size):
     return calib
 
 
+def distrust(calib, path) -> str:
+    """Why the calibration file ``path`` must not be trusted (its verdict degenerate or failed: written with
+    ``procam calibrate --force``), or ""; a command that uses it says so in its output and exits 3."""
+    if calib.trusted:
+        return ""
+    why = "; ".join(calib.verdict_reasons) or "see its verdict_reasons"
+    return (f"{path}: its verdict is {calib.verdict} ({why}); procam calibrate wrote it only because of --force: "
+            "its numbers may be anything, and so is what is made from them")
+
+
 def assumed_size(calib, key: str) -> str:
     """A note for a size mismatch when the calibration file had no ``key`` (``cam_size``/``proj_size``) and
     its size was assumed from the principal point; '' otherwise."""

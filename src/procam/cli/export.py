@@ -11,7 +11,7 @@ import typer
 from .. import choices
 from ._app import app, fail, say, user_errors, warn
 from ._options import ForceOpt, OrderOpt, ProjectorOpt, StepOpt, choice, number, optional_size, value
-from ._paths import load_pose, output_dir, output_path
+from ._paths import distrust, load_pose, output_dir, output_path
 
 Format = choice("Format", choices.EXPORT_FORMATS)
 World = choice("World", choices.WORLDS)
@@ -188,9 +188,12 @@ def export_cmd(
             warn(w + " (the exported camera is for images of that size)")
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration has no projector to export; give a procam calibration")
+    doubt = distrust(calib, calibration)
+    if doubt:
+        warn(doubt)
     if fmt == "projector-view":
-        return _projector_view(calib, out, pose, maps_file, projector, order, step)
-    if fmt in ENGINES:
+        _projector_view(calib, out, pose, maps_file, projector, order, step)
+    elif fmt in ENGINES:
         from .. import export as _ex
 
         if fmt == "opengl":
@@ -200,6 +203,8 @@ def export_cmd(
         else:
             doc = _ex.unity_document(calib, world=world, unit=unit, near_m=clip[0], far_m=clip[1])
         doc["calibration"] = Path(calibration).name
+        if doubt:
+            doc["not_trusted"] = doubt
         doc["distortion_maps"] = _distortion(calib, out)
         written = (io.engines.save_blender(doc, out, _ex.blender.script_text()) if fmt == "blender"
                    else [io.engines.save_document(doc, out)])
@@ -207,14 +212,16 @@ def export_cmd(
             say(f"wrote {p}")
         if not doc["distortion_maps"]:
             say("neither device has lens distortion: the engine cameras are the whole calibration")
-        return
-    if fmt in ("kamino410", "yaml"):
+    elif fmt in ("kamino410", "yaml"):
         (io.save_kamino410 if fmt == "kamino410" else io.save_opencv_yaml)(calib, out)
         say(f"wrote {out}")
         if calib.camera.distortion.model == "division":
             say("note: the camera's division model is written as its OpenCV (k1, k2, p1, p2, k3) fit")
-        return
-    _maps(calib, out, force, rectify, scale)
+    else:
+        _maps(calib, out, force, rectify, scale)
+    if doubt:
+        fail(f"the export is of a calibration that must not be trusted: its verdict is {calib.verdict}", code=3,
+             label="not trusted")
 
 
 def _maps(calib, out, force, rectify, scale):

@@ -11,7 +11,7 @@ import typer
 from .. import choices
 from ._app import app, console, fail, plain, refuse, say, user_errors, warn
 from ._options import OrderOpt, ProjectorOpt, StepOpt, choice, parse_size, value
-from ._paths import assumed_size, load_pose, output_path
+from ._paths import assumed_size, distrust, load_pose, output_path
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 
@@ -92,6 +92,10 @@ def reconstruct_cmd(
             fail(f"{pose_dir}: fewer than 3 points on the board; is it lit by the projector?")
         plane = rc.fit_plane(cloud.points[on_board])
     accounted, dropped_warnings, misfit = rc.dropped_lines(cloud)
+    doubt = distrust(calib, calibration)
+    if doubt:
+        warn(doubt)
+        misfit = misfit or doubt
     io.write_ply(out, cloud.points, cloud.colours,
                  comments=[PLY_COMMENT, "procam reconstruct", f"calibration {Path(calibration).name}",
                            f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"]
@@ -101,7 +105,8 @@ def reconstruct_cmd(
     t.add_column("value", justify="right")
     t.add_row("points", f"{len(cloud)}")
     if misfit:
-        t.add_row("verdict", "NOT TRUSTED: the calibration does not fit this capture")
+        t.add_row("verdict", "NOT TRUSTED: " + ("the calibration's verdict is " + calib.verdict if misfit == doubt
+                                               else "the calibration does not fit this capture"))
     for line in accounted:
         name, val = line.split(": ", 1)
         t.add_row(name, val)
@@ -123,5 +128,6 @@ def reconstruct_cmd(
     if residuals is not None:
         say(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")
     if misfit:
-        fail(f"the point cloud in {out} must not be trusted: most decoded pixels do not fit the calibration "
-             "(see the warning above)", code=3, label="not trusted")
+        fail(f"the point cloud in {out} must not be trusted: " + (f"the calibration's verdict is {calib.verdict}"
+             if misfit == doubt else "most decoded pixels do not fit the calibration") + " (see the warning above)",
+             code=3, label="not trusted")
