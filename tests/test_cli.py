@@ -82,6 +82,14 @@ def test_names_are_shown_with_their_control_characters_and_undecodable_bytes_esc
     assert code == 2 and "\x1b" not in err and "pose\\x1b[2J: no such folder" in err
 
 
+def test_names_that_look_like_emoji_codes_are_shown_as_typed(tmp_path):
+    """rich turned ':smile:' in a folder's name, and 'opencv:thumbs_up' in an option, into emoji."""
+    code, out, err = run_cli(["decode", tmp_path / ":smile:", "-o", tmp_path / "m.npz"])
+    assert code == 2 and ":smile:: no such folder" in err and "\U0001f604" not in err, err
+    code, out, err = run_cli(["capture", tmp_path / "x", "--camera", "opencv:thumbs_up"])
+    assert code == 2 and err.startswith("error: --camera opencv:thumbs_up: opencv takes"), err
+
+
 def test_calibrate_errors(ideal_capture, tmp_path):
     folder, _, _, _ = ideal_capture
     out = tmp_path / "c.json"

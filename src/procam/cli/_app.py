@@ -84,7 +84,8 @@ class _LazyConsole:
             from rich.console import Console
 
             stream = sys.stderr if self._stderr else sys.stdout
-            self._console = Console(stderr=self._stderr, soft_wrap=True, width=None if stream.isatty() else 160)
+            self._console = Console(stderr=self._stderr, soft_wrap=True, emoji=False,  # ':abc:' is a name, not 🔤
+                                    width=None if stream.isatty() else 160)
         return self._console
 
     def __getattr__(self, name):
