@@ -187,6 +187,12 @@ def test_projector_view_refuses_another_captures_maps(files, tmp_path):
     code, out, err = run_cli(export + ["--maps", tmp_path / "old.npz"])
     assert code == 0 and "does not say which capture it was decoded from" in out, err
     assert io.load_decoded_maps(tmp_path / "other.npz")["source"].startswith("sha256:")
+    from procam.calibration import Device
+
+    small = calib.replace(projector=Device(calib.projector.K, (1280, 720), calib.projector.distortion))
+    io.save_calibration(small, tmp_path / "p720.json")  # another rig's calibration: the view ignored it
+    code, out, err = run_cli(["export", tmp_path / "p720.json", *export[2:]])
+    assert code == 2 and "but the calibration's projector is 1280x720" in err and err.count("\n") == 1, err
 
 
 @pytest.mark.parametrize("args, phrase", [

@@ -47,9 +47,11 @@ def distinct_poses(poses) -> None:
 
 
 def load_pose(pose_dir, projector, calib, order=None, step=None):
-    """The capture of one pose folder for a command that has a calibration: the projector size from
-    ``--projector``, else the folder's ``patterns.json``, else the calibration's; its warnings printed."""
-    from .. import capture
+    """The capture of one pose folder for a command that has a calibration, and the calibration with the sizes its
+    file did not store taken from the pose: ``(capture, calib)``.  The projector size from ``--projector``, else the
+    folder's ``patterns.json``, else the calibration's; the capture's warnings printed; a pose of another camera or
+    projector size than the calibration's is a one-line error."""
+    from .. import capture, io
 
     size = optional_size(projector)
     if size is None and not (Path(pose_dir) / "patterns.json").exists():
@@ -57,7 +59,18 @@ def load_pose(pose_dir, projector, calib, order=None, step=None):
     cap = capture.load_capture(pose_dir, size, value(order), step=step)
     for w in cap.warnings:
         warn(w)
-    return cap
+    ps = cap.pattern_set
+    H, W = cap.stack.shape[1:]
+    calib = io.complete_sizes(calib, (W, H), (ps.width, ps.height))   # sizes the calibration file did not store
+    if (W, H) != tuple(calib.camera.image_size):
+        fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
+             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
+             + (assumed_size(calib, "cam_size") or "; use captures of the calibrated camera"))
+    if (ps.width, ps.height) != tuple(calib.projector.image_size):
+        fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
+             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
+             + (assumed_size(calib, "proj_size") or "; check --projector"))
+    return cap, calib
 
 
 def pose_sizes(calib, path, cam_size, proj_size):

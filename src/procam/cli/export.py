@@ -93,7 +93,7 @@ def _projector_view(calib, out, pose, maps_file, projector, order, step):
     if pose is None:
         fail("--format projector-view needs --pose POSE_DIR (the captured pose whose white frame, or mean of the "
              "fringes without one, it remaps)")
-    cap = load_pose(pose, projector, calib, order, step)
+    cap, calib = load_pose(pose, projector, calib, order, step)
     ps = cap.pattern_set
     if maps_file is not None:
         m = io.load_decoded_maps(maps_file)

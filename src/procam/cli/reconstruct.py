@@ -11,7 +11,7 @@ import typer
 from .. import choices
 from ._app import app, console, fail, plain, refuse, say, user_errors, warn
 from ._options import OrderOpt, ProjectorOpt, StepOpt, choice, parse_size, value
-from ._paths import assumed_size, distrust, load_pose, output_path
+from ._paths import distrust, load_pose, output_path
 
 Use = choice("Use", choices.TRIANGULATION_USES)
 
@@ -64,18 +64,9 @@ def reconstruct_cmd(
     calib = io.load_calibration(calibration)
     if calib.projector is None or calib.R is None:
         fail(f"{calibration}: a camera-only calibration cannot triangulate; give a procam calibration")
-    cap = load_pose(pose_dir, projector, calib, order, step)
+    cap, calib = load_pose(pose_dir, projector, calib, order, step)
     ps = cap.pattern_set
     H, W = cap.stack.shape[1:]
-    calib = io.complete_sizes(calib, (W, H), (ps.width, ps.height))   # sizes the calibration file did not store
-    if (W, H) != tuple(calib.camera.image_size):
-        fail(f"{pose_dir}: camera images are {W}x{H} but the calibration is for "
-             f"{calib.camera.image_size[0]}x{calib.camera.image_size[1]}"
-             + (assumed_size(calib, "cam_size") or "; use captures of the calibrated camera"))
-    if (ps.width, ps.height) != tuple(calib.projector.image_size):
-        fail(f"{pose_dir}: the sequence is for a {ps.width}x{ps.height} projector but the calibration's projector is "
-             f"{calib.projector.image_size[0]}x{calib.projector.image_size[1]}"
-             + (assumed_size(calib, "proj_size") or "; check --projector"))
     maps = decode.decode(cap.stack, ps)
     from ..decode import plausibility  # the capture's own faults first: they, not the calibration, explain a bad cloud
 
