@@ -259,7 +259,10 @@ def test_decoded_maps_round_trip_and_are_checked(tmp_path):
                               ("reason_row", good["reason_row"].astype(np.int8), "reason_row holds int8 values"),
                               ("col", good["col"][..., None], "col is 32x64x1, not a map"),
                               ("col", np.float32(1), "col is a single value, not a map"),
-                              ("row", good["row"][:16], "row is 16x64, the maps are 32x64")):
+                              ("row", good["row"][:16], "row is 16x64, the maps are 32x64"),
+                              # decoded coordinates beyond the projector (a map scaled by 10), or NaN where decoded
+                              ("col", good["col"] * 10, "col holds decoded values outside the projector's 0 to 64"),
+                              ("row", np.full_like(good["row"], np.nan), "row holds decoded values outside")):
         np.savez(tmp_path / "odd.npz", **{**good, key: value})
         with pytest.raises(CaptureError, match=f"odd.npz: {words}"):
             io.load_decoded_maps(tmp_path / "odd.npz")

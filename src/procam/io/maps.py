@@ -51,8 +51,8 @@ def load_decoded_maps(path) -> dict:
 
     Raises :class:`~procam.errors.CaptureError` naming the file: missing, not an ``.npz``, a member missing, a map
     that is not 2-D or not of the others' shape or of another kind of value (real numbers for the coordinates and
-    the confidence, true/false for the validity, unsigned integers for the reasons and dropped bits), or a projector
-    size that is not one.
+    the confidence, true/false for the validity, unsigned integers for the reasons and dropped bits), a projector
+    size that is not one, or a decoded coordinate outside the projector (or not a number).
     """
     import zipfile
 
@@ -82,6 +82,12 @@ def load_decoded_maps(path) -> dict:
             bad(path, k, f"holds {a.dtype} values, not {what}", **how)
     out = {k: data[k] for k in maps}
     out["projector_size"] = check_size(path, "projector_size", data["projector_size"], **how)
+    for key, valid, extent in (("col", "valid_col", out["projector_size"][0]), ("row", "valid_row",
+                                                                                 out["projector_size"][1])):
+        v = out[key][out[valid]]
+        if v.size and not (np.isfinite(v).all() and v.min() >= -1.0 and v.max() <= extent):
+            bad(path, key, f"holds decoded values outside the projector's 0 to {extent} px (or not numbers) where "
+                           f"{valid} says decoded", **how)
     out["order"] = str(data["order"])
     out["source"] = str(data["source"]) if "source" in data and data["source"].ndim == 0 else ""
     return out
