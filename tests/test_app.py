@@ -449,6 +449,24 @@ def test_procam_app_takes_only_its_own_project_folders(tmp_path):
     assert code == 2 and "a capture folder, not a project the app made" in err and "http://" not in out, err
 
 
+@pytest.mark.parametrize("state, words", [
+    ({"board": {"cols": "x"}}, "board cols: give a whole number"), ({"board": {"cols": 10}}, "board rows"),
+    ({"board": [10, 6]}, "board cols"), ({"pose": "/tmp/pose1"}, "pose must be an object or null"),
+    ({"calibration": 123}, "calibration must be an object"), ({"camera_file": ["x"]}, "camera_file must be a string"),
+    ({"projector_size": [0, 5]}, "projector_size must be [width, height]"), ({"version": 99}, "version 99"),
+])
+def test_a_hand_edited_project_state_is_named_not_an_internal_error(tmp_path, state, words):
+    """A board without its rows was an internal error (KeyError) at start; a pose that is a string broke every page
+    later (AttributeError); version 99 was read as 1."""
+    from procam.app.project import Project
+    from procam.errors import ProcamError
+
+    (tmp_path / "procam-app.json").write_text(json.dumps({"format": "procam-app-project", "version": 1, **state}))
+    with pytest.raises(ProcamError, match=re.escape(words)) as e:
+        Project(tmp_path)
+    assert "procam-app.json" in str(e.value) and "\n" not in str(e.value)
+
+
 def test_procam_app_serves_its_page_and_stops_on_ctrl_c(tmp_path):
     """As a user starts it: the printed address (with its token) answers, one without the token is refused, Ctrl+C
     stops it with exit code 0 and says where the project is."""

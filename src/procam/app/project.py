@@ -79,10 +79,27 @@ class Project:
                 from None
         if not isinstance(doc, dict) or doc.get("format") != STATE_FORMAT:
             raise ProcamError(f"{f}: not the app's project state (no \"format\": \"{STATE_FORMAT}\"); move it away")
-        for key in DEFAULTS:
-            if key in doc:
-                self.state[key] = doc[key]
-        self.board()  # a state file edited by hand is checked as a request would be
+        if doc.get("version", 1) != 1:
+            raise ProcamError(f"{f}: version {doc.get('version')!r} of the project state; this procam reads version 1 "
+                              "(a newer procam wrote it: use that one, or move the file away to start over)")
+        for key in DEFAULTS:  # a state file edited by hand is checked as a request would be
+            if key not in doc:
+                continue
+            v, kind = doc[key], _STATE_KINDS[key]
+            if kind == "board":
+                b = v if isinstance(v, dict) else {}
+                try:
+                    v = _checked_board(b.get("cols"), b.get("rows"), b.get("square"))
+                except ProcamError as e:
+                    raise ProcamError(f"{f}: {e}; fix it, or move the file away to start over") from None
+            elif kind == "size":
+                if not (isinstance(v, list) and len(v) == 2 and all(type(n) is int and 1 <= n <= 16384 for n in v)):
+                    raise ProcamError(f"{f}: {key} must be [width, height] in pixels, got {v!r}; fix it, or move "
+                                      "the file away to start over")
+            elif not (v is None or isinstance(v, kind)):
+                raise ProcamError(f"{f}: {key} must be {_KIND_WORDS[kind]}{'' if key == 'unit' else ' or null'}, got "
+                                  f"{str(v)[:40]!r}; fix it, or move the file away to start over")
+            self.state[key] = v
 
     def save(self) -> None:
         from ..io.files import write_text
@@ -98,15 +115,7 @@ class Project:
 
     def set_board(self, cols, rows, square) -> None:
         """Check and keep the board (a one-line :class:`ProcamError` names the wrong field)."""
-        from ..board import Board
-
-        for name, v in (("cols", cols), ("rows", rows)):
-            if isinstance(v, bool) or not isinstance(v, int):
-                raise ProcamError(f"board {name}: give a whole number of inner corners, got {v!r}")
-        if isinstance(square, bool) or not isinstance(square, (int, float)) or not math.isfinite(square):
-            raise ProcamError(f"board square: give the square's side as a number (e.g. 24 for mm), got {square!r}")
-        Board(cols, rows, float(square))
-        self.state["board"] = {"cols": cols, "rows": rows, "square": float(square)}
+        self.state["board"] = _checked_board(cols, rows, square)
         self.save()
 
     def summary(self) -> dict:
@@ -118,3 +127,23 @@ class Project:
         check = f"{pose}.check.png" if pose and (self.root / f"{pose}.check.png").is_file() else None
         return {"root": str(self.root), "state": self.state, "files": {k: FILES[k] for k in FILES if have[k]},
                 "pose_check": check, "exports": exports}
+
+
+#: The kind of value each key of the state file holds (null allowed but for the board, the unit and the size).
+_STATE_KINDS = {"board": "board", "unit": str, "camera_file": str, "projector_size": "size", "pose": dict,
+                "calibration": dict, "photos": dict, "rig": dict, "rig_calibration": dict}
+_KIND_WORDS = {str: "a string", dict: "an object"}
+
+
+def _checked_board(cols, rows, square) -> dict:
+    """The state's board entry of ``cols`` x ``rows`` inner corners of ``square`` side, checked (a one-line
+    :class:`ProcamError` names the wrong field)."""
+    from ..board import Board
+
+    for name, v in (("cols", cols), ("rows", rows)):
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise ProcamError(f"board {name}: give a whole number of inner corners, got {v!r}")
+    if isinstance(square, bool) or not isinstance(square, (int, float)) or not math.isfinite(square):
+        raise ProcamError(f"board square: give the square's side as a number (e.g. 24 for mm), got {square!r}")
+    Board(cols, rows, float(square))
+    return {"cols": cols, "rows": rows, "square": float(square)}
