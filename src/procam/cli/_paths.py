@@ -91,7 +91,7 @@ def pose_sizes(calib, path, cam_size, proj_size):
 def distrust(calib, path) -> str:
     """Why the calibration file ``path`` must not be trusted (its verdict degenerate or failed: written with
     ``procam calibrate --force``), or ""; a command that uses it says so in its output and exits 3."""
-    if calib.trusted:
+    if calib.verdict not in ("degenerate", "failed"):  # good, weak, or another tool's file (unknown: no verdict)
         return ""
     why = "; ".join(calib.verdict_reasons) or "see its verdict_reasons"
     return (f"{path}: its verdict is {calib.verdict} ({why}); procam calibrate wrote it only because of --force: "
