@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from procam import capture
+from procam import capture, patterns
 from procam.errors import CaptureError
 from conftest import run_cli, write_stack
 
@@ -54,6 +54,22 @@ def test_every_number_and_structure_is_bounded_before_use(tmp_path, text, words)
     folder = _with(tmp_path / "pose", text)
     with pytest.raises(CaptureError, match=words):
         capture.resolve_pattern_set(folder)
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"count": 40}, r"count 40 is not that of the 64x48 sequence of order opencv, step 1 \(26\)"),
+    ({"col_bits": 9}, r"col_bits 9 is not that of"), ({"col_offset": 64}, r"col_offset 64 is not that of"),
+    ({"white": 25, "black": 24}, r"white 25 is not that of"),
+])
+def test_what_a_gray_description_states_must_be_its_sequences(tmp_path, change, words):
+    """count, bits, offsets, white and black follow from width, height, order and step: a file that states others
+    describes another sequence, and was read as procam's with exit 0 (the key silently ignored)."""
+    doc = {**patterns.pattern_set(64, 48).to_dict(), **change}
+    with pytest.raises(CaptureError, match=words):
+        capture.resolve_pattern_set(_with(tmp_path / "pose", doc))
+    ok = patterns.pattern_set(64, 48).to_dict()
+    assert capture.resolve_pattern_set(_with(tmp_path / "same", ok)) == patterns.pattern_set(64, 48)
+    assert capture.resolve_pattern_set(tmp_path / "pose", order="moreno").order == "moreno"  # --order: another one
 
 
 @pytest.mark.parametrize("doc, words", [

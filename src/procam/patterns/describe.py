@@ -239,5 +239,21 @@ def gray_from_dict(meta: dict, width=None, height=None, order=None, step=None) -
     order = meta.get("order", "opencv") if order is None else order
     if order not in ORDERS:
         raise ValueError(f"unknown order {_short(order)} (one of {', '.join(ORDERS)})")
+    overridden = order != meta.get("order", "opencv") or step is not None
     step = _number(meta.get("step", 1) if step is None else step, "step", 1, 64, integer=True)
-    return pattern_set(w, h, order, step, bit_order_of(meta))
+    ps = pattern_set(w, h, order, step, bit_order_of(meta))
+    if not overridden:  # what the file states beyond its size, order and step must be that sequence's
+        import json
+
+        derived = json.loads(json.dumps(ps.to_dict()))
+        for key in _DERIVED:
+            if key in meta and meta[key] != derived[key]:
+                raise ValueError(f"{key} {_short(meta[key])} is not that of the {w}x{h} sequence of order {order}, step "
+                                 f"{step} ({_short(derived[key])}): the file describes another sequence than procam's "
+                                 "(which width, height, order, step and bit_order determine); remove the key or fix it")
+    return ps
+
+
+#: The keys of a Gray-family description that width, height, order and step determine (the frame pairs and their
+#: bit rule are the bit order's: the capture's frames tell a wrong one, procam.capture.bit_order, in better words).
+_DERIVED = ("count", "col_bits", "row_bits", "col_offset", "row_offset", "white", "black", "col_start", "row_start")
