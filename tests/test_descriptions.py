@@ -358,3 +358,13 @@ def test_a_ceiling_mounted_projector_decodes_upside_down_rightly(tmp_path):
                 capture.load_capture(folder)
         else:
             assert capture.load_capture(folder).pattern_set.count == ps.count
+
+
+def test_a_step_that_contradicts_the_description_is_refused(tmp_path):
+    """patterns.json says step 1; --step 2 was read as another sequence, and the count message then blamed
+    --projector, which was not given."""
+    doc = patterns.pattern_set(64, 48).to_dict()
+    with pytest.raises(CaptureError, match=r"--step 2: .*patterns.json says the sequence was made with step 1; "
+                                           r"leave --step out"):
+        capture.resolve_pattern_set(_with(tmp_path / "pose", doc), step=2)
+    assert capture.resolve_pattern_set(tmp_path / "pose", step=1) == patterns.pattern_set(64, 48)

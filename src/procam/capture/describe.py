@@ -45,6 +45,9 @@ def resolve_pattern_set(folder, projector=None, order=None, step=None):
         raise CaptureError(f"--projector {projector[0]}x{projector[1]}: {where} says the sequence was made for a "
                            f"{stated[0]}x{stated[1]} projector; leave --projector out (or, if that is wrong, correct "
                            "its width and height)")
+    if step is not None and meta is not None and type(meta.get("step")) is int and step != meta["step"]:
+        raise CaptureError(f"--step {step}: {where} says the sequence was made with step {meta['step']}; leave --step "
+                           "out (or, if that is wrong, correct its step)")
     family = patterns.family_of(meta)
     if family != "gray":
         if order is not None or step is not None:
