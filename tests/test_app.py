@@ -415,6 +415,7 @@ def test_procam_app_says_who_can_reach_it():
         except OSError:  # no IPv4 route at all
             pass
     assert app.address("::")[0] == "[::1]" and app.address("::")[2]
+    assert app.address("0")[::2] == ("127.0.0.1", True)  # the socket's short form of 0.0.0.0 (the URL was http://0:)
     name, hosts, reachable = app.address("192.168.7.9")
     assert name == "192.168.7.9" and "192.168.7.9" in hosts and reachable
     assert app.address("fe80::1")[:1] == ("[fe80::1]",) and "[fe80::1]" in app.address("fe80::1")[1]

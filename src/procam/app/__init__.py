@@ -66,6 +66,7 @@ def listen(host: str, port: int) -> socket.socket:
             raise ProcamError(f"--host {host}: not an address of this machine; give one of its addresses, e.g. "
                               "127.0.0.1 (this machine only) or 0.0.0.0 (every network)") from None
         raise ProcamError(f"--host {host} --port {port}: cannot listen there ({e.strerror})") from None
+    sock.listen(128)  # a browser that connects as soon as the address is printed waits in the queue, not refused
     return sock
 
 
@@ -75,14 +76,16 @@ def address(host: str) -> tuple[str, tuple[str, ...], bool]:
     wildcard (``0.0.0.0``, ``::``) every network, the URL then names the loopback address of its family."""
     import ipaddress
 
-    try:
-        ip = ipaddress.ip_address(host)
-    except ValueError:
+    try:  # a name or a short form ("0") as the socket reads it
+        ip = ipaddress.ip_address(socket.getaddrinfo(host, None, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+                                  [0][4][0].split("%")[0])
+    except (OSError, UnicodeError, ValueError, IndexError):
         ip = None
     if ip is not None and ip.is_unspecified:  # the names other machines reach this one by
         return ("127.0.0.1" if ip.version == 4 else "[::1]"), LOCAL_HOSTS + _own_names(), True
-    name = f"[{ip.compressed}]" if ip is not None and ip.version == 6 else host
-    local = host == "localhost" or (ip is not None and ip.is_loopback)
+    literal = host.strip("[]").split("%")[0] == (ip.compressed if ip is not None else None) or host == "localhost"
+    name = host if not literal or ip.version == 4 else f"[{ip.compressed}]"
+    local = ip is not None and ip.is_loopback
     return name, tuple(dict.fromkeys(LOCAL_HOSTS + (name.lower(),))), not local
 
 
