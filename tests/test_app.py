@@ -468,6 +468,31 @@ def test_a_hand_edited_project_state_is_named_not_an_internal_error(tmp_path, st
     assert "procam-app.json" in str(e.value) and "\n" not in str(e.value)
 
 
+def test_one_app_per_project_folder(tmp_path):
+    """Two apps on one folder both wrote its state file; a second is now refused while the first runs, and a lock
+    left by a process that no longer runs is taken over."""
+    import subprocess
+    import sys
+
+    from procam.app.project import LOCK, Project
+    from procam.errors import ProcamError
+
+    first = Project(tmp_path / "p")
+    first.hold()
+    lock = tmp_path / "p" / LOCK
+    assert lock.read_text() == str(os.getpid())
+    with pytest.raises(ProcamError, match=f"another procam app \\(process {os.getpid()}\\) has this project open"):
+        Project(tmp_path / "p").hold()
+    first.release()
+    assert not lock.exists()
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    lock.write_text(gone.stdout.strip())  # a process that has ended
+    second = Project(tmp_path / "p")
+    second.hold()
+    assert lock.read_text() == str(os.getpid())
+    second.release()
+
+
 def test_procam_app_serves_its_page_and_stops_on_ctrl_c(tmp_path):
     """As a user starts it: the printed address (with its token) answers, one without the token is refused, Ctrl+C
     stops it with exit code 0 and says where the project is."""
@@ -505,6 +530,7 @@ def test_procam_app_serves_its_page_and_stops_on_ctrl_c(tmp_path):
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert f"stopped; {tmp_path / 'p'} keeps everything" in out
+    assert not (tmp_path / "p" / ".procam-app.lock").exists()  # the project given back
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 from ..errors import ProcamError
@@ -52,6 +53,38 @@ class Project:
             self._load()
         else:
             self.save()  # the folder is the app's from now on: reopened, it is recognised
+
+    def hold(self) -> None:
+        """Take the project for this process (``.procam-app.lock`` holds its id): a second ``procam app`` on the
+        same folder would write the same state file.  A lock whose process no longer runs is taken over; one of a
+        running process is a one-line :class:`ProcamError`.  :meth:`release` gives it back."""
+        lock = self.root / LOCK
+        for _ in range(3):
+            try:
+                fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                try:
+                    pid = int(lock.read_text().strip() or 0)
+                except (OSError, ValueError):
+                    pid = 0
+                if pid and _running(pid):
+                    raise ProcamError(f"{self.root}: another procam app (process {pid}) has this project open; stop "
+                                      f"it (Ctrl+C there), or give another folder (the lock: {lock})") from None
+                lock.unlink(missing_ok=True)  # the lock of a process that no longer runs
+                continue
+            with os.fdopen(fd, "w") as f:
+                f.write(str(os.getpid()))
+            return
+        raise ProcamError(f"{lock}: cannot take the project's lock; remove the file if no procam app runs on it")
+
+    def release(self) -> None:
+        """Give back the lock :meth:`hold` took (only this process's)."""
+        lock = self.root / LOCK
+        try:
+            if lock.read_text().strip() == str(os.getpid()):
+                lock.unlink()
+        except OSError:
+            pass
 
     def file(self, key: str) -> Path:
         """The project file of ``key`` (:data:`FILES`)."""
@@ -147,3 +180,20 @@ def _checked_board(cols, rows, square) -> dict:
         raise ProcamError(f"board square: give the square's side as a number (e.g. 24 for mm), got {square!r}")
     Board(cols, rows, float(square))
     return {"cols": cols, "rows": rows, "square": float(square)}
+
+
+#: The hidden file that says which process has the project open (:meth:`Project.hold`).
+LOCK = ".procam-app.lock"
+
+
+def _running(pid: int) -> bool:
+    """Does process ``pid`` run (on Windows, where a signal 0 is Ctrl+C, every lock counts as held)?"""
+    if os.name == "nt":
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

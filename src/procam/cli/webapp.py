@@ -49,6 +49,7 @@ def app_cmd(
         token = procam_app.new_token()
         asgi = procam_app.make(project, virtual=virtual, token=token, camera=camera, display=display, seed=seed,
                                hosts=hosts)
+        asgi.state.procam.project.hold()  # one app per project folder: a second one would write the same state
     except BaseException:
         sock.close()
         raise
@@ -68,4 +69,5 @@ def app_cmd(
         pass
     finally:
         procam_app.shutdown(asgi)  # a running capture is cancelled, and removes its partial folder
+        asgi.state.procam.project.release()
     say(f"stopped; {project} keeps everything (procam app {project} resumes)")
