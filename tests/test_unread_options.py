@@ -89,6 +89,21 @@ def test_a_real_camera_refuses_the_settings_it_does_not_read(tmp_path, command, 
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command, camera, words", [
+    (command, *case) for command in (["capture", "POSE"], ["world-check", "c.json", "--board", "10x6"],
+                                     ["advise", "--board", "10x6"], ["app", "p", "--no-browser"])
+    for case in (("folder:NOPE", "no such folder; give the folder your camera software"),
+                 ("genicam:NOPE/producer.cti", "no such GenTL producer (.cti) file"))
+    if not (command[0] == "advise" and case[0].startswith("folder:"))])  # advise refuses a folder camera itself
+def test_a_camera_that_names_a_missing_folder_or_producer_is_refused_at_once(tmp_path, command, camera, words):
+    """The app started on a folder camera whose folder does not exist, and said so only when a capture began."""
+    camera = camera.replace("NOPE", str(tmp_path / "nope"))
+    args = [tmp_path / "pose" if a == "POSE" else tmp_path / a if a in ("c.json", "p") else a for a in command]
+    code, _, err = run_cli([*args, "--camera", camera])
+    assert code == 2 and err.startswith(f"error: --camera {camera}: {words}") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("command, extra", [("world-check", ["c.json", "--board", "10x6"]), ("app", ["p", "--no-browser"])])
 def test_the_simulators_camera_comes_with_virtual(tmp_path, command, extra):
     """--camera virtual without --virtual: the simulated camera without its simulated projector."""

@@ -186,7 +186,8 @@ CameraSizeOpt = Annotated[Optional[str], typer.Option(
 DisplayOpt = Annotated[Optional[int], typer.Option(
     "--display", help="The projector's display (default: the one that is not the primary; procam capture "
     "--list-devices lists them).")]
-SeedOpt = Annotated[int, typer.Option("--seed", help="The simulator's noise seed (--virtual, --camera virtual): "
+SeedOpt = Annotated[int, typer.Option("--seed", help="The simulator's noise seed (with --virtual; capture, advise: "
+                                      "also --camera virtual): "
                                       "the same seed gives the same frames.")]
 LiveJsonOpt = Annotated[bool, typer.Option(
     "--json", help="Live advice: one JSON line per frame on stdout instead of the preview window.")]
@@ -262,8 +263,7 @@ def real_camera(camera: str, *, virtual_flag: str = "--virtual") -> str:
     kind, _ = parse_camera_spec(camera)
     if kind == "virtual":
         fail(f"--camera {camera}: the simulator's camera comes with its projector; use {virtual_flag} instead")
-    refuse_unread_camera(kind)
-    return kind
+    return refuse_unread_camera(camera)
 
 
 def virtual_gain(gain) -> None:
@@ -272,11 +272,20 @@ def virtual_gain(gain) -> None:
            unit=" (the simulator's camera multiplies the light by it)")
 
 
-def refuse_unread_camera(kind: str) -> None:
-    """Refuse the device options a camera of ``kind`` would not read (a folder camera's exposure, gain and size; a
-    GenICam camera's ``--camera-size``)."""
+def refuse_unread_camera(camera: str) -> str:
+    """The kind of the ``--camera`` spec, the device options it would not read refused (a folder camera's exposure,
+    gain and size; a GenICam camera's ``--camera-size``) and the folder or producer file it names checked, before
+    any work; returns the kind (:func:`procam.acquire.cameras.parse_camera_spec`)."""
+    from ..acquire.cameras import parse_camera_spec
+
+    kind, arg = parse_camera_spec(camera)
     if kind in _CAMERA_IGNORES:
         refuse(*_CAMERA_IGNORES[kind])
+    if kind == "folder" and not Path(arg).expanduser().is_dir():
+        fail(f"--camera {camera}: no such folder; give the folder your camera software saves into (make it first)")
+    if kind == "genicam" and not Path(arg.partition("#")[0]).expanduser().is_file():
+        fail(f"--camera {camera}: no such GenTL producer (.cti) file; give the path of the camera vendor's producer")
+    return kind
 
 
 def seed_applies(where: str) -> str:

@@ -150,7 +150,7 @@ def _camera_opener(camera, b, exposure, gain, camera_size, virtual_pose, seed, s
         refuse(("camera_size", "exposure", "gain"), SIMULATED_CAMERA)
     else:
         refuse(("seed",), seed_applies("--camera virtual"))
-    refuse_unread_camera(kind)
+    refuse_unread_camera(camera)
 
     def open_(default_pose, **changes):
         if kind != "virtual":

@@ -118,7 +118,6 @@ def capture_cmd(
     """Show the pattern sequence full screen on the projector (Gray codes, or a phase family with --family,
     docs/patterns.md), grab and check one camera frame per pattern, and write a pose folder that decode/calibrate
     read as is (images, patterns.json, capture.json)."""
-    from ..acquire.cameras import parse_camera_spec
     from ..acquire.orchestrate import Devices, capture_session
     from ..acquire.session import CaptureOptions
 
@@ -153,8 +152,7 @@ def capture_cmd(
     live = _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual)
     if virtual and camera not in ("opencv:0", "virtual"):
         fail(f"--virtual uses the simulator as the camera; leave out --camera {camera}")
-    kind, _ = parse_camera_spec("virtual" if virtual else camera)
-    _refuse_unused(kind, virtual, rig_spec is not None)
+    kind = _refuse_unused("virtual" if virtual else camera, virtual, rig_spec is not None)
     if kind == "virtual":
         virtual_gain(gain)
     if kind == "virtual" and step != 1:
@@ -175,19 +173,22 @@ def capture_cmd(
         capture_session(out_dir, poses, rig, options, board=brd, live=live, hooks=printer)
 
 
-def _refuse_unused(kind: str, virtual: bool, rig: bool) -> None:
+def _refuse_unused(camera: str, virtual: bool, rig: bool) -> str:
     """Refuse the device options the devices of this capture would ignore: the simulator (``--virtual``, ``--camera
     virtual``) has no exposure, file timeout or (but for a virtual rig's camera) resolution, a virtual projector no
-    display, a real camera no seed."""
+    display, a real camera no seed (:func:`refuse_unread_camera`: the real cameras' own); returns the camera's kind."""
+    from ..acquire.cameras import parse_camera_spec
+
+    kind, _ = parse_camera_spec(camera)
     if kind == "virtual":
         refuse(("exposure",) if rig else ("camera_size", "exposure"), SIMULATED_CAMERA)
     if kind != "folder":
         refuse(("timeout",), "is how long a folder camera (--camera folder:PATH) waits for each file")
-    refuse_unread_camera(kind)
     if kind != "virtual":
         refuse(("seed",), seed_applies("--virtual or --camera virtual"))
     if virtual:
         refuse(("display",), SIMULATED_PROJECTOR)
+    return refuse_unread_camera(camera)
 
 
 def _live_advice(advise, auto, json_lines, calibration, square, target, max_frames, board, virtual):
