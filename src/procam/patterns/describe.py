@@ -243,9 +243,7 @@ def gray_from_dict(meta: dict, width=None, height=None, order=None, step=None) -
     step = _number(meta.get("step", 1) if step is None else step, "step", 1, 64, integer=True)
     ps = pattern_set(w, h, order, step, bit_order_of(meta))
     if not overridden:  # what the file states beyond its size, order and step must be that sequence's
-        import json
-
-        derived = json.loads(json.dumps(ps.to_dict()))
+        derived = ps.to_dict()
         for key in _DERIVED:
             if key in meta and meta[key] != derived[key]:
                 raise ValueError(f"{key} {_short(meta[key])} is not that of the {w}x{h} sequence of order {order}, step "
