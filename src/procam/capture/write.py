@@ -58,11 +58,15 @@ def remove_stale(out_dir, keep, prefix: str = "") -> list[Path]:
     """
     out = Path(out_dir)
     keep = {Path(p).name for p in keep}
+    return folders.remove_listed(out, sorted(n for n in _own_frames(out, prefix) if n not in keep))
+
+
+def _own_frames(out: Path, prefix: str) -> set[str]:
+    """The frames of a sequence of ``prefix`` the folder's manifest lists as procam's (role ``"frame"``; names of
+    ``prefix``, decimal digits and ``.png``): what a new sequence of that prefix may replace or remove."""
     pat = re.compile(re.escape(prefix) + r"\d+\.png")
     man = _files.read_manifest(out)
-    listed = {n for n, r in man["files"].items() if r == "frame"} if man is not None else set()
-    stale = sorted(n for n in listed if pat.fullmatch(n) and n not in keep)
-    return folders.remove_listed(out, stale)
+    return {n for n, r in man["files"].items() if r == "frame" and pat.fullmatch(n)} if man is not None else set()
 
 
 def sequence_names(ps: patterns.PatternSet, prefix: str = "") -> list[str]:
@@ -116,12 +120,8 @@ def _other_sequence(out: Path, names, prefix: str) -> list[str]:
         return []  # no sequence's description (check_overwrite has judged the file itself)
     if not isinstance(listed, list):
         return []
-    man = _files.read_manifest(out)
-    frames = {n for n, r in man["files"].items() if r == "frame"} if man is not None else set()
-    stale = re.compile(re.escape(prefix) + r"\d+\.png")
-    new = set(names)
-    return [n for n in listed if isinstance(n, str) and n not in new and (out / n).is_file()
-            and not (n in frames and stale.fullmatch(n))]
+    replaced = set(names) | _own_frames(out, prefix)
+    return [n for n in listed if isinstance(n, str) and n not in replaced and (out / n).is_file()]
 
 
 class SequenceWriter:

@@ -258,12 +258,10 @@ def real_camera(camera: str, *, virtual_flag: str = "--virtual") -> str:
     """The kind (:func:`procam.acquire.cameras.parse_camera_spec`) of a real ``--camera``, the spec checked and the
     device options that kind would not read refused; ``--camera virtual`` names ``virtual_flag`` (the simulator's
     camera comes with the simulated rig)."""
-    from ..acquire.cameras import parse_camera_spec
-
-    kind, _ = parse_camera_spec(camera)
+    kind = refuse_unread_camera(camera)
     if kind == "virtual":
         fail(f"--camera {camera}: the simulator's camera comes with its projector; use {virtual_flag} instead")
-    return refuse_unread_camera(camera)
+    return kind
 
 
 def virtual_gain(gain) -> None:

@@ -86,18 +86,18 @@ def reconstruct_cmd(
     doubt = distrust(calib, calibration)
     if doubt:
         warn(doubt)
-        misfit = misfit or doubt
+    untrusted = ("most decoded pixels do not fit the calibration" if misfit
+                 else f"the calibration's verdict is {calib.verdict}" if doubt else "")
     io.write_ply(out, cloud.points, cloud.colours,
                  comments=[PLY_COMMENT, "procam reconstruct", f"calibration {Path(calibration).name}",
                            f"pose {Path(pose_dir).name}", "frame: camera (x right, y down, z forward), units of the calibration's T"]
-                 + ([f"NOT TRUSTED: {misfit}"] if misfit else []))
+                 + ([f"NOT TRUSTED: {misfit or doubt}"] if untrusted else []))
     t = Table(title=plain(f"{Path(pose_dir).name}: point cloud"))
     t.add_column("quantity")
     t.add_column("value", justify="right")
     t.add_row("points", f"{len(cloud)}")
-    if misfit:
-        t.add_row("verdict", "NOT TRUSTED: " + ("the calibration's verdict is " + calib.verdict if misfit == doubt
-                                               else "the calibration does not fit this capture"))
+    if untrusted:
+        t.add_row("verdict", f"NOT TRUSTED: {untrusted}")
     for line in accounted:
         name, val = line.split(": ", 1)
         t.add_row(name, val)
@@ -118,7 +118,6 @@ def reconstruct_cmd(
     say(f"wrote {out}")
     if residuals is not None:
         say(f"wrote {residuals} (board distance to its plane, ±3 robust sigma: blue below, red above)")
-    if misfit:
-        fail(f"the point cloud in {out} must not be trusted: " + (f"the calibration's verdict is {calib.verdict}"
-             if misfit == doubt else "most decoded pixels do not fit the calibration") + " (see the warning above)",
-             code=3, label="not trusted")
+    if untrusted:
+        fail(f"the point cloud in {out} must not be trusted: {untrusted} (see the warning above)", code=3,
+             label="not trusted")

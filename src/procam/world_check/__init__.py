@@ -358,13 +358,14 @@ def world_check(calib, board: Board, show_and_grab: Callable[[np.ndarray], np.nd
     shown = int(inside.sum())
     need = max(4, int(np.ceil(options.min_found * shown)))
     reasons = []
-    seen = count_spots(smooth, floor, sigma_cam) if shown >= 4 and ok.sum() < need else 0
-    if shown >= 4 and ok.sum() < need and need <= seen <= 1.25 * shown + 2:  # more: changes that are not the spots
+    few = shown < 4 or ok.sum() < need
+    seen = count_spots(smooth, floor, sigma_cam) if few and shown >= 4 else 0
+    if few and need <= seen <= 1.25 * shown + 2:  # more than that: changes that are not the spots
         verdict = "off"  # the camera saw the spots, elsewhere: not a dark board, a calibration of another rig
         reasons.append(f"only {int(ok.sum())} of {shown} spots shown on the board were found within half a square of "
                        f"where the calibration puts them, yet the camera sees {seen} spots elsewhere: the calibration "
                        "does not describe this camera and projector (another rig, a moved projector, R or T)")
-    elif shown < 4 or ok.sum() < need:
+    elif few:
         verdict = "inconclusive"
         reasons.append(f"only {int(ok.sum())} of {shown} spots shown on the board were found ({n} targets); light "
                        "the board better, or bring all of it into the projector's image")
