@@ -10,6 +10,10 @@ to is filled again with a later pose instead of a new one), and hands them over 
 folder's, images of different sizes or bit depths, a file that cannot be read) is read again by
 :func:`procam.io.images.read_images` itself, so errors are the same, word for word.
 
+Given a :class:`procam.io.child_reader.ChildReader` (``child=``: the command line forks one as it starts), the
+images are read by that child process into shared memory instead of by threads here: the same stacks, read
+without taking this process's interpreter lock from the work beside them.
+
 >>> from procam import stream, capture
 >>> with stream.Prefetcher(["pose1", "pose2"]) as pf:            # doctest: +SKIP
 ...     caps = [capture.load_capture(f, reader=pf.read) for f in ["pose1", "pose2"]]
@@ -41,6 +45,7 @@ class _Pose:
         self.left = len(self.files)
         self.done = threading.Event()
         self.lock = threading.Lock()
+        self.ticket = None  # read by the child process: its ticket (ChildReader.wait)
         if not self.files:
             self.done.set()
 
@@ -90,22 +95,26 @@ class Prefetcher:
     ahead : poses read ahead of the one handed out last (1: the next pose is read while this one is processed;
         the first pose is read from the start).
     gray : as :func:`procam.io.images.read_images`.
+    child : a :class:`procam.io.child_reader.ChildReader` that reads the images instead of threads (its own
+        threads), or None; the Prefetcher closes it.
 
-    Use as a context manager (the threads stop on exit); :meth:`read` is the reader for
+    Use as a context manager (the threads, or the child, stop on exit); :meth:`read` is the reader for
     :func:`procam.capture.load_capture`.
     """
 
-    def __init__(self, folders, threads: int | None = None, ahead: int = 1, gray: bool = True):
+    def __init__(self, folders, threads: int | None = None, ahead: int = 1, gray: bool = True, child=None):
         self.folders = [Path(f) for f in folders]
         self.gray = gray
         self.ahead = max(1, int(ahead))
         n = threads if threads is not None else min(2, os.cpu_count() or 1)
-        self._pool = ThreadPoolExecutor(max(1, n), thread_name_prefix="procam-read")
+        self.child = child
+        self._shared: dict[int, int] = {}  # id() of a stack in shared memory -> the child's buffer id
+        self._pool = None if child is not None else ThreadPoolExecutor(max(1, n), thread_name_prefix="procam-read")
         self._poses: dict[tuple, _Pose] = {}
         self._next = 0          # next folder to start reading
         self._handed = 0        # poses handed out by read()
         self._closed = False
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()  # reentrant: a pose given to the child takes its spare stack under it
         self._handed_stacks = []
         self._fill()
 
@@ -122,8 +131,38 @@ class Prefetcher:
                     continue
                 pose = _Pose(files, self._spare)
                 self._poses[tuple(str(f) for f in files)] = pose
+                if self.child is not None:
+                    self._to_child(pose)
+                    continue
                 for i, f in enumerate(pose.files):
                     self._pool.submit(self._load, pose, i, f)
+
+    def _to_child(self, pose: _Pose):
+        """Have the child process read ``pose`` into a stack in shared memory (a spare one, else a new one), its
+        frame size and type from the first file's PNG header; without a header (another format, a file that cannot
+        be read) it is not read ahead, and :meth:`read` reads it (the lock held)."""
+        head = _images.png_header(pose.files[0]) if pose.files else None
+        if head is None:
+            pose.failed = True
+            pose.done.set()
+            return
+        shape, dtype = (len(pose.files),) + tuple(head[:2]), np.dtype(np.uint8 if head[2] == 1 else np.uint16)
+        stack = pose.spare(shape, dtype)
+        buffer = self._shared.get(id(stack)) if stack is not None else None
+        if buffer is None:
+            made = self.child.new_buffer(int(np.prod(shape)) * dtype.itemsize)
+            if made is None:
+                pose.failed = True
+                pose.done.set()
+                return
+            mem, buffer = made
+            stack = np.frombuffer(mem, dtype, int(np.prod(shape))).reshape(shape)
+        pose.stack = stack
+        self._shared[id(stack)] = buffer
+        pose.ticket = self.child.submit(pose.files, buffer, shape, dtype.name, self.gray)
+        if pose.ticket is None:  # the child is gone, or the command too long: read() reads the pose
+            pose.failed = True
+            pose.done.set()
 
     def _spare(self, shape, dtype):
         """A stack handed out before that nothing refers to any more, to fill with the next pose: its pages are
@@ -168,12 +207,28 @@ class Prefetcher:
             self._handed += 1
         self._fill()
         if pose is not None:
+            if pose.ticket is not None:
+                pose.failed = not self.child.wait(pose.ticket)
+                pose.done.set()
             pose.done.wait()
             if not pose.failed and pose.stack is not None:
                 with self._lock:  # kept for reuse: the last few only (others are the caller's to free)
-                    self._handed_stacks = [*self._handed_stacks[-self.ahead:], pose.stack]
+                    kept = [*self._handed_stacks[-self.ahead:], pose.stack]
+                    for old in self._handed_stacks[:-self.ahead]:
+                        self._unshare(old)
+                    self._handed_stacks = kept
                 return pose.stack
+            if pose.stack is not None:
+                with self._lock:
+                    self._unshare(pose.stack)
         return _images.read_images(files, self.gray)
+
+    def _unshare(self, stack):
+        """The child process forgets ``stack``'s shared buffer (never filled again: the caller keeps it, or frees
+        it); nothing for a stack of the reader threads (the lock held)."""
+        buffer = self._shared.pop(id(stack), None)
+        if buffer is not None and self.child is not None:
+            self.child.forget(buffer)
 
     def close(self):
         """Stop reading (pending images are skipped) and wait for the threads."""
@@ -181,7 +236,11 @@ class Prefetcher:
             self._closed = True
             self._poses.clear()
             self._handed_stacks = []
-        self._pool.shutdown(wait=True, cancel_futures=True)
+            self._shared.clear()
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+        if self.child is not None:
+            self.child.close()
 
     def __enter__(self):
         return self

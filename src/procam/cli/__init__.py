@@ -99,9 +99,16 @@ def _start_reading(command: str, args: list[str]) -> None:
         return
     folders = [a for a in args if not a.startswith("-") and os.path.isdir(a)]
     if folders:
+        child = None
+        if command == "calibrate" and len(folders) > 1:
+            # several poses: a child process reads them (procam.io.child_reader), forked now, while this process
+            # runs one thread, before numpy and OpenCV start theirs
+            from ..io.child_reader import ChildReader
+
+            child = ChildReader.start()
         from ..stream import Prefetcher
 
-        _EARLY["reader"] = Prefetcher(folders if command == "calibrate" else folders[:1])
+        _EARLY["reader"] = Prefetcher(folders if command == "calibrate" else folders[:1], child=child)
 
 
 def take_reader(poses):
