@@ -392,6 +392,10 @@ def test_procam_app_listens_before_it_makes_the_project(tmp_path):
         code, out, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser", "--host", host])
         assert code == 2 and err.startswith(f"error: --host {host}: not an address") and err.count("\n") == 1, err
         assert "http://" not in out and not (tmp_path / "p").exists()
+    # an IPv6 address is quoted where the message names it (it read "--host 2001:db8::7:" before)
+    code, out, err = run_cli(["app", tmp_path / "p", "--virtual", "--no-browser", "--host", "2001:db8::7"])
+    assert code == 2 and err.startswith("error: --host '2001:db8::7': not an address") and err.count("\n") == 1, err
+    assert not (tmp_path / "p").exists()
 
 
 def test_procam_app_says_who_can_reach_it():

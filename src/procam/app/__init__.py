@@ -38,6 +38,12 @@ def new_token() -> str:
     return secrets.token_urlsafe(24)
 
 
+def host_option(host: str) -> str:
+    """``--host HOST`` as a message names it: an IPv6 address quoted (``--host '::'``, not ``--host :::`` before the
+    colon that follows it)."""
+    return f"--host '{host}'" if ":" in host else f"--host {host}"
+
+
 def listen(host: str, port: int) -> socket.socket:
     """A TCP socket bound to ``host:port`` (port 0: a free one) for :func:`uvicorn_server` ``.run(sockets=[it])``,
     bound before anything is written, so a port in use or an address of another machine is a one-line
@@ -48,7 +54,7 @@ def listen(host: str, port: int) -> socket.socket:
         family, _, _, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
                                                       flags=socket.AI_PASSIVE)[0]
     except (socket.gaierror, UnicodeError) as e:
-        raise ProcamError(f"--host {host}: not an address this machine can listen on ({e}); give one of its "
+        raise ProcamError(f"{host_option(host)}: not an address this machine can listen on ({e}); give one of its "
                           "addresses, e.g. 127.0.0.1 (this machine only) or 0.0.0.0 (every network)") from None
     sock = socket.socket(family, socket.SOCK_STREAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds: a restart reuses the port
@@ -63,9 +69,9 @@ def listen(host: str, port: int) -> socket.socket:
             raise ProcamError(f"--port {port}: not allowed for this user (ports below 1024 need administrator "
                               "rights); choose 1024 to 65535, or leave --port out for a free one") from None
         if e.errno == errno.EADDRNOTAVAIL:
-            raise ProcamError(f"--host {host}: not an address of this machine; give one of its addresses, e.g. "
+            raise ProcamError(f"{host_option(host)}: not an address of this machine; give one of its addresses, e.g. "
                               "127.0.0.1 (this machine only) or 0.0.0.0 (every network)") from None
-        raise ProcamError(f"--host {host} --port {port}: cannot listen there ({e.strerror})") from None
+        raise ProcamError(f"{host_option(host)} --port {port}: cannot listen there ({e.strerror})") from None
     sock.listen(128)  # a browser that connects as soon as the address is printed waits in the queue, not refused
     return sock
 

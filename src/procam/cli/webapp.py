@@ -54,7 +54,7 @@ def app_cmd(
         sock.close()
         raise
     if reachable:
-        warn(f"--host {host}: the app is reachable from other machines (the token still guards it)")
+        warn(f"{procam_app.host_option(host)}: the app is reachable from other machines (the token still guards it)")
     url = f"http://{name}:{sock.getsockname()[1]}/?token={token}"
     say(f"procam app on {project.resolve()}: {url}")
     say("Ctrl+C stops it")
