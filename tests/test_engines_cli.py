@@ -187,6 +187,17 @@ def test_projector_view_refuses_another_captures_maps(files, tmp_path):
     code, out, err = run_cli(export + ["--maps", tmp_path / "old.npz"])
     assert code == 0 and "does not say which capture it was decoded from" in out, err
     assert io.load_decoded_maps(tmp_path / "other.npz")["source"].startswith("sha256:")
+    import dataclasses
+
+    from procam import capture
+
+    nothing = np.zeros_like(maps.valid_col)  # this pose's maps, none of their pixels decoded: the maps are to blame
+    io.save_decoded_maps(tmp_path / "none.npz", dataclasses.replace(maps, valid_col=nothing, valid_row=nothing),
+                         capture.load_capture(pose).fingerprint)
+    (tmp_path / "v.png").unlink()
+    code, out, err = run_cli(export + ["--maps", tmp_path / "none.npz"])
+    assert code == 2 and err.startswith(f"error: --maps {tmp_path / 'none.npz'}: its maps mark no pixel decoded"), err
+    assert err.count("\n") == 1 and not (tmp_path / "v.png").exists()
     from procam.calibration import Device
 
     small = calib.replace(projector=Device(calib.projector.K, (1280, 720), calib.projector.distortion))

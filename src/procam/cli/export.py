@@ -111,6 +111,9 @@ def _projector_view(calib, out, pose, maps_file, projector, order, step):
         col, row, valid = d.col, d.row, d.valid_col & d.valid_row
     view = projector_view(col, row, valid, cap.picture(), (ps.width, ps.height))
     if not view.mask.any():
+        if maps_file is not None:  # the maps say so, not the pose
+            fail(f"--maps {maps_file}: its maps mark no pixel decoded; decode the pose again (procam decode {pose} -o "
+                 f"{maps_file.name} --png decoded.png shows what decodes)")
         fail(f"{pose}: nothing was decoded; check the decode picture (procam decode --png)")
     written = io.engines.save_projector_view(view, out)
     say(f"wrote {written[0]} (the camera's view in {ps.width}x{ps.height} projector pixels) and {written[1]} (the "
