@@ -70,6 +70,26 @@ def run_cli(args):
     return res.exit_code, out, err
 
 
+@pytest.fixture
+def forked_reader():
+    """A :class:`procam.io.child_reader.ChildReader`, forked beside pytest's threads (the command line forks only
+    while it runs one thread; on Python 3.12 and later a fork beside threads warns, which ``when_threaded`` accepts
+    here); closed after the test. Skipped off Linux."""
+    import sys
+    import warnings
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the child reader forks: Linux only")
+    from procam.io.child_reader import ChildReader
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        reader = ChildReader.start(when_threaded=True)
+    assert reader is not None
+    yield reader
+    reader.close()
+
+
 @pytest.fixture(scope="session")
 def paper_capture(tmp_path_factory):
     """One rendered capture (paper preset, recommended pose, default noise, seed 1), written to a folder.

@@ -1,5 +1,6 @@
-"""A forked child process reads the poses of a multi-pose calibrate (issue 35): the same stacks as read_images,
-the same errors, its shared buffers reused, and the child reaped on every way out."""
+"""A forked child process reads the poses of a multi-pose calibrate (issue 35): the same stacks as read_images
+(and the same errors: tests/test_fast_paths.py reads its damaged poses both ways), its shared buffers reused, and
+the child reaped on every way out."""
 
 from __future__ import annotations
 
@@ -8,7 +9,6 @@ import signal
 import subprocess
 import sys
 import threading
-import warnings
 
 import numpy as np
 import pytest
@@ -31,17 +31,8 @@ def _poses(tmp_path, n=3, dtype=np.uint8):
 
 
 @pytest.fixture
-def child():
-    """A child reader, forked beside pytest's threads (the command line forks only while it runs one thread; on
-    Python 3.12 and later a fork beside threads warns, which is what ``when_threaded`` accepts here)."""
-    from procam.io.child_reader import ChildReader
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        reader = ChildReader.start(when_threaded=True)
-    assert reader is not None
-    yield reader
-    reader.close()
+def child(forked_reader):
+    return forked_reader
 
 
 def _files(folder):
@@ -106,31 +97,6 @@ def test_stacks_no_one_refers_to_are_filled_again(tmp_path, child):
             del stack
         np.testing.assert_array_equal(kept, first)
         assert child._buffers <= 3, child._buffers
-
-
-@pytest.mark.parametrize("damage", ["corrupt", "size", "depth"])
-def test_the_errors_are_read_images_errors(tmp_path, child, damage):
-    import cv2
-
-    from procam.errors import CaptureError
-    from procam.io import images
-    from procam.stream import Prefetcher
-
-    folders = _poses(tmp_path, 2)
-    victim = _files(folders[1])[7]
-    if damage == "corrupt":
-        victim.write_bytes(b"\x89PNG\r\n\x1a\nnot a png at all")
-    elif damage == "size":
-        cv2.imwrite(str(victim), np.zeros((40, 64), np.uint8))
-    else:
-        cv2.imwrite(str(victim), np.zeros((48, 64), np.uint16))
-    with pytest.raises(CaptureError) as ref:
-        images.read_images(_files(folders[1]))
-    with Prefetcher(folders, child=child) as pf:
-        np.testing.assert_array_equal(pf.read(_files(folders[0])), images.read_images(_files(folders[0])))
-        with pytest.raises(CaptureError) as got:
-            pf.read(_files(folders[1]))
-    assert str(got.value) == str(ref.value)
 
 
 def test_a_child_that_dies_leaves_the_reading_here(tmp_path, child):

@@ -262,8 +262,11 @@ def test_prefetcher_reads_other_files_itself_and_out_of_order(tmp_path):
         np.testing.assert_array_equal(pf.read(files[1]), _images.read_images(files[1]))
 
 
+@pytest.mark.parametrize("by", ["threads", "child"])
 @pytest.mark.parametrize("damage", ["corrupt", "size", "depth"])
-def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
+def test_prefetcher_errors_are_read_images_errors(tmp_path, damage, by, request):
+    """Read by threads or by the forked child (procam.io.child_reader), a pose with a frame that cannot be read, or
+    of another size or depth, raises read_images' own error."""
     import cv2
 
     from procam import stream
@@ -281,8 +284,10 @@ def test_prefetcher_errors_are_read_images_errors(tmp_path, damage):
         cv2.imwrite(str(victim), np.zeros((48, 64), np.uint16))
     with pytest.raises(CaptureError) as ref:
         _images.read_images(_files.list_images(folders[1]))
-    with stream.Prefetcher(folders) as pf:
-        pf.read(_files.list_images(folders[0]))
+    child = request.getfixturevalue("forked_reader") if by == "child" else None
+    with stream.Prefetcher(folders, child=child) as pf:
+        np.testing.assert_array_equal(pf.read(_files.list_images(folders[0])), _images.read_images(
+            _files.list_images(folders[0])))
         with pytest.raises(CaptureError) as got:
             pf.read(_files.list_images(folders[1]))
     assert str(got.value) == str(ref.value)
