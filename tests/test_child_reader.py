@@ -147,3 +147,21 @@ def test_the_command_line_forks_the_child_first_thing(tmp_path):
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "child.yaml").read_bytes() == (tmp_path / "threads.yaml").read_bytes()
+
+
+def test_a_pose_of_other_images_is_read_here(tmp_path, child):
+    """The child reads PNGs into stacks sized from their headers; a pose of other images (BMP here) is read by this
+    process, the same stack read_images gives, and the PNG poses around it still by the child."""
+    from conftest import camera_view_of_patterns, write_stack
+
+    from procam.io import images
+    from procam.stream import Prefetcher
+
+    folders = _poses(tmp_path, 2)
+    bmp = tmp_path / "bmp"
+    write_stack(bmp, camera_view_of_patterns(64, 48, seed=5), ext=".bmp")
+    order = [folders[0], bmp, folders[1]]
+    with Prefetcher(order, child=child) as pf:
+        for folder in order:
+            np.testing.assert_array_equal(pf.read(_files(folder)), images.read_images(_files(folder)))
+    assert child._tickets == 2  # the two PNG poses only
