@@ -134,8 +134,9 @@ def reconstruct(calib, maps, colour=None, *, use: str = "both", max_residual_px:
     if max_residual_px is not None:
         keep = out["residual_px"] <= float(max_residual_px)
     decoded = int(np.count_nonzero((vc & (use != "row")) | (vr & (use != "col"))))  # as triangulate_dense reads them
-    both_res = out["residual_px"][out["both"]]
-    if use != "both":  # one coordinate triangulates, yet both were decoded: their disagreement still tests the fit
+    if use == "both":
+        both_res = out["residual_px"][out["both"]]
+    else:  # one coordinate triangulates, yet both were decoded: their disagreement still tests the fit
         ys, xs = np.nonzero(vc & vr)
         step = max(1, len(xs) // 20000)  # a sample is enough for a median
         sample = np.column_stack([xs[::step], ys[::step]])

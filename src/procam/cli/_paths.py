@@ -91,7 +91,9 @@ def pose_sizes(calib, path, cam_size, proj_size):
 def distrust(calib, path) -> str:
     """Why the calibration file ``path`` must not be trusted (its verdict degenerate or failed: written with
     ``procam calibrate --force``), or ""; a command that uses it says so in its output and exits 3."""
-    if calib.verdict not in ("degenerate", "failed"):  # good, weak, or another tool's file (unknown: no verdict)
+    from ..verdict import LEVELS
+
+    if calib.trusted or calib.verdict not in LEVELS:  # good, weak, or another tool's file (no verdict of procam's)
         return ""
     why = "; ".join(calib.verdict_reasons) or "see its verdict_reasons"
     return (f"{path}: its verdict is {calib.verdict} ({why}); procam calibrate wrote it only because of --force: "

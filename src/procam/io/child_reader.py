@@ -247,7 +247,7 @@ def _fill(buf, cmd: dict, pool) -> bool:  # pragma: no cover - runs in the child
 
     def one(i: int) -> bool:
         slot = stack[i]
-        img = images.read_image(cmd["files"][i], gray, slot if dtype == np.uint8 and len(shape) == 3 else None)
+        img = images.read_image(cmd["files"][i], gray, slot)  # decoded into the slot where it can be (8-bit grey)
         if img is not slot:
             if img.shape != slot.shape or img.dtype != dtype:
                 return False

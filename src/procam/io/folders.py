@@ -39,8 +39,9 @@ def _legacy_files(folder: Path) -> set[str]:
         return set()
     if (folder / "capture.json").exists():
         return set()
-    frames = {str(f) for f in meta["files"] if plain_name(str(f))}  # procam's only with procam's mark: a user's
-    frames = {n for n in frames if not (folder / n).exists() or is_frame(folder / n)}  # camera frames can share names
+    # a listed frame is procam's only with procam's mark: a user's camera frames can share its name
+    frames = {str(f) for f in meta["files"]
+              if plain_name(str(f)) and (not (folder / str(f)).exists() or is_frame(folder / str(f)))}
     return frames | {"patterns.json", "truth.json"}
 
 
