@@ -381,7 +381,8 @@ print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]
 
 def test_version_imports_no_command_line_and_a_command_registers_only_itself():
     """`procam --version` answers before typer (and pydantic) are imported; `procam calibrate --help` builds only
-    the calibrate command and imports no pydantic, `procam --help` every command (fresh interpreters, the console-script entry point)."""
+    the calibrate command and imports no pydantic, nor does parsing a calibrate command line; `procam --help` builds
+    every command (fresh interpreters, the console-script entry point)."""
     import json
     import os
     import subprocess
@@ -414,6 +415,10 @@ print(json.dumps({"code": code, "typer": "typer" in sys.modules, "pydantic": "py
     out, rep = run("calibrate", "--help")
     assert rep["code"] in (0, None) and rep["commands"] == ["calibrate"] and "--board" in out
     assert not rep["pydantic"]  # typer 0.29 coerces a --help flag not given through pydantic (0.1 s to import)
+    # a command line is parsed without pydantic: typer 0.29's per-option TypeAdapters (pydantic's import and the
+    # adapters: 0.15-0.25 s of every command) are why pyproject caps typer below 0.29
+    out, rep = run("calibrate", "no-such-pose", "--board", "10x6", "--square", "-24", "-o", "c.json")
+    assert rep["code"] == 2 and rep["commands"] == ["calibrate"] and not rep["pydantic"], rep
     out, rep = run("--help")
     assert rep["code"] in (0, None) and rep["commands"] == sorted(COMMANDS.values()) and all(c in out for c in COMMANDS)
 

@@ -29,7 +29,8 @@ class _OneLineErrors(TyperGroup):
     def get_help_option(self, ctx):
         """The group's ``--help`` flag, off by default: typer 0.29 coerces a flag that is not given (None) through a
         pydantic adapter, importing pydantic (a tenth of a second) for ``procam CMD --help``, where nothing else
-        needs it."""
+        needs it (procam requires typer < 0.29 for that reason; this keeps ``--help`` fast where 0.29 is installed
+        all the same)."""
         opt = super().get_help_option(ctx)
         if opt is not None and opt.default is None:
             opt.default = False
