@@ -63,9 +63,13 @@ def test_isal_deflates_the_same_archive_with_its_own_streams(level):
         assert [(i.filename, zf.read(i)) for i in zf.infolist()] == [(n, bytes(d)) for n, d in members]
     if level == 2:
         assert len(one.getvalue()) <= 1.02 * len(reference)
+        numpys = io.BytesIO()  # a NumPy integer is a level too
+        assert zipwriter.write(numpys, members, np.int64(level), deflater="isal")
+        assert numpys.getvalue() == one.getvalue()
 
 
-@pytest.mark.parametrize("deflater, level", [("isal", 4), ("isal", -1), ("zlib", 10), ("gzip", 1), ("zlib", 1.0)])
+@pytest.mark.parametrize("deflater, level", [("isal", 4), ("isal", -1), ("zlib", 10), ("gzip", 1), ("zlib", 1.0),
+                                             ("zlib", True), ("zlib", "1")])
 def test_a_deflater_or_level_it_does_not_have_is_refused_before_writing(deflater, level):
     buf = io.BytesIO()
     with pytest.raises(ValueError, match="no deflater"):

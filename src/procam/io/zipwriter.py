@@ -18,6 +18,7 @@ is left to :mod:`zipfile` (:func:`write` says so by returning False).
 
 from __future__ import annotations
 
+import operator
 import os
 import struct
 import zlib
@@ -66,8 +67,13 @@ def write(f: BinaryIO, members: Sequence[tuple[str, object]], level: int, thread
     :data:`COUNT_LIMIT`): write those with :mod:`zipfile`.  Raises ValueError for a deflater that is not installed
     or a level it does not have."""
     lib = {"zlib": zlib, "isal": _isal}.get(deflater)
-    if lib is None or not (isinstance(level, int) and 0 <= level <= (9 if lib is zlib else 3)):
+    try:  # any integer (NumPy's too), not a bool or a float
+        good = not isinstance(level, bool) and 0 <= operator.index(level) <= (9 if lib is zlib else 3)
+    except TypeError:
+        good = False
+    if lib is None or not good:
         raise ValueError(f"no deflater {deflater!r} with level {level!r} (zlib: 0-9; isal, where installed: 0-3)")
+    level = operator.index(level)
     views = [(name, memoryview(data).cast("B")) for name, data in members]
     if len(views) >= COUNT_LIMIT or sum(v.nbytes + 2 * len(n) for n, v in views) * 1.05 + 1024 * (len(views) + 1) > LIMIT:
         return False
