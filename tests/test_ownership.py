@@ -9,6 +9,7 @@ test runs every writing command onto every kind of file a user owns and onto its
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import cv2
@@ -369,3 +370,140 @@ def test_a_cameras_frames_beside_a_copied_patterns_json_are_never_overwritten(tm
         assert code == 2 and "procam did not write" in err and err.count("\n") == 1, (force, err)
         assert snapshot(cap) == before
     assert run_cli(["patterns", "-o", pat, "-p", "320x200"])[0] == 0  # its own pattern images: rewritten
+
+
+def _edit(path: Path) -> None:
+    """A user's edit of a frame: one pixel changed, saved by another program (no procam mark)."""
+    im = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    im[0, 0] ^= 255
+    assert cv2.imwrite(str(path), im)
+
+
+def test_a_frame_or_description_the_user_edited_is_never_rewritten_or_removed(tmp_path):
+    """Round 5: a frame edited inside a `procam patterns` folder was rewritten by a rerun (the manifest listed it
+    as procam's).  The manifest now records what procam wrote; an edited frame or patterns.json is refused (exit 2,
+    one line naming it, every byte kept), with or without --force, whether it would be overwritten or removed as a
+    stale frame of a longer sequence; moved away, the rest is procam's again."""
+    from procam.io import formats
+
+    pat = tmp_path / "pat"
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    man = _files.read_manifest(pat)
+    assert man["digests"] and set(man["digests"]) == set(man["files"])
+    assert all(_files.file_digest(pat / n) == d for n, d in man["digests"].items())
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0  # unedited: rewritten as before
+    _edit(pat / "pattern_03.png")
+    before = snapshot(pat)
+    for args in (["-p", "64x32"], ["-p", "64x32", "--force"], ["-p", "16x8"]):
+        code, _, err = run_cli(["patterns", "-o", pat, *args])
+        assert code == 2 and "pattern_03.png" in err and "changed since procam wrote" in err, (args, err)
+        assert err.count("\n") == 1 and snapshot(pat) == before
+    # an edited frame the shorter sequence would delete as stale
+    (pat / "pattern_03.png").rename(tmp_path / "mine.png")
+    _edit(pat / "pattern_20.png")
+    before = snapshot(pat)
+    code, _, err = run_cli(["patterns", "-o", pat, "-p", "16x8"])
+    assert code == 2 and "remove 1 frame(s)" in err and "pattern_20.png" in err and snapshot(pat) == before, err
+    (pat / "pattern_20.png").rename(tmp_path / "mine20.png")
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0  # the moved frame is written again
+    assert (pat / "pattern_03.png").is_file() and (pat / "pattern_20.png").is_file()
+    # the description
+    doc = json.loads((pat / "patterns.json").read_text())
+    doc["note"] = "mine"
+    (pat / "patterns.json").write_text(json.dumps(doc))
+    before = snapshot(pat)
+    code, _, err = run_cli(["patterns", "-o", pat, "-p", "64x32"])
+    assert code == 2 and "patterns.json" in err and "changed since procam wrote" in err and snapshot(pat) == before
+    assert not _files.procam_wrote(pat / "patterns.json")  # procam's JSON mark, but the digest decides
+    assert json.loads((pat / "patterns.json").read_text())["format"].startswith(formats.JSON_PREFIX)
+    from procam.errors import OutputError
+
+    with pytest.raises(OutputError, match="changed since procam wrote it"):
+        with _files.atomic_path(pat / "patterns.json"):
+            pass
+
+
+def test_an_interrupted_or_older_sequence_stays_procams_and_a_hostile_digest_list_is_ignored(tmp_path):
+    """A frame's digest is dropped just before procam replaces it: a run killed half way leaves the frames it
+    replaced procam's and the others protected.  A manifest without digests (an older procam's) reads as before;
+    digests that are not strings, or name files the manifest does not list, are ignored."""
+    from procam import patterns
+    from procam.capture import write as _write
+
+    pat = tmp_path / "pat"
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    ps = patterns.pattern_set(64, 32)
+    with pytest.raises(RuntimeError):
+        with _write.SequenceWriter(pat, ps, "pattern_") as w:
+            w.add(0, np.full((32, 64), 7, np.uint8))  # another frame 0, then the run dies
+            raise RuntimeError("killed")
+    digests = _files.read_manifest(pat)["digests"]
+    assert "pattern_00.png" not in digests and "pattern_01.png" in digests
+    _edit(pat / "pattern_01.png")  # untouched by the killed run: still protected
+    code, _, err = run_cli(["patterns", "-o", pat, "-p", "64x32"])
+    assert code == 2 and "pattern_01.png" in err and "pattern_00" not in err, err
+    (pat / "pattern_01.png").unlink()
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    # an older procam's manifest: no digests, its frames procam's by their listing
+    doc = json.loads((pat / _files.MANIFEST).read_text())
+    doc.pop("digests")
+    (pat / _files.MANIFEST).write_text(json.dumps(doc))
+    _edit(pat / "pattern_01.png")
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    # hostile digests
+    doc = json.loads((pat / _files.MANIFEST).read_text())
+    doc["digests"] = {"pattern_00.png": 5, "elsewhere.png": "blake2b-160:00", "../x": "y"}
+    (pat / _files.MANIFEST).write_text(json.dumps(doc))
+    assert _files.read_manifest(pat)["digests"] == {}
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    doc["digests"] = ["not", "a", "mapping"]
+    (pat / _files.MANIFEST).write_text(json.dumps(doc))
+    assert _files.read_manifest(pat)["digests"] == {} and _files.procam_wrote(pat / "pattern_00.png")
+    # a listed name of a role procam does not know, with its digest: written over without an internal error
+    doc = json.loads((pat / _files.MANIFEST).read_text())
+    doc["files"]["maps.npz"] = "bogus"
+    (pat / "maps.npz").write_bytes(b"")
+    doc["digests"] = {"maps.npz": _files.file_digest(pat / "maps.npz")}
+    (pat / _files.MANIFEST).write_text(json.dumps(doc))
+    _files.write_npz(pat / "maps.npz", a=np.zeros(3))
+    assert _files.read_manifest(pat)["digests"]["maps.npz"] == _files.file_digest(pat / "maps.npz")
+
+
+def test_every_file_procam_writes_into_a_manifest_folder_is_protected_from_overwriting_an_edit(tmp_path,
+                                                                                                monkeypatch):
+    """Round 6: a rig's top-level rig.json and truth.json (written one by one, not by the sequence writer) had no
+    digest, so an edit of them was written over.  Any file written into a folder with a manifest now gets its
+    digest once written; procam writing it again replaces the digest; one that cannot be read to check is
+    refused, not taken for procam's."""
+    from procam.errors import OutputError
+
+    pat = tmp_path / "pat"
+    assert run_cli(["patterns", "-o", pat, "-p", "64x32"])[0] == 0
+    _files.write_text(pat / "rig.json", "{}", role="sidecar")
+    _files.write_text(pat / "notes.txt", "procam's")
+    man = _files.read_manifest(pat)
+    assert man["digests"]["rig.json"] == _files.file_digest(pat / "rig.json")
+    assert man["digests"]["notes.txt"] == _files.file_digest(pat / "notes.txt")
+    _files.write_text(pat / "rig.json", '{"a": 1}', role="sidecar")  # procam again: the new digest
+    assert _files.read_manifest(pat)["digests"]["rig.json"] == _files.file_digest(pat / "rig.json")
+    (pat / "rig.json").write_text('{"a": 2}')  # the user's edit
+    for name in ("rig.json", "notes.txt"):
+        if name == "notes.txt":
+            (pat / name).write_text("mine")
+        before = (pat / name).read_bytes()
+        with pytest.raises(OutputError, match="changed since procam wrote it"):
+            _files.write_text(pat / name, "{}", role="sidecar")
+        assert (pat / name).read_bytes() == before
+    # unreadable: refused, and a stale frame that cannot be read is not removed
+    real = _files.file_digest
+
+    def unreadable(path):
+        if Path(path).name == "pattern_20.png":
+            raise PermissionError(13, "Permission denied", str(path))
+        return real(path)
+
+    monkeypatch.setattr(_files, "file_digest", unreadable)
+    assert _files.changed_since_written(pat / "pattern_20.png") and not _files.procam_wrote(pat / "pattern_20.png")
+    before = snapshot(pat)
+    code, _, err = run_cli(["patterns", "-o", pat, "-p", "16x8"])
+    assert code == 2 and "pattern_20.png" in err and snapshot(pat) == before, err

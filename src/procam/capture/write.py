@@ -11,7 +11,10 @@ pattern images and simulator renders (manifest role ``"frame"``)
     earlier output, or with ``force`` any folder -- but never over a file procam did not write
     (:func:`check_sequence_dir`).  The manifest lists the names before any file is written; each file is
     written under a hidden temporary name and renamed (:func:`procam.io.files.write_image`), so an interrupted run
-    leaves no half-written image; frames of an earlier, longer sequence are deleted (:func:`remove_stale`).
+    leaves no half-written image; frames of an earlier, longer sequence are deleted (:func:`remove_stale`). When
+    done, the manifest records each file's digest: a rerun refuses to overwrite or delete a file the user edited
+    since (:func:`procam.io.files.changed_since_written`); each file's old digest is dropped just before it is
+    replaced, so an interrupted run leaves the files it replaced replaceable and the others protected.
 a camera's frames (manifest role ``"captured"``, which no procam writer replaces or deletes)
     ``out_dir`` must not exist or be empty (:func:`check_out_dir`).  Everything is written into a hidden
     sibling folder ``.NAME.partial-PID``, which gets its manifest last and is renamed to ``NAME`` only when
@@ -97,6 +100,16 @@ def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, wr
     names = sequence_names(ps, prefix)
     sidecars = ["patterns.json", *(extra or {})]
     folders.check_overwrite(out_dir, names + sidecars, option)
+    edited = sorted(n for n in _own_frames(Path(out_dir), prefix) - set(names)
+                    if _files.changed_since_written(Path(out_dir) / n))
+    if edited:
+        from ..errors import OutputError
+
+        where = f"{option} {out_dir}" if option else str(out_dir)
+        raise OutputError(f"{where}: writing {names[0]} ... here would remove {len(edited)} frame(s) of the "
+                          f"sequence before, changed since procam wrote them ({', '.join(edited[:3])}"
+                          f"{' ...' if len(edited) > 3 else ''}: an edit is the user's); move them away first, or "
+                          "write into another folder")
     orphans = _other_sequence(Path(out_dir), names, prefix)
     if orphans:
         from ..errors import OutputError
@@ -211,6 +224,10 @@ class SequenceWriter:
         if self.captured:
             _files.record_files(self.folder, self.roles(), writer=self.writer)
             self._place()
+        else:  # what procam wrote, so that a rerun tells a user's edit from its own file (each file's old digest
+            # went as it was replaced)
+            _files.record_files(self.folder, self.roles(), self.writer,
+                                digests={n: _files.file_digest(self.folder / n) for n in self.roles()})
         return [self.out / p.name for p in written]
 
     def _place(self) -> None:

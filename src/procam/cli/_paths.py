@@ -148,7 +148,7 @@ def output_path(path, option: str, suffixes: tuple[str, ...], inputs=()):
             fail(f"{option} {path}: {_files.kept_because(path)}")
     folder = path.parent
     if _capture_folder(folder, inputs):
-        own = folders.replaceable(folder)
+        own = folders.replaceable(folder, [path.name])
         man = _files.read_manifest(folder)
         roles = man["files"] if man is not None else {}
         if path.exists() and (path.name not in own or roles.get(path.name) not in (None, "output")):

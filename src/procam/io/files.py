@@ -96,6 +96,9 @@ def is_frame(path) -> bool:
 def kept_because(path) -> str:
     """Why procam does not write over the existing file ``path`` (:func:`procam_wrote` says no), and what to do, in
     words for a message after the file's name."""
+    if changed_since_written(path):
+        return ("the file was changed since procam wrote it, or cannot be read to tell (an edit is the user's); give "
+                "another name, or move it away first (procam never overwrites a user's edit)")
     if is_frame(path):
         return ("the file is a frame of a capture (data procam wrote, not an output); give another name, or move it "
                 "away first (procam never overwrites a capture's frames)")
@@ -106,7 +109,9 @@ def kept_because(path) -> str:
 def procam_wrote(path) -> bool:
     """Does the existing file ``path`` look like procam wrote it (so writing over it loses nothing of the user's)?
 
-    Yes when its folder's manifest lists it (not as a camera frame), or by its content (the marks of
+    Not when its folder's manifest holds the digest of what procam wrote and the file's differs (the user edited
+    it: :func:`changed_since_written`).  Yes when the manifest lists it (not as a camera frame), or by its content
+    (the marks of
     :mod:`procam.io.formats`): procam's JSON (``"format": "procam-..."``), a FileStorage file or ``.npz`` whose
     ``procam_format`` names one of procam's formats, a PLY with procam's header comment, a PNG/JPEG/PDF/SVG
     marked ``procam`` (every figure and image procam writes is; not a sequence's frame, marked ``procam frame``,
@@ -116,6 +121,8 @@ def procam_wrote(path) -> bool:
     """
     path = Path(path)
     man = read_manifest(path.parent)
+    if man is not None and man["digests"].get(path.name) is not None:
+        return not changed_since_written(path, man)  # an edited file is the user's, whatever its marks say
     if man is not None and man["files"].get(path.name) in ("output", "frame", "sidecar"):
         return True
     try:
@@ -266,7 +273,9 @@ def atomic_path(path, record: bool = True, role: str = "output"):
     of dead processes in the folder are removed first (:func:`remove_stale_temps`).  With ``record``,
     a folder that has a manifest gets ``path`` listed in it (role ``output`` unless it is listed already)
     before the file is written, so a kill never leaves a file of procam's that its manifest does not list; ``role``
-    ``sidecar`` (a file the folder's readers need) also replaces an ``output`` listing.
+    ``sidecar`` (a file the folder's readers need) also replaces an ``output`` listing; and once written, the
+    file's digest (:func:`changed_since_written` then tells a user's edit).  The digest recorded for ``path`` is
+    dropped just before it is replaced (``record`` or not), so a kill in between leaves a file procam may replace.
     """
     path = Path(path)
     if path.name != MANIFEST and path.exists() and not procam_wrote(path):  # the last line of defence
@@ -276,15 +285,20 @@ def atomic_path(path, record: bool = True, role: str = "output"):
     except OSError as e:
         raise _named(e, path.parent) from None
     remove_stale_temps(path.parent)
-    if record:
-        man = read_manifest(path.parent)
-        listed = man["files"].get(path.name) if man is not None else None
-        if man is not None and (listed is None or (listed == "output" and role != "output")):
-            record_files(path.parent, {path.name: role})
+    man = read_manifest(path.parent) if path.name != MANIFEST else None
+    if record and man is not None:
+        listed = man["files"].get(path.name)
+        if listed is None or (listed == "output" and role != "output"):
+            man = record_files(path.parent, {path.name: role})
     tmp = temp_path(path)
     try:
         yield tmp
+        digest = file_digest(tmp) if record and man is not None else None
+        if man is not None and path.name in man["digests"]:  # procam replaces it: the old digest goes first
+            set_digest(path.parent, path.name, None)
         os.replace(tmp, path)
+        if digest is not None:
+            set_digest(path.parent, path.name, digest)
     except OSError as e:
         raise _named(e, path) from None
     finally:
@@ -468,7 +482,37 @@ def read_manifest(folder) -> dict | None:
         return None
     # plain names only: a manifest never points outside its folder
     doc["files"] = {str(k): str(v) for k, v in doc["files"].items() if plain_name(str(k))}
+    digests = doc.get("digests")
+    doc["digests"] = ({str(k): v for k, v in digests.items() if str(k) in doc["files"] and isinstance(v, str)}
+                      if isinstance(digests, dict) else {})
     return doc
+
+
+def file_digest(path) -> str:
+    """The digest procam records of a file it wrote (``blake2b-160:`` and 40 hex digits of its bytes)."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=20)
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return "blake2b-160:" + h.hexdigest()
+
+
+def changed_since_written(path, man: dict | None = None) -> bool:
+    """Is the existing file ``path`` not what procam wrote?  True when its folder's manifest (``man``, default:
+    read) holds the digest of the file as procam wrote it and the file's bytes are others now (an edit); False
+    without a recorded digest (an older manifest, an output listed without one) or a missing file; True for a file
+    that cannot be read (procam cannot tell it is its own)."""
+    path = Path(path)
+    man = read_manifest(path.parent) if man is None else man
+    want = man["digests"].get(path.name) if man is not None else None
+    if want is None or not os.path.lexists(path):
+        return False
+    try:
+        return file_digest(path) != want
+    except OSError:
+        return True
 
 
 def plain_name(name: str) -> bool:
@@ -477,20 +521,40 @@ def plain_name(name: str) -> bool:
 
 
 def write_manifest(folder, doc: dict) -> None:
-    """Write ``doc`` as the manifest of ``folder`` (atomically; the manifest does not list itself)."""
+    """Write ``doc`` as the manifest of ``folder`` (atomically; the manifest does not list itself; no
+    ``digests`` member when it records none: such a manifest reads as an older procam's)."""
+    if not doc.get("digests", True):
+        doc = {k: v for k, v in doc.items() if k != "digests"}
     write_text(Path(folder) / MANIFEST, json.dumps(doc, indent=1, sort_keys=True), record=False)
 
 
-def record_files(folder, roles: dict, writer: str | None = None) -> dict:
+def set_digest(folder, name: str, digest: str | None) -> None:
+    """Record ``digest`` (:func:`file_digest`) for the listed file ``name`` in the manifest of ``folder``, or drop
+    its digest (None); nothing without a manifest, for a name it does not list, or when nothing changes."""
+    doc = read_manifest(folder)
+    if doc is None or name not in doc["files"] or doc["digests"].get(name) == digest:
+        return
+    if digest is None:
+        del doc["digests"][name]
+    else:
+        doc["digests"][name] = str(digest)
+    write_manifest(folder, doc)
+
+
+def record_files(folder, roles: dict, writer: str | None = None, digests: dict | None = None) -> dict:
     """Add ``roles`` (``{name: role}``) to the manifest of ``folder`` (created when missing, with ``writer``);
-    returns the manifest."""
+    returns the manifest.  ``digests`` (``{name: digest}``, :func:`file_digest` of files of ``roles`` as written)
+    records what procam wrote (:func:`changed_since_written` then tells an edit)."""
     doc = read_manifest(folder) or {"format": formats.MANIFEST_FORMAT, "version": 1, "writer": writer or "procam",
-                                    "files": {}}
+                                    "files": {}, "digests": {}}
     for name, role in roles.items():
         if role not in ROLES:
             raise ValueError(f"role must be one of {ROLES}, got {role!r}")
         if doc["files"].get(name) != "captured":
             doc["files"][str(name)] = role
+    for name, digest in (digests or {}).items():
+        if str(name) in roles:
+            doc["digests"][str(name)] = str(digest)
     write_manifest(folder, doc)
     return doc
 
@@ -502,4 +566,5 @@ def unlist_files(folder, names) -> None:
         return
     for n in names:
         doc["files"].pop(str(n), None)
+        doc["digests"].pop(str(n), None)
     write_manifest(folder, doc)

@@ -17,7 +17,8 @@ from pathlib import Path
 
 from ..errors import OutputError
 from . import formats
-from .files import (IMAGE_EXTS, MANIFEST, fmt_bytes, is_frame, natural_key, plain_name, read_manifest, record_files, remove_stale_temps, unlist_files, write_manifest)
+from .files import (IMAGE_EXTS, MANIFEST, changed_since_written, fmt_bytes, is_frame, natural_key, plain_name,
+                    read_manifest, record_files, remove_stale_temps, unlist_files, write_manifest)
 from .jsonfile import JSONError, load_json
 
 
@@ -49,14 +50,18 @@ def _listing(names: list[str], n: int = 4) -> str:
     return ", ".join(names[:n]) + (f", ... ({len(names)} in all)" if len(names) > n else "")
 
 
-def replaceable(folder) -> set[str]:
-    """Names in ``folder`` procam may overwrite or delete: listed in its manifest (or an older procam's
-    patterns.json), except camera frames (role ``captured``)."""
+def replaceable(folder, names=None) -> set[str]:
+    """Names in ``folder`` (of ``names``, default all) procam may overwrite or delete: listed in its manifest (or an
+    older procam's patterns.json), except camera frames (role ``captured``) and files changed since procam wrote
+    them (their recorded digest is not theirs: :func:`procam.io.files.changed_since_written`, which reads the
+    file: give ``names`` to judge only those)."""
     folder = Path(folder)
     man = read_manifest(folder)
     if man is None:
-        return _legacy_files(folder)
-    return {n for n, r in man["files"].items() if r != "captured"}
+        own = _legacy_files(folder)
+        return own if names is None else own & set(names)
+    listed = man["files"] if names is None else {n: man["files"][n] for n in names if n in man["files"]}
+    return {n for n, r in listed.items() if r != "captured" and not changed_since_written(folder / n, man)}
 
 
 def prepare_output_dir(folder, writer: str, *, force: bool = False, option: str | None = None,
@@ -130,10 +135,16 @@ def check_overwrite(folder, names, option: str | None = None) -> None:
     """Raise :class:`OutputError` when writing ``names`` into ``folder`` would overwrite a file procam did
     not write (or a camera frame)."""
     folder = Path(folder)
-    ok = replaceable(folder)
-    clash = [n for n in names if n not in ok and (folder / n).exists()]
+    names = [n for n in names if (folder / n).exists()]
+    ok = replaceable(folder, names)
+    clash = [n for n in names if n not in ok]
     if clash:
         label = f"{option} {folder}" if option else str(folder)
+        edited = [n for n in clash if changed_since_written(folder / n)]
+        if edited:
+            raise OutputError(f"{label}: writing here would overwrite {len(edited)} file(s) changed since procam "
+                              f"wrote them ({_listing(sorted(edited, key=natural_key))}: an edit is the user's); "
+                              "move them away first, or give a new or empty folder")
         raise OutputError(f"{label}: writing here would overwrite {len(clash)} file(s) procam did not write "
                           f"({_listing(sorted(clash, key=natural_key))}); give a new or empty folder")
 
@@ -142,7 +153,7 @@ def remove_listed(folder, names) -> list[Path]:
     """Delete ``names`` from ``folder`` if its manifest lists them as procam's (and not as camera frames),
     and unlist them; anything else is left alone.  Returns the deleted paths."""
     folder = Path(folder)
-    ok = replaceable(folder)
+    ok = replaceable(folder, names)
     gone = []
     for n in names:
         if n in ok and (folder / n).is_file() and not (folder / n).is_symlink():
