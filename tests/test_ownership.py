@@ -467,6 +467,12 @@ def test_an_interrupted_or_older_sequence_stays_procams_and_a_hostile_digest_lis
     (pat / _files.MANIFEST).write_text(json.dumps(doc))
     _files.write_npz(pat / "maps.npz", a=np.zeros(3))
     assert _files.read_manifest(pat)["digests"]["maps.npz"] == _files.file_digest(pat / "maps.npz")
+    # a camera's frame with its digest forged in: still never procam's to replace
+    doc = json.loads((pat / _files.MANIFEST).read_text())
+    doc["files"]["pattern_02.png"] = "captured"
+    doc["digests"]["pattern_02.png"] = _files.file_digest(pat / "pattern_02.png")
+    (pat / _files.MANIFEST).write_text(json.dumps(doc))
+    assert not _files.procam_wrote(pat / "pattern_02.png")
 
 
 def test_every_file_procam_writes_into_a_manifest_folder_is_protected_from_overwriting_an_edit(tmp_path,

@@ -121,10 +121,8 @@ def procam_wrote(path) -> bool:
     """
     path = Path(path)
     man = read_manifest(path.parent)
-    if man is not None and man["digests"].get(path.name) is not None:
-        return not changed_since_written(path, man)  # an edited file is the user's, whatever its marks say
     if man is not None and man["files"].get(path.name) in ("output", "frame", "sidecar"):
-        return True
+        return not changed_since_written(path, man)  # an edited file is the user's, whatever its marks say
     try:
         with open(path, "rb") as f:
             head = f.read(1 << 16)
