@@ -165,3 +165,28 @@ def test_a_pose_of_other_images_is_read_here(tmp_path, child):
         for folder in order:
             np.testing.assert_array_equal(pf.read(_files(folder)), images.read_images(_files(folder)))
     assert child._tickets == 2  # the two PNG poses only
+
+
+def test_read_images_into_a_given_stack_reads_the_same_and_refuses_another_frame(tmp_path):
+    """read_images(out=) (the child's reading): the same pixels as a new stack, into the given memory; a frame of
+    another size or bit depth is the same CaptureError; a stack of another length a ValueError."""
+    import cv2
+
+    from procam.errors import CaptureError
+    from procam.io import images
+
+    rng = np.random.default_rng(5)
+    files = []
+    for k in range(4):
+        files.append(tmp_path / f"{k:02d}.png")
+        cv2.imwrite(str(files[-1]), rng.integers(0, 255, (24, 32), dtype=np.uint8))
+    out = np.zeros((4, 24, 32), np.uint8)
+    got = images.read_images(files, out=out)
+    assert got is out and np.array_equal(out, images.read_images(files))
+    cv2.imwrite(str(tmp_path / "big.png"), rng.integers(0, 255, (24, 40), dtype=np.uint8))
+    cv2.imwrite(str(tmp_path / "deep.png"), rng.integers(0, 65535, (24, 32), dtype=np.uint16))
+    for odd, word in (("big.png", "size 40x24 differs"), ("deep.png", "16-bit image among 8-bit")):
+        with pytest.raises(CaptureError, match=word):
+            images.read_images([*files[:3], tmp_path / odd], out=out)
+    with pytest.raises(ValueError, match="holds 4 frames"):
+        images.read_images(files[:3], out=out)

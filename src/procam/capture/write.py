@@ -100,8 +100,9 @@ def check_sequence_dir(out_dir, ps: patterns.PatternSet, prefix: str = "", *, wr
     names = sequence_names(ps, prefix)
     sidecars = ["patterns.json", *(extra or {})]
     folders.check_overwrite(out_dir, names + sidecars, option)
+    man = _files.read_manifest(out_dir)
     edited = sorted(n for n in _own_frames(Path(out_dir), prefix) - set(names)
-                    if _files.changed_since_written(Path(out_dir) / n))
+                    if _files.changed_since_written(Path(out_dir) / n, man))
     if edited:
         from ..errors import OutputError
 

@@ -204,7 +204,6 @@ def _serve(sock, threads: int) -> None:  # pragma: no cover - runs in the child 
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the parent stops us
     buffers = {}
-    pool = None
     while True:
         msg, fds, _, _ = socket.recv_fds(sock, _MAX_MESSAGE, 1)
         if not msg:
@@ -223,16 +222,13 @@ def _serve(sock, threads: int) -> None:  # pragma: no cover - runs in the child 
 
             buffers[cmd["buffer"]] = mmap.mmap(fds[0], os.fstat(fds[0]).st_size)
             os.close(fds[0])
-        if pool is None:
-            from concurrent.futures import ThreadPoolExecutor
-
-            pool = ThreadPoolExecutor(threads, thread_name_prefix="procam-child-read")
-        ok = _fill(buffers.get(cmd["buffer"]), cmd, pool)
+        ok = _fill(buffers.get(cmd["buffer"]), cmd, threads)
         sock.sendall(f"{cmd['ticket']} {int(ok)}".encode())
 
 
-def _fill(buf, cmd: dict, pool) -> bool:  # pragma: no cover - runs in the child
-    """Read the command's files into ``buf``; whether every one was read, of the stack's frame size and type."""
+def _fill(buf, cmd: dict, threads: int) -> bool:  # pragma: no cover - runs in the child
+    """Read the command's files into ``buf`` (:func:`procam.io.images.read_images` into it, ``threads`` at once);
+    whether every one was read, of the stack's frame size and type."""
     import numpy as np
 
     from . import images
@@ -243,18 +239,8 @@ def _fill(buf, cmd: dict, pool) -> bool:  # pragma: no cover - runs in the child
     if len(cmd["files"]) != shape[0] or int(np.prod(shape)) * dtype.itemsize > len(buf):
         return False
     stack = np.frombuffer(buf, dtype, int(np.prod(shape))).reshape(shape)
-    gray = cmd["gray"]
-
-    def one(i: int) -> bool:
-        slot = stack[i]
-        img = images.read_image(cmd["files"][i], gray, slot)  # decoded into the slot where it can be (8-bit grey)
-        if img is not slot:
-            if img.shape != slot.shape or img.dtype != dtype:
-                return False
-            slot[...] = img
-        return True
-
     try:
-        return all(pool.map(one, range(shape[0])))
-    except Exception:
+        images.read_images(cmd["files"], cmd["gray"], threads, out=stack)
+    except Exception:  # a file it cannot read, or of another size or type: the parent reads the pose, and says so
         return False
+    return True

@@ -158,38 +158,46 @@ def png_header(path) -> tuple[int, int, int] | None:
     return (h, w, 2 if head[24] == 16 else 1) if w > 0 and h > 0 else None
 
 
-def read_images(files, gray: bool = True, threads: int | None = None) -> np.ndarray:
+def read_images(files, gray: bool = True, threads: int | None = None, out: np.ndarray | None = None) -> np.ndarray:
     """Read ``files`` into one array (K, H, W) of a single dtype.
 
     Images are read in parallel threads (OpenCV releases the GIL).  All images must have the
-    same size and bit depth: otherwise :class:`CaptureError` names the first one that differs.
+    same size and bit depth: otherwise :class:`CaptureError` names the first one that differs.  ``out``: a
+    (K, H, W) array to read into and return (e.g. shared memory), whose frame size and type every image must have.
     """
     files = [Path(f) for f in files]
     if not files:
         raise CaptureError("no image files given")
-    first = read_image(files[0], gray)
-    stack = np.empty((len(files),) + first.shape, dtype=first.dtype)
-    stack[0] = first
+    if out is None:
+        first = read_image(files[0], gray)
+        stack = np.empty((len(files),) + first.shape, dtype=first.dtype)
+        stack[0] = first
+        start = 1
+    else:
+        if len(out) != len(files):
+            raise ValueError(f"out holds {len(out)} frames, {len(files)} files given")
+        stack, start = out, 0
+    shape, dtype = stack.shape[1:], stack.dtype
 
     def load(i):
         slot = stack[i]
         img = read_image(files[i], gray, slot)
         if img is slot:  # decoded in place
             return
-        if img.shape != first.shape:
+        if img.shape != shape:
             raise CaptureError(f"{files[i]}: size {img.shape[1]}x{img.shape[0]} differs from {files[0].name} "
-                               f"({first.shape[1]}x{first.shape[0]}); all images of a pose must come from one "
+                               f"({shape[1]}x{shape[0]}); all images of a pose must come from one "
                                "camera at one resolution")
-        if img.dtype != first.dtype:
+        if img.dtype != dtype:
             raise CaptureError(f"{files[i]}: {img.dtype.itemsize * 8}-bit image among "
-                               f"{first.dtype.itemsize * 8}-bit ones ({files[0].name}); capture all frames at one bit depth")
+                               f"{dtype.itemsize * 8}-bit ones ({files[0].name}); capture all frames at one bit depth")
         stack[i] = img
 
     n = threads if threads is not None else min(4, os.cpu_count() or 1)
-    if n > 1 and len(files) > 2:
+    if n > 1 and len(files) - start > 1:
         with ThreadPoolExecutor(n) as ex:
-            list(ex.map(load, range(1, len(files))))
+            list(ex.map(load, range(start, len(files))))
     else:
-        for i in range(1, len(files)):
+        for i in range(start, len(files)):
             load(i)
     return stack
