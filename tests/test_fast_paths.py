@@ -423,6 +423,43 @@ print(json.dumps({"code": code, "typer": "typer" in sys.modules, "pydantic": "py
     assert rep["code"] in (0, None) and rep["commands"] == sorted(COMMANDS.values()) and all(c in out for c in COMMANDS)
 
 
+def test_the_console_script_skips_pythons_final_collection_and_a_caller_keeps_it():
+    """The console script (``main()``, no arguments) moves the objects alive at exit to the permanent generation,
+    so Python's final collection does not walk scipy's and numpy's module objects; an in-process caller
+    (``main(argv)``) keeps its collector untouched, at exit too. An exit handler registered before main runs after
+    main's (handlers run last registered first), and reports the frozen count then."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import atexit, gc, sys
+atexit.register(lambda: print("frozen", gc.get_freeze_count(), file=sys.stderr))
+from procam.cli import main
+try:
+    how, sys.argv[1:] = sys.argv[1], sys.argv[2:]
+    main() if how == "console" else main(sys.argv[1:])
+except SystemExit:
+    pass
+print("after", gc.get_freeze_count(), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+
+    def counts(how, *args):
+        res = subprocess.run([sys.executable, "-c", script, how, *args], env=env, capture_output=True, text=True,
+                             timeout=300)
+        lines = dict(line.split() for line in res.stderr.splitlines() if line.startswith(("frozen", "after")))
+        assert res.returncode == 0 and res.stdout.startswith("procam "), res.stderr
+        return int(lines["after"]), int(lines["frozen"])
+
+    # nothing is frozen while the command runs or after it returns; only at exit, and only for the console script
+    after, at_exit = counts("console", "--version")
+    assert after == 0 and at_exit > 1000
+    assert counts("caller", "--version") == (0, 0)
+
+
 def test_prefetcher_reads_at_most_ahead_poses_beyond_the_one_in_use(tmp_path):
     """Memory stays bounded: with ahead=1 the pose in use and the next one, never more."""
     from procam import stream
