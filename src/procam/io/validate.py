@@ -36,11 +36,14 @@ The rules, and why each is what it is:
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..calibration import Calibration, Distortion
 from ..errors import CalibrationFileError
+
+if TYPE_CHECKING:
+    from ..calibration import Calibration, Distortion
 
 #: Plausible bounds of a calibration file's numbers (beyond them a file is corrupt, not a camera).
 MAX_FOCAL_PX = 1e7
@@ -135,6 +138,8 @@ def opencv_coeffs(path, field: str, c) -> tuple[float, ...]:
 def check_distortion(path, field: str, d) -> Distortion:
     """A JSON distortion object (``{"model": "none" | "division" | "opencv", ...}``) as a :class:`Distortion`;
     None is no distortion, and so is an OpenCV model with no coefficients."""
+    from ..calibration import Distortion  # here: the decoded maps' reader checks their sizes with this module
+
     if d is None:
         return Distortion()
     if not isinstance(d, dict):
