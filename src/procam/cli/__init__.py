@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> None:
         import atexit
 
         # Python's last act is a collection over every object still alive, scipy's, numpy's and typer's module
-        # objects among them: 0.1-0.15 s after a calibrate's files are written (a decode's, a help's less). Moved
+        # objects among them: 0.1-0.25 s after a calibrate's or a decode's files are written (a help's less). Moved
         # to the permanent generation by an exit handler (one registered now runs after those registered later),
         # they are left to the process's end, as Python leaves every object its final collection does not reach;
         # objects still freed by their reference counts are freed as before
