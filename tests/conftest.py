@@ -74,20 +74,58 @@ def run_cli(args):
 def forked_reader():
     """A :class:`procam.io.child_reader.ChildReader`, forked beside pytest's threads (the command line forks only
     while it runs one thread; on Python 3.12 and later a fork beside threads warns, which ``when_threaded`` accepts
-    here); closed after the test. Skipped off Linux."""
+    here); closed after the test. Skipped off Linux.
+
+    A fork copies every lock as it is at that moment, held or not, and none of the threads that would let go of one.
+    The command line forks before OpenCV is loaded; here OpenCV's pool of worker threads has run, and a child that
+    inherited a pool lock in use hung in its first ``cv2.integral`` (once in many runs, holding up the whole test
+    session).  So OpenCV runs on one thread as the fork happens (its pthreads pool stops and joins its workers; the
+    child keeps one thread, this process gets its count back), and a child still running after ``HANG`` seconds is
+    killed and the test fails saying so, instead of waiting for ever."""
+    import os
+    import signal
     import sys
+    import threading
     import warnings
 
     if not sys.platform.startswith("linux"):
         pytest.skip("the child reader forks: Linux only")
     from procam.io.child_reader import ChildReader
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        reader = ChildReader.start(when_threaded=True)
+    cv2 = sys.modules.get("cv2")
+    threads = cv2.getNumThreads() if cv2 is not None else None
+    if cv2 is not None:
+        cv2.setNumThreads(1)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            reader = ChildReader.start(when_threaded=True)
+    finally:
+        if cv2 is not None:
+            cv2.setNumThreads(threads)
     assert reader is not None
+    hung, pid = [], reader.pid
+
+    def kill():  # only the child itself, while not yet reaped (its pid cannot have been reused)
+        if pid > 0 and reader.pid == pid:
+            hung.append(pid)
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+    watchdog = threading.Timer(FORKED_READER_HANG, kill)
+    watchdog.daemon = True
+    watchdog.start()
     yield reader
+    watchdog.cancel()
     reader.close()
+    if hung:
+        pytest.fail(f"the forked child reader (pid {hung[0]}) was still running after {FORKED_READER_HANG} s: killed")
+
+
+#: Seconds a test's forked child reader may run (its tests take a few).
+FORKED_READER_HANG = 240
 
 
 @pytest.fixture(scope="session")
