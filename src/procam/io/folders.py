@@ -140,7 +140,8 @@ def check_overwrite(folder, names, option: str | None = None) -> None:
     clash = [n for n in names if n not in ok]
     if clash:
         label = f"{option} {folder}" if option else str(folder)
-        edited = [n for n in clash if changed_since_written(folder / n)]
+        man = read_manifest(folder)
+        edited = [n for n in clash if changed_since_written(folder / n, man)]
         if edited:
             raise OutputError(f"{label}: writing here would overwrite {len(edited)} file(s) changed since procam "
                               f"wrote them ({_listing(sorted(edited, key=natural_key))}: an edit is the user's); "

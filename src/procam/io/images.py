@@ -178,6 +178,7 @@ def read_images(files, gray: bool = True, threads: int | None = None, out: np.nd
             raise ValueError(f"out holds {len(out)} frames, {len(files)} files given")
         stack, start = out, 0
     shape, dtype = stack.shape[1:], stack.dtype
+    like = files[0].name if out is None else "the stack read into"  # what every frame must match
 
     def load(i):
         slot = stack[i]
@@ -185,12 +186,12 @@ def read_images(files, gray: bool = True, threads: int | None = None, out: np.nd
         if img is slot:  # decoded in place
             return
         if img.shape != shape:
-            raise CaptureError(f"{files[i]}: size {img.shape[1]}x{img.shape[0]} differs from {files[0].name} "
+            raise CaptureError(f"{files[i]}: size {img.shape[1]}x{img.shape[0]} differs from {like} "
                                f"({shape[1]}x{shape[0]}); all images of a pose must come from one "
                                "camera at one resolution")
         if img.dtype != dtype:
             raise CaptureError(f"{files[i]}: {img.dtype.itemsize * 8}-bit image among "
-                               f"{dtype.itemsize * 8}-bit ones ({files[0].name}); capture all frames at one bit depth")
+                               f"{dtype.itemsize * 8}-bit ones ({like}); capture all frames at one bit depth")
         stack[i] = img
 
     n = threads if threads is not None else min(4, os.cpu_count() or 1)
