@@ -379,6 +379,48 @@ print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]
         assert report["code"] in (0, None) and set(report["loaded"]) <= set(allowed), (args, res.stderr[-2000:])
 
 
+def test_decode_imports_neither_the_corner_pipeline_nor_the_other_familys_decoder(ideal_capture, tmp_path):
+    """`procam decode` finds no corners: it imports neither the pose pipeline nor the board's corner detection nor
+    the correspondences; a Gray capture's decode imports nothing of the phase decoder, a phase capture's does (issue
+    35: nothing paid at start-up that a decode does not need). Fresh interpreters, the decoded maps written."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from sim_small import small_scene
+
+    from procam import simulate
+
+    scene = small_scene()
+    ps = patterns.pattern_set(*scene.proj_size, family="phase")
+    stack, truth = simulate.render(scene, ps, seed=4)
+    simulate.write_capture(tmp_path / "phase", stack, truth, ps)
+    script = """
+import json, sys
+from procam.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as e:
+    code = e.code
+mods = ("procam.pipeline", "procam.board", "procam.correspond", "procam.view", "procam.decode.plausibility",
+        "procam.decode.phase.decoder", "scipy", "matplotlib")
+print(json.dumps({"code": code, "loaded": [m for m in mods if m in sys.modules]}), file=sys.stderr)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    for folder, shape, loaded in ((ideal_capture[0], ideal_capture[1].shape[1:], []),
+                                  (tmp_path / "phase", stack.shape[1:], ["procam.decode.phase.decoder"])):
+        out = tmp_path / f"{Path(folder).name}.npz"
+        res = subprocess.run([sys.executable, "-c", script, "decode", str(folder), "-o", str(out)], env=env,
+                             capture_output=True, text=True, timeout=300)
+        report = json.loads(res.stderr.strip().splitlines()[-1])
+        assert report["code"] in (0, None) and report["loaded"] == loaded, (folder, res.stderr[-2000:])
+        with np.load(out) as maps:
+            assert maps["col"].shape == shape
+
+
 def test_version_imports_no_command_line_and_a_command_registers_only_itself():
     """`procam --version` answers before typer (and pydantic) are imported; `procam calibrate --help` builds only
     the calibrate command and imports no pydantic, nor does parsing a calibrate command line; `procam --help` builds

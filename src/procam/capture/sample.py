@@ -1,6 +1,6 @@
 """A fixed pseudo-random sample of a stack's pixels and the frames' levels on it: what every check of a capture
 (:mod:`procam.capture.read`, :mod:`procam.capture.phase`) measures on, so that they agree pixel for pixel with the
-phase decoder's own measurements (:func:`procam.decode.phase.decoder.sample_index`).
+phase decoder's own measurements (:func:`procam.decode.decoded.sample_index`).
 
 The sample is pseudo-random, not a grid, so it does not alias with periodic stripes or fringes.
 """
@@ -21,7 +21,7 @@ def _sample(stack: np.ndarray, n: int = 20000) -> np.ndarray:
 def sample_index(size: int, n: int) -> np.ndarray:
     """The fixed pseudo-random set of ``n`` pixel indices (sorted) out of ``size`` every check and the phase
     decoder's measurements use (all of them when ``size <= n``)."""
-    from ..decode.phase.decoder import sample_index as _index
+    from ..decode.decoded import sample_index as _index
 
     return _index(size, n)
 

@@ -83,6 +83,19 @@ def parse_board(text: str, square: float):
         fail(f"--square: {e}")
 
 
+def decode_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, poses=()):
+    """The :class:`procam.decode.DecodeOptions` of the decoder's options, validated; a decoder option typed that the
+    pose folders ``poses`` leave unread is refused (:func:`refuse_unread_decoder`).  What ``procam decode`` reads
+    (it finds no corners: none of :mod:`procam.pipeline`'s imports), and :func:`pose_options`' ``decode``."""
+    from .. import decode as _decode
+
+    refuse_unread_decoder(poses)
+    for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
+        if not (math.isfinite(v) and 0 <= v <= 255):
+            fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
+    return _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
+
+
 def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 3.0, detector=None,
                  refine_window: int | None = None, refine=None, window: int = 60, estimator=None,
                  min_corners: int = 10, background: bool = True, poses=()):
@@ -90,20 +103,15 @@ def pose_options(*, decode_method=None, shadow: float = 10.0, contrast: float = 
     that these options or the pose folders ``poses`` leave unread is refused (:func:`refuse_unread_decoder`,
     ``--refine-window`` with ``--corner-refine none``)."""
     from .. import correspond as _corr
-    from .. import decode as _decode
     from .. import pipeline
 
     if value(refine) == "none":
         refuse(("refine_window",), "is the corner refinement's half-window; --corner-refine none refines nothing")
-    refuse_unread_decoder(poses)
-    for opt, v in (("--shadow-threshold", shadow), ("--contrast-threshold", contrast)):
-        if not (math.isfinite(v) and 0 <= v <= 255):
-            fail(f"{opt} must be a number of 8-bit grey levels from 0 to 255, got {v}")
+    dec = decode_options(decode_method=decode_method, shadow=shadow, contrast=contrast, poses=poses)
     if refine_window is not None and not 0 <= refine_window <= 100:
         fail(f"--refine-window must be from 0 to 100 px, got {refine_window}")
     if not 6 <= window <= 1000:
         fail(f"--window must be from 6 to 1000 camera px, got {window}")
-    dec = _decode.DecodeOptions(value(decode_method) or "robust", float(shadow), float(contrast))
     corners = _corr.CornerOptions(window=int(window), estimator=value(estimator) or "trimmed")
     return pipeline.PoseOptions(decode=dec, detector=value(detector) or "auto", refine_window=refine_window,
                                 refine=value(refine) or "fit", corners=corners, min_corners=min_corners,

@@ -17,7 +17,7 @@ from ._options import (
     StepOpt,
     number,
     optional_size,
-    pose_options,
+    decode_options,
     value,
 )
 from ._paths import FIGURE_SUFFIXES, output_path
@@ -51,7 +51,7 @@ def decode_cmd(
 
     keep_freed_memory()
     size = optional_size(projector)
-    opts = pose_options(decode_method=decode_method, shadow=shadow, contrast=contrast, poses=[pose_dir]).decode
+    opts = decode_options(decode_method=decode_method, shadow=shadow, contrast=contrast, poses=[pose_dir])
     if gamma not in ("auto", "none"):
         try:
             gamma = float(gamma)

@@ -94,7 +94,8 @@ class DecodeOptions:
         for what, v in (("shadow threshold", self.shadow_threshold), ("contrast threshold", self.contrast_threshold)):
             if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and 0 <= v <= 255):
                 raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
-        self.phase_options()  # validates gamma and camera_noise
+        # the phase decoder's options it passes on (its own checks, without importing that decoder)
+        _decoded.check_phase_options(self.gamma, self.camera_noise, self.shadow_threshold, self.contrast_threshold)
 
     def phase_options(self):
         """The :class:`procam.decode.phase.PhaseOptions` of these options (for the phase families)."""

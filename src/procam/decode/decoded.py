@@ -1,11 +1,13 @@
-"""The decoded maps of one pose (:class:`DecodeResult`) and the reason codes of a pixel that did not decode
-(:data:`REASONS`), shared by the Gray-code decoder (:mod:`procam.decode`) and the phase decoder
-(:mod:`procam.decode.phase`).
+"""What the Gray-code decoder (:mod:`procam.decode`) and the phase decoder (:mod:`procam.decode.phase`) share: the
+decoded maps of one pose (:class:`DecodeResult`), the reason codes of a pixel that did not decode (:data:`REASONS`),
+the fixed sample of pixels the phase decoder measures on (:func:`sample_index`) and the check of the phase options
+(:func:`check_phase_options`), so that a Gray capture's decode and checks import nothing of the phase decoder.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,6 +29,43 @@ REASONS = {
     7: "orders disagree: the frequencies (or the Gray code and the phase) give different fringe periods",
 }
 OK, SHADOW, LOW_CONTRAST, AMBIGUOUS, OUT_OF_RANGE, SATURATED, LOW_MODULATION, ORDER_DISAGREE = range(8)
+
+
+def sample_index(size: int, n: int) -> np.ndarray:
+    """The fixed pseudo-random sample of pixels the phase decoder measures the projector's response and the
+    camera's noise on, and the capture checks judge a capture on (:func:`procam.capture.sample_index`), so that
+    the two agree pixel for pixel: ``n`` of ``size`` flat indices, sorted (all of them when ``size <= n``)."""
+    if size <= n:
+        return np.arange(size)
+    return _sample_index(size, n)
+
+
+@lru_cache(maxsize=8)
+def _sample_index(size: int, n: int) -> np.ndarray:
+    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
+    idx.flags.writeable = False
+    return idx
+
+
+def check_phase_options(gamma, camera_noise, shadow_threshold, contrast_threshold) -> None:
+    """Raise ``ValueError`` for a phase decoder's option out of its range (:class:`procam.decode.phase.PhaseOptions`
+    checks its own with it, and :class:`procam.decode.DecodeOptions` the ones it passes on, without importing the
+    phase decoder): ``gamma`` ``"auto"``, ``"none"`` or a number from 0.2 to 5; ``camera_noise`` None or a sigma
+    in (0, 100] grey levels; the thresholds numbers of grey levels from 0 to 255."""
+    import math
+
+    g = gamma
+    if isinstance(g, str):
+        if g not in ("auto", "none"):
+            raise ValueError(f"gamma must be 'auto', 'none' or a number from 0.2 to 5, got {g!r}")
+    elif not (isinstance(g, (int, float)) and math.isfinite(g) and 0.2 <= g <= 5):
+        raise ValueError(f"gamma must be 'auto', 'none' or a number from 0.2 to 5, got {g!r}")
+    if camera_noise is not None and not (math.isfinite(camera_noise) and 0 < camera_noise <= 100):
+        raise ValueError(f"camera noise must be a positive number of grey levels (at most 100), got "
+                         f"{camera_noise!r}")
+    for what, v in (("shadow threshold", shadow_threshold), ("contrast threshold", contrast_threshold)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 255):
+            raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
 
 
 @dataclass(frozen=True)

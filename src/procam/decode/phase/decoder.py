@@ -35,7 +35,6 @@ import warnings
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -79,18 +78,7 @@ class PhaseOptions:
     neighbours: bool = True
 
     def __post_init__(self):
-        g = self.gamma
-        if isinstance(g, str):
-            if g not in ("auto", "none"):
-                raise ValueError(f"gamma must be 'auto', 'none' or a number from 0.2 to 5, got {g!r}")
-        elif not (isinstance(g, (int, float)) and math.isfinite(g) and 0.2 <= g <= 5):
-            raise ValueError(f"gamma must be 'auto', 'none' or a number from 0.2 to 5, got {g!r}")
-        if self.camera_noise is not None and not (math.isfinite(self.camera_noise) and 0 < self.camera_noise <= 100):
-            raise ValueError(f"camera noise must be a positive number of grey levels (at most 100), got "
-                             f"{self.camera_noise!r}")
-        for what, v in (("shadow threshold", self.shadow_threshold), ("contrast threshold", self.contrast_threshold)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 255):
-                raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
+        _d.check_phase_options(self.gamma, self.camera_noise, self.shadow_threshold, self.contrast_threshold)
         if not 0 < self.tolerance < 0.5 or not 0 < self.max_sigma < 0.5:
             raise ValueError("tolerance and max_sigma must be fractions of a period between 0 and 0.5")
 
@@ -155,21 +143,6 @@ def summary_lines(result: _d.DecodeResult) -> list[str]:
         out.append(f"  {'column' if st.axis == 'col' else 'row'} fringes #{st.frames[0]}-#{st.frames[-1]} (period "
                    f"{st.period:.4g} px, {st.steps} steps): median modulation {st.modulation:.1f} grey levels")
     return out
-
-
-def sample_index(size: int, n: int) -> np.ndarray:
-    """The sample's pixels: ``n`` of ``size`` (flat indices, sorted), the same fixed pseudo-random set as the
-    capture checks' (:func:`procam.capture.sample_index`)."""
-    if size <= n:
-        return np.arange(size)
-    return _sample_index(size, n)
-
-
-@lru_cache(maxsize=8)
-def _sample_index(size: int, n: int) -> np.ndarray:
-    idx = np.sort(np.random.default_rng(0).choice(size, n, replace=False))
-    idx.flags.writeable = False
-    return idx
 
 
 def _lut_px(lut, period: float) -> float:
@@ -291,7 +264,7 @@ def decode_phase(stack: np.ndarray, ps: PhaseSet, options: PhaseOptions = PhaseO
     fs = _files.full_scale_of(stack) if full_scale is None else float(full_scale)
     scale = fs / 255.0
     K, H, W = stack.shape
-    idx = sample_index(H * W, SAMPLE)
+    idx = _d.sample_index(H * W, SAMPLE)
     sub = stack.reshape(K, -1)[:, idx].astype(np.float64)
     resp, measured, used, err_px, noise, luts, notes, lit, nsteps = _response(sub, ps, options, fs, scale)
     plan = _plan(ps, luts, noise)

@@ -118,7 +118,8 @@ def _wrap(t: float) -> float:
 
 def check_description(stack: np.ndarray, ps: PhaseSet, name: str, files=None, options=None) -> None:
     """Raise :class:`CaptureError` when the frames are not the sequence ``ps`` describes (the module docstring)."""
-    from .decoder import SAMPLE, PhaseOptions, sample_index
+    from ..decoded import sample_index
+    from .decoder import SAMPLE, PhaseOptions
 
     options = options or PhaseOptions()
     K, H, W = stack.shape
