@@ -15,9 +15,9 @@ from ._options import (
     ProjectorOpt,
     ShadowOpt,
     StepOpt,
+    decode_options,
     number,
     optional_size,
-    decode_options,
     value,
 )
 from ._paths import FIGURE_SUFFIXES, output_path
