@@ -347,34 +347,47 @@ def test_experiment_prints_one_plain_line_per_step_when_piped(tmp_path, monkeypa
 # start-up: what procam --help and procam calibrate import
 # --------------------------------------------------------------------------------------------
 
-def test_help_and_calibrate_import_no_matplotlib_simulator_or_scipy_for_help(ideal_capture, tmp_path):
-    """`procam --help` imports neither matplotlib, the simulator nor scipy; `procam calibrate` without --png or
-    --report imports no matplotlib or simulator (fresh interpreters, through the console-script entry point)."""
-    import json
+def _fresh(script: str, *args, timeout: float = 300):
+    """``python -c script ARGS`` in a fresh interpreter, this checkout's procam first on its path: the finished
+    process (text output)."""
     import os
     import subprocess
     import sys
     from pathlib import Path
 
-    script = """
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    return subprocess.run([sys.executable, "-c", script, *map(str, args)], env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+#: Runs ``procam ARGS...`` (argv[2:]) through the console-script entry point and reports, as the last line of
+#: stderr, its exit code and which of the comma-separated modules of argv[1] it imported.
+_LOADED = """
 import json, sys
+watched, sys.argv[1:] = sys.argv[1].split(","), sys.argv[2:]
 from procam.cli import main
+code = 0
 try:
     main(sys.argv[1:])
 except SystemExit as e:
     code = e.code
-heavy = ("matplotlib", "procam.simulate", "procam.plots", "procam.paper", "scipy")
-print(json.dumps({"code": code, "loaded": [m for m in heavy if m in sys.modules]}), file=sys.stderr)
+print(json.dumps({"code": code, "loaded": [m for m in watched if m in sys.modules]}), file=sys.stderr)
 """
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+
+
+def test_help_and_calibrate_import_no_matplotlib_simulator_or_scipy_for_help(ideal_capture, tmp_path):
+    """`procam --help` imports neither matplotlib, the simulator nor scipy; `procam calibrate` without --png or
+    --report imports no matplotlib or simulator (fresh interpreters, through the console-script entry point)."""
+    import json
+
+    heavy = "matplotlib,procam.simulate,procam.plots,procam.paper,scipy"
     folder = ideal_capture[0]
     runs = [(["--help"], []), (["calibrate", "--help"], []),
             (["calibrate", str(folder), "--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json")],
              ["scipy"])]
     for args, allowed in runs:
-        res = subprocess.run([sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
-                             timeout=300)
+        res = _fresh(_LOADED, heavy, *args)
         report = json.loads(res.stderr.strip().splitlines()[-1])
         assert report["code"] in (0, None) and set(report["loaded"]) <= set(allowed), (args, res.stderr[-2000:])
 
@@ -384,9 +397,6 @@ def test_decode_imports_neither_the_corner_pipeline_nor_the_other_familys_decode
     the correspondences; a Gray capture's decode imports nothing of the phase decoder, a phase capture's does (issue
     35: nothing paid at start-up that a decode does not need). Fresh interpreters, the decoded maps written."""
     import json
-    import os
-    import subprocess
-    import sys
     from pathlib import Path
 
     from sim_small import small_scene
@@ -397,24 +407,12 @@ def test_decode_imports_neither_the_corner_pipeline_nor_the_other_familys_decode
     ps = patterns.pattern_set(*scene.proj_size, family="phase")
     stack, truth = simulate.render(scene, ps, seed=4)
     simulate.write_capture(tmp_path / "phase", stack, truth, ps)
-    script = """
-import json, sys
-from procam.cli import main
-try:
-    main(sys.argv[1:])
-except SystemExit as e:
-    code = e.code
-mods = ("procam.pipeline", "procam.board", "procam.correspond", "procam.view", "procam.decode.plausibility",
-        "procam.decode.phase.decoder", "scipy", "matplotlib")
-print(json.dumps({"code": code, "loaded": [m for m in mods if m in sys.modules]}), file=sys.stderr)
-"""
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
+    watched = ("procam.pipeline,procam.board,procam.correspond,procam.view,procam.decode.plausibility,"
+               "procam.decode.phase.decoder,scipy,matplotlib")
     for folder, shape, loaded in ((ideal_capture[0], ideal_capture[1].shape[1:], []),
                                   (tmp_path / "phase", stack.shape[1:], ["procam.decode.phase.decoder"])):
         out = tmp_path / f"{Path(folder).name}.npz"
-        res = subprocess.run([sys.executable, "-c", script, "decode", str(folder), "-o", str(out)], env=env,
-                             capture_output=True, text=True, timeout=300)
+        res = _fresh(_LOADED, watched, "decode", folder, "-o", out)
         report = json.loads(res.stderr.strip().splitlines()[-1])
         assert report["code"] in (0, None) and report["loaded"] == loaded, (folder, res.stderr[-2000:])
         with np.load(out) as maps:
@@ -426,10 +424,6 @@ def test_version_imports_no_command_line_and_a_command_registers_only_itself():
     the calibrate command and imports no pydantic, nor does parsing a calibrate command line; `procam --help` builds
     every command (fresh interpreters, the console-script entry point)."""
     import json
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
 
     script = """
 import json, sys
@@ -443,13 +437,10 @@ cmds = sorted(m.rsplit(".", 1)[1] for m in sys.modules if m.startswith("procam.c
 print(json.dumps({"code": code, "typer": "typer" in sys.modules, "pydantic": "pydantic" in sys.modules,
                   "commands": cmds}), file=sys.stderr)
 """
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
     from procam.cli import COMMANDS
 
     def run(*args):
-        res = subprocess.run([sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
-                             timeout=300)
+        res = _fresh(script, *args)
         return res.stdout, json.loads(res.stderr.strip().splitlines()[-1])
 
     out, rep = run("--version")
@@ -470,11 +461,6 @@ def test_the_console_script_skips_pythons_final_collection_and_a_caller_keeps_it
     so Python's final collection does not walk scipy's and numpy's module objects; an in-process caller
     (``main(argv)``) keeps its collector untouched, at exit too. An exit handler registered before main runs after
     main's (handlers run last registered first), and reports the frozen count then."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
     script = """
 import atexit, gc, sys
 atexit.register(lambda: print("frozen", gc.get_freeze_count(), file=sys.stderr))
@@ -486,12 +472,8 @@ except SystemExit:
     pass
 print("after", gc.get_freeze_count(), file=sys.stderr)
 """
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
-
     def counts(how, *args):
-        res = subprocess.run([sys.executable, "-c", script, how, *args], env=env, capture_output=True, text=True,
-                             timeout=300)
+        res = _fresh(script, how, *args)
         lines = dict(line.split() for line in res.stderr.splitlines() if line.startswith(("frozen", "after")))
         assert res.returncode == 0 and res.stdout.startswith("procam "), res.stderr
         return int(lines["after"]), int(lines["frozen"])
@@ -632,10 +614,6 @@ def test_calibrate_reads_its_pose_folders_before_its_command_line_is_parsed(idea
     what it looked like (an unknown option, --help) leaves no reader behind (fresh interpreters, the console-script
     entry point)."""
     import json
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
 
     from conftest import run_cli
 
@@ -661,13 +639,10 @@ except SystemExit as e:
 readers = [t.name for t in threading.enumerate() if t.name.startswith("procam-read")]
 print(json.dumps({"code": code, "made": made, "readers": readers}), file=sys.stderr)
 """
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1] / "src"), env.get("PYTHONPATH", "")])
     folder = str(ideal_capture[0])
 
     def run(command, *args):
-        res = subprocess.run([sys.executable, "-c", script, command, folder, *args], env=env, capture_output=True,
-                             text=True, timeout=300)
+        res = _fresh(script, command, folder, *args)
         return json.loads(res.stderr.strip().splitlines()[-1])
 
     rep = run("calibrate", "--board", "10x6", "--square", "24", "-o", str(tmp_path / "c.json"))
