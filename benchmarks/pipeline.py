@@ -17,9 +17,10 @@ commands round by round (the machine may be shared, so every command sees the sa
    must be no slower);
 5. with ``--kamino410 PATH --kamino410-python PY``: kamino410's ``calibrate.py`` (procam-calibration) on the
    same files (linked into its ``capture_*/graycode_*`` layout), run by its own Python (OpenCV contrib);
-6. two stand-ins for what the targets not met are up against: a cold process that only imports the third-party
-   modules a calibrate imports (:data:`IMPORTS`), against the floor; and ``procam decode`` of the phase capture with
-   the neighbours' ordering pass skipped (:data:`WITHOUT_NEIGHBOURS`), against the Gray capture.
+6. stand-ins for what the targets not met are up against: a cold process that only imports the third-party modules
+   a calibrate imports (:data:`IMPORTS`) and the calibrate with the board's corners given (:data:`CORNERS_GIVEN`),
+   each against the floor; and ``procam decode`` of the phase capture with the neighbours' ordering pass skipped
+   (:data:`WITHOUT_NEIGHBOURS`), against the Gray capture.
 
 The first table is the summary: each command against its baseline, as ratios of the medians of one run; the
 second the stand-ins against theirs.
@@ -205,6 +206,9 @@ def commands(args, data: Path, out: Path) -> dict:
     cmds["imports"] = ([sys.executable, "-c", IMPORTS], None)
     cmds["decode-phase-own"] = ([sys.executable, "-c", WITHOUT_NEIGHBOURS, "decode", str(pair["phase"][0]), "-o",
                                  str(out.parent / "phase-own.npz")], None)
+    cmds["corners-given"] = ([sys.executable, "-c", CORNERS_GIVEN, str(ensure_corners(data)), "calibrate",
+                              *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o",
+                              str(out.parent / "calib-corners-given.json")], None)
     if args.kamino410:
         root = kamino_layout(data)
         cmds["kamino410"] = ([args.kamino410_python, str(Path(args.kamino410).resolve()), "768", "1024",
@@ -239,6 +243,83 @@ sys.meta_path.insert(0, Skip())
 from procam.cli import main
 sys.argv[0] = "procam"
 main()"""
+
+
+#: ``procam calibrate`` with the board's corners given: ``procam.pipeline.find_board`` replaced, as the module loads,
+#: by a lookup of the corners it found for the same white frame (:func:`ensure_corners`; the file is the first
+#: argument; a frame not there fails the run).  The most moving the corner detection into the process that reads
+#: the poses could give (there it would still take a core's time, and import scipy.special's erf again).  The
+#: calibration file is the same byte for byte.
+CORNERS_GIVEN = """import importlib.abc, importlib.util, sys
+path = sys.argv.pop(1)
+class Given(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, where, target=None):
+        if name != "procam.pipeline":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        run = spec.loader.exec_module
+        def exec_module(m):
+            run(m)
+            import hashlib
+            import numpy as np
+            given = dict(np.load(path))
+            def find_board(stack, ps, *a, **k):
+                c = given.get(hashlib.sha1(stack[ps.white].tobytes()).hexdigest())
+                if c is None:
+                    raise SystemExit(f"{path} has no corners of this pose's white frame: delete it (remade)")
+                return c.copy()
+            m.find_board = find_board
+        spec.loader.exec_module = exec_module
+        return spec
+sys.meta_path.insert(0, Given())
+from procam.cli import main
+sys.argv[0] = "procam"
+main()"""
+
+
+def ensure_corners(data: Path) -> Path:
+    """The board's corners procam's ``calibrate`` finds in each pose, keyed by the SHA-1 of the pose's white frame
+    (``corners.npz`` in ``data``, made unless there, by the calibrate itself with ``find_board`` recording)."""
+    path = data / "corners.npz"
+    if not path.is_file():
+        import subprocess
+
+        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--record-corners", "--data", str(data)],
+                       env=_env(), check=True, stdout=subprocess.DEVNULL)
+    return path
+
+
+def record_corners(data: Path) -> None:
+    """Run ``procam calibrate`` on the poses in this process, ``find_board`` recording what it returns."""
+    import hashlib
+    import tempfile
+
+    import numpy as np
+
+    from procam import pipeline
+    from procam.cli import main as cli
+
+    found, find = {}, pipeline.find_board
+
+    def recording(stack, ps, *a, **k):
+        c = find(stack, ps, *a, **k)
+        found[hashlib.sha1(stack[ps.white].tobytes()).hexdigest()] = np.array(c)
+        return c
+
+    pipeline.find_board = recording
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            cli(["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o",
+                 str(Path(tmp) / "calib.json")])
+        except SystemExit as e:
+            if e.code not in (0, None):
+                raise
+    if len(found) != N_POSES:
+        raise SystemExit(f"recorded the corners of {len(found)} poses, not {N_POSES}")
+    part = data / "corners.part.npz"
+    np.savez(part, **found)
+    part.replace(data / "corners.npz")
 
 
 def run_cold(argv, cwd=None) -> dict:
@@ -457,6 +538,8 @@ TARGETS = [("5-pose Gray calibrate vs reading its PNGs (the floor)", "procam", "
 #: (what, stand-in command, baseline command) of the second table: what the two targets not met are up against
 BOUNDS = [("the third-party imports of a calibrate, alone (IMPORTS) vs reading its PNGs (the floor)", "imports",
            "read"),
+          ("5-pose Gray calibrate with the board's corners given (CORNERS_GIVEN) vs reading its PNGs (the floor)",
+           "corners-given", "read"),
           ("phase capture without the neighbours' ordering pass (WITHOUT_NEIGHBOURS) vs Gray capture, procam decode",
            "decode-phase-own", "decode-gray")]
 
@@ -500,6 +583,7 @@ def main():
     ap.add_argument("--read-only", choices=("opencv", "procam"), default=None, help=argparse.SUPPRESS)
     ap.add_argument("--profile", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--render-only", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--record-corners", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--out", type=Path, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     data = args.data.resolve()
@@ -513,6 +597,9 @@ def main():
         return
     if args.profile:  # one in-process per-stage run
         print(json.dumps(profile_once(data, args.out)))
+        return
+    if args.record_corners:  # the corners CORNERS_GIVEN looks up
+        record_corners(data)
         return
     if args.render_only:  # the captures, rendered in a process of their own (below)
         ensure_data(data)
@@ -580,6 +667,7 @@ def main():
              "calibrate-help": "procam calibrate --help",
              "imports": "import the third-party modules of a calibrate (cold process)",
              "decode-phase-own": "procam decode, phase capture, without the neighbours' ordering pass",
+             "corners-given": "procam calibrate, 5 poses, the board's corners given (cold process)",
              **{f"decode-{n}": f"procam decode, {n} capture ({k} frames, {mp:.2f} MP)"
                 for n, (_, k, mp) in pair.items()}}
     for n in names:
