@@ -222,60 +222,51 @@ def commands(args, data: Path, out: Path) -> dict:
 IMPORTS = ("import numpy, cv2, typer, rich.console, rich.table, scipy.optimize\n"
            "try:\n    import isal.isal_zlib\nexcept ImportError:\n    pass")
 
-#: ``procam decode`` with the phase decoder's neighbours' ordering pass skipped (``neighbour_orders`` replaced by a
-#: function that orders nothing, as the module loads: nothing imported ahead of the command line's fork): each pixel
-#: from its own fringes only, the pixels ``PhaseOptions(neighbours=False)`` decodes (the pass's inputs still made)
-WITHOUT_NEIGHBOURS = """import importlib.abc, sys
-class Skip(importlib.abc.MetaPathFinder):
-    def find_spec(self, name, path, target=None):
-        if name != "procam.decode.phase.unwrap":
-            return None
-        sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(name)
-        run = spec.loader.exec_module
-        def exec_module(m):
-            run(m)
-            m.neighbour_orders = lambda *a, **k: 0
-        spec.loader.exec_module = exec_module
-        return spec
-import importlib.util
-sys.meta_path.insert(0, Skip())
-from procam.cli import main
-sys.argv[0] = "procam"
-main()"""
-
-
-#: ``procam calibrate`` with the board's corners given: ``procam.pipeline.find_board`` replaced, as the module loads,
-#: by a lookup of the corners it found for the same white frame (:func:`ensure_corners`; the file is the first
-#: argument; a frame not there fails the run).  The most moving the corner detection into the process that reads
-#: the poses could give (there it would still take a core's time, and import scipy.special's erf again).  The
-#: calibration file is the same byte for byte.
-CORNERS_GIVEN = """import importlib.abc, importlib.util, sys
-path = sys.argv.pop(1)
-class Given(importlib.abc.MetaPathFinder):
+def _patched(module: str, patch: str, head: str = "") -> str:
+    """A ``python -c`` script running procam's command line with ``module`` patched as it loads (``patch``: lines
+    run with the module as ``m`` after it is executed; ``head``: lines run first), so that nothing is imported ahead
+    of the command line's fork of its reader."""
+    body = "\n".join(" " * 12 + line for line in patch.strip().splitlines())
+    return f"""import importlib.abc, importlib.util, sys
+{head}
+class Patch(importlib.abc.MetaPathFinder):
     def find_spec(self, name, where, target=None):
-        if name != "procam.pipeline":
+        if name != {module!r}:
             return None
         sys.meta_path.remove(self)
         spec = importlib.util.find_spec(name)
         run = spec.loader.exec_module
         def exec_module(m):
             run(m)
-            import hashlib
-            import numpy as np
-            given = dict(np.load(path))
-            def find_board(stack, ps, *a, **k):
-                c = given.get(hashlib.sha1(stack[ps.white].tobytes()).hexdigest())
-                if c is None:
-                    raise SystemExit(f"{path} has no corners of this pose's white frame: delete it (remade)")
-                return c.copy()
-            m.find_board = find_board
+{body}
         spec.loader.exec_module = exec_module
         return spec
-sys.meta_path.insert(0, Given())
+sys.meta_path.insert(0, Patch())
 from procam.cli import main
 sys.argv[0] = "procam"
 main()"""
+
+
+#: ``procam decode`` with the phase decoder's neighbours' ordering pass skipped (``neighbour_orders`` replaced by a
+#: function that orders nothing): each pixel from its own fringes only, the pixels ``PhaseOptions(neighbours=False)``
+#: decodes (the pass's inputs still made)
+WITHOUT_NEIGHBOURS = _patched("procam.decode.phase.unwrap", "m.neighbour_orders = lambda *a, **k: 0")
+
+#: ``procam calibrate`` with the board's corners given: ``procam.pipeline.find_board`` replaced by a lookup of the
+#: corners it found for the same white frame (:func:`ensure_corners`; the file is the first argument; a frame not
+#: there fails the run).  The most moving the corner detection into the process that reads the poses could give
+#: (there it would still take a core's time, and import scipy.special's erf again).  The calibration file is the
+#: same byte for byte.
+CORNERS_GIVEN = _patched("procam.pipeline", """
+import hashlib
+import numpy as np
+given = dict(np.load(path))
+def find_board(stack, ps, *a, **k):
+    c = given.get(hashlib.sha1(stack[ps.white].tobytes()).hexdigest())
+    if c is None:
+        raise SystemExit(f"{path} has no corners of this pose's white frame: delete it (remade)")
+    return c.copy()
+m.find_board = find_board""", head="path = sys.argv.pop(1)")
 
 
 def ensure_corners(data: Path) -> Path:
