@@ -187,12 +187,16 @@ def _env():
     return env
 
 
+def calibrate_argv(data: Path, out: Path) -> list[str]:
+    """``procam calibrate``'s arguments for the five poses in ``data``, writing ``out``."""
+    return ["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)]
+
+
 def commands(args, data: Path, out: Path) -> dict:
     """name -> (argv, cwd)."""
     procam = [sys.executable, "-c", "import sys; from procam.cli import main; sys.argv[0] = 'procam'; main()"]
     cmds = {
-        "procam": ([*procam, "calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1],
-                    "-o", str(out)], None),
+        "procam": ([*procam, *calibrate_argv(data, out)], None),
         "read": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "opencv", "--data", str(data)], None),
         "read-procam": ([sys.executable, str(Path(__file__).resolve()), "--read-only", "procam", "--data", str(data)],
                         None),
@@ -206,9 +210,8 @@ def commands(args, data: Path, out: Path) -> dict:
     cmds["imports"] = ([sys.executable, "-c", IMPORTS], None)
     cmds["decode-phase-own"] = ([sys.executable, "-c", WITHOUT_NEIGHBOURS, "decode", str(pair["phase"][0]), "-o",
                                  str(out.parent / "phase-own.npz")], None)
-    cmds["corners-given"] = ([sys.executable, "-c", CORNERS_GIVEN, str(ensure_corners(data)), "calibrate",
-                              *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o",
-                              str(out.parent / "calib-corners-given.json")], None)
+    cmds["corners-given"] = ([sys.executable, "-c", CORNERS_GIVEN, str(ensure_corners(data)),
+                              *calibrate_argv(data, out.parent / "calib-corners-given.json")], None)
     if args.kamino410:
         root = kamino_layout(data)
         cmds["kamino410"] = ([args.kamino410_python, str(Path(args.kamino410).resolve()), "768", "1024",
@@ -301,8 +304,7 @@ def record_corners(data: Path) -> None:
     pipeline.find_board = recording
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            cli(["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o",
-                 str(Path(tmp) / "calib.json")])
+            cli(calibrate_argv(data, Path(tmp) / "calib.json"))
         except SystemExit as e:
             if e.code not in (0, None):
                 raise
@@ -429,7 +431,7 @@ def profile_once(data: Path, out: Path) -> dict:
         setattr(owner, name, wrap(stage, f))
     # the modules calibrate imports lazily are imported here, to wrap them
     t_import = (time.perf_counter() - t0, time.thread_time() - c0)
-    argv = ["calibrate", *map(str, pose_dirs(data)), "--board", BOARD[0], "--square", BOARD[1], "-o", str(out)]
+    argv = calibrate_argv(data, out)
     t2, c2, m2 = time.perf_counter(), time.process_time(), time.thread_time()
     with redirect_stdout(_io.StringIO()):
         try:

@@ -91,10 +91,7 @@ class DecodeOptions:
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"decode method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        for what, v in (("shadow threshold", self.shadow_threshold), ("contrast threshold", self.contrast_threshold)):
-            if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and 0 <= v <= 255):
-                raise ValueError(f"{what} must be a number of grey levels from 0 to 255, got {v!r}")
-        # the phase decoder's options it passes on (its own checks, without importing that decoder)
+        # the thresholds, gamma and camera noise: the phase decoder's own checks (without importing that decoder)
         _decoded.check_phase_options(self.gamma, self.camera_noise, self.shadow_threshold, self.contrast_threshold)
 
     def phase_options(self):
